@@ -1,0 +1,1 @@
+"""Scene description: validated, typed, unit-bearing data. No physics, no tracing."""
