@@ -1,0 +1,1 @@
+"""Estimators: strategies that turn kernels into pictures."""

@@ -1,0 +1,278 @@
+"""The plain forward Monte Carlo estimator: what LightTools does, and the unbiased reference.
+
+Every ray leaves an LED with the same power w = Φ_total / N and keeps it: at a partial reflector
+it reflects with probability R (else refracts, or is absorbed with probability A), at a Lambertian
+face it scatters with probability ρ into a cosine-weighted direction (else is absorbed). Each ray
+thus ends in exactly one ledger entry, every bin counts whole rays, and a result is an integer
+count times w — independent of summation order, hence of thread count and batch size.
+
+Non-sequential among eye, face and LED bodies (nearest hit among all surfaces); a ray that meets
+the imaging lens's first surface from the eye side continues sequentially to the image plane.
+The eye-plane receiver counts every crossing of z = 0 toward the eye without touching the ray.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numba import njit, prange
+
+from eyelume.compile import (
+    TALLY_ESCAPED,
+    TALLY_LIMIT,
+    TALLY_OFF_SENSOR,
+    TALLY_SENSOR,
+    TALLY_TIR,
+    TALLY_VIGNETTED,
+    CompiledScene,
+)
+from eyelume.kernels import geometry as G
+from eyelume.kernels.interact import fresnel_reflectance, reflect, refract
+from eyelume.kernels.rng import next_uniform, stream_start
+from eyelume.kernels.sampling import about_axis, cosine_hemisphere, profile_polar_angle
+from eyelume.kernels.sequential import LENS_PASSED, LENS_TIR, trace_lens
+
+__all__ = ["ForwardCounts", "trace_forward", "trace_paths"]
+
+_ESCAPE_DRAW_MM = 60.0  # length drawn for an escaping ray in a recorded path
+
+
+@njit(cache=True, inline="always")
+def _record(path, n, x, y, z, record):
+    if record and n < path.shape[0]:
+        path[n, 0] = x
+        path[n, 1] = y
+        path[n, 2] = z
+        n += 1
+    return n
+
+
+@njit(cache=True)
+def trace_ray(
+    i, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid, sensor, plane, max_events,
+    img_counts, plane_counts, tallies, path, record,
+):
+    """Trace ray ``i`` from birth to its end, adding to the count arrays.
+
+    Returns (ledger entry, surface interactions, recorded path length).
+    """
+    state = stream_start(seed, i)
+    state, u = next_uniform(state)
+    led = min(int(u * leds.shape[0]), leds.shape[0] - 1)
+    state, u1 = next_uniform(state)
+    state, u2 = next_uniform(state)
+    alpha = profile_polar_angle(u1, alpha_grid, cdf_grid)
+    phi = 2.0 * math.pi * u2
+    sa = math.sin(alpha)
+    dx, dy, dz = about_axis(sa * math.cos(phi), sa * math.sin(phi), math.cos(alpha),
+                            leds[led, 3], leds[led, 4], leds[led, 5])
+    x, y, z = leds[led, 0], leds[led, 1], leds[led, 2]
+    npath = _record(path, 0, x, y, z, record)
+    pw, ph, pc, pr = plane[0], plane[1], int(plane[2]), int(plane[3])
+    interactions = 0
+    for _ in range(max_events):
+        s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
+        if dz < 0.0 and z > 0.0:  # crosses the eye plane toward the eye before its next hit?
+            t0 = -z / dz
+            if t0 < t:
+                col = int(math.floor((x + t0 * dx + 0.5 * pw) / pw * pc))
+                row = int(math.floor((0.5 * ph - (y + t0 * dy)) / ph * pr))
+                if 0 <= col < pc and 0 <= row < pr:
+                    plane_counts[row, col] += 1
+        if s < 0:
+            tallies[TALLY_ESCAPED] += 1
+            npath = _record(path, npath, x + _ESCAPE_DRAW_MM * dx, y + _ESCAPE_DRAW_MM * dy,
+                            z + _ESCAPE_DRAW_MM * dz, record)
+            return TALLY_ESCAPED, interactions, npath
+        action = si[s, G.ACTION]
+        if action == G.ACT_LENS:
+            nx, ny, nz = G.surface_normal(sf, si, s, x + t * dx, y + t * dy, z + t * dz)
+            if dx * nx + dy * ny + dz * nz < 0.0:  # met from behind: the lens's back and mount
+                tallies[si[s, G.TALLY_B]] += 1
+                npath = _record(path, npath, x + t * dx, y + t * dy, z + t * dz, record)
+                return si[s, G.TALLY_B], interactions + 1, npath
+            status, x, y, z, dx, dy, dz, met, npath = trace_lens(lf, x, y, z, dx, dy, dz, path, npath, record)
+            interactions += met
+            if status != LENS_PASSED:
+                entry = TALLY_TIR if status == LENS_TIR else TALLY_VIGNETTED
+                tallies[entry] += 1
+                return entry, interactions, npath
+            t = (image_z - z) / dz
+            x += t * dx
+            y += t * dy
+            z = image_z
+            npath = _record(path, npath, x, y, z, record)
+            sw, sh, sc, sr = sensor[0], sensor[1], int(sensor[2]), int(sensor[3])
+            # the picture is the sensor image turned by 180°, as a camera's readout shows it:
+            # world +y at the top (row 0), world +x to the right (as seen from the camera)
+            col = int(math.floor((0.5 * sw - x) / sw * sc))
+            row = int(math.floor((y + 0.5 * sh) / sh * sr))
+            if 0 <= col < sc and 0 <= row < sr:
+                img_counts[row, col] += 1
+                tallies[TALLY_SENSOR] += 1
+                return TALLY_SENSOR, interactions, npath
+            tallies[TALLY_OFF_SENSOR] += 1
+            return TALLY_OFF_SENSOR, interactions, npath
+
+        x += t * dx
+        y += t * dy
+        z += t * dz
+        interactions += 1
+        npath = _record(path, npath, x, y, z, record)
+        nx, ny, nz = G.surface_normal(sf, si, s, x, y, z)
+        cos_d = dx * nx + dy * ny + dz * nz
+        from_b = cos_d < 0.0  # the normal points to side B, so the ray arrives from B
+        state, u = next_uniform(state)
+        if action == G.ACT_OPAQUE:
+            rho = sf[s, G.RHO_B] if from_b else sf[s, G.RHO_A]
+            if u >= rho:
+                entry = si[s, G.TALLY_B] if from_b else si[s, G.TALLY_A]
+                tallies[entry] += 1
+                return entry, interactions, npath
+            if not from_b:
+                nx, ny, nz = -nx, -ny, -nz
+            state, u1 = next_uniform(state)
+            state, u2 = next_uniform(state)
+            lx, ly, lz = cosine_hemisphere(u1, u2)
+            dx, dy, dz = about_axis(lx, ly, lz, nx, ny, nz)
+        else:  # refracting interface with a partial reflection
+            n1 = sf[s, G.N_B] if from_b else sf[s, G.N_A]
+            n2 = sf[s, G.N_A] if from_b else sf[s, G.N_B]
+            if si[s, G.FRESNEL]:
+                r = fresnel_reflectance(cos_d, n1, n2)
+            else:
+                r = sf[s, G.REFL]
+            if u < r:
+                dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz)
+            elif u < r + sf[s, G.ABSORB]:
+                entry = si[s, G.TALLY_B] if from_b else si[s, G.TALLY_A]
+                tallies[entry] += 1
+                return entry, interactions, npath
+            else:
+                ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
+                if ok:
+                    dx, dy, dz = tx, ty, tz
+                else:
+                    dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz)
+        norm = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
+        dx *= norm
+        dy *= norm
+        dz *= norm
+    tallies[TALLY_LIMIT] += 1
+    return TALLY_LIMIT, interactions, npath
+
+
+@njit(cache=True, parallel=True)
+def _trace_batch(
+    start, count, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid, sensor, plane,
+    max_events, img_counts, plane_counts, tallies, interactions,
+):
+    n_chunks = img_counts.shape[0]
+    for c in prange(n_chunks):
+        lo = start + (count * c) // n_chunks
+        hi = start + (count * (c + 1)) // n_chunks
+        path = np.zeros((1, 3))
+        inter = 0
+        for i in range(lo, hi):
+            _, k, _ = trace_ray(
+                i, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid, sensor, plane,
+                max_events, img_counts[c], plane_counts[c], tallies[c], path, False,
+            )
+            inter += k
+        interactions[c] += inter
+
+
+@dataclass
+class ForwardCounts:
+    """Integer tallies of a forward run: every ray counted exactly once in ``tallies``."""
+
+    image: np.ndarray  # (rows, cols) rays reaching each sensor pixel
+    plane: np.ndarray  # (rows, cols) eye-plane crossings toward the eye
+    tallies: np.ndarray  # (n_entries,) rays ending in each ledger entry
+    interactions: int
+    rays: int
+
+
+def trace_forward(
+    cs: CompiledScene,
+    rays: int,
+    seed: int,
+    batch_size: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> ForwardCounts:
+    """Trace ``rays`` rays of the compiled scene, in batches so memory stays flat.
+
+    ``progress(done, total)`` is called after each batch. Results depend on (scene, rays, seed)
+    only. A KeyboardInterrupt between batches propagates; counts so far are discarded.
+    """
+    if rays < 1:
+        raise ValueError(f"rays = {rays}: must be ≥ 1")
+    batch = int(batch_size or cs.scene.run.batch_size)
+    n_chunks = 4 * numba.get_num_threads()
+    rows, cols = int(cs.sensor[3]), int(cs.sensor[2])
+    prow, pcol = int(cs.plane[3]), int(cs.plane[2])
+    img = np.zeros((n_chunks, rows, cols), dtype=np.int64)
+    pl = np.zeros((n_chunks, prow, pcol), dtype=np.int64)
+    tal = np.zeros((n_chunks, len(cs.tallies)), dtype=np.int64)
+    inter = np.zeros(n_chunks, dtype=np.int64)
+    done = 0
+    while done < rays:
+        n = min(batch, rays - done)
+        _trace_batch(
+            done, n, seed, cs.sf, cs.si, cs.lf, cs.image_z, cs.leds, cs.alpha_grid, cs.cdf_grid,
+            cs.sensor, cs.plane, cs.scene.run.max_events, img, pl, tal, inter,
+        )
+        done += n
+        if progress is not None:
+            progress(done, rays)
+    return ForwardCounts(img.sum(axis=0), pl.sum(axis=0), tal.sum(axis=0), int(inter.sum()), rays)
+
+
+@njit(cache=True)
+def _trace_paths(start, n, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid, sensor, plane,
+                 max_events, n_tallies, want_detected, want_other, out, lengths, kinds):
+    img = np.zeros((int(sensor[3]), int(sensor[2])), dtype=np.int64)
+    pl = np.zeros((int(plane[3]), int(plane[2])), dtype=np.int64)
+    tal = np.zeros(n_tallies, dtype=np.int64)
+    path = np.zeros((out.shape[1], 3))
+    got_d = 0
+    got_o = 0
+    k = 0
+    for i in range(start, start + n):
+        entry, _, npath = trace_ray(i, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid,
+                                    sensor, plane, max_events, img, pl, tal, path, True)
+        detected = entry == TALLY_SENSOR
+        if (detected and got_d < want_detected) or (not detected and got_o < want_other):
+            out[k, :npath] = path[:npath]
+            lengths[k] = npath
+            kinds[k] = 1 if detected else 0
+            k += 1
+            if detected:
+                got_d += 1
+            else:
+                got_o += 1
+        if got_d >= want_detected and got_o >= want_other:
+            break
+    return k
+
+
+def trace_paths(cs: CompiledScene, seed: int, detected: int = 24, other: int = 24,
+                search: int = 2_000_000) -> list[tuple[np.ndarray, bool]]:
+    """Record the vertices of a few rays for drawing: up to ``detected`` rays that reach the
+    sensor and ``other`` that do not, among the first ``search`` rays of the seed's stream.
+
+    Returns a list of ((k, 3) world vertices in mm, reached_sensor).
+    """
+    max_len = cs.scene.run.max_events + cs.lf.shape[0] + 4
+    out = np.zeros((detected + other, max_len, 3))
+    lengths = np.zeros(detected + other, dtype=np.int64)
+    kinds = np.zeros(detected + other, dtype=np.int64)
+    k = _trace_paths(0, search, seed, cs.sf, cs.si, cs.lf, cs.image_z, cs.leds, cs.alpha_grid,
+                     cs.cdf_grid, cs.sensor, cs.plane, cs.scene.run.max_events, len(cs.tallies), detected, other,
+                     out, lengths, kinds)
+    return [(out[j, : lengths[j]].copy(), bool(kinds[j])) for j in range(k)]
+

@@ -1,0 +1,201 @@
+"""Ray–surface intersections and normals, and the nearest hit among a table of surfaces.
+
+Surfaces live in a float table ``sf[s, :]`` and an int table ``si[s, :]`` (columns below, filled by
+:mod:`eyelume.compile`). Each surface has a local frame: ``local = R (world − origin)``, with the
+rows of R the local axes in world coordinates. Shapes, in their local frame:
+
+* conicoid (plane when c = 0): sag z = c r² / (1 + √(1 − (1+k) c² r²)), vertex at the origin;
+* sphere: |p| = radius;  cylinder: x² + y² = radius² about local z.
+
+Each exists where the local radial distance r ∈ [rmin, rmax] and local z ∈ [zlo, zhi]. Normals
+point toward *side B*: +z for a conicoid (the side light reaches after it, lens-design
+convention), outward for a sphere or cylinder; side A is the other one.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+# --- float columns of the surface table -------------------------------------------------------
+OX, OY, OZ = 0, 1, 2
+R00, R01, R02, R10, R11, R12, R20, R21, R22 = 3, 4, 5, 6, 7, 8, 9, 10, 11
+CURV, CONIC, RADIUS = 12, 13, 14
+RMIN2, RMAX2, ZLO, ZHI = 15, 16, 17, 18
+BX, BY, BZ, BR = 19, 20, 21, 22  # bounding sphere, world frame
+N_A, N_B = 23, 24  # refractive index on sides A and B
+REFL, ABSORB = 25, 26  # fixed reflectance and absorptance of a refracting interface
+RHO_A, RHO_B = 27, 28  # Lambertian reflectance of the faces of an opaque surface
+N_FLOAT = 29
+
+# --- int columns -------------------------------------------------------------------------------
+SHAPE, ACTION, FRESNEL, TALLY_A, TALLY_B = 0, 1, 2, 3, 4
+N_INT = 5
+
+SHAPE_CONIC, SHAPE_SPHERE, SHAPE_CYLINDER = 0, 1, 2
+ACT_REFRACT, ACT_OPAQUE, ACT_LENS = 0, 1, 2
+
+T_MIN = 1e-7  # mm: a hit closer than this to a ray's origin is the surface it just left
+
+
+@njit(cache=True, inline="always")
+def to_local(sf, s, x, y, z):
+    """World point → local frame of surface ``s``."""
+    px, py, pz = x - sf[s, OX], y - sf[s, OY], z - sf[s, OZ]
+    return (
+        sf[s, R00] * px + sf[s, R01] * py + sf[s, R02] * pz,
+        sf[s, R10] * px + sf[s, R11] * py + sf[s, R12] * pz,
+        sf[s, R20] * px + sf[s, R21] * py + sf[s, R22] * pz,
+    )
+
+
+@njit(cache=True, inline="always")
+def dir_to_local(sf, s, x, y, z):
+    """World direction → local frame of surface ``s``."""
+    return (
+        sf[s, R00] * x + sf[s, R01] * y + sf[s, R02] * z,
+        sf[s, R10] * x + sf[s, R11] * y + sf[s, R12] * z,
+        sf[s, R20] * x + sf[s, R21] * y + sf[s, R22] * z,
+    )
+
+
+@njit(cache=True, inline="always")
+def dir_to_world(sf, s, x, y, z):
+    """Local direction of surface ``s`` → world (the transpose of the rotation)."""
+    return (
+        sf[s, R00] * x + sf[s, R10] * y + sf[s, R20] * z,
+        sf[s, R01] * x + sf[s, R11] * y + sf[s, R21] * z,
+        sf[s, R02] * x + sf[s, R12] * y + sf[s, R22] * z,
+    )
+
+
+@njit(cache=True, inline="always")
+def quadratic_roots(a, b, c):
+    """Real roots (t1, t2, n) of a t² + b t + c = 0, numerically stable; n = number of roots.
+
+    Degenerates to the linear root when a = 0 (a plane, or a ray along a paraboloid's axis).
+    """
+    if a == 0.0:
+        if b == 0.0:
+            return 0.0, 0.0, 0
+        return -c / b, 0.0, 1
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0:
+        return 0.0, 0.0, 0
+    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    t1 = q / a
+    t2 = c / q if q != 0.0 else t1
+    if t1 > t2:
+        t1, t2 = t2, t1
+    return t1, t2, 2
+
+
+@njit(cache=True, inline="always")
+def conic_coefficients(c, k, px, py, pz, dx, dy, dz):
+    """Coefficients of the conicoid c (x² + y² + (1+k) z²) − 2 z = 0 along p + t d."""
+    e = 1.0 + k
+    a = c * (dx * dx + dy * dy + e * dz * dz)
+    b = 2.0 * (c * (px * dx + py * dy + e * pz * dz) - dz)
+    cc = c * (px * px + py * py + e * pz * pz) - 2.0 * pz
+    return a, b, cc
+
+
+@njit(cache=True, inline="always")
+def on_vertex_branch(c, k, z):
+    """Whether a point of the conicoid lies on the sheet through the vertex: (1+k) c z ≤ 1."""
+    return (1.0 + k) * c * z <= 1.0
+
+
+@njit(cache=True, inline="always")
+def conic_normal(c, k, x, y, z):
+    """Unit normal of the conicoid at a local point, pointing toward +z at the vertex."""
+    nx, ny, nz = -c * x, -c * y, 1.0 - c * (1.0 + k) * z
+    inv = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
+    return nx * inv, ny * inv, nz * inv
+
+
+@njit(cache=True, inline="always")
+def conic_sag(c, k, r):
+    """Sag z(r) = c r² / (1 + √(1 − (1+k) c² r²)) in mm; NaN beyond the conicoid's extent."""
+    arg = 1.0 - (1.0 + k) * c * c * r * r
+    if arg < 0.0:
+        return math.nan
+    return c * r * r / (1.0 + math.sqrt(arg))
+
+
+@njit(cache=True, inline="always")
+def _valid(sf, s, shape, x, y, z):
+    r2 = x * x + y * y
+    if r2 < sf[s, RMIN2] or r2 > sf[s, RMAX2] or z < sf[s, ZLO] or z > sf[s, ZHI]:
+        return False
+    if shape == SHAPE_CONIC:
+        return on_vertex_branch(sf[s, CURV], sf[s, CONIC], z)
+    return True
+
+
+@njit(cache=True)
+def intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max):
+    """Nearest valid hit of a world ray with surface ``s`` beyond T_MIN and before ``t_max``.
+
+    Returns t (mm), or -1.0 if none.
+    """
+    px, py, pz = to_local(sf, s, x, y, z)
+    ux, uy, uz = dir_to_local(sf, s, dx, dy, dz)
+    shape = si[s, SHAPE]
+    if shape == SHAPE_CONIC:
+        a, b, c = conic_coefficients(sf[s, CURV], sf[s, CONIC], px, py, pz, ux, uy, uz)
+    elif shape == SHAPE_SPHERE:
+        a = 1.0
+        b = 2.0 * (px * ux + py * uy + pz * uz)
+        c = px * px + py * py + pz * pz - sf[s, RADIUS] * sf[s, RADIUS]
+    else:
+        a = ux * ux + uy * uy
+        b = 2.0 * (px * ux + py * uy)
+        c = px * px + py * py - sf[s, RADIUS] * sf[s, RADIUS]
+    t1, t2, n = quadratic_roots(a, b, c)
+    if n >= 1 and T_MIN < t1 < t_max:
+        if _valid(sf, s, shape, px + t1 * ux, py + t1 * uy, pz + t1 * uz):
+            return t1
+    if n == 2 and T_MIN < t2 < t_max:
+        if _valid(sf, s, shape, px + t2 * ux, py + t2 * uy, pz + t2 * uz):
+            return t2
+    return -1.0
+
+
+@njit(cache=True)
+def surface_normal(sf, si, s, x, y, z):
+    """World unit normal (toward side B) of surface ``s`` at world point (x, y, z) on it."""
+    px, py, pz = to_local(sf, s, x, y, z)
+    shape = si[s, SHAPE]
+    if shape == SHAPE_CONIC:
+        nx, ny, nz = conic_normal(sf[s, CURV], sf[s, CONIC], px, py, pz)
+    elif shape == SHAPE_SPHERE:
+        inv = 1.0 / sf[s, RADIUS]
+        nx, ny, nz = px * inv, py * inv, pz * inv
+    else:
+        inv = 1.0 / math.sqrt(px * px + py * py)
+        nx, ny, nz = px * inv, py * inv, 0.0
+    return dir_to_world(sf, s, nx, ny, nz)
+
+
+@njit(cache=True)
+def nearest_hit(sf, si, x, y, z, dx, dy, dz):
+    """Non-sequential search: (surface, t) of the nearest hit along the ray, or (-1, inf).
+
+    A bounding sphere per surface rejects most candidates before the exact test.
+    """
+    best_t = math.inf
+    best_s = -1
+    for s in range(sf.shape[0]):
+        cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
+        tc = cx * dx + cy * dy + cz * dz
+        br = sf[s, BR]
+        d2 = cx * cx + cy * cy + cz * cz - tc * tc
+        if d2 > br * br or tc + br < 0.0 or tc - br > best_t:
+            continue
+        t = intersect_surface(sf, si, s, x, y, z, dx, dy, dz, best_t)
+        if t > 0.0:
+            best_t = t
+            best_s = s
+    return best_s, best_t

@@ -1,0 +1,48 @@
+"""Interactions at a surface: one physical law per function, unit vectors in, unit vectors out."""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+
+@njit(cache=True, inline="always")
+def reflect(dx, dy, dz, nx, ny, nz):
+    """Specular reflection r = d − 2 (d·n) n (either orientation of the unit normal n)."""
+    k = 2.0 * (dx * nx + dy * ny + dz * nz)
+    return dx - k * nx, dy - k * ny, dz - k * nz
+
+
+@njit(cache=True, inline="always")
+def refract(dx, dy, dz, nx, ny, nz, eta):
+    """Refraction by Snell's law n₁ sin θ₁ = n₂ sin θ₂, ``eta`` = n₁/n₂.
+
+    The unit normal may face either side. Returns (ok, tx, ty, tz); ok is False on total internal
+    reflection (then the direction returned is meaningless).
+    """
+    cos_i = -(dx * nx + dy * ny + dz * nz)
+    if cos_i < 0.0:  # normal on the far side: flip it toward the incoming ray
+        nx, ny, nz, cos_i = -nx, -ny, -nz, -cos_i
+    sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i)
+    if sin2_t > 1.0:
+        return False, dx, dy, dz
+    cos_t = math.sqrt(1.0 - sin2_t)
+    k = eta * cos_i - cos_t
+    return True, eta * dx + k * nx, eta * dy + k * ny, eta * dz + k * nz
+
+
+@njit(cache=True, inline="always")
+def fresnel_reflectance(cos_i, n1, n2):
+    """Unpolarised Fresnel power reflectance R = (R_s + R_p)/2 at a smooth dielectric interface.
+
+    ``cos_i`` is |cos| of the angle of incidence in medium n1. Returns 1 beyond the critical angle.
+    """
+    cos_i = min(abs(cos_i), 1.0)
+    sin2_t = (n1 / n2) ** 2 * (1.0 - cos_i * cos_i)
+    if sin2_t >= 1.0:
+        return 1.0
+    cos_t = math.sqrt(1.0 - sin2_t)
+    rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t)
+    rp = (n1 * cos_t - n2 * cos_i) / (n1 * cos_t + n2 * cos_i)
+    return 0.5 * (rs * rs + rp * rp)

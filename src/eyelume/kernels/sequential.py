@@ -1,0 +1,100 @@
+"""Sequential trace through a rotationally symmetric lens whose axis is the world z axis.
+
+Lens table ``lf[j, :]`` (filled by :mod:`eyelume.compile`), one row per surface in order:
+vertex z (world mm), curvature c (1/mm), conic constant k, semi-diameter (mm), index before and
+after. Every surface transmits 100 % (ideal coatings); a ray outside a semi-diameter is stopped
+by the mount (vignetting), one beyond the critical angle is lost to total internal reflection.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from numba import njit
+
+from eyelume.kernels.geometry import conic_coefficients, conic_normal, on_vertex_branch, quadratic_roots
+from eyelume.kernels.interact import refract
+
+L_Z, L_CURV, L_CONIC, L_SD, L_N0, L_N1 = 0, 1, 2, 3, 4, 5
+N_LENS_COL = 6
+
+LENS_PASSED, LENS_VIGNETTED, LENS_TIR = 0, 1, 2
+
+
+@njit(cache=True, inline="always")
+def conic_hit_sequential(c, k, px, py, pz, dx, dy, dz):
+    """Parameter t of the ray's hit with a conicoid's vertex sheet (local frame), or NaN."""
+    a, b, cc = conic_coefficients(c, k, px, py, pz, dx, dy, dz)
+    t1, t2, n = quadratic_roots(a, b, cc)
+    if n >= 1 and t1 > -1e-9 and on_vertex_branch(c, k, pz + t1 * dz):
+        return t1
+    if n == 2 and t2 > -1e-9 and on_vertex_branch(c, k, pz + t2 * dz):
+        return t2
+    return math.nan
+
+
+@njit(cache=True)
+def trace_lens(lf, x, y, z, dx, dy, dz, path, n_path, record):
+    """Trace a world ray (unit direction, dz > 0) through all lens surfaces.
+
+    Returns (status, x, y, z, dx, dy, dz, surfaces_met, n_path): the ray after the last surface
+    when status is LENS_PASSED. With ``record`` the hit points are appended to ``path``.
+    """
+    met = 0
+    for j in range(lf.shape[0]):
+        zv = lf[j, L_Z]
+        c = lf[j, L_CURV]
+        k = lf[j, L_CONIC]
+        t = conic_hit_sequential(c, k, x, y, z - zv, dx, dy, dz)
+        if math.isnan(t):
+            return LENS_VIGNETTED, x, y, z, dx, dy, dz, met, n_path
+        x += t * dx
+        y += t * dy
+        z += t * dz
+        met += 1
+        if record and n_path < path.shape[0]:
+            path[n_path, 0] = x
+            path[n_path, 1] = y
+            path[n_path, 2] = z
+            n_path += 1
+        if x * x + y * y > lf[j, L_SD] * lf[j, L_SD]:
+            return LENS_VIGNETTED, x, y, z, dx, dy, dz, met, n_path
+        nx, ny, nz = conic_normal(c, k, x, y, z - zv)
+        ok, dx, dy, dz = refract(dx, dy, dz, nx, ny, nz, lf[j, L_N0] / lf[j, L_N1])
+        if not ok:
+            return LENS_TIR, x, y, z, dx, dy, dz, met, n_path
+    return LENS_PASSED, x, y, z, dx, dy, dz, met, n_path
+
+
+@njit(cache=True)
+def max_heights(lf, xs, ys, grid, stop):
+    """Largest ray height at each surface over rays that pass every surface and the stop.
+
+    Rays start at object points (x, y, 0) for x in ``xs``, y in ``ys`` and aim at (g₁, g₂, z₀)
+    on the first vertex plane for g₁, g₂ in ``grid``; apertures other than the stop are ignored.
+    """
+    n = lf.shape[0]
+    best = np.zeros(n)
+    heights = np.zeros(n)
+    path = np.zeros((n, 3))
+    z0 = lf[0, L_Z]
+    for x in xs:
+        for y in ys:
+            for g1 in grid:
+                for g2 in grid:
+                    dx, dy, dz = g1 - x, g2 - y, z0
+                    inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
+                    status, _, _, _, _, _, _, met, npath = trace_lens(
+                        lf, x, y, 0.0, dx * inv, dy * inv, dz * inv, path, 0, True
+                    )
+                    if status != LENS_PASSED:
+                        continue
+                    for j in range(n):
+                        heights[j] = math.sqrt(path[j, 0] ** 2 + path[j, 1] ** 2)
+                    if heights[stop] > lf[stop, L_SD]:
+                        continue
+                    for j in range(n):
+                        best[j] = max(best[j], heights[j])
+    return best

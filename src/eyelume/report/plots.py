@@ -1,0 +1,481 @@
+"""Pictures and plots of irradiance maps and optical layouts, written as PNG files.
+
+Three outputs, all in the package's units (lengths in mm, irradiance in W/mm²):
+
+- :func:`save_grey_png`: an irradiance array as a plain 8-bit grey picture, the way a camera image
+  looks, with bright glints allowed to saturate.
+- :func:`save_irradiance_plot`: the same kind of array as a labelled figure with millimetre axes and
+  a colour bar in physical units.
+- :func:`save_layout`: a y–z cross-section (x = 0) of the whole system, surfaces and rays, like a
+  lens-design layout plot.
+
+Figures are :class:`matplotlib.figure.Figure` objects drawn by the Agg canvas; pyplot is never
+imported, so nothing leaks between calls or processes. Parent directories of ``path`` are created
+when missing.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from PIL import Image
+
+__all__ = [
+    "CATEGORY_COLORS",
+    "SectionCurve",
+    "save_grey_png",
+    "save_irradiance_plot",
+    "save_layout",
+]
+
+#: Line colour of each :attr:`SectionCurve.category`, in the legend's order.
+CATEGORY_COLORS: dict[str, str] = {
+    "led": "tab:red",
+    "eye": "tab:blue",
+    "tissue": "tab:brown",
+    "lens": "tab:green",
+    "stop": "black",
+    "sensor": "tab:purple",
+    "receiver": "tab:gray",
+}
+
+_CATEGORY_STYLES: dict[str, str] = {"receiver": "--"}
+_DEFAULT_RAY_COLOR = "tab:orange"
+_DPI = 150
+
+PathLike = str | os.PathLike[str]
+
+
+# --------------------------------------------------------------------------------------------------
+# Helpers
+# --------------------------------------------------------------------------------------------------
+
+
+def _finite_2d(values: np.ndarray, what: str) -> np.ndarray:
+    """Return ``values`` as a 2-D float64 array, or raise if it is not 2-D or not finite."""
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.ndim != 2:
+        raise ValueError(f"{what} must be a 2-D array, got shape {arr.shape}")
+    bad = int(np.count_nonzero(~np.isfinite(arr)))
+    if bad:
+        raise ValueError(
+            f"{what} has {bad} non-finite value(s) (NaN or inf) out of {arr.size}; "
+            "mask or replace them before writing a picture"
+        )
+    return arr
+
+
+def _check_percentile(clip_percentile: float) -> float:
+    p = float(clip_percentile)
+    if not (0.0 < p <= 100.0):
+        raise ValueError(f"clip_percentile must be in (0, 100], got {clip_percentile!r}")
+    return p
+
+
+def _positive_percentile(arr: np.ndarray, clip_percentile: float) -> float:
+    """The ``clip_percentile`` percentile of the positive entries of ``arr`` (0 if none)."""
+    positive = arr[arr > 0.0]
+    if positive.size == 0:
+        return 0.0
+    return float(np.percentile(positive, clip_percentile))
+
+
+def _prepare_path(path: PathLike) -> Path:
+    out = Path(os.fspath(path))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def _save_figure(fig: Figure, path: PathLike) -> None:
+    """Render ``fig`` with the Agg canvas to ``path`` and release it."""
+    FigureCanvasAgg(fig)
+    try:
+        fig.savefig(_prepare_path(path), dpi=_DPI, bbox_inches="tight", format="png")
+    finally:
+        fig.clear()
+
+
+# --------------------------------------------------------------------------------------------------
+# Grey picture
+# --------------------------------------------------------------------------------------------------
+
+
+def save_grey_png(
+    irradiance: np.ndarray,
+    path: PathLike,
+    *,
+    clip_percentile: float = 99.5,
+    min_width_px: int = 640,
+) -> None:
+    """Write a 2-D irradiance array as an 8-bit grey PNG a person can look at.
+
+    The grey level is linear in irradiance,
+
+    .. math:: g = \\operatorname{round}\\bigl(255 \\,\\min(1, \\max(0, E / E_c))\\bigr),
+
+    from black at ``E = 0`` to white at the clip value ``E_c``, the ``clip_percentile``
+    percentile of the strictly positive entries. Anything brighter than ``E_c`` saturates to white:
+    small bright features such as corneal glints are clipped on purpose, because a scale running to
+    the maximum would leave the face and pupil nearly black next to a glint. Negative entries are
+    drawn black. Use ``clip_percentile=100`` for a scale to the maximum.
+
+    Parameters
+    ----------
+    irradiance : numpy.ndarray
+        2-D array of shape (rows, cols), any unit (typically W/mm²). Row 0 is the top of the
+        picture, column 0 its left edge.
+    path : str or os.PathLike
+        Output PNG file; parent directories are created when missing.
+    clip_percentile : float, optional
+        Percentile in (0, 100] of the positive values that maps to white. Default 99.5.
+    min_width_px : int, optional
+        The picture is enlarged by the smallest integer nearest-neighbour factor that makes it at
+        least this many pixels wide (each array element becomes a square block), so a small
+        detector image is not a thumbnail. Default 640.
+
+    Raises
+    ------
+    ValueError
+        If the array is not 2-D, holds NaN or inf (the message gives how many), or an option is
+        out of range.
+
+    Notes
+    -----
+    An all-zero array (or one with no positive entry) gives a black picture. An empty array
+    (zero rows or columns) gives a black picture one element high and wide, enlarged as above.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from PIL import Image
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     p = pathlib.Path(d) / "eye.png"
+    ...     save_grey_png(np.ones((15, 21)), p, min_width_px=100)
+    ...     Image.open(p).size
+    (105, 75)
+    """
+    arr = _finite_2d(irradiance, "irradiance")
+    p = _check_percentile(clip_percentile)
+    if int(min_width_px) != min_width_px or min_width_px < 1:
+        raise ValueError(f"min_width_px must be a positive integer, got {min_width_px!r}")
+
+    if arr.size == 0:
+        grey = np.zeros((1, 1), dtype=np.uint8)
+    else:
+        clip = _positive_percentile(arr, p)
+        if clip > 0.0:
+            scaled = np.clip(arr / clip, 0.0, 1.0) * 255.0
+            grey = np.rint(scaled).astype(np.uint8)
+        else:
+            grey = np.zeros(arr.shape, dtype=np.uint8)
+
+    factor = max(1, math.ceil(int(min_width_px) / grey.shape[1]))
+    if factor > 1:
+        grey = np.repeat(np.repeat(grey, factor, axis=0), factor, axis=1)
+
+    Image.fromarray(np.ascontiguousarray(grey)).save(_prepare_path(path), format="PNG")
+
+
+# --------------------------------------------------------------------------------------------------
+# Irradiance figure
+# --------------------------------------------------------------------------------------------------
+
+
+def save_irradiance_plot(
+    irradiance: np.ndarray,
+    path: PathLike,
+    *,
+    extent_mm: tuple[float, float, float, float],
+    title: str,
+    label: str = "Irradiance (W/mm²)",
+    xlabel: str = "x (mm)",
+    ylabel: str = "y (mm)",
+    clip_percentile: float | None = None,
+) -> None:
+    """Write an irradiance map as a figure with millimetre axes and a colour bar.
+
+    The map is drawn with the perceptual colormap ``inferno`` at its physical aspect ratio, the
+    colour scale running from ``min(0, E_min)`` to ``E_max`` or, with ``clip_percentile``, to that
+    percentile of the positive values; brighter entries (corneal glints) then saturate and the
+    colour bar shows an arrow at its top. Saved at 150 dpi with a tight bounding box.
+
+    Parameters
+    ----------
+    irradiance : numpy.ndarray
+        2-D array of shape (rows, cols), in the unit named by ``label``. Row 0 is drawn at ``top``,
+        column 0 at ``left``.
+    path : str or os.PathLike
+        Output PNG file; parent directories are created when missing.
+    extent_mm : tuple of 4 floats
+        ``(left, right, bottom, top)`` in mm: the outer edges of the array's first and last
+        columns and of its last and first rows, as matplotlib's ``imshow`` extent.
+    title : str
+        Figure title.
+    label : str, optional
+        Colour bar label, with its unit. Default ``"Irradiance (W/mm²)"``.
+    xlabel, ylabel : str, optional
+        Axis labels. Defaults ``"x (mm)"`` and ``"y (mm)"``.
+    clip_percentile : float or None, optional
+        Percentile in (0, 100] of the positive values at the top of the colour scale. ``None``
+        (default) scales to the maximum.
+
+    Raises
+    ------
+    ValueError
+        If the array is not 2-D, is empty, holds NaN or inf (the message gives how many), or the
+        extent is not four finite numbers with ``left != right`` and ``bottom != top``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     p = pathlib.Path(d) / "eye_plane.png"
+    ...     save_irradiance_plot(np.ones((15, 21)), p, extent_mm=(-20, 20, -15, 15),
+    ...                          title="Eye plane")
+    ...     p.stat().st_size > 0
+    True
+    """
+    arr = _finite_2d(irradiance, "irradiance")
+    if arr.size == 0:
+        raise ValueError(f"irradiance is empty (shape {arr.shape}); nothing to plot")
+    ext = tuple(float(v) for v in extent_mm)
+    if len(ext) != 4 or not all(math.isfinite(v) for v in ext):
+        raise ValueError(
+            f"extent_mm must be 4 finite numbers (left, right, bottom, top), got {ext}"
+        )
+    left, right, bottom, top = ext
+    if left == right or bottom == top:
+        raise ValueError(f"extent_mm has zero width or height: {ext}")
+
+    vmin = min(0.0, float(arr.min()))
+    if clip_percentile is None:
+        vmax = float(arr.max())
+        clipped = False
+    else:
+        vmax = _positive_percentile(arr, _check_percentile(clip_percentile))
+        clipped = bool(np.any(arr > vmax))
+    if vmax <= vmin:
+        vmax = vmin + 1.0  # constant image: any non-degenerate scale shows it as one colour
+
+    fig = Figure(figsize=(7.0, 5.0), layout="constrained")
+    ax = fig.add_subplot()
+    image = ax.imshow(
+        arr,
+        cmap="inferno",
+        vmin=vmin,
+        vmax=vmax,
+        origin="upper",
+        extent=(left, right, bottom, top),
+        interpolation="nearest",
+    )
+    # The colour bar lives in an inset of the axes so it is as tall as the image at any aspect.
+    # Its width, a fraction of the axes width, grows for tall images to keep it readable.
+    widen = max(1.0, abs(top - bottom) / abs(right - left) / 0.75)
+    cax = ax.inset_axes((1.0 + 0.04 * widen, 0.0, 0.045 * widen, 1.0))
+    colorbar = fig.colorbar(image, cax=cax, extend="max" if clipped else "neither")
+    colorbar.set_label(label)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    _save_figure(fig, path)
+
+
+# --------------------------------------------------------------------------------------------------
+# Layout cross-section
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class SectionCurve:
+    """One surface or outline of the system, cut by the plane x = 0, in world coordinates.
+
+    Parameters
+    ----------
+    name : str
+        What the curve is, shown in error messages, e.g. ``"anterior cornea"``, ``"LED 1 body"``,
+        ``"lens S3"``, ``"sensor"``.
+    category : str
+        One of ``"led"``, ``"eye"``, ``"tissue"``, ``"lens"``, ``"stop"``, ``"sensor"``,
+        ``"receiver"``; sets the colour (:data:`CATEGORY_COLORS`) and the legend entry.
+    z : numpy.ndarray
+        World z (mm) of the polyline's vertices, 1-D.
+    y : numpy.ndarray
+        World y (mm) of the same vertices, 1-D, same length as ``z``.
+
+    Raises
+    ------
+    ValueError
+        At construction, naming the curve, if the category is unknown, ``z`` and ``y`` are not 1-D
+        arrays of the same non-zero length, or either holds NaN or inf.
+
+    Notes
+    -----
+    ``z`` and ``y`` are stored as read-only float64 copies. Instances compare by identity
+    (``eq=False``) since arrays have no single truth value.
+    """
+
+    name: str
+    category: str
+    z: np.ndarray
+    y: np.ndarray
+
+    def __post_init__(self) -> None:
+        if self.category not in CATEGORY_COLORS:
+            raise ValueError(
+                f"curve {self.name!r}: unknown category {self.category!r}; "
+                f"expected one of {sorted(CATEGORY_COLORS)}"
+            )
+        z = np.array(self.z, dtype=np.float64)
+        y = np.array(self.y, dtype=np.float64)
+        if z.ndim != 1 or y.ndim != 1:
+            raise ValueError(
+                f"curve {self.name!r}: z and y must be 1-D, got shapes {z.shape} and {y.shape}"
+            )
+        if z.shape != y.shape:
+            raise ValueError(
+                f"curve {self.name!r}: z and y differ in length ({z.size} vs {y.size})"
+            )
+        if z.size == 0:
+            raise ValueError(f"curve {self.name!r}: has no vertices")
+        bad = int(np.count_nonzero(~np.isfinite(z)) + np.count_nonzero(~np.isfinite(y)))
+        if bad:
+            raise ValueError(f"curve {self.name!r}: {bad} non-finite value(s) (NaN or inf) in z/y")
+        z.flags.writeable = False
+        y.flags.writeable = False
+        object.__setattr__(self, "z", z)
+        object.__setattr__(self, "y", y)
+
+
+def _ray_segments(rays: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """Each ray's (z, y) vertices as a (k, 2) array, after checking shape and finiteness."""
+    segments = []
+    for i, ray in enumerate(rays):
+        v = np.asarray(ray, dtype=np.float64)
+        if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] == 0:
+            raise ValueError(
+                f"ray {i}: expected a (k, 3) array of (x, y, z) vertices, got {v.shape}"
+            )
+        bad = int(np.count_nonzero(~np.isfinite(v)))
+        if bad:
+            raise ValueError(
+                f"ray {i}: {bad} non-finite value(s) (NaN or inf); "
+                "end escaping rays at a finite point before plotting"
+            )
+        segments.append(v[:, [2, 1]])
+    return segments
+
+
+def save_layout(
+    curves: Sequence[SectionCurve],
+    rays: Sequence[np.ndarray],
+    path: PathLike,
+    *,
+    title: str,
+    ray_colors: Sequence[str] | None = None,
+) -> None:
+    """Write a y–z cross-section of the optical system, surfaces and rays, as a layout plot.
+
+    z runs horizontally, y vertically, both in mm and at equal scale. Each curve is a line in its
+    category's colour (receivers dashed), with one legend entry per category present. Each ray is
+    a thin semi-transparent polyline through its vertices' (z, y), i.e. its projection onto the
+    plane x = 0. The figure is 16 × 5 in at 150 dpi so a system spanning z ∈ [−30, 500] mm and
+    y ∈ [−40, 40] mm stays readable; the y range is widened to fill the axes at equal scale.
+
+    Parameters
+    ----------
+    curves : sequence of SectionCurve
+        Surfaces and outlines, drawn in order.
+    rays : sequence of numpy.ndarray
+        Ray paths, each a (k, 3) array of world vertices (x, y, z) in mm, k ≥ 1 (a single vertex
+        draws nothing). A (n, k, 3) array also works.
+    path : str or os.PathLike
+        Output PNG file; parent directories are created when missing.
+    title : str
+        Figure title.
+    ray_colors : sequence of str or None, optional
+        One matplotlib colour per ray (e.g. by LED); default all ``"tab:orange"``.
+
+    Raises
+    ------
+    ValueError
+        If a ray is not a finite (k, 3) array (the message gives its index), an entry of
+        ``curves`` is not a :class:`SectionCurve`, or ``ray_colors`` differs in length from
+        ``rays``. Bad curve arrays are rejected when the :class:`SectionCurve` is built.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> cornea = SectionCurve("anterior cornea", "eye", np.array([-1.0, 0.0, -1.0]),
+    ...                       np.array([-5.0, 0.0, 5.0]))
+    >>> ray = np.array([[0.0, 20.0, 60.0], [0.0, 2.0, 0.0], [0.0, -10.0, 200.0]])
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     p = pathlib.Path(d) / "layout.png"
+    ...     save_layout([cornea], [ray], p, title="Layout")
+    ...     p.stat().st_size > 0
+    True
+    """
+    for curve in curves:
+        if not isinstance(curve, SectionCurve):
+            raise ValueError(f"curves must hold SectionCurve objects, got {type(curve).__name__}")
+    segments = _ray_segments(rays)
+    if ray_colors is None:
+        colors: list[str] = [_DEFAULT_RAY_COLOR] * len(segments)
+    else:
+        colors = list(ray_colors)
+        if len(colors) != len(segments):
+            raise ValueError(
+                f"ray_colors has {len(colors)} entries but there are {len(segments)} rays"
+            )
+
+    fig = Figure(figsize=(16.0, 5.0), layout="constrained")
+    ax = fig.add_subplot()
+    if segments:
+        ax.add_collection(
+            LineCollection(segments, colors=colors, linewidths=0.5, alpha=0.35, zorder=1),
+            autolim=True,
+        )
+    present: list[str] = []
+    for curve in curves:
+        ax.plot(
+            curve.z,
+            curve.y,
+            color=CATEGORY_COLORS[curve.category],
+            linestyle=_CATEGORY_STYLES.get(curve.category, "-"),
+            linewidth=1.3,
+            marker="o" if curve.z.size == 1 else None,
+            markersize=3,
+            zorder=2,
+        )
+        if curve.category not in present:
+            present.append(curve.category)
+    ax.autoscale_view()
+    ax.set_aspect("equal", adjustable="datalim")
+
+    if present:
+        order = [c for c in CATEGORY_COLORS if c in present]
+        handles = [
+            Line2D(
+                [],
+                [],
+                color=CATEGORY_COLORS[c],
+                linestyle=_CATEGORY_STYLES.get(c, "-"),
+                linewidth=1.3,
+                label=c,
+            )
+            for c in order
+        ]
+        ax.legend(handles=handles, loc="upper right", fontsize="small", framealpha=0.85)
+    ax.set_xlabel("z (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_title(title)
+    ax.grid(True, linewidth=0.3, alpha=0.5)
+    _save_figure(fig, path)

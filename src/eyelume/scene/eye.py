@@ -1,0 +1,69 @@
+"""Schematic-eye optics: indices at any wavelength and the eye's paraxial layout."""
+
+from __future__ import annotations
+
+import math
+
+from eyelume.scene.model import Eye
+
+__all__ = ["LAMBDA_C", "LAMBDA_D", "LAMBDA_F", "eye_index", "eye_indices", "limbus_geometry"]
+
+LAMBDA_D = 587.5618  # nm, helium d line
+LAMBDA_F = 486.1327  # nm, hydrogen F line
+LAMBDA_C = 656.2725  # nm, hydrogen C line
+
+
+def eye_index(nd: float, nF: float, nC: float, wavelength_nm: float) -> float:
+    """Index of an ocular medium at any wavelength from its d, F and C values.
+
+    The two-term Cauchy law n(λ) = A + B/λ², anchored at n_d with the slope B fixed by the F–C
+    dispersion (the form behind the Arizona eye's dispersion, Schwiegerling 2004):
+
+        n(λ) = n_d + (n_F − n_C) (λ⁻² − λ_d⁻²) / (λ_F⁻² − λ_C⁻²)
+
+    Three values and two parameters: the law passes through n_d exactly and reproduces
+    n_F − n_C exactly. Beyond the visible (850 nm) it is an extrapolation, as in the paper.
+
+    Examples
+    --------
+    >>> round(eye_index(1.3771, 1.3807, 1.37405, 587.5618), 6)
+    1.3771
+    """
+    if not (wavelength_nm > 0 and math.isfinite(wavelength_nm)):
+        raise ValueError(f"wavelength_nm = {wavelength_nm!r} must be a positive number")
+    inv2 = lambda lam: 1.0 / (lam * 1e-3) ** 2  # noqa: E731  (µm⁻²)
+    slope = (nF - nC) / (inv2(LAMBDA_F) - inv2(LAMBDA_C))
+    return nd + slope * (inv2(wavelength_nm) - inv2(LAMBDA_D))
+
+
+def eye_indices(eye: Eye, wavelength_nm: float) -> list[float]:
+    """Indices [air, after surface 1, …] of the eye's media at ``wavelength_nm``; air is 1."""
+    out = [1.0]
+    for s in eye.surfaces[:-1]:
+        out.append(eye_index(s.nd, s.nF, s.nC, wavelength_nm))
+    return out
+
+
+def sag(radius_mm: float, conic: float, r: float) -> float:
+    """Sag z(r) = c r² / (1 + √(1 − (1+k) c² r²)) in mm (c = 1/R; 0 for a plane)."""
+    c = 0.0 if math.isinf(radius_mm) else 1.0 / radius_mm
+    arg = 1.0 - (1.0 + conic) * c * c * r * r
+    if arg < 0:
+        return math.nan
+    return c * r * r / (1.0 + math.sqrt(arg))
+
+
+def limbus_geometry(eye: Eye) -> tuple[float, float, float]:
+    """The limbus and the eyeball: (limbus radius, limbus depth z', eyeball-centre depth z').
+
+    The sclera is the sphere of ``sclera_radius_mm`` through the edge of the anterior cornea's
+    clear aperture, centred on the axis (eye frame, mm behind the corneal vertex).
+    """
+    cornea = eye.surfaces[0]
+    r_l = cornea.semi_diameter_mm
+    z_l = sag(cornea.radius_mm, cornea.conic, r_l)
+    if math.isnan(z_l):
+        raise ValueError(
+            f"eye.surfaces.0.semi_diameter_mm = {r_l} exceeds the extent of the corneal conicoid"
+        )
+    return r_l, z_l, z_l + math.sqrt(eye.sclera_radius_mm**2 - r_l**2)

@@ -1,0 +1,185 @@
+"""Scene files: TOML load/save, presets, dotted-path overrides, and one-line error messages.
+
+Every error a user can cause is a :class:`SceneError` whose message names the field (as a dotted
+path such as ``leds.height_mm``) and the offending value.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+from pydantic import ValidationError
+
+from eyelume.scene.model import Scene
+
+__all__ = ["SceneError", "apply_overrides", "load_scene", "preset_names", "save_scene"]
+
+_PRESETS = "eyelume.scene.presets"
+
+
+class SceneError(ValueError):
+    """A scene that cannot be used, with a one-line message naming the field and the value."""
+
+
+def preset_names() -> list[str]:
+    """Names of the scenes shipped with eyelume (``paper2005``, …)."""
+    root = resources.files(_PRESETS)
+    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise SceneError(f"cannot read scene file '{path}': {exc.strerror}") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"scene file '{path}' is not valid TOML: {exc}") from None
+
+
+def _resolve_paths(data: dict[str, Any], base: Path) -> None:
+    """Make file references in the scene absolute, relative to the scene file's folder."""
+    profile = data.get("leds", {}).get("profile", {})
+    if isinstance(profile, dict) and isinstance(profile.get("table_csv"), str):
+        profile["table_csv"] = str((base / profile["table_csv"]).resolve())
+    lens = data.get("lens", {})
+    if isinstance(lens, dict) and isinstance(lens.get("glass_catalogs"), list):
+        lens["glass_catalogs"] = [
+            str((base / p).resolve()) if isinstance(p, str) else p for p in lens["glass_catalogs"]
+        ]
+
+
+def _format_loc(loc: tuple[Any, ...]) -> str:
+    return ".".join(str(p) for p in loc if not (isinstance(p, str) and p.startswith("function-")))
+
+
+def _lookup(data: Any, loc: tuple[Any, ...]) -> Any:
+    for part in loc:
+        try:
+            data = data[part]
+        except (KeyError, IndexError, TypeError):
+            return None
+    return data
+
+
+def validate_scene(data: dict[str, Any], origin: str = "scene") -> Scene:
+    """Build a :class:`Scene` from plain data, turning the first validation error into one line."""
+    try:
+        return Scene.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        loc = tuple(err["loc"])
+        field = _format_loc(loc) or "(top level)"
+        msg = err["msg"]
+        if err["type"] == "extra_forbidden":
+            raise SceneError(f"{origin}: unknown field '{field}'") from None
+        if err["type"] == "missing":
+            raise SceneError(f"{origin}: field '{field}' is required") from None
+        value = err.get("input", _lookup(data, loc))
+        if isinstance(value, dict):
+            raise SceneError(f"{origin}: {field}: {msg}") from None
+        raise SceneError(f"{origin}: field '{field}' = {value!r}: {msg}") from None
+
+
+def load_scene(source: str | Path = "paper2005", overrides: dict[str, Any] | None = None) -> Scene:
+    """Load a scene from a preset name or a TOML file, then apply dotted-path overrides.
+
+    Parameters
+    ----------
+    source
+        A preset name (see :func:`preset_names`) or the path of a ``.toml`` scene file.
+    overrides
+        ``{"leds.height_mm": 40, ...}``; values may be TOML literals given as strings.
+
+    Examples
+    --------
+    >>> scene = load_scene("paper2005", {"leds.height_mm": "40"})
+    >>> scene.leds.height_mm
+    40.0
+    """
+    text_source = str(source)
+    if text_source in preset_names():
+        res = resources.files(_PRESETS) / f"{text_source}.toml"
+        with resources.as_file(res) as path:
+            data = _read_toml(path)
+            _resolve_paths(data, path.parent)
+        origin = f"preset {text_source}"
+    else:
+        path = Path(text_source)
+        if not path.exists():
+            raise SceneError(
+                f"scene '{text_source}' is neither a file nor a preset "
+                f"(presets: {', '.join(preset_names())})"
+            )
+        data = _read_toml(path)
+        _resolve_paths(data, path.parent)
+        origin = str(path)
+    if overrides:
+        data = _override_data(data, overrides)
+    return validate_scene(data, origin)
+
+
+def _parse_value(text: Any) -> Any:
+    """A TOML literal (``40``, ``true``, ``[1, 2]``, ``"x"``, ``inf``) or else the bare string."""
+    if not isinstance(text, str):
+        return text
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def _override_data(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
+    data = copy.deepcopy(data)
+    for key, raw in overrides.items():
+        parts = key.split(".")
+        if not key or any(p == "" for p in parts):
+            raise SceneError(f"override '{key}': not a dotted field path like leds.height_mm")
+        node: Any = data
+        for i, part in enumerate(parts[:-1]):
+            if isinstance(node, list):
+                if not part.isdigit() or int(part) >= len(node):
+                    raise SceneError(f"override '{key}': no item {part} in '{'.'.join(parts[:i])}'")
+                node = node[int(part)]
+            else:
+                node = node.setdefault(part, {})
+            if not isinstance(node, dict | list):
+                raise SceneError(f"override '{key}': '{'.'.join(parts[: i + 1])}' is not a table")
+        last = parts[-1]
+        value = _parse_value(raw)
+        if isinstance(value, float) and math.isnan(value):
+            raise SceneError(f"override '{key}' = nan: must be a number, not NaN")
+        if isinstance(node, list):
+            if not last.isdigit() or int(last) >= len(node):
+                raise SceneError(f"override '{key}': no item {last} in this list")
+            node[int(last)] = value
+        else:
+            node[last] = value
+    return data
+
+
+def apply_overrides(scene: Scene, overrides: dict[str, Any]) -> Scene:
+    """A new scene with the dotted-path ``overrides`` applied (the scene itself is unchanged)."""
+    data = scene.model_dump(mode="python")
+    return validate_scene(_override_data(data, overrides), f"scene {scene.name}")
+
+
+def _toml_ready(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _toml_ready(v) for k, v in value.items() if v is not None}
+    if isinstance(value, list | tuple):
+        return [_toml_ready(v) for v in value]
+    return value
+
+
+def save_scene(scene: Scene, path: str | Path) -> None:
+    """Write a scene as TOML that :func:`load_scene` reads back to an equal scene."""
+    data = _toml_ready(scene.model_dump(mode="python"))
+    Path(path).write_text(tomli_w.dumps(data), encoding="utf-8")

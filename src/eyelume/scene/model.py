@@ -1,0 +1,307 @@
+"""The scene: plain validated data describing LEDs, eye, face, imaging lens, sensor and receivers.
+
+No physics happens here. Every length is in millimetres, every angle in degrees, wavelength in
+nanometres, radiant intensity in W/sr (DESIGN.md §2). The world frame has its origin at the
+anterior corneal vertex of the eye in primary gaze, +z along the camera's optical axis from the eye
+toward the camera and LEDs, +y up; the eye's prescription is written in its own lens-design frame
+(z' into the eye, z' = −z in primary gaze).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validator
+
+__all__ = [
+    "Eye",
+    "EyePlane",
+    "EyeSurface",
+    "Face",
+    "ImagingLens",
+    "LedArray",
+    "LedProfile",
+    "LensSurface",
+    "Run",
+    "Scene",
+    "Sensor",
+    "Tissue",
+]
+
+
+def _not_nan(value: float) -> float:
+    if math.isnan(value):
+        raise ValueError("must be a number, not NaN")
+    return value
+
+
+#: A radius of curvature: finite and non-zero, or ±inf for a plane.
+Radius = Annotated[float, Field(allow_inf_nan=True), AfterValidator(_not_nan)]
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+Fraction = Annotated[float, Field(ge=0, le=1)]
+Vector3 = tuple[float, float, float]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+class LedProfile(_Model):
+    """Relative radiant intensity I(α)/I(0) of an LED against the angle α from its axis.
+
+    ``kind = "cos_power"``: I(α)/I(0) = cos^m α with m chosen so that the intensity is half at
+    ``half_intensity_angle_deg`` (the datasheet's half of the full spread angle).
+    ``kind = "table"``: a CSV file of two columns, angle in degrees (0 … ≤ 90, increasing) and
+    relative intensity, linearly interpolated; a path relative to the scene file.
+    """
+
+    kind: Literal["cos_power", "table"] = "cos_power"
+    half_intensity_angle_deg: float = Field(22.5, gt=0, lt=90)
+    table_csv: str | None = None
+
+    @model_validator(mode="after")
+    def _table_needs_file(self) -> LedProfile:
+        if self.kind == "table" and not self.table_csv:
+            raise ValueError("kind 'table' needs table_csv, the path of the profile CSV")
+        return self
+
+
+class LedArray(_Model):
+    """N identical LEDs placed symmetrically about the camera axis (paper Fig. 8).
+
+    LED ``i`` sits at azimuth φᵢ (from +x toward +y as seen from the camera), its body centre at
+    (Y cos φ, Y sin φ, Z) in the world frame, its axis pitched by θ from −z toward the optical axis.
+    Light leaves from the apex of the spherical body (a point source at centre + r·axis).
+    """
+
+    part: str = "American Bright BIR-BO07J4Q-1"
+    count: int = Field(4, ge=1, le=64)
+    azimuths_deg: list[float] | None = None
+    height_mm: NonNegative = 30.0
+    distance_mm: Positive = 70.0
+    pitch_deg: float = Field(20.0, gt=-90, lt=90)
+    body_diameter_mm: Positive = 5.0
+    radiant_intensity_w_sr: Positive = 0.015
+    profile: LedProfile = LedProfile()
+
+    @model_validator(mode="after")
+    def _azimuths_match_count(self) -> LedArray:
+        if self.azimuths_deg is not None and len(self.azimuths_deg) != self.count:
+            raise ValueError(
+                f"azimuths_deg has {len(self.azimuths_deg)} entries but count is {self.count}"
+            )
+        return self
+
+    def azimuths(self) -> list[float]:
+        """Azimuth of every LED in degrees (evenly spaced from 0° unless given)."""
+        if self.azimuths_deg is not None:
+            return list(self.azimuths_deg)
+        return [360.0 * i / self.count for i in range(self.count)]
+
+
+class EyeSurface(_Model):
+    """One row of a schematic-eye prescription (eye frame, lens-design sign convention).
+
+    ``nd, nF, nC`` are the indices of the medium *after* the surface (toward the retina) at the
+    d (587.56 nm), F (486.13 nm) and C (656.27 nm) lines; the last row (retina) has none.
+    """
+
+    name: str
+    radius_mm: Radius
+    conic: float = 0.0
+    thickness_mm: NonNegative = 0.0
+    semi_diameter_mm: Positive
+    nd: float | None = Field(None, gt=1)
+    nF: float | None = Field(None, gt=1)
+    nC: float | None = Field(None, gt=1)
+
+    @model_validator(mode="after")
+    def _finite_radius(self) -> EyeSurface:
+        if self.radius_mm == 0:
+            raise ValueError("radius_mm is 0: use inf for a flat surface")
+        return self
+
+
+class Eye(_Model):
+    """A schematic eye with its Lambertian tissues.
+
+    ``surfaces`` are the refracting surfaces followed by the retina, in order from the anterior
+    cornea. The iris is a Lambertian annulus in the plane of the anterior lens vertex; the sclera a
+    Lambertian sphere of ``sclera_radius_mm`` through the corneal limbus (the edge of the anterior
+    cornea's clear aperture); its inner face and the retina reflect ``retina_reflectance``.
+    """
+
+    model: str = "arizona"
+    accommodation_d: float = 0.0
+    surfaces: list[EyeSurface]
+    cornea_reflection: Literal["fixed", "fresnel"] = "fixed"
+    cornea_reflectance: Fraction = 0.024
+    cornea_absorptance: Fraction = 0.0
+    iris_outer_diameter_mm: Positive = 11.0
+    pupil_diameter_mm: Positive = 7.0
+    iris_reflectance: Fraction = 0.05
+    sclera_radius_mm: Positive = 12.0
+    sclera_reflectance: Fraction = 0.09
+    retina_reflectance: Fraction = 0.0
+    rotation_center_mm: Positive = 13.5
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Eye:
+        if len(self.surfaces) < 3:
+            raise ValueError("surfaces needs at least an anterior cornea, one more surface and the retina")
+        for s in self.surfaces[:-1]:
+            if None in (s.nd, s.nF, s.nC):
+                raise ValueError(f"surface '{s.name}' needs nd, nF and nC of the medium after it")
+        if self.pupil_diameter_mm >= self.iris_outer_diameter_mm:
+            raise ValueError(
+                f"pupil_diameter_mm = {self.pupil_diameter_mm} must be smaller than "
+                f"iris_outer_diameter_mm = {self.iris_outer_diameter_mm}"
+            )
+        if self.cornea_reflectance + self.cornea_absorptance > 1:
+            raise ValueError(
+                f"cornea_reflectance + cornea_absorptance = "
+                f"{self.cornea_reflectance + self.cornea_absorptance} exceeds 1"
+            )
+        limbus = self.surfaces[0].semi_diameter_mm
+        if self.iris_outer_diameter_mm / 2 >= limbus:
+            raise ValueError(
+                f"iris_outer_diameter_mm = {self.iris_outer_diameter_mm} must fit inside the cornea "
+                f"(anterior cornea semi_diameter_mm = {limbus})"
+            )
+        if self.sclera_radius_mm <= limbus:
+            raise ValueError(
+                f"sclera_radius_mm = {self.sclera_radius_mm} must exceed the limbus radius {limbus}"
+            )
+        return self
+
+
+class Tissue(_Model):
+    """A Lambertian face or eyelid structure built from a sphere, cylinder or disk.
+
+    Frame: the shape's local z axis is ``axis`` (world, normalised on use) through ``center_mm``.
+    Sphere: radius about the centre. Cylinder: radius about the axis. Disk: the plane through the
+    centre normal to the axis. The surface exists where local z ∈ ``clip_z_mm`` and the distance
+    from the axis ∈ ``clip_r_mm`` (local frame). ``reflectance`` defaults to the face's skin.
+    """
+
+    name: str
+    anatomy: str = ""
+    shape: Literal["sphere", "cylinder", "disk"]
+    center_mm: Vector3
+    axis: Vector3 = (0.0, 0.0, 1.0)
+    radius_mm: NonNegative = 0.0
+    clip_z_mm: tuple[float, float] = (-1.0e6, 1.0e6)
+    clip_r_mm: tuple[float, float] = (0.0, 1.0e6)
+    reflectance: Fraction | None = None
+
+    @model_validator(mode="after")
+    def _shape_ok(self) -> Tissue:
+        if self.shape != "disk" and self.radius_mm <= 0:
+            raise ValueError(f"radius_mm = {self.radius_mm} must be > 0 for a {self.shape}")
+        if sum(a * a for a in self.axis) == 0:
+            raise ValueError("axis = (0, 0, 0) has no direction")
+        if self.clip_z_mm[0] >= self.clip_z_mm[1] or self.clip_r_mm[0] >= self.clip_r_mm[1]:
+            raise ValueError(f"empty clip range clip_z_mm={self.clip_z_mm} clip_r_mm={self.clip_r_mm}")
+        return self
+
+
+class Face(_Model):
+    """The face around the eye: eyelids, brow, cheek, nose and periorbital skin."""
+
+    enabled: bool = True
+    skin_reflectance: Fraction = 0.12
+    tissues: list[Tissue] = []
+
+
+class LensSurface(_Model):
+    """One surface of the imaging lens prescription (light travels +z, lens-design signs).
+
+    ``glass`` names the medium after the surface in the glass catalogs (empty = air);
+    ``paper_glass`` records the name in the source prescription when a substitute is used.
+    ``semi_diameter_mm`` unset: sized from a real-ray trace of the full field (see compile).
+    """
+
+    radius_mm: Radius = math.inf
+    conic: float = 0.0
+    thickness_mm: NonNegative
+    glass: str = ""
+    paper_glass: str = ""
+    semi_diameter_mm: Positive | None = None
+    stop: bool = False
+
+    @model_validator(mode="after")
+    def _finite_radius(self) -> LensSurface:
+        if self.radius_mm == 0:
+            raise ValueError("radius_mm is 0: use inf for a flat surface")
+        return self
+
+
+class ImagingLens(_Model):
+    """The camera lens: object (eye plane) distance, prescription and stop sizing.
+
+    The last surface's ``thickness_mm`` is the distance to the image plane. The stop's
+    semi-diameter is sized so that EFL / entrance-pupil diameter = ``f_number`` (infinite
+    conjugate, the reading of the paper's "F-number of 2.51").
+    """
+
+    name: str = ""
+    object_distance_mm: Positive = 70.0
+    f_number: Positive = 2.51
+    glass_catalogs: list[str] = []
+    surfaces: list[LensSurface]
+
+    @model_validator(mode="after")
+    def _one_stop(self) -> ImagingLens:
+        stops = [i for i, s in enumerate(self.surfaces) if s.stop]
+        if len(stops) != 1:
+            raise ValueError(f"exactly one surface must have stop = true (found {len(stops)})")
+        if self.surfaces[-1].thickness_mm <= 0:
+            raise ValueError("the last surface's thickness_mm (distance to the image) must be > 0")
+        return self
+
+
+class Sensor(_Model):
+    """The image plane, binned into pixels (rows × cols over height × width, centred on axis)."""
+
+    width_mm: Positive = 46.0
+    height_mm: Positive = 34.3
+    cols: int = Field(87, ge=1, le=4096)
+    rows: int = Field(65, ge=1, le=4096)
+
+
+class EyePlane(_Model):
+    """The eye-plane receiver (paper §4.1.2): the plane z = 0 tangent to the corneal vertex.
+
+    It records the flux crossing it toward the eye (−z) and does not disturb rays.
+    """
+
+    width_mm: Positive = 40.0
+    height_mm: Positive = 30.0
+    cols: int = Field(21, ge=1, le=4096)
+    rows: int = Field(15, ge=1, le=4096)
+
+
+class Run(_Model):
+    """Defaults of a forward Monte Carlo run."""
+
+    rays: int = Field(1_500_000, ge=1)
+    seed: int = Field(0, ge=0, lt=2**63)
+    batch_size: int = Field(1 << 18, ge=1)
+    max_events: int = Field(64, ge=2, le=10_000)
+
+
+class Scene(_Model):
+    """A complete eye illumination and imaging system."""
+
+    name: str
+    description: str = ""
+    wavelength_nm: float = Field(850.0, ge=300, le=2500)
+    leds: LedArray = LedArray()
+    eye: Eye
+    face: Face = Face()
+    lens: ImagingLens
+    sensor: Sensor = Sensor()
+    eye_plane: EyePlane = EyePlane()
+    run: Run = Run()

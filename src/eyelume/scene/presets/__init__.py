@@ -1,0 +1,1 @@
+"""Scenes shipped with eyelume (TOML) and their data files."""
