@@ -434,6 +434,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
         conic=lf[0, Q.L_CONIC],
         clip_r=(0.0, lf[0, Q.L_SD]),
         action=G.ACT_LENS,
+        tally_a="lens mount (vignetted)",
         tally_b="lens mount (vignetted)",
     )
 

@@ -14,7 +14,10 @@ The eye-plane receiver counts every crossing of z = 0 toward the eye without tou
 from __future__ import annotations
 
 import math
+import signal
+import threading
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numba
@@ -186,15 +189,44 @@ def _trace_batch(
         interactions[c] += inter
 
 
+class _StopFlag:
+    requested = False
+
+
+@contextmanager
+def _interrupt_between_batches():
+    """Turn the first SIGINT into a request to stop after the current batch."""
+    flag = _StopFlag()
+    if threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+
+    def handler(signum, frame):
+        if flag.requested:
+            raise KeyboardInterrupt
+        flag.requested = True
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 @dataclass
 class ForwardCounts:
-    """Integer tallies of a forward run: every ray counted exactly once in ``tallies``."""
+    """Integer tallies of a forward run: every ray counted exactly once in ``tallies``.
+
+    ``interrupted`` is True when Ctrl-C stopped the run between batches: ``rays`` is then the
+    number traced so far, a complete unbiased sample of its own.
+    """
 
     image: np.ndarray  # (rows, cols) rays reaching each sensor pixel
     plane: np.ndarray  # (rows, cols) eye-plane crossings toward the eye
     tallies: np.ndarray  # (n_entries,) rays ending in each ledger entry
     interactions: int
     rays: int
+    interrupted: bool = False
 
 
 def trace_forward(
@@ -207,7 +239,8 @@ def trace_forward(
     """Trace ``rays`` rays of the compiled scene, in batches so memory stays flat.
 
     ``progress(done, total)`` is called after each batch. Results depend on (scene, rays, seed)
-    only. A KeyboardInterrupt between batches propagates; counts so far are discarded.
+    only. Ctrl-C (SIGINT, in the main thread) ends the run after the batch in flight and returns
+    the finished batches, marked ``interrupted``; a second Ctrl-C aborts at once.
     """
     if rays < 1:
         raise ValueError(f"rays = {rays}: must be ≥ 1")
@@ -220,16 +253,21 @@ def trace_forward(
     tal = np.zeros((n_chunks, len(cs.tallies)), dtype=np.int64)
     inter = np.zeros(n_chunks, dtype=np.int64)
     done = 0
-    while done < rays:
-        n = min(batch, rays - done)
-        _trace_batch(
-            done, n, seed, cs.sf, cs.si, cs.lf, cs.image_z, cs.leds, cs.alpha_grid, cs.cdf_grid,
-            cs.sensor, cs.plane, cs.scene.run.max_events, img, pl, tal, inter,
-        )
-        done += n
-        if progress is not None:
-            progress(done, rays)
-    return ForwardCounts(img.sum(axis=0), pl.sum(axis=0), tal.sum(axis=0), int(inter.sum()), rays)
+    with _interrupt_between_batches() as stop:
+        while done < rays and not stop.requested:
+            n = min(batch, rays - done)
+            _trace_batch(
+                done, n, seed, cs.sf, cs.si, cs.lf, cs.image_z, cs.leds, cs.alpha_grid,
+                cs.cdf_grid, cs.sensor, cs.plane, cs.scene.run.max_events, img, pl, tal, inter,
+            )
+            done += n
+            if progress is not None:
+                progress(done, rays)
+    if done == 0:
+        raise KeyboardInterrupt
+    return ForwardCounts(
+        img.sum(axis=0), pl.sum(axis=0), tal.sum(axis=0), int(inter.sum()), done, done < rays
+    )
 
 
 @njit(cache=True)

@@ -1,0 +1,65 @@
+"""Files a render writes: arrays, pictures, figures, the layout drawing and the summary."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from eyelume.compile import CompiledScene
+from eyelume.estimators.forward import trace_paths
+from eyelume.layout import system_sections
+from eyelume.render import RenderResult
+from eyelume.report.plots import SectionCurve, save_grey_png, save_irradiance_plot, save_layout
+
+__all__ = ["write_render_outputs"]
+
+
+def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Path) -> list[Path]:
+    """Write every output of ``eyelume render`` into folder ``out``; returns the paths written.
+
+    ``eye_image.npy``/``eye_plane.npy`` (W/mm², float64), their grey PNGs (glints saturate at the
+    99.5th percentile), colour-bar figures ``*_plot.png`` in physical units, ``layout.png`` (a y–z
+    section with a few dozen traced rays) and ``summary.json`` (run facts and power ledger).
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+
+    def path(name: str) -> Path:
+        p = out / name
+        written.append(p)
+        return p
+
+    np.save(path("eye_image.npy"), result.eye_image)
+    np.save(path("eye_plane.npy"), result.eye_plane)
+    save_grey_png(result.eye_image, path("eye_image.png"))
+    save_grey_png(result.eye_plane, path("eye_plane.png"), clip_percentile=100.0)
+    name = result.scene.name
+    save_irradiance_plot(
+        result.eye_image,
+        path("eye_image_plot.png"),
+        extent_mm=result.sensor_extent_mm,
+        title=f"{name}: eye image, {result.rays:,} rays (glints clipped at 99.5 %)",
+        xlabel="image x (mm, picture upright)",
+        ylabel="image y (mm)",
+        clip_percentile=99.5,
+    )
+    save_irradiance_plot(
+        result.eye_plane,
+        path("eye_plane_plot.png"),
+        extent_mm=result.plane_extent_mm,
+        title=f"{name}: eye-plane irradiance toward the eye",
+    )
+    rays = trace_paths(cs, result.seed)
+    curves = [SectionCurve(s.name, s.category, s.z, s.y) for s in system_sections(cs)]
+    save_layout(
+        curves,
+        [p for p, _ in rays],
+        path("layout.png"),
+        title=f"{name}: y–z section, rays reaching the sensor (red) and others (orange)",
+        ray_colors=["tab:red" if hit else "tab:orange" for _, hit in rays],
+    )
+    path("summary.json").write_text(json.dumps(result.summary(), indent=2) + "\n", encoding="utf-8")
+    return written
