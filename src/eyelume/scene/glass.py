@@ -22,6 +22,7 @@ True
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -462,13 +463,12 @@ def _checked_wavelength(wavelength_nm: float, glass_name: str) -> np.float64:
 
     float64 (not float) so that a pole of a formula gives inf instead of ZeroDivisionError.
     """
-    try:
-        lam = np.float64(wavelength_nm)
-    except (TypeError, ValueError):
+    if not isinstance(wavelength_nm, numbers.Real) or isinstance(wavelength_nm, bool):
         raise GlassError(
             f"glass {glass_name!r}: wavelength {wavelength_nm!r} is not a number (nm expected)"
-        ) from None
-    if np.ndim(wavelength_nm) != 0 or not (math.isfinite(lam) and lam > 0.0):
+        )
+    lam = np.float64(wavelength_nm)
+    if not (math.isfinite(lam) and lam > 0.0):
         raise GlassError(
             f"glass {glass_name!r}: wavelength {wavelength_nm!r} nm is not a finite positive number"
         )
@@ -632,9 +632,7 @@ def _parse_agf(path: Path) -> list[Glass]:
         record = tokens[0].upper()
         if record == "NM":
             if len(tokens) < 6:
-                raise bad(
-                    lineno, f"NM record needs 'NM name formula MIL nd vd ...', got {line!r}"
-                )
+                raise bad(lineno, f"NM record needs 'NM name formula MIL nd vd ...', got {line!r}")
             name = tokens[1]
             formula_number = _formula_number(tokens[2], bad, lineno, name)
             nd = number(tokens[4], lineno, f"nd of glass {name!r}")

@@ -80,6 +80,14 @@ class ParaxialSystem:
         ys, _ = self.trace(epd / 2.0, 0.0)
         return abs(float(ys[stop]))
 
+    def entrance_pupil_position(self, stop: int) -> float:
+        """Distance from the first vertex to the entrance pupil, the paraxial image of surface
+        ``stop`` in object space (mm, positive toward the system): where a ray aimed through the
+        stop's centre crosses the axis before the first surface."""
+        a = self.trace(1.0, 0.0)[0][stop]  # stop height per unit entrance height
+        b = self.trace(0.0, 1.0)[0][stop]  # stop height per unit entrance angle
+        return b / a
+
     def working_f_number(self, object_distance: float, stop: int, stop_semi_diameter: float) -> float:
         """Paraxial working F-number 1 / (2 n_k |u′_k|) of the marginal ray from the axial object
         point that grazes the stop's rim."""
