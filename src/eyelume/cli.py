@@ -30,7 +30,9 @@ SceneOpt = Annotated[
 ]
 SetOpt = Annotated[
     list[str] | None,
-    typer.Option("--set", help="Override a scene field by its dotted path: key=value (repeatable)."),
+    typer.Option(
+        "--set", help="Override a scene field by its dotted path: key=value (repeatable)."
+    ),
 ]
 
 
@@ -60,8 +62,12 @@ def _load(scene: str, sets: list[str] | None):
 def render(
     out: Annotated[Path, typer.Option("--out", help="Folder for the outputs (created).")],
     scene: SceneOpt = "paper2005",
-    rays: Annotated[int | None, typer.Option(help="Rays to trace (default: the scene's run.rays).")] = None,
-    seed: Annotated[int | None, typer.Option(help="Random seed (default: the scene's run.seed).")] = None,
+    rays: Annotated[
+        int | None, typer.Option(help="Rays to trace (default: the scene's run.rays).")
+    ] = None,
+    seed: Annotated[
+        int | None, typer.Option(help="Random seed (default: the scene's run.seed).")
+    ] = None,
     set_: SetOpt = None,
 ) -> None:
     """Trace a scene (forward Monte Carlo) and write the eye image, eye-plane irradiance,
@@ -90,7 +96,9 @@ def render(
         transient=True,
     ) as bar:
         task = bar.add_task("trace", total=total)
-        result = render_scene(cs, rays=rays, seed=seed, progress=lambda d, t: bar.update(task, completed=d))
+        result = render_scene(
+            cs, rays=rays, seed=seed, progress=lambda d, t: bar.update(task, completed=d)
+        )
     if result.interrupted:
         err.print(f"interrupted: writing the {result.rays:,} rays traced so far")
     written = write_render_outputs(result, cs, out)
@@ -122,5 +130,3 @@ def info(
         sys.stdout.write(json.dumps(data, indent=2) + "\n")
         return
     Console().print_json(data=data)
-
-

@@ -219,7 +219,9 @@ def _lens_table(scene: Scene, indices: list[float], semi: list[float]) -> tuple[
     return lf, z
 
 
-def _auto_semi_diameters(scene: Scene, indices: list[float], stop: int, stop_sd: float) -> list[float]:
+def _auto_semi_diameters(
+    scene: Scene, indices: list[float], stop: int, stop_sd: float
+) -> list[float]:
     """Clear semi-diameters from a real-ray trace of the full eye-plane field.
 
     Rays from a 9 × 7 grid of object points over the eye plane, aimed at a 101 × 101 grid over
@@ -264,9 +266,13 @@ def _check_lens_geometry(scene: Scene, lf: np.ndarray) -> None:
     for j in range(lf.shape[0] - 1):
         r_max = min(lf[j, Q.L_SD], lf[j + 1, Q.L_SD])
         for r in np.linspace(0.0, r_max, 64):
-            z0 = lf[j, Q.L_Z] + sag(1 / lf[j, Q.L_CURV] if lf[j, Q.L_CURV] else math.inf, lf[j, Q.L_CONIC], r)
+            z0 = lf[j, Q.L_Z] + sag(
+                1 / lf[j, Q.L_CURV] if lf[j, Q.L_CURV] else math.inf, lf[j, Q.L_CONIC], r
+            )
             z1 = lf[j + 1, Q.L_Z] + sag(
-                1 / lf[j + 1, Q.L_CURV] if lf[j + 1, Q.L_CURV] else math.inf, lf[j + 1, Q.L_CONIC], r
+                1 / lf[j + 1, Q.L_CURV] if lf[j + 1, Q.L_CURV] else math.inf,
+                lf[j + 1, Q.L_CONIC],
+                r,
             )
             if z1 < z0 - 1e-9:
                 raise SceneError(
@@ -280,11 +286,14 @@ def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray) -> None:
     for i, c in enumerate(centres):
         if c[2] - rb <= 0:
             raise SceneError(
-                f"leds: LED {i} body (centre z = {c[2]:.2f} mm, radius {rb}) crosses the eye plane z = 0"
+                f"leds: LED {i} body (centre z = {c[2]:.2f} mm, radius {rb}) crosses the "
+                "eye plane z = 0"
             )
         for j in range(i):
             if np.linalg.norm(c - centres[j]) < 2 * rb:
-                raise SceneError(f"leds: LED {i} and LED {j} bodies overlap (centres {c}, {centres[j]})")
+                raise SceneError(
+                    f"leds: LED {i} and LED {j} bodies overlap (centres {c}, {centres[j]})"
+                )
         # the body against the lens's first surface, within its clear aperture
         r_c = math.hypot(c[0], c[1])
         R = 1 / lf[0, Q.L_CURV] if lf[0, Q.L_CURV] else math.inf
@@ -292,8 +301,8 @@ def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray) -> None:
             half = math.sqrt(max(0.0, rb * rb - (r - r_c) ** 2))
             if c[2] + half > lf[0, Q.L_Z] + sag(R, lf[0, Q.L_CONIC], r) and half > 0:
                 raise SceneError(
-                    f"leds: LED {i} body at (Y = {r_c:.1f}, Z = {c[2]:.1f}) mm overlaps the imaging "
-                    f"lens's first surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
+                    f"leds: LED {i} body at (Y = {r_c:.1f}, Z = {c[2]:.1f}) mm overlaps the "
+                    f"imaging lens's first surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
                 )
 
 
@@ -417,12 +426,20 @@ def compile_scene(scene: Scene) -> CompiledScene:
     _check_leds(scene, centres, lf)
     rb = scene.leds.body_diameter_mm / 2
     for i, c in enumerate(centres):
-        t.add(f"LED {i} body", G.SHAPE_SPHERE, c, _frame(axes[i]), (c, rb * 1.000001),
-              radius=rb, tally_a="LED bodies", tally_b="LED bodies")
+        t.add(
+            f"LED {i} body",
+            G.SHAPE_SPHERE,
+            c,
+            _frame(axes[i]),
+            (c, rb * 1.000001),
+            radius=rb,
+            tally_a="LED bodies",
+            tally_b="LED bodies",
+        )
     emit = centres + axes * rb * (1.0 + 1e-9)
     alpha_grid, cdf_grid, omega = profile_tables(relative_intensity(scene.leds.profile))
 
-    # --- the lens entrance: hands rays to the sequential trace --------------------------------------
+    # --- the lens entrance: hands rays to the sequential trace ----------------------------
     o = np.array([0.0, 0.0, lf[0, Q.L_Z]])
     t.add(
         "imaging lens",
@@ -452,9 +469,18 @@ def compile_scene(scene: Scene) -> CompiledScene:
         alpha_grid=alpha_grid,
         cdf_grid=cdf_grid,
         omega_eff=omega,
-        sensor=np.array([scene.sensor.width_mm, scene.sensor.height_mm, scene.sensor.cols, scene.sensor.rows], float),
+        sensor=np.array(
+            [scene.sensor.width_mm, scene.sensor.height_mm, scene.sensor.cols, scene.sensor.rows],
+            float,
+        ),
         plane=np.array(
-            [scene.eye_plane.width_mm, scene.eye_plane.height_mm, scene.eye_plane.cols, scene.eye_plane.rows], float
+            [
+                scene.eye_plane.width_mm,
+                scene.eye_plane.height_mm,
+                scene.eye_plane.cols,
+                scene.eye_plane.rows,
+            ],
+            float,
         ),
         tallies=t.tallies,
     )

@@ -89,5 +89,3 @@ def scene_info(scene: Scene) -> dict:
             "sized for it. The working F-number above is that of the finite eye-plane conjugate."
         ),
     }
-
-

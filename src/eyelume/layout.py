@@ -104,7 +104,9 @@ def system_sections(cs: CompiledScene, extent: float = 60.0) -> list[Section]:
             continue
         keep = _clip_mask(cs.sf, s, pts) & (np.abs(pts[:, 1]) <= extent)
         for run in _runs(pts, keep):
-            out.append(Section(name, _category(name, int(cs.si[s, G.ACTION])), run[:, 2], run[:, 1]))
+            out.append(
+                Section(name, _category(name, int(cs.si[s, G.ACTION])), run[:, 2], run[:, 1])
+            )
     for j in range(cs.lf.shape[0]):
         sd = cs.lf[j, Q.L_SD]
         c, k = cs.lf[j, Q.L_CURV], cs.lf[j, Q.L_CONIC]

@@ -112,7 +112,9 @@ def render(
     wall = time.perf_counter() - t0
     w = cs.emitted_w / fc.rays
     px_area = (sc.sensor.width_mm / sc.sensor.cols) * (sc.sensor.height_mm / sc.sensor.rows)
-    pl_area = (sc.eye_plane.width_mm / sc.eye_plane.cols) * (sc.eye_plane.height_mm / sc.eye_plane.rows)
+    pl_area = (sc.eye_plane.width_mm / sc.eye_plane.cols) * (
+        sc.eye_plane.height_mm / sc.eye_plane.rows
+    )
     return RenderResult(
         scene=sc,
         rays=fc.rays,

@@ -27,7 +27,12 @@ def closed_form_eye_plane(cs) -> np.ndarray:
     f = relative_intensity(sc.leds.profile)
     i0 = sc.leds.radiant_intensity_w_sr
     src, axis = cs.leds[0, :3], cs.leds[0, 3:]
-    w, h, nc, nr = sc.eye_plane.width_mm, sc.eye_plane.height_mm, sc.eye_plane.cols, sc.eye_plane.rows
+    w, h, nc, nr = (
+        sc.eye_plane.width_mm,
+        sc.eye_plane.height_mm,
+        sc.eye_plane.cols,
+        sc.eye_plane.rows,
+    )
     g, gw = np.polynomial.legendre.leggauss(16)
     flux = np.zeros((nr, nc))
     bw, bh = w / nc, h / nr

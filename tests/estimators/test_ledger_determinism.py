@@ -41,7 +41,8 @@ def test_same_seed_same_arrays_whatever_the_batch_size(paper_compiled):
 
 _SCRIPT = """
 import sys, numpy as np, eyelume
-r = eyelume.render(eyelume.load_scene("paper2005"), rays=200_000, seed=5, batch_size=int(sys.argv[2]))
+scene = eyelume.load_scene("paper2005")
+r = eyelume.render(scene, rays=200_000, seed=5, batch_size=int(sys.argv[2]))
 np.save(sys.argv[1], np.concatenate([r.eye_image.ravel(), r.eye_plane.ravel()]))
 """
 

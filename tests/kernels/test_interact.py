@@ -21,7 +21,7 @@ from eyelume.kernels.interact import fresnel_reflectance, reflect, refract
 
 ROUND = 1e-12  # a few ulp of O(1) quantities, with ample headroom (module docstring)
 
-SETTINGS = settings(derandomize=True, max_examples=300, deadline=None)
+SETTINGS = settings(derandomize=True, max_examples=200, deadline=None)
 
 
 def _unit(cos_polar: float, azimuth: float) -> np.ndarray:
@@ -126,13 +126,14 @@ def test_refract_is_reversible(inc, eta):
     # Helmholtz reciprocity: refracting −t back with 1/η returns −d.
     d, n, _ = inc
     sin_i = np.linalg.norm(np.cross(d, n))
-    assume(eta * sin_i < 1.0 - 1e-6)  # keep cos θt ≥ ~1e-3 so reversal is well conditioned
+    # Keep cos θi and cos θt ≥ 1e-3: near grazing either way the reversal is ill-conditioned
+    # (a cosine recomputed as √(1 − sin²) carries an absolute error ~ε/cos).
+    assume(abs(np.dot(d, n)) > 1e-3 and eta * sin_i < math.sqrt(1.0 - 1e-6))
     ok, t = _refract(d, n, eta)
     assert ok
     ok2, back = _refract(-t, n, 1.0 / eta)
     assert ok2
-    # conditioning: an error δ in t becomes ~δ·cos θt⁻¹ after the second refraction; the kernel
-    # error is ~ε, cos θt ≥ 1e-3 → ≲ 1e-12 with headroom 1e-9
+    # error of the recomputed cosines ≲ ε/1e-3 ≈ 2e-13, times O(η) ≤ 2: 1e-9 leaves headroom
     np.testing.assert_allclose(back, -d, rtol=0, atol=1e-9)
 
 
@@ -164,7 +165,9 @@ indices = st.floats(1.0, 2.5)
 def test_fresnel_normal_incidence(n1, n2):
     expected = ((n1 - n2) / (n1 + n2)) ** 2
     for cos_i in (1.0, -1.0):  # |cos θi| is what counts
-        assert math.isclose(fresnel_reflectance(cos_i, n1, n2), expected, rel_tol=ROUND, abs_tol=1e-18)
+        assert math.isclose(
+            fresnel_reflectance(cos_i, n1, n2), expected, rel_tol=ROUND, abs_tol=1e-18
+        )
 
 
 @SETTINGS
@@ -220,9 +223,12 @@ def test_fresnel_reciprocity(n1, n2, frac):
     theta = frac * theta_max * (1.0 - 1e-6)
     sin_t = n1 / n2 * math.sin(theta)
     cos_t = math.sqrt(1.0 - sin_t * sin_t)
-    a = fresnel_reflectance(math.cos(theta), n1, n2)
+    cos_i = math.cos(theta)
+    # Each call recomputes the other side's cosine as √(1 − sin²), whose absolute error is
+    # ~ε/cos; keep both cosines ≥ 1e-3 so it is ≤ 2.2e-13, and |dR/dcos| ≤ ~10 there.
+    assume(min(cos_i, cos_t) > 1e-3)
+    a = fresnel_reflectance(cos_i, n1, n2)
     b = fresnel_reflectance(cos_t, n2, n1)
-    # cos θt near 0 amplifies the rounding of sin θt: δcos ≈ ε/cos θt ≲ 2e-13, so 1e-10 is safe
     assert abs(a - b) < 1e-10
 
 

@@ -56,8 +56,23 @@ def _record(path, n, x, y, z, record):
 
 @njit(cache=True)
 def trace_ray(
-    i, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid, sensor, plane, max_events,
-    img_counts, plane_counts, tallies, path, record,
+    i,
+    seed,
+    sf,
+    si,
+    lf,
+    image_z,
+    leds,
+    alpha_grid,
+    cdf_grid,
+    sensor,
+    plane,
+    max_events,
+    img_counts,
+    plane_counts,
+    tallies,
+    path,
+    record,
 ):
     """Trace ray ``i`` from birth to its end, adding to the count arrays.
 
@@ -71,8 +86,14 @@ def trace_ray(
     alpha = profile_polar_angle(u1, alpha_grid, cdf_grid)
     phi = 2.0 * math.pi * u2
     sa = math.sin(alpha)
-    dx, dy, dz = about_axis(sa * math.cos(phi), sa * math.sin(phi), math.cos(alpha),
-                            leds[led, 3], leds[led, 4], leds[led, 5])
+    dx, dy, dz = about_axis(
+        sa * math.cos(phi),
+        sa * math.sin(phi),
+        math.cos(alpha),
+        leds[led, 3],
+        leds[led, 4],
+        leds[led, 5],
+    )
     x, y, z = leds[led, 0], leds[led, 1], leds[led, 2]
     npath = _record(path, 0, x, y, z, record)
     pw, ph, pc, pr = plane[0], plane[1], int(plane[2]), int(plane[3])
@@ -88,8 +109,14 @@ def trace_ray(
                     plane_counts[row, col] += 1
         if s < 0:
             tallies[TALLY_ESCAPED] += 1
-            npath = _record(path, npath, x + _ESCAPE_DRAW_MM * dx, y + _ESCAPE_DRAW_MM * dy,
-                            z + _ESCAPE_DRAW_MM * dz, record)
+            npath = _record(
+                path,
+                npath,
+                x + _ESCAPE_DRAW_MM * dx,
+                y + _ESCAPE_DRAW_MM * dy,
+                z + _ESCAPE_DRAW_MM * dz,
+                record,
+            )
             return TALLY_ESCAPED, interactions, npath
         action = si[s, G.ACTION]
         if action == G.ACT_LENS:
@@ -98,7 +125,9 @@ def trace_ray(
                 tallies[si[s, G.TALLY_B]] += 1
                 npath = _record(path, npath, x + t * dx, y + t * dy, z + t * dz, record)
                 return si[s, G.TALLY_B], interactions + 1, npath
-            status, x, y, z, dx, dy, dz, met, npath = trace_lens(lf, x, y, z, dx, dy, dz, path, npath, record)
+            status, x, y, z, dx, dy, dz, met, npath = trace_lens(
+                lf, x, y, z, dx, dy, dz, path, npath, record
+            )
             interactions += met
             if status != LENS_PASSED:
                 entry = TALLY_TIR if status == LENS_TIR else TALLY_VIGNETTED
@@ -171,8 +200,23 @@ def trace_ray(
 
 @njit(cache=True, parallel=True)
 def _trace_batch(
-    start, count, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid, sensor, plane,
-    max_events, img_counts, plane_counts, tallies, interactions,
+    start,
+    count,
+    seed,
+    sf,
+    si,
+    lf,
+    image_z,
+    leds,
+    alpha_grid,
+    cdf_grid,
+    sensor,
+    plane,
+    max_events,
+    img_counts,
+    plane_counts,
+    tallies,
+    interactions,
 ):
     n_chunks = img_counts.shape[0]
     for c in prange(n_chunks):
@@ -182,8 +226,23 @@ def _trace_batch(
         inter = 0
         for i in range(lo, hi):
             _, k, _ = trace_ray(
-                i, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid, sensor, plane,
-                max_events, img_counts[c], plane_counts[c], tallies[c], path, False,
+                i,
+                seed,
+                sf,
+                si,
+                lf,
+                image_z,
+                leds,
+                alpha_grid,
+                cdf_grid,
+                sensor,
+                plane,
+                max_events,
+                img_counts[c],
+                plane_counts[c],
+                tallies[c],
+                path,
+                False,
             )
             inter += k
         interactions[c] += inter
@@ -257,8 +316,23 @@ def trace_forward(
         while done < rays and not stop.requested:
             n = min(batch, rays - done)
             _trace_batch(
-                done, n, seed, cs.sf, cs.si, cs.lf, cs.image_z, cs.leds, cs.alpha_grid,
-                cs.cdf_grid, cs.sensor, cs.plane, cs.scene.run.max_events, img, pl, tal, inter,
+                done,
+                n,
+                seed,
+                cs.sf,
+                cs.si,
+                cs.lf,
+                cs.image_z,
+                cs.leds,
+                cs.alpha_grid,
+                cs.cdf_grid,
+                cs.sensor,
+                cs.plane,
+                cs.scene.run.max_events,
+                img,
+                pl,
+                tal,
+                inter,
             )
             done += n
             if progress is not None:
@@ -271,8 +345,27 @@ def trace_forward(
 
 
 @njit(cache=True)
-def _trace_paths(start, n, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid, sensor, plane,
-                 max_events, n_tallies, want_detected, want_other, out, lengths, kinds):
+def _trace_paths(
+    start,
+    n,
+    seed,
+    sf,
+    si,
+    lf,
+    image_z,
+    leds,
+    alpha_grid,
+    cdf_grid,
+    sensor,
+    plane,
+    max_events,
+    n_tallies,
+    want_detected,
+    want_other,
+    out,
+    lengths,
+    kinds,
+):
     img = np.zeros((int(sensor[3]), int(sensor[2])), dtype=np.int64)
     pl = np.zeros((int(plane[3]), int(plane[2])), dtype=np.int64)
     tal = np.zeros(n_tallies, dtype=np.int64)
@@ -281,8 +374,25 @@ def _trace_paths(start, n, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid
     got_o = 0
     k = 0
     for i in range(start, start + n):
-        entry, _, npath = trace_ray(i, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid,
-                                    sensor, plane, max_events, img, pl, tal, path, True)
+        entry, _, npath = trace_ray(
+            i,
+            seed,
+            sf,
+            si,
+            lf,
+            image_z,
+            leds,
+            alpha_grid,
+            cdf_grid,
+            sensor,
+            plane,
+            max_events,
+            img,
+            pl,
+            tal,
+            path,
+            True,
+        )
         detected = entry == TALLY_SENSOR
         if (detected and got_d < want_detected) or (not detected and got_o < want_other):
             out[k, :npath] = path[:npath]
@@ -298,8 +408,9 @@ def _trace_paths(start, n, seed, sf, si, lf, image_z, leds, alpha_grid, cdf_grid
     return k
 
 
-def trace_paths(cs: CompiledScene, seed: int, detected: int = 24, other: int = 24,
-                search: int = 2_000_000) -> list[tuple[np.ndarray, bool]]:
+def trace_paths(
+    cs: CompiledScene, seed: int, detected: int = 24, other: int = 24, search: int = 2_000_000
+) -> list[tuple[np.ndarray, bool]]:
     """Record the vertices of a few rays for drawing: up to ``detected`` rays that reach the
     sensor and ``other`` that do not, among the first ``search`` rays of the seed's stream.
 
@@ -309,8 +420,25 @@ def trace_paths(cs: CompiledScene, seed: int, detected: int = 24, other: int = 2
     out = np.zeros((detected + other, max_len, 3))
     lengths = np.zeros(detected + other, dtype=np.int64)
     kinds = np.zeros(detected + other, dtype=np.int64)
-    k = _trace_paths(0, search, seed, cs.sf, cs.si, cs.lf, cs.image_z, cs.leds, cs.alpha_grid,
-                     cs.cdf_grid, cs.sensor, cs.plane, cs.scene.run.max_events, len(cs.tallies), detected, other,
-                     out, lengths, kinds)
+    k = _trace_paths(
+        0,
+        search,
+        seed,
+        cs.sf,
+        cs.si,
+        cs.lf,
+        cs.image_z,
+        cs.leds,
+        cs.alpha_grid,
+        cs.cdf_grid,
+        cs.sensor,
+        cs.plane,
+        cs.scene.run.max_events,
+        len(cs.tallies),
+        detected,
+        other,
+        out,
+        lengths,
+        kinds,
+    )
     return [(out[j, : lengths[j]].copy(), bool(kinds[j])) for j in range(k)]
-

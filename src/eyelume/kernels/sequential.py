@@ -11,10 +11,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
 from numba import njit
 
-from eyelume.kernels.geometry import conic_coefficients, conic_normal, on_vertex_branch, quadratic_roots
+from eyelume.kernels.geometry import (
+    conic_coefficients,
+    conic_normal,
+    on_vertex_branch,
+    quadratic_roots,
+)
 from eyelume.kernels.interact import refract
 
 L_Z, L_CURV, L_CONIC, L_SD, L_N0, L_N1 = 0, 1, 2, 3, 4, 5

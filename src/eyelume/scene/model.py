@@ -150,7 +150,9 @@ class Eye(_Model):
     @model_validator(mode="after")
     def _consistent(self) -> Eye:
         if len(self.surfaces) < 3:
-            raise ValueError("surfaces needs at least an anterior cornea, one more surface and the retina")
+            raise ValueError(
+                "surfaces needs at least an anterior cornea, one more surface and the retina"
+            )
         for s in self.surfaces[:-1]:
             if None in (s.nd, s.nF, s.nC):
                 raise ValueError(f"surface '{s.name}' needs nd, nF and nC of the medium after it")
@@ -167,8 +169,8 @@ class Eye(_Model):
         limbus = self.surfaces[0].semi_diameter_mm
         if self.iris_outer_diameter_mm / 2 >= limbus:
             raise ValueError(
-                f"iris_outer_diameter_mm = {self.iris_outer_diameter_mm} must fit inside the cornea "
-                f"(anterior cornea semi_diameter_mm = {limbus})"
+                f"iris_outer_diameter_mm = {self.iris_outer_diameter_mm} must fit inside the "
+                f"cornea (anterior cornea semi_diameter_mm = {limbus})"
             )
         if self.sclera_radius_mm <= limbus:
             raise ValueError(
@@ -203,7 +205,9 @@ class Tissue(_Model):
         if sum(a * a for a in self.axis) == 0:
             raise ValueError("axis = (0, 0, 0) has no direction")
         if self.clip_z_mm[0] >= self.clip_z_mm[1] or self.clip_r_mm[0] >= self.clip_r_mm[1]:
-            raise ValueError(f"empty clip range clip_z_mm={self.clip_z_mm} clip_r_mm={self.clip_r_mm}")
+            raise ValueError(
+                f"empty clip range clip_z_mm={self.clip_z_mm} clip_r_mm={self.clip_r_mm}"
+            )
         return self
 
 

@@ -88,7 +88,9 @@ class ParaxialSystem:
         b = self.trace(0.0, 1.0)[0][stop]  # stop height per unit entrance angle
         return b / a
 
-    def working_f_number(self, object_distance: float, stop: int, stop_semi_diameter: float) -> float:
+    def working_f_number(
+        self, object_distance: float, stop: int, stop_semi_diameter: float
+    ) -> float:
         """Paraxial working F-number 1 / (2 n_k |u′_k|) of the marginal ray from the axial object
         point that grazes the stop's rim."""
         ys, us = self.trace(object_distance * 1e-3, 1e-3)

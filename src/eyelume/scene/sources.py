@@ -39,7 +39,9 @@ def _read_table(path: str) -> tuple[np.ndarray, np.ndarray]:
         except (ValueError, IndexError):
             if n == 1:
                 continue  # a header line
-            raise ValueError(f"{where}: row {n} {row!r} is not 'angle_deg, relative_intensity'") from None
+            raise ValueError(
+                f"{where}: row {n} {row!r} is not 'angle_deg, relative_intensity'"
+            ) from None
         if not (math.isfinite(a) and math.isfinite(v)) or v < 0:
             raise ValueError(f"{where}: row {n} has a bad value {row!r}")
         angles.append(a)
@@ -71,10 +73,19 @@ def led_poses(leds: LedArray) -> tuple[np.ndarray, np.ndarray]:
     phi = np.radians(leds.azimuths())
     th = math.radians(leds.pitch_deg)
     centres = np.stack(
-        [leds.height_mm * np.cos(phi), leds.height_mm * np.sin(phi), np.full_like(phi, leds.distance_mm)],
+        [
+            leds.height_mm * np.cos(phi),
+            leds.height_mm * np.sin(phi),
+            np.full_like(phi, leds.distance_mm),
+        ],
         axis=1,
     )
     axes = np.stack(
-        [-math.sin(th) * np.cos(phi), -math.sin(th) * np.sin(phi), np.full_like(phi, -math.cos(th))], axis=1
+        [
+            -math.sin(th) * np.cos(phi),
+            -math.sin(th) * np.sin(phi),
+            np.full_like(phi, -math.cos(th)),
+        ],
+        axis=1,
     )
     return centres, axes

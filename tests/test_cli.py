@@ -1,0 +1,153 @@
+"""The command line: outputs of render and info, and test 9 — bad input gives one line naming
+the field and the value, exit code 2, no traceback."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from eyelume.cli import app
+from eyelume.scene.io import load_scene, save_scene
+
+runner = CliRunner()
+
+
+def test_render_writes_every_output(tmp_path):
+    out = tmp_path / "out"
+    res = runner.invoke(app, ["render", "--rays", "300000", "--seed", "4", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    img = np.load(out / "eye_image.npy")
+    plane = np.load(out / "eye_plane.npy")
+    assert img.shape == (65, 87) and img.dtype == np.float64
+    assert plane.shape == (15, 21) and plane.dtype == np.float64
+    for name in (
+        "eye_image.png",
+        "eye_plane.png",
+        "eye_image_plot.png",
+        "eye_plane_plot.png",
+        "layout.png",
+    ):
+        assert (out / name).stat().st_size > 1000, name
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scene"] == "paper2005" and summary["rays"] == 300000 and summary["seed"] == 4
+    p = summary["power_w"]
+    total = p["sensor"] + p["escaped"] + sum(p["absorbed"].values())
+    assert total == pytest.approx(p["emitted"], rel=1e-9)
+    assert summary["wall_time_s"] > 0
+
+
+def test_set_overrides_a_field(tmp_path):
+    out = tmp_path / "o"
+    two = ["--set", "leds.count=2", "--set", "leds.azimuths_deg=[0.0, 180.0]"]
+    res = runner.invoke(
+        app, ["render", "--rays", "20000", "--set", "leds.height_mm=40", *two, "--out", str(out)]
+    )
+    assert res.exit_code == 0, res.output
+    emitted_two = json.loads((out / "summary.json").read_text())["power_w"]["emitted"]
+    res = runner.invoke(app, ["info", "--json"])
+    data = json.loads(res.stdout)["leds"]
+    assert data["count"] == 4 and data["height_mm"] == 30.0
+    # two LEDs of the same intensity emit half the power of four
+    assert emitted_two == pytest.approx(data["total_power_w"] / 2, rel=1e-12)
+
+
+def test_info_json():
+    res = runner.invoke(app, ["info", "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    lens = data["imaging_lens"]
+    for key in (
+        "effective_focal_length_mm",
+        "paraxial_image_distance_mm",
+        "eye_plane_magnification",
+        "working_f_number",
+    ):
+        assert np.isfinite(lens[key]), key
+    assert lens["working_f_number"] > lens["f_number_efl_over_epd"]  # finite conjugate is slower
+    assert 55 < data["eye"]["power_d"] < 65
+    assert set(data["glasses"]) == {"BSM24", "P-SK60", "F5", "N-SK16"}
+    for g in data["glasses"].values():
+        assert 1.5 < g["index"] < 1.7
+        assert g["nd_from_formula"] == pytest.approx(g["nd_catalog"], abs=2e-5)
+
+
+def _scene_file(tmp_path, edit):
+    path = tmp_path / "scene.toml"
+    save_scene(load_scene("paper2005"), path)
+    text = path.read_text()
+    path.write_text(edit(text))
+    return str(path)
+
+
+BAD = {
+    "malformed TOML": (lambda t: t.replace("[leds]", "[leds", 1), ["not valid TOML", "line"]),
+    "unknown field": (lambda t: t.replace("[leds]\n", "[leds]\ncolour = 3\n", 1), ["leds.colour"]),
+    "negative distance": (
+        lambda t: t.replace("distance_mm = 70.0", "distance_mm = -5.0", 1),
+        ["leds.distance_mm", "-5"],
+    ),
+    "zero thickness of image": (
+        lambda t: t.replace("thickness_mm = 200.46", "thickness_mm = 0.0"),
+        ["thickness_mm"],
+    ),
+    "pupil wider than iris": (
+        lambda t: t.replace("pupil_diameter_mm = 7.0", "pupil_diameter_mm = 12.0"),
+        ["pupil_diameter_mm", "12"],
+    ),
+    "missing glass": (
+        lambda t: t.replace('glass = "BSM24"', 'glass = "UNOBTAINIUM"', 1),
+        ["lens.surfaces.0.glass", "UNOBTAINIUM"],
+    ),
+    "NaN": (
+        lambda t: t.replace("height_mm = 30.0", "height_mm = nan", 1),
+        ["leds.height_mm", "nan"],
+    ),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD))
+def test_bad_scene_file_one_line_exit_2(tmp_path, case):
+    edit, words = BAD[case]
+    path = _scene_file(tmp_path, edit)
+    res = runner.invoke(
+        app, ["render", "--scene", path, "--rays", "1000", "--out", str(tmp_path / "o")]
+    )
+    assert res.exit_code == 2, res.output
+    message = res.stderr.strip()
+    assert "Traceback" not in res.output and "Traceback" not in message
+    assert len(message.splitlines()) == 1, message
+    for w in words:
+        assert w.lower() in message.lower(), (w, message)
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--set", "leds.height_mm=-3"], ["leds.height_mm", "-3"]),
+        (["--set", "leds.distance_mm=0"], ["leds.distance_mm", "0"]),
+        (["--set", "eye.pupil_diameter_mm=nan"], ["eye.pupil_diameter_mm", "nan"]),
+        (["--set", "leds.nope=1"], ["leds.nope"]),
+        (["--set", "leds.height_mm"], ["leds.height_mm", "key=value"]),
+        (["--scene", "no_such_scene"], ["no_such_scene"]),
+        (["--set", "leds.distance_mm=2"], ["LED", "eye plane"]),
+        (["--set", "leds.height_mm=20", "--set", "leds.distance_mm=73"], ["overlaps", "lens"]),
+        (["--rays", "0"], ["--rays", "0"]),
+    ],
+)
+def test_bad_overrides_one_line_exit_2(tmp_path, args, words):
+    res = runner.invoke(
+        app,
+        ["render", *args, "--rays", "1000", "--out", str(tmp_path / "o")]
+        if "--rays" not in args
+        else ["render", *args, "--out", str(tmp_path / "o")],
+    )
+    assert res.exit_code == 2, res.output
+    message = res.stderr.strip()
+    assert "Traceback" not in res.output
+    assert len(message.splitlines()) == 1, message
+    for w in words:
+        assert w.lower() in message.lower(), (w, message)
