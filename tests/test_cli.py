@@ -151,3 +151,23 @@ def test_bad_overrides_one_line_exit_2(tmp_path, args, words):
     assert len(message.splitlines()) == 1, message
     for w in words:
         assert w.lower() in message.lower(), (w, message)
+
+
+@pytest.mark.parametrize(
+    ("csv", "words"),
+    [
+        ("angle,rel\n0,1\n20,oops\n", ["table_csv", "row 3"]),
+        ("0,1\n50,0.5\n30,0.2\n", ["table_csv", "increase"]),
+        ("0,1\n20,nan\n", ["table_csv", "nan"]),
+    ],
+)
+def test_bad_led_profile_csv_one_line_exit_2(tmp_path, csv, words):
+    path = tmp_path / "led.csv"
+    path.write_text(csv, encoding="utf-8")
+    sets = ["--set", 'leds.profile.kind="table"', "--set", f'leds.profile.table_csv="{path}"']
+    res = runner.invoke(app, ["render", *sets, "--rays", "1000", "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2, res.output
+    message = res.stderr.strip()
+    assert len(message.splitlines()) == 1, message
+    for w in words:
+        assert w.lower() in message.lower(), (w, message)

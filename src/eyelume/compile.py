@@ -437,7 +437,10 @@ def compile_scene(scene: Scene) -> CompiledScene:
             tally_b="LED bodies",
         )
     emit = centres + axes * rb * (1.0 + 1e-9)
-    alpha_grid, cdf_grid, omega = profile_tables(relative_intensity(scene.leds.profile))
+    try:
+        alpha_grid, cdf_grid, omega = profile_tables(relative_intensity(scene.leds.profile))
+    except ValueError as exc:
+        raise SceneError(str(exc)) from None
 
     # --- the lens entrance: hands rays to the sequential trace ----------------------------
     o = np.array([0.0, 0.0, lf[0, Q.L_Z]])
