@@ -320,7 +320,7 @@ def test_sphere_and_cylinder_hits_match_brute_force_and_closed_form():
             clips = _clips(rng, shape, radius)
             sf, si = _table(_row(shape, origin=origin, rot=rot, radius=radius, **clips))
 
-            def targets(n, radius=radius):
+            def targets(n, radius=radius, shape=shape):
                 v = rng.normal(size=(n, 3))
                 v[:, :2] *= radius / np.linalg.norm(v[:, :2], axis=1, keepdims=True)
                 if shape == G.SHAPE_SPHERE:

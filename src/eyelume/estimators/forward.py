@@ -360,6 +360,7 @@ def _trace_paths(
     plane,
     max_events,
     n_tallies,
+    section_tol,
     want_detected,
     want_other,
     out,
@@ -393,6 +394,8 @@ def _trace_paths(
             path,
             True,
         )
+        if abs(path[0, 0]) > section_tol:
+            continue  # born off the y–z section: its projection would mislead
         detected = entry == TALLY_SENSOR
         if (detected and got_d < want_detected) or (not detected and got_o < want_other):
             out[k, :npath] = path[:npath]
@@ -409,10 +412,16 @@ def _trace_paths(
 
 
 def trace_paths(
-    cs: CompiledScene, seed: int, detected: int = 24, other: int = 24, search: int = 2_000_000
+    cs: CompiledScene,
+    seed: int,
+    detected: int = 24,
+    other: int = 24,
+    search: int = 4_000_000,
+    section_tol: float = 1.0,
 ) -> list[tuple[np.ndarray, bool]]:
     """Record the vertices of a few rays for drawing: up to ``detected`` rays that reach the
-    sensor and ``other`` that do not, among the first ``search`` rays of the seed's stream.
+    sensor and ``other`` that do not, among the first ``search`` rays of the seed's stream,
+    keeping only rays born within ``section_tol`` mm of the y–z section (x = 0).
 
     Returns a list of ((k, 3) world vertices in mm, reached_sensor).
     """
@@ -435,6 +444,7 @@ def trace_paths(
         cs.plane,
         cs.scene.run.max_events,
         len(cs.tallies),
+        section_tol,
         detected,
         other,
         out,
