@@ -20,7 +20,7 @@ def cos_power_exponent(half_intensity_angle_deg: float) -> float:
     Examples
     --------
     >>> round(cos_power_exponent(22.5), 3)
-    8.759
+    8.755
     """
     return math.log(0.5) / math.log(math.cos(math.radians(half_intensity_angle_deg)))
 
