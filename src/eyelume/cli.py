@@ -86,6 +86,7 @@ def render(
     except (SceneError, GlassError) as exc:
         _fail(str(exc))
     total = sc.run.rays if rays is None else rays
+    err.print(f"tracing {total:,} rays of {sc.name} (Ctrl-C stops after the current batch)")
     with Progress(
         TextColumn("[bold]tracing"),
         BarColumn(),
