@@ -111,19 +111,36 @@ def print_header(title: str, info: dict) -> None:
     print(f"   source  : commit {info['commit']}  src dirty={info['src_dirty']}")
 
 
+def cpu_ticks() -> tuple[int, int] | None:
+    """System-wide (busy, steal) clock ticks from /proc/stat; busy = user+nice+system+(soft)irq."""
+    try:
+        f = [int(v) for v in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:]]
+    except (OSError, ValueError):
+        return None
+    return f[0] + f[1] + f[2] + f[5] + f[6], f[7] if len(f) > 7 else 0
+
+
 def timed(fn: Callable[[], object], repeats: int, threads: int = 1) -> dict:
-    """Run ``fn`` ``repeats`` times; best, median, spread of wall time, and CPU use per repeat.
+    """Run ``fn`` ``repeats`` times; best, median, spread of wall time, and disturbance per repeat.
 
     ``cpu_util`` = process CPU time / (wall time × threads): near 1 when the run had its cores to
-    itself, well below 1 when something else on the machine took them (then repeat the run).
+    itself, well below 1 when something else took them. ``others_cpu_s`` = CPU seconds the rest of
+    the machine used meanwhile (system-wide busy ticks − this process, 10 ms resolution) and
+    ``steal_s`` the time the hypervisor took from this VM: both near 0 for a clean repeat.
     """
-    walls, utils, out = [], [], None
+    hz = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+    walls, utils, others, steals, out = [], [], [], [], None
     for _ in range(repeats):
+        k0 = cpu_ticks()
         c0, t0 = time.process_time(), time.perf_counter()
         out = fn()
         t1, c1 = time.perf_counter(), time.process_time()
+        k1 = cpu_ticks()
         walls.append(t1 - t0)
         utils.append((c1 - c0) / ((t1 - t0) * threads))
+        if k0 and k1:
+            others.append(max(0.0, (k1[0] - k0[0]) / hz - (c1 - c0)))
+            steals.append((k1[1] - k0[1]) / hz)
     return {
         "best_s": min(walls),
         "median_s": statistics.median(walls),
@@ -131,8 +148,22 @@ def timed(fn: Callable[[], object], repeats: int, threads: int = 1) -> dict:
         "spread_pct": 100.0 * (max(walls) - min(walls)) / min(walls),
         "walls_s": [round(w, 6) for w in walls],
         "cpu_util": [round(u, 3) for u in utils],
+        "others_cpu_s": [round(v, 2) for v in others],
+        "steal_s": [round(v, 2) for v in steals],
         "last": out,
     }
+
+
+def disturbed(t: dict) -> str:
+    """A warning for a timing whose repeats shared the machine, else ''."""
+    flags = []
+    if min(t["cpu_util"]) < 0.9:
+        flags.append("cpu_util < 0.9")
+    if t.get("others_cpu_s") and max(t["others_cpu_s"]) > 0.05 * t["worst_s"] + 0.02:
+        flags.append(f"other processes used {max(t['others_cpu_s']):.2f} CPU-s")
+    if t.get("steal_s") and max(t["steal_s"]) > 0.02:
+        flags.append(f"steal {max(t['steal_s']):.2f} s")
+    return f"  (DISTURBED? {'; '.join(flags)})" if flags else ""
 
 
 def append_result(name: str, record: dict) -> Path:

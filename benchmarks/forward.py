@@ -30,6 +30,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -206,15 +207,40 @@ def worker_anatomy(a: argparse.Namespace) -> dict:
                 acc += t
         return acc
 
+    @njit
+    def polar_only(u, alpha_grid, cdf_grid):
+        # the inverse-CDF search of the LED profile alone (part of the emission sampling)
+        acc = 0.0
+        for i in range(u.shape[0]):
+            acc += profile_polar_angle(u[i], alpha_grid, cdf_grid)
+        return acc
+
     out = {}
     for face in (True, False):
         cs = compile_scene(eyelume.load_scene(SCENE, _overrides(face)))
-        rays = np.empty((a.rays, 6))
-        emission_rays(a.rays, a.seed, cs.leds, cs.alpha_grid, cs.cdf_grid, rays)
-        hits = np.empty(a.rays, dtype=np.int64)
+        n = a.rays
+        uu = np.random.default_rng(a.seed).random(n)
+        polar_only(uu[:1000], cs.alpha_grid, cs.cdf_grid)
+        t_polar = []
+        rays = np.empty((n, 6))
+        hits = np.empty(n, dtype=np.int64)
+        emission_rays(1000, a.seed, cs.leds, cs.alpha_grid, cs.cdf_grid, rays)
         search_all(cs.sf, cs.si, rays[:1000], hits[:1000])
-        t = C.timed(lambda cs=cs, rays=rays, hits=hits: search_all(cs.sf, cs.si, rays, hits), 5)
-        t.pop("last")
+        eyelume.render(cs, rays=min(n, cs.scene.run.batch_size), seed=a.seed)
+        # interleaved, so the three costs see the same machine conditions
+        t_render, t_emit, t_search, res = [], [], [], None
+        for _ in range(a.repeats):
+            res = eyelume.render(cs, rays=n, seed=a.seed)
+            t_render.append(res.wall_time_s)
+            t0 = time.perf_counter()
+            emission_rays(n, a.seed, cs.leds, cs.alpha_grid, cs.cdf_grid, rays)
+            t_emit.append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            search_all(cs.sf, cs.si, rays, hits)
+            t_search.append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            polar_only(uu, cs.alpha_grid, cs.cdf_grid)
+            t_polar.append(time.perf_counter() - t0)
         counts = np.bincount(hits + 1, minlength=cs.sf.shape[0] + 1)
         first = {"(escape)": int(counts[0])}
         first.update(
@@ -224,12 +250,29 @@ def worker_anatomy(a: argparse.Namespace) -> dict:
                 if counts[j + 1]
             }
         )
+
+        def spread(ts):
+            return 100.0 * (max(ts) - min(ts)) / min(ts)
+
         out["face" if face else "no_face"] = {
             "surfaces": int(cs.sf.shape[0]),
-            "rays": a.rays,
-            "search": t,
-            "ns_per_search": 1e9 * t["best_s"] / a.rays,
-            "first_hit_fraction": {k: v / a.rays for k, v in first.items()},
+            "rays": n,
+            "render_s": t_render,
+            "emission_s": t_emit,
+            "search_s": t_search,
+            "ns_per_ray": 1e9 * min(t_render) / n,
+            "ns_per_emission": 1e9 * min(t_emit) / n,
+            "ns_per_search": 1e9 * min(t_search) / n,
+            "ns_per_polar_search": 1e9 * min(t_polar) / n,
+            "cdf_grid_size": int(cs.cdf_grid.shape[0]),
+            "spread_pct": {
+                "render": spread(t_render),
+                "emission": spread(t_emit),
+                "search": spread(t_search),
+            },
+            "interactions_per_ray": res.interactions / n,
+            "ledger_fraction": {k: v / res.emitted_w for k, v in res.ledger.items() if v > 0},
+            "first_hit_fraction": {k: v / n for k, v in first.items()},
         }
     return out
 
@@ -278,12 +321,14 @@ def bench_throughput(a: argparse.Namespace, out: dict) -> None:
         args = ["--rays", str(a.rays), "--repeats", str(a.repeats), "--seed", str(a.seed)]
         r = run_worker("throughput", env, args)
         rows[str(th)] = r
-        warn = "" if min(r["render_call"]["cpu_util"]) > 0.9 else "  (DISTURBED? cpu_util < 0.9)"
+        warn = C.disturbed(r["render_call"])
         print(
             f"   threads={th}: {C.fmt_rate(r['rays_per_s'])}rays/s, "
             f"{C.fmt_rate(r['interactions_per_s'])}interactions/s "
             f"(trace best {r['trace_best_s']:.3f} s, spread {r['trace_spread_pct']:.1f} %, "
-            f"walls {r['trace_wall_s']}, cpu_util {r['render_call']['cpu_util']}){warn}"
+            f"walls {[round(w, 4) for w in r['trace_wall_s']]}, cpu_util "
+            f"{r['render_call']['cpu_util']}, others {r['render_call']['others_cpu_s']} CPU-s, "
+            f"steal {r['render_call']['steal_s']} s){warn}"
         )
         print(
             f"      [{quote_env(env)} python benchmarks/forward.py --worker throughput "
@@ -312,6 +357,42 @@ def bench_throughput(a: argparse.Namespace, out: dict) -> None:
         out["paper_run_s"] = top["trace_best_s"]
 
 
+IMPORT_WATCH = (
+    "eyelume",
+    "numba",
+    "scipy",
+    "pydantic",
+    "eyelume.scene.model",
+    "eyelume.kernels.rng",
+    "eyelume.kernels.geometry",
+)
+
+
+def import_profile(env_extra: dict) -> dict:
+    """``python -X importtime -c "import eyelume"``: cumulative time of a few modules and the
+    largest self times (seconds)."""
+    env = {**os.environ, **{k: str(v) for k, v in env_extra.items()}}
+    proc = subprocess.run(
+        [sys.executable, "-X", "importtime", "-c", "import eyelume"],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    self_t, cum_t = {}, {}
+    for ln in proc.stderr.splitlines():
+        if not ln.startswith("import time:") or "self [us]" in ln:
+            continue
+        s_us, c_us, name = (f.strip() for f in ln[len("import time:") :].split("|"))
+        self_t[name] = int(s_us) / 1e6
+        cum_t[name] = int(c_us) / 1e6
+    top = dict(sorted(self_t.items(), key=lambda kv: -kv[1])[:6])
+    return {
+        "cumulative_s": {k: cum_t[k] for k in IMPORT_WATCH if k in cum_t},
+        "top_self_s": top,
+    }
+
+
 def bench_startup(a: argparse.Namespace, out: dict) -> None:
     th = max(a.threads)
     print(f"\n-- start-up (NUMBA_NUM_THREADS={th}): process start → first 1000-ray render done")
@@ -331,13 +412,25 @@ def bench_startup(a: argparse.Namespace, out: dict) -> None:
         subprocess.run([sys.executable, "-c", "pass"], check=True)
         py.append(time.perf_counter() - t0)
     res["python_bare"] = py
+    res["importtime"] = import_profile(base_env)
     print(
         f"   python -c 'import eyelume': best {min(res['import']):.3f} s "
         f"(all {[round(x, 3) for x in res['import']]}); bare 'python -c pass' {min(py):.3f} s"
     )
+    prof = res["importtime"]
+    print(
+        "   python -X importtime -c 'import eyelume' (one run), cumulative: "
+        + ", ".join(f"{k} {v:.3f}" for k, v in prof["cumulative_s"].items())
+    )
+    print(
+        "      largest self times: "
+        + ", ".join(f"{k} {v:.3f}" for k, v in prof["top_self_s"].items())
+    )
     keep = None
+    made = []
     for i in range(a.cold_repeats):
         tmp = tempfile.mkdtemp(prefix="eyelume-cold-numba-")
+        made.append(tmp)
         env = {**base_env, "NUMBA_CACHE_DIR": tmp}
         r = run_worker("startup", env, ["--seed", str(a.seed)])
         r["start_to_render_s"] = r["t_done_epoch"] - r["_spawn_epoch"]
@@ -358,6 +451,8 @@ def bench_startup(a: argparse.Namespace, out: dict) -> None:
             f"load_scene {r['load_scene_s']:.3f}, compile_scene {r['compile_scene_s']:.3f}, "
             f"first render {r['first_render_s']:.3f}) [cache of the last cold run]"
         )
+    for tmp in made:  # the empty-cache directories this run made
+        shutil.rmtree(tmp, ignore_errors=True)
     cold = [r["start_to_render_s"] for r in res["cold"]]
     warm = [r["start_to_render_s"] for r in res["warm"]]
     res["summary"] = {
@@ -392,47 +487,79 @@ def bench_memory(a: argparse.Namespace, out: dict) -> None:
 
 
 def bench_anatomy(a: argparse.Namespace, out: dict) -> None:
-    th = max(a.threads)
-    print("\n-- where the time goes")
-    env = {"NUMBA_NUM_THREADS": th, "NUMBA_CACHE_DIR": C.WARM_CACHE}
+    print("\n-- where the time goes (1 thread unless stated)")
     args = ["--rays", str(a.rays), "--repeats", str(a.repeats), "--seed", str(a.seed)]
-    off = run_worker("throughput", env, [*args, "--face-off"])
-    on = out.get("throughput", {}).get(str(th))
-    if on is None:
-        on = run_worker("throughput", env, args)
-    for lab, r in (("face on ", on), ("face off", off)):
-        print(
-            f"   {lab}: {r['ns_surfaces']} non-sequential surfaces, "
-            f"{r['interactions_per_ray']:.3f} interactions/ray, "
-            f"{C.fmt_rate(r['rays_per_s'])}rays/s, "
-            f"{C.fmt_rate(r['interactions_per_s'])}interactions/s, "
-            f"{r['ns_per_interaction_per_thread']:.0f} ns/interaction/thread "
-            f"(trace best {r['trace_best_s']:.3f} s, spread {r['trace_spread_pct']:.1f} %)"
-        )
-    lf = on["ledger_fraction"]
-    lens = sum(
-        lf.get(k, 0.0)
-        for k in ("sensor", "lens (total internal reflection)", "image plane outside the sensor")
-    )
-    ends = sorted(lf.items(), key=lambda kv: -kv[1])
-    print("   ends: " + ", ".join(f"{k} {v:.3%}" for k, v in ends))
-    print(f"   rays through the whole lens (sensor + off-sensor + TIR): {lens:.3%}")
-    n_search = max(a.rays // 2, 100_000)
+    rows = {}
+    for th in sorted({1, max(a.threads)}):
+        env = {"NUMBA_NUM_THREADS": th, "NUMBA_CACHE_DIR": C.WARM_CACHE}
+        on = out.get("throughput", {}).get(str(th)) or run_worker("throughput", env, args)
+        off = run_worker("throughput", env, [*args, "--face-off"])
+        rows[th] = (on, off)
+        for lab, r in (("face on ", on), ("face off", off)):
+            warn = C.disturbed(r["render_call"])
+            print(
+                f"   {th} thr, {lab}: {r['ns_surfaces']} non-sequential surfaces, "
+                f"{r['interactions_per_ray']:.3f} interactions/ray, "
+                f"{C.fmt_rate(r['rays_per_s'])}rays/s, "
+                f"{C.fmt_rate(r['interactions_per_s'])}interactions/s, "
+                f"{r['ns_per_ray_per_thread']:.0f} ns/ray/thread "
+                f"(trace best {r['trace_best_s']:.3f} s, spread {r['trace_spread_pct']:.1f} %)"
+                + warn
+            )
+    n_an = a.rays
     an = run_worker(
         "anatomy",
         {"NUMBA_NUM_THREADS": 1, "NUMBA_CACHE_DIR": C.WARM_CACHE},
-        ["--rays", str(n_search), "--seed", str(a.seed)],
+        ["--rays", str(n_an), "--seed", str(a.seed), "--repeats", str(a.repeats)],
+    )
+    f = an["face"]
+    lf = f["ledger_fraction"]
+    ends = sorted(lf.items(), key=lambda kv: -kv[1])
+    print("   ends (share of rays): " + ", ".join(f"{k} {v:.3%}" for k, v in ends))
+    print(
+        f"   one process, 1 thread, {n_an:_} rays, best of {a.repeats} interleaved repeats "
+        "[NUMBA_NUM_THREADS=1 python benchmarks/forward.py --worker anatomy ...]:"
     )
     for key in ("face", "no_face"):
         s = an[key]
         top = sorted(s["first_hit_fraction"].items(), key=lambda kv: -kv[1])[:4]
+        sp = s["spread_pct"]
         print(
-            f"   nearest_hit over {s['surfaces']} surfaces on {n_search:_} emission rays "
-            f"({key}): {s['ns_per_search']:.1f} ns/search "
-            f"(1 thread, spread {s['search']['spread_pct']:.1f} %); first hits: "
+            f"   {key:>7}: render {s['ns_per_ray']:.0f} ns/ray (spread {sp['render']:.0f} %), "
+            f"emission sampling {s['ns_per_emission']:.0f} ns/ray ({sp['emission']:.0f} %; "
+            f"its inverse-CDF search over {s['cdf_grid_size']} entries "
+            f"{s['ns_per_polar_search']:.0f} ns), "
+            f"nearest_hit over {s['surfaces']} surfaces on the emission rays "
+            f"{s['ns_per_search']:.0f} ns/search ({sp['search']:.0f} %); first hits: "
             + ", ".join(f"{k} {v:.1%}" for k, v in top)
         )
-    out["anatomy"] = {"face_on": on, "face_off": off, "nearest_hit": an}
+    # searches per ray: one per event-loop turn = non-sequential interactions + the final
+    # escape or lens entry; lens surfaces (≤ 11 per lens entry) are not searches.
+    n_lens = rows[1][0]["lens_surfaces"]
+    through = sum(lf.get(k, 0.0) for k in ("sensor", "image plane outside the sensor"))
+    stopped = sum(
+        lf.get(k, 0.0) for k in ("lens (total internal reflection)", "lens mount (vignetted)")
+    )
+    entries = through + stopped
+    base = f["interactions_per_ray"] + lf.get("escaped", 0.0) + entries
+    lo = base - n_lens * (through + stopped)
+    hi = base - n_lens * through - stopped
+    ns_ray, ns_s, ns_e = f["ns_per_ray"], f["ns_per_search"], f["ns_per_emission"]
+    share = (lo * ns_s / ns_ray, hi * ns_s / ns_ray)
+    rest = ns_ray - ns_e - 0.5 * (lo + hi) * ns_s
+    print(
+        f"   → face on: {ns_ray:.0f} ns/ray ≈ emission sampling {ns_e:.0f} ({ns_e / ns_ray:.0%}) "
+        f"+ {lo:.2f}–{hi:.2f} searches × {ns_s:.0f} ns ({share[0]:.0%}–{share[1]:.0%}) + the rest "
+        f"{rest:.0f} ns (interaction physics, scattering, eye-plane test, the lens for "
+        f"{entries:.2%} of rays)"
+    )
+    out["anatomy"] = {
+        "by_threads": {str(k): {"face_on": v[0], "face_off": v[1]} for k, v in rows.items()},
+        "same_process_1_thread": an,
+        "searches_per_ray_range": [lo, hi],
+        "nearest_hit_share_range": list(share),
+        "emission_share": ns_e / ns_ray,
+    }
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -1,0 +1,417 @@
+"""The Table 3 imaging lens alone: eyelume's sequential kernel against Optiland 0.6.3 (NumPy).
+
+Run from the repository root (needs the ``bench`` extra: ``pip install "optiland==0.6.3"``)::
+
+    python benchmarks/lens_vs_optiland.py            # 10⁶ rays, a minute or two
+    python benchmarks/lens_vs_optiland.py --quick    # smoke run
+
+Both tracers get the SAME rays in the same run: start points uniform over the 40 × 30 mm eye plane
+(world z = 0), each aimed at a point uniform over the entrance-pupil disc (paraxial image of the
+stop, diameter EFL / 2.51). eyelume traces them with ``eyelume.kernels.sequential.trace_lens`` and
+the compiled scene's ``lf`` table, inside a Numba loop written here (``prange`` over rays, and a
+serial variant); Optiland traces a prescription built from the same table (radii, conics,
+thicknesses, object distance 70 mm, stop at surface 6, clear apertures) with constant-index
+``IdealMaterial``s holding eyelume's indices at 850 nm, via ``optic.surfaces.trace(RealRays)``.
+Their image-plane points are compared ray by ray before any timing is reported.
+
+Prints the figures and how they were run, and appends a JSON line to
+``benchmarks/results/lens_vs_optiland.jsonl``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+import warnings
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _common as C  # noqa: E402
+import numba  # noqa: E402
+import numpy as np  # noqa: E402
+from numba import njit, prange  # noqa: E402
+
+import eyelume  # noqa: E402
+from eyelume.compile import compile_scene, lens_paraxial  # noqa: E402
+from eyelume.kernels import sequential as Q  # noqa: E402
+from eyelume.kernels.sequential import LENS_PASSED, trace_lens  # noqa: E402
+
+# Reference figures for this machine (from the brief, not measured here).
+REF_OPTILAND_RAYS_S = 0.34e6
+REF_BLOCK_256_INTERACTIONS_S = 400e6  # Numba, 256-ray blocks, 12-surface lens, float64
+REF_SCALAR_INTERACTIONS_S = 46e6  # one-ray-at-a-time scalar code
+TARGET_RATIO = 30.0
+
+
+# ------------------------------------------------------------------------------------------------
+# eyelume side: Numba loops around the package's per-ray kernel
+# ------------------------------------------------------------------------------------------------
+
+
+@njit(parallel=True)
+def trace_parallel(lf, image_z, x0, y0, z0, dx, dy, dz, xo, yo, lo, mo, status, met):
+    """Trace every ray through the lens (one ray per iteration, prange over rays)."""
+    path = np.zeros((1, 3))  # never written: record=False
+    for i in prange(x0.shape[0]):
+        s, x, y, z, ux, uy, uz, m, _ = trace_lens(
+            lf, x0[i], y0[i], z0[i], dx[i], dy[i], dz[i], path, 0, False
+        )
+        t = (image_z - z) / uz
+        xo[i] = x + t * ux
+        yo[i] = y + t * uy
+        lo[i] = ux
+        mo[i] = uy
+        status[i] = s
+        met[i] = m
+
+
+@njit
+def trace_serial(lf, image_z, x0, y0, z0, dx, dy, dz, xo, yo, lo, mo, status, met):
+    """The same loop on one thread."""
+    path = np.zeros((1, 3))
+    for i in range(x0.shape[0]):
+        s, x, y, z, ux, uy, uz, m, _ = trace_lens(
+            lf, x0[i], y0[i], z0[i], dx[i], dy[i], dz[i], path, 0, False
+        )
+        t = (image_z - z) / uz
+        xo[i] = x + t * ux
+        yo[i] = y + t * uy
+        lo[i] = ux
+        mo[i] = uy
+        status[i] = s
+        met[i] = m
+
+
+# ------------------------------------------------------------------------------------------------
+# the rays
+# ------------------------------------------------------------------------------------------------
+
+
+def make_rays(cs, n: int, seed: int) -> dict:
+    """Start points uniform over the eye plane, aimed uniformly over the entrance-pupil disc."""
+    sc = cs.scene
+    par = lens_paraxial(sc, cs.lens_indices)
+    efl = par.efl
+    epd = efl / sc.lens.f_number
+    z_ep = cs.lf[0, Q.L_Z] + par.entrance_pupil_position(cs.stop_index)
+    rng = np.random.default_rng(seed)
+    w, h = sc.eye_plane.width_mm, sc.eye_plane.height_mm
+    x0 = rng.uniform(-w / 2, w / 2, n)
+    y0 = rng.uniform(-h / 2, h / 2, n)
+    r = 0.5 * epd * np.sqrt(rng.uniform(0.0, 1.0, n))
+    phi = rng.uniform(0.0, 2 * math.pi, n)
+    d = np.stack([r * np.cos(phi) - x0, r * np.sin(phi) - y0, np.full(n, z_ep)])
+    d /= np.linalg.norm(d, axis=0)
+    return {
+        "x": x0,
+        "y": y0,
+        "z": np.zeros(n),
+        "L": np.ascontiguousarray(d[0]),
+        "M": np.ascontiguousarray(d[1]),
+        "N": np.ascontiguousarray(d[2]),
+        "efl": efl,
+        "epd": epd,
+        "z_ep": z_ep,
+    }
+
+
+# ------------------------------------------------------------------------------------------------
+# Optiland side
+# ------------------------------------------------------------------------------------------------
+
+
+def build_optiland(cs, epd: float):
+    """The lens of ``cs.lf`` as an Optiland Optic; surface 1's vertex at Optiland z = 0."""
+    from optiland.materials import IdealMaterial
+    from optiland.optic import Optic
+
+    lf, sc = cs.lf, cs.scene
+    op = Optic(name=sc.lens.name)
+    op.surfaces.add(index=0, thickness=float(lf[0, Q.L_Z]), material=IdealMaterial(1.0))
+    for j, s in enumerate(sc.lens.surfaces):
+        c = lf[j, Q.L_CURV]
+        op.surfaces.add(
+            index=j + 1,
+            radius=math.inf if c == 0.0 else 1.0 / c,
+            conic=float(lf[j, Q.L_CONIC]),
+            thickness=float(s.thickness_mm),  # the last one: last vertex → image plane
+            material=IdealMaterial(float(lf[j, Q.L_N1])),
+            aperture=2.0 * float(lf[j, Q.L_SD]),  # a number is a diameter in Optiland
+            is_stop=j == cs.stop_index,
+        )
+    op.surfaces.add(index=len(sc.lens.surfaces) + 1)
+    op.set_aperture("EPD", float(epd))
+    op.fields.set_type("object_height")
+    op.fields.add(y=0.0)
+    op.fields.add(y=math.hypot(sc.eye_plane.width_mm, sc.eye_plane.height_mm) / 2)  # corner
+    op.wavelengths.add(cs.scene.wavelength_nm / 1000.0, is_primary=True)
+    return op
+
+
+def optiland_rays(rays: dict, z_shift: float, wavelength_um: float):
+    from optiland.rays import RealRays
+
+    n = rays["x"].shape[0]
+    return RealRays(
+        rays["x"].copy(),
+        rays["y"].copy(),
+        rays["z"] - z_shift,
+        rays["L"].copy(),
+        rays["M"].copy(),
+        rays["N"].copy(),
+        np.ones(n),
+        np.full(n, wavelength_um),
+    )
+
+
+# ------------------------------------------------------------------------------------------------
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--quick", action="store_true", help="smoke run: 10⁵ rays, 2 repeats")
+    p.add_argument("--rays", type=int, default=1_000_000)
+    p.add_argument("--repeats", type=int, default=5, help="eyelume repeats")
+    p.add_argument("--optiland-repeats", type=int, default=3)
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument(
+        "--no-optiland-extras",
+        action="store_true",
+        help="skip the secondary Optiland timings: surfaces.trace(record=True) on the same rays, "
+        "and trace_generic (its own ray generation from normalised field/pupil coordinates)",
+    )
+    a = p.parse_args(argv)
+    if a.quick:
+        a.rays, a.repeats, a.optiland_repeats = 100_000, 2, 2
+
+    import optiland
+    import optiland.backend as be
+
+    info = C.machine()
+    info["optiland"] = getattr(optiland, "__version__", None) or _dist_version("optiland")
+    info["optiland_backend"] = be.get_backend()
+    C.print_header("Table 3 lens alone: eyelume trace_lens vs Optiland", info)
+    print(f"   Optiland {info['optiland']} ({info['optiland_backend']} backend)")
+
+    cs = compile_scene(eyelume.load_scene("paper2005"))
+    lf, n = cs.lf, a.rays
+    n_surf = lf.shape[0]
+    rays = make_rays(cs, n, a.seed)
+    print(
+        f"\n   lens: {n_surf} surfaces, EFL {rays['efl']:.4f} mm, EPD {rays['epd']:.4f} mm, "
+        f"entrance pupil at world z = {rays['z_ep']:.4f} mm, image plane z = {cs.image_z} mm"
+    )
+    print(f"   rays: {n:_} from the 40 × 30 mm eye plane to the entrance pupil (seed {a.seed})")
+
+    # --- eyelume ---------------------------------------------------------------------------------
+    out = {k: np.empty(n) for k in ("x", "y", "L", "M")}
+    status = np.empty(n, dtype=np.int64)
+    met = np.empty(n, dtype=np.int64)
+    args = (
+        lf,
+        cs.image_z,
+        rays["x"],
+        rays["y"],
+        rays["z"],
+        rays["L"],
+        rays["M"],
+        rays["N"],
+        out["x"],
+        out["y"],
+        out["L"],
+        out["M"],
+        status,
+        met,
+    )
+    t0 = time.perf_counter()
+    trace_parallel(*args)
+    t_jit_par = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    trace_serial(*args)
+    t_jit_ser = time.perf_counter() - t0
+    threads = numba.get_num_threads()
+    t_par = C.timed(lambda: trace_parallel(*args), a.repeats, threads)
+    t_ser = C.timed(lambda: trace_serial(*args), a.repeats, 1)
+    t_par.pop("last")
+    t_ser.pop("last")
+    passed_e = status == LENS_PASSED
+    met_total = int(met.sum())
+
+    # --- Optiland --------------------------------------------------------------------------------
+    warnings.simplefilter("ignore", DeprecationWarning)
+    op = build_optiland(cs, rays["epd"])
+    z_shift = float(lf[0, Q.L_Z])  # Optiland puts the first vertex at z = 0
+    wl_um = cs.scene.wavelength_nm / 1000.0
+    efl_o = float(op.paraxial.f2())
+    op.surfaces.trace(optiland_rays(rays, z_shift, wl_um), record=False)  # warm-up
+    batches = [optiland_rays(rays, z_shift, wl_um) for _ in range(a.optiland_repeats)]
+    traced = []
+
+    def run_optiland(record: bool):
+        r = batches.pop()
+        op.surfaces.trace(r, record=record)
+        traced.append(r)
+        return r
+
+    t_opt = C.timed(lambda: run_optiland(False), a.optiland_repeats, 1)
+    t_opt.pop("last")
+    t_opt_rec = t_gen = None
+    if not a.no_optiland_extras:
+        batches = [optiland_rays(rays, z_shift, wl_um) for _ in range(a.optiland_repeats)]
+        t_opt_rec = C.timed(lambda: run_optiland(True), a.optiland_repeats, 1)
+        t_opt_rec.pop("last")
+        # trace_generic: the same eye-plane field (normalised to the 25 mm corner) and a uniform
+        # pupil disc, but Optiland generates and aims the rays itself (other rays: timing only)
+        g = np.random.default_rng(a.seed + 1)
+        hmax = float(op.fields.max_field)
+        hx = g.uniform(-0.5, 0.5, n) * cs.scene.eye_plane.width_mm / hmax
+        hy = g.uniform(-0.5, 0.5, n) * cs.scene.eye_plane.height_mm / hmax
+        pr, pa = np.sqrt(g.uniform(0, 1, n)) * 0.999, g.uniform(0, 2 * math.pi, n)
+        px, py = pr * np.cos(pa), pr * np.sin(pa)
+        op.ray_tracer.trace_generic(hx[:1000], hy[:1000], px[:1000], py[:1000], wl_um)
+        t_gen = C.timed(
+            lambda: op.ray_tracer.trace_generic(hx, hy, px, py, wl_um, record=False),
+            a.optiland_repeats,
+            1,
+        )
+        t_gen.pop("last")
+    ro = traced[-1]
+    batches.clear()
+
+    # --- agreement -------------------------------------------------------------------------------
+    xo, yo = np.asarray(ro.x), np.asarray(ro.y)
+    passed_o = (np.asarray(ro.i) > 0) & np.isfinite(xo) & np.isfinite(yo)
+    both = passed_e & passed_o
+    dx = float(np.max(np.abs(xo[both] - out["x"][both]))) if both.any() else math.nan
+    dy = float(np.max(np.abs(yo[both] - out["y"][both]))) if both.any() else math.nan
+    dl = float(np.max(np.abs(np.asarray(ro.L)[both] - out["L"][both]))) if both.any() else math.nan
+    dm = float(np.max(np.abs(np.asarray(ro.M)[both] - out["M"][both]))) if both.any() else math.nan
+    z_img = np.unique(np.asarray(ro.z)[both] + z_shift)
+    only_e = int((passed_e & ~passed_o).sum())
+    only_o = int((~passed_e & passed_o).sum())
+    agreement = {
+        "passed_eyelume": int(passed_e.sum()),
+        "passed_optiland": int(passed_o.sum()),
+        "passed_only_eyelume": only_e,
+        "passed_only_optiland": only_o,
+        "max_abs_dx_mm": dx,
+        "max_abs_dy_mm": dy,
+        "max_abs_dL": dl,
+        "max_abs_dM": dm,
+        "optiland_image_z_world_mm": z_img.tolist()[:3],
+        "efl_eyelume_mm": rays["efl"],
+        "efl_optiland_mm": efl_o,
+    }
+    print("\n-- agreement (image plane, rays passing both)")
+    print(
+        f"   passed: eyelume {passed_e.sum():_}, Optiland {passed_o.sum():_} "
+        f"({passed_e.mean():.3%}); only eyelume {only_e}, only Optiland {only_o}"
+    )
+    print(
+        f"   max |Δx| = {dx:.3e} mm, max |Δy| = {dy:.3e} mm, max |ΔL| = {dl:.2e}, "
+        f"max |ΔM| = {dm:.2e}"
+    )
+    print(
+        f"   EFL eyelume {rays['efl']:.9f} mm, Optiland {efl_o:.9f} mm; Optiland image "
+        f"plane at world z = {z_img[:3]}"
+    )
+    ok = only_e == 0 and only_o == 0 and max(dx, dy) < 1e-9
+    print(f"   {'AGREE' if ok else 'DISAGREE'} (criterion: same rays pass, |Δ| < 1e-9 mm)")
+
+    # --- figures ---------------------------------------------------------------------------------
+    rs_par = n / t_par["best_s"]
+    rs_ser = n / t_ser["best_s"]
+    rs_opt = n / t_opt["best_s"]
+    print("\n-- speed (best of repeats; spread = (worst − best) / best)")
+
+    def line(name, t, rate, th):
+        util = t["cpu_util"]
+        warn = C.disturbed(t)
+        print(
+            f"   {name:<38} {C.fmt_rate(rate)}rays/s  {C.fmt_rate(rate * n_surf)}surf/s "
+            f"({th} thr)  best {t['best_s']:.4f} s, spread {t['spread_pct']:.1f} %, "
+            f"cpu_util {util}, others {t['others_cpu_s']} CPU-s, steal {t['steal_s']} s{warn}"
+        )
+
+    line(f"eyelume prange ({threads} threads)", t_par, rs_par, threads)
+    line("eyelume serial", t_ser, rs_ser, 1)
+    line("Optiland surfaces.trace(record=False)", t_opt, rs_opt, 1)
+    rs_opt_rec = rs_gen = None
+    if t_opt_rec:
+        rs_opt_rec = n / t_opt_rec["best_s"]
+        line("Optiland surfaces.trace(record=True)", t_opt_rec, rs_opt_rec, 1)
+        rs_gen = n / t_gen["best_s"]
+        line("Optiland trace_generic(record=False)", t_gen, rs_gen, 1)
+    print(f"   first call (JIT compile + run): prange {t_jit_par:.2f} s, serial {t_jit_ser:.2f} s")
+    print(
+        f"\n   ratio eyelume prange / Optiland = {rs_par / rs_opt:.1f}×  (target ≥ "
+        f"{TARGET_RATIO:.0f}×); eyelume serial / Optiland = {rs_ser / rs_opt:.1f}× "
+        f"(core for core)"
+    )
+    print(
+        f"   Optiland measured {C.fmt_rate(rs_opt)}rays/s vs the brief's "
+        f"{C.fmt_rate(REF_OPTILAND_RAYS_S)}rays/s; eyelume prange against that reference: "
+        f"{rs_par / REF_OPTILAND_RAYS_S:.1f}×"
+    )
+    ia_par = rs_par * n_surf
+    ia_ser = rs_ser * n_surf
+    print(
+        f"   eyelume lens-only surface interactions/s (rays × {n_surf} / s): prange "
+        f"{C.fmt_rate(ia_par)}, serial {C.fmt_rate(ia_ser)}; surfaces actually met "
+        f"({met_total / n:.3f}/ray): prange {C.fmt_rate(met_total / t_par['best_s'])}, serial "
+        f"{C.fmt_rate(met_total / t_ser['best_s'])}"
+    )
+    print(
+        f"   references: 256-ray blocks {C.fmt_rate(REF_BLOCK_256_INTERACTIONS_S)}/s "
+        f"(eyelume prange at {ia_par / REF_BLOCK_256_INTERACTIONS_S:.1%} of it), scalar "
+        f"one-ray-at-a-time {C.fmt_rate(REF_SCALAR_INTERACTIONS_S)}/s (eyelume serial at "
+        f"{ia_ser / REF_SCALAR_INTERACTIONS_S:.0%}, prange at "
+        f"{ia_par / REF_SCALAR_INTERACTIONS_S:.0%})"
+    )
+    print(f"   {1e9 / ia_ser:.1f} ns per surface per ray, one thread")
+
+    info["loadavg_at_end"] = C.loadavg()
+    rec = {
+        "machine": info,
+        "command": C.command_line(),
+        "quick": a.quick,
+        "rays": n,
+        "seed": a.seed,
+        "lens_surfaces": n_surf,
+        "agreement": agreement,
+        "agree": ok,
+        "eyelume_prange": {**t_par, "threads": threads, "rays_per_s": rs_par},
+        "eyelume_serial": {**t_ser, "rays_per_s": rs_ser},
+        "optiland_record_false": {**t_opt, "rays_per_s": rs_opt},
+        "optiland_record_true": (
+            {**t_opt_rec, "rays_per_s": rs_opt_rec} if t_opt_rec is not None else None
+        ),
+        "optiland_trace_generic": (
+            {**t_gen, "rays_per_s": rs_gen, "note": "Optiland's own rays, timing only"}
+            if t_gen is not None
+            else None
+        ),
+        "ratio_prange_vs_optiland": rs_par / rs_opt,
+        "ratio_serial_vs_optiland": rs_ser / rs_opt,
+        "interactions_per_s_nominal": {"prange": ia_par, "serial": ia_ser},
+        "surfaces_met_per_ray": met_total / n,
+        "jit_first_call_s": {"prange": t_jit_par, "serial": t_jit_ser},
+    }
+    path = C.append_result("lens_vs_optiland", rec)
+    print(f"\nloadavg at end {info['loadavg_at_end']}; appended to {path.relative_to(C.REPO)}")
+
+
+def _dist_version(name: str) -> str | None:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version(name)
+    except PackageNotFoundError:
+        return None
+
+
+if __name__ == "__main__":
+    main()
