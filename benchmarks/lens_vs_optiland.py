@@ -37,7 +37,7 @@ from numba import njit, prange  # noqa: E402
 import eyelume  # noqa: E402
 from eyelume.compile import compile_scene, lens_paraxial  # noqa: E402
 from eyelume.kernels import sequential as Q  # noqa: E402
-from eyelume.kernels.sequential import LENS_PASSED, trace_lens  # noqa: E402
+from eyelume.kernels.sequential import LENS_PASSED, trace_lens, trace_lens_block  # noqa: E402
 
 # Reference figures for this machine (from the brief, not measured here).
 REF_OPTILAND_RAYS_S = 0.34e6
@@ -66,6 +66,38 @@ def trace_parallel(lf, image_z, x0, y0, z0, dx, dy, dz, xo, yo, lo, mo, status, 
         mo[i] = uy
         status[i] = s
         met[i] = m
+
+
+@njit(parallel=True)
+def trace_blocks(lf, image_z, x0, y0, z0, dx, dy, dz, xo, yo, lo, mo, status, work, block):
+    """The package's SIMD block kernel: prange over blocks of ``block`` rays, surface by surface
+    inside each block. ``work`` (6, n) holds the rays being traced (copied in, timed)."""
+    n = x0.shape[0]
+    for b in prange((n + block - 1) // block):
+        i0 = b * block
+        i1 = min(i0 + block, n)
+        work[0, i0:i1] = x0[i0:i1]
+        work[1, i0:i1] = y0[i0:i1]
+        work[2, i0:i1] = z0[i0:i1]
+        work[3, i0:i1] = dx[i0:i1]
+        work[4, i0:i1] = dy[i0:i1]
+        work[5, i0:i1] = dz[i0:i1]
+        trace_lens_block(
+            lf,
+            work[0, i0:i1],
+            work[1, i0:i1],
+            work[2, i0:i1],
+            work[3, i0:i1],
+            work[4, i0:i1],
+            work[5, i0:i1],
+            status[i0:i1],
+        )
+        for i in range(i0, i1):
+            t = (image_z - work[2, i]) / work[5, i]
+            xo[i] = work[0, i] + t * work[3, i]
+            yo[i] = work[1, i] + t * work[4, i]
+            lo[i] = work[3, i]
+            mo[i] = work[4, i]
 
 
 @njit
@@ -177,6 +209,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--repeats", type=int, default=5, help="eyelume repeats")
     p.add_argument("--optiland-repeats", type=int, default=3)
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--block", type=int, default=256, help="rays per block for the block kernel")
     p.add_argument(
         "--no-optiland-extras",
         action="store_true",
@@ -239,6 +272,26 @@ def main(argv: list[str] | None = None) -> None:
     t_ser.pop("last")
     passed_e = status == LENS_PASSED
     met_total = int(met.sum())
+    # the block kernel, on copies of the same rays; it must reproduce the per-ray kernel
+    out_b = {k: np.empty(n) for k in ("x", "y", "L", "M")}
+    status_b = np.empty(n, dtype=np.int64)
+    work = np.empty((6, n))
+    args_b = (*args[:2], *args[2:8], out_b["x"], out_b["y"], out_b["L"], out_b["M"], status_b)
+    t0 = time.perf_counter()
+    trace_blocks(*args_b, work, a.block)
+    t_jit_blk = time.perf_counter() - t0
+    t_blk = C.timed(lambda: trace_blocks(*args_b, work, a.block), a.repeats, threads)
+    numba.set_num_threads(1)
+    t_blk1 = C.timed(lambda: trace_blocks(*args_b, work, a.block), a.repeats, 1)
+    numba.set_num_threads(threads)
+    t_blk.pop("last")
+    t_blk1.pop("last")
+    same_status = bool(np.array_equal(status_b, status))
+    blk_vs_ray = (
+        float(max(np.max(np.abs(out_b[k][passed_e] - out[k][passed_e])) for k in out))
+        if passed_e.any()
+        else math.nan
+    )
 
     # --- Optiland --------------------------------------------------------------------------------
     warnings.simplefilter("ignore", DeprecationWarning)
@@ -336,6 +389,10 @@ def main(argv: list[str] | None = None) -> None:
             f"cpu_util {util}, others {t['others_cpu_s']} CPU-s, steal {t['steal_s']} s{warn}"
         )
 
+    rs_blk = n / t_blk["best_s"]
+    rs_blk1 = n / t_blk1["best_s"]
+    line(f"eyelume block kernel ({threads} threads)", t_blk, rs_blk, threads)
+    line("eyelume block kernel (1 thread)", t_blk1, rs_blk1, 1)
     line(f"eyelume prange ({threads} threads)", t_par, rs_par, threads)
     line("eyelume serial", t_ser, rs_ser, 1)
     line("Optiland surfaces.trace(record=False)", t_opt, rs_opt, 1)
@@ -345,7 +402,23 @@ def main(argv: list[str] | None = None) -> None:
         line("Optiland surfaces.trace(record=True)", t_opt_rec, rs_opt_rec, 1)
         rs_gen = n / t_gen["best_s"]
         line("Optiland trace_generic(record=False)", t_gen, rs_gen, 1)
-    print(f"   first call (JIT compile + run): prange {t_jit_par:.2f} s, serial {t_jit_ser:.2f} s")
+    print(
+        f"   first call (JIT compile + run): prange {t_jit_par:.2f} s, serial {t_jit_ser:.2f} s, "
+        f"block {t_jit_blk:.2f} s"
+    )
+    print(
+        f"   block kernel ({a.block} rays/block) against the per-ray kernel: same fates "
+        f"{same_status}, max |Δ| {blk_vs_ray:.2e} (mm, direction cosines)"
+    )
+    print(
+        f"\n   ratio eyelume block kernel / Optiland = {rs_blk / rs_opt:.1f}×  (target ≥ "
+        f"{TARGET_RATIO:.0f}×); one thread each: {rs_blk1 / rs_opt:.1f}×; against the brief's "
+        f"{C.fmt_rate(REF_OPTILAND_RAYS_S)}rays/s: {rs_blk / REF_OPTILAND_RAYS_S:.1f}×"
+    )
+    print(
+        f"   block kernel surface interactions/s: {C.fmt_rate(rs_blk * n_surf)} "
+        f"({rs_blk * n_surf / REF_BLOCK_256_INTERACTIONS_S:.0%} of the 256-ray-block reference)"
+    )
     print(
         f"\n   ratio eyelume prange / Optiland = {rs_par / rs_opt:.1f}×  (target ≥ "
         f"{TARGET_RATIO:.0f}×); eyelume serial / Optiland = {rs_ser / rs_opt:.1f}× "
@@ -383,6 +456,11 @@ def main(argv: list[str] | None = None) -> None:
         "lens_surfaces": n_surf,
         "agreement": agreement,
         "agree": ok,
+        "eyelume_block": {**t_blk, "threads": threads, "block": a.block, "rays_per_s": rs_blk},
+        "eyelume_block_1thread": {**t_blk1, "rays_per_s": rs_blk1},
+        "block_same_fates_as_per_ray": same_status,
+        "block_max_abs_diff_vs_per_ray": blk_vs_ray,
+        "ratio_block_vs_optiland": rs_blk / rs_opt,
         "eyelume_prange": {**t_par, "threads": threads, "rays_per_s": rs_par},
         "eyelume_serial": {**t_ser, "rays_per_s": rs_ser},
         "optiland_record_false": {**t_opt, "rays_per_s": rs_opt},
