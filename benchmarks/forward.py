@@ -161,38 +161,21 @@ def worker_memory(a: argparse.Namespace) -> dict:
 
 def worker_anatomy(a: argparse.Namespace) -> dict:
     """Cost of one non-sequential nearest-hit search on the scene's emission rays (1 thread)."""
-    import math
-
     import numpy as np
     from numba import njit
 
     import eyelume
     from eyelume.compile import compile_scene
+    from eyelume.estimators.forward import emit_ray
     from eyelume.kernels.geometry import nearest_hit
-    from eyelume.kernels.rng import next_uniform, stream_start
-    from eyelume.kernels.sampling import about_axis, profile_polar_angle
+    from eyelume.kernels.sampling import profile_polar_angle
 
     @njit
     def emission_rays(n, seed, leds, alpha_grid, cdf_grid, out):
-        # the first segment of every ray, drawn as the forward estimator draws it
+        # the first segment of every ray, drawn by the forward estimator's own emission kernel
         for i in range(n):
-            state = stream_start(seed, i)
-            state, u = next_uniform(state)
-            led = min(int(u * leds.shape[0]), leds.shape[0] - 1)
-            state, u1 = next_uniform(state)
-            state, u2 = next_uniform(state)
-            alpha = profile_polar_angle(u1, alpha_grid, cdf_grid)
-            phi = 2.0 * math.pi * u2
-            sa = math.sin(alpha)
-            dx, dy, dz = about_axis(
-                sa * math.cos(phi),
-                sa * math.sin(phi),
-                math.cos(alpha),
-                leds[led, 3],
-                leds[led, 4],
-                leds[led, 5],
-            )
-            out[i, 0], out[i, 1], out[i, 2] = leds[led, 0], leds[led, 1], leds[led, 2]
+            _, x, y, z, dx, dy, dz = emit_ray(i, seed, leds, alpha_grid, cdf_grid)
+            out[i, 0], out[i, 1], out[i, 2] = x, y, z
             out[i, 3], out[i, 4], out[i, 5] = dx, dy, dz
 
     @njit

@@ -75,6 +75,22 @@ class CompiledScene:
     tallies: list[str]
     sections: list[Section] = field(default_factory=list)
 
+    def kernel_arrays(self) -> tuple:
+        """What the forward kernels read, as one tuple: (sf, si, lf, image_z, leds, alpha_grid,
+        cdf_grid, sensor, plane, max_events)."""
+        return (
+            self.sf,
+            self.si,
+            self.lf,
+            self.image_z,
+            self.leds,
+            self.alpha_grid,
+            self.cdf_grid,
+            self.sensor,
+            self.plane,
+            self.scene.run.max_events,
+        )
+
     @property
     def led_power_w(self) -> float:
         """Radiant power of one LED (W): Φ = I₀ ∫ I/I₀ dΩ."""

@@ -112,15 +112,17 @@ def test_stream_matches_reference_and_is_reproducible():
 
 def test_stream_stepped_from_python_matches_reference():
     # The kernels are plain functions one may call from Python, passing back the state they
-    # return. Numba hands the uint64 state back as a Python int, which it retypes as int64 when
-    # it is below 2**63 on the next call; the stream must not depend on that.
+    # return. Numba hands the uint64 state back as a Python int, which it types as int64 on the
+    # next call when it is below 2**63; the kernels cast to uint64 so the stream does not depend
+    # on that. (A state ≥ 2**63 must be passed as np.uint64: Numba cannot fit it in an int64.)
     seed, ray = 2005, 0
-    state = stream_start(seed, ray)
-    got = []
-    for _ in range(16):
-        state, u = next_uniform(state)
-        got.append(u)
-    np.testing.assert_array_equal(got, _stream_ref(seed, ray, 16))
+    for wrap in (lambda s: s, np.uint64):
+        state = stream_start(seed, ray)
+        got = []
+        for _ in range(16):
+            state, u = next_uniform(wrap(state) if state < 2**63 else np.uint64(state))
+            got.append(u)
+        np.testing.assert_array_equal(got, _stream_ref(seed, ray, 16))
 
 
 def test_different_keys_give_different_streams():

@@ -55,29 +55,9 @@ def _record(path, n, x, y, z, record):
 
 
 @njit(cache=True)
-def trace_ray(
-    i,
-    seed,
-    sf,
-    si,
-    lf,
-    image_z,
-    leds,
-    alpha_grid,
-    cdf_grid,
-    sensor,
-    plane,
-    max_events,
-    img_counts,
-    plane_counts,
-    tallies,
-    path,
-    record,
-):
-    """Trace ray ``i`` from birth to its end, adding to the count arrays.
-
-    Returns (ledger entry, surface interactions, recorded path length).
-    """
+def emit_ray(i, seed, leds, alpha_grid, cdf_grid):
+    """Birth of ray ``i``: an LED drawn uniformly (equal powers), a direction from its angular
+    profile about its axis. Returns (stream state, x, y, z, dx, dy, dz) in world mm."""
     state = stream_start(seed, i)
     state, u = next_uniform(state)
     led = min(int(u * leds.shape[0]), leds.shape[0] - 1)
@@ -94,7 +74,28 @@ def trace_ray(
         leds[led, 4],
         leds[led, 5],
     )
-    x, y, z = leds[led, 0], leds[led, 1], leds[led, 2]
+    return state, leds[led, 0], leds[led, 1], leds[led, 2], dx, dy, dz
+
+
+@njit(cache=True)
+def trace_ray(
+    i,
+    seed,
+    arrays,
+    img_counts,
+    plane_counts,
+    tallies,
+    path,
+    record,
+):
+    """Trace ray ``i`` from birth to its end, adding to the count arrays.
+
+    ``arrays`` is :meth:`CompiledScene.kernel_arrays`.
+
+    Returns (ledger entry, surface interactions, recorded path length).
+    """
+    sf, si, lf, image_z, leds, alpha_grid, cdf_grid, sensor, plane, max_events = arrays
+    state, x, y, z, dx, dy, dz = emit_ray(i, seed, leds, alpha_grid, cdf_grid)
     npath = _record(path, 0, x, y, z, record)
     pw, ph, pc, pr = plane[0], plane[1], int(plane[2]), int(plane[3])
     interactions = 0
@@ -203,16 +204,7 @@ def _trace_batch(
     start,
     count,
     seed,
-    sf,
-    si,
-    lf,
-    image_z,
-    leds,
-    alpha_grid,
-    cdf_grid,
-    sensor,
-    plane,
-    max_events,
+    arrays,
     img_counts,
     plane_counts,
     tallies,
@@ -228,16 +220,7 @@ def _trace_batch(
             _, k, _ = trace_ray(
                 i,
                 seed,
-                sf,
-                si,
-                lf,
-                image_z,
-                leds,
-                alpha_grid,
-                cdf_grid,
-                sensor,
-                plane,
-                max_events,
+                arrays,
                 img_counts[c],
                 plane_counts[c],
                 tallies[c],
@@ -311,6 +294,7 @@ def trace_forward(
     pl = np.zeros((n_chunks, prow, pcol), dtype=np.int64)
     tal = np.zeros((n_chunks, len(cs.tallies)), dtype=np.int64)
     inter = np.zeros(n_chunks, dtype=np.int64)
+    arrays = cs.kernel_arrays()
     done = 0
     with _interrupt_between_batches() as stop:
         while done < rays and not stop.requested:
@@ -319,16 +303,7 @@ def trace_forward(
                 done,
                 n,
                 seed,
-                cs.sf,
-                cs.si,
-                cs.lf,
-                cs.image_z,
-                cs.leds,
-                cs.alpha_grid,
-                cs.cdf_grid,
-                cs.sensor,
-                cs.plane,
-                cs.scene.run.max_events,
+                arrays,
                 img,
                 pl,
                 tal,
@@ -349,16 +324,7 @@ def _trace_paths(
     start,
     n,
     seed,
-    sf,
-    si,
-    lf,
-    image_z,
-    leds,
-    alpha_grid,
-    cdf_grid,
-    sensor,
-    plane,
-    max_events,
+    arrays,
     n_tallies,
     section_tol,
     want_detected,
@@ -367,6 +333,7 @@ def _trace_paths(
     lengths,
     kinds,
 ):
+    sensor, plane = arrays[7], arrays[8]
     img = np.zeros((int(sensor[3]), int(sensor[2])), dtype=np.int64)
     pl = np.zeros((int(plane[3]), int(plane[2])), dtype=np.int64)
     tal = np.zeros(n_tallies, dtype=np.int64)
@@ -378,16 +345,7 @@ def _trace_paths(
         entry, _, npath = trace_ray(
             i,
             seed,
-            sf,
-            si,
-            lf,
-            image_z,
-            leds,
-            alpha_grid,
-            cdf_grid,
-            sensor,
-            plane,
-            max_events,
+            arrays,
             img,
             pl,
             tal,
@@ -433,16 +391,7 @@ def trace_paths(
         0,
         search,
         seed,
-        cs.sf,
-        cs.si,
-        cs.lf,
-        cs.image_z,
-        cs.leds,
-        cs.alpha_grid,
-        cs.cdf_grid,
-        cs.sensor,
-        cs.plane,
-        cs.scene.run.max_events,
+        cs.kernel_arrays(),
         len(cs.tallies),
         section_tol,
         detected,
