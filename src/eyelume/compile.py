@@ -236,38 +236,36 @@ def _lens_table(scene: Scene, indices: list[float], semi: list[float]) -> tuple[
 
 
 def _auto_semi_diameters(
-    scene: Scene, indices: list[float], stop: int, stop_sd: float
-) -> list[float]:
+    scene: Scene, indices: list[float], par: ParaxialSystem, stop: int, stop_sd: float
+) -> tuple[list[float], float]:
     """Clear semi-diameters from a real-ray trace of the full eye-plane field.
 
-    Rays from a 9 × 7 grid of object points over the eye plane, aimed at a 101 × 101 grid over
-    the first vertex plane (overfilled), are traced with open apertures; those through the stop
-    set the largest height at each surface. Each surface gets that height + 1 % (a mechanical
-    clear aperture), so the stop alone limits the axial and field bundles over the eye area.
+    For a 9 × 7 grid of object points over the eye plane (corners included) the rays through 72
+    points of the stop's rim are found by real-ray aiming; the largest height they reach at each
+    surface + 1 % (a mechanical clear aperture) is its semi-diameter, so the stop alone limits
+    every bundle from the eye area, as the paper's lens was designed. Also returns the fraction
+    of rim rays that got through.
     """
-    from eyelume.kernels.sequential import max_heights
+    from eyelume.kernels.sequential import rim_ray_heights
 
     n = len(scene.lens.surfaces)
-    semi = [math.inf] * n
-    semi[stop] = stop_sd
-    lf, _ = _lens_table(scene, indices, semi)
+    lf, _ = _lens_table(scene, indices, [math.inf] * n)
     plane = scene.eye_plane
     xs = np.linspace(-plane.width_mm / 2, plane.width_mm / 2, 9)
     ys = np.linspace(-plane.height_mm / 2, plane.height_mm / 2, 7)
-    reach = 2.0 * scene.lens.object_distance_mm / scene.lens.f_number + plane.width_mm
-    g = np.linspace(-reach, reach, 101)
-    heights = max_heights(lf, xs, ys, g, stop)
+    # the aiming starts from the paraxial entrance pupil (its radius / the stop's)
+    pupil_mag = par.efl / scene.lens.f_number / 2 / stop_sd
+    pupil_z = scene.lens.object_distance_mm + par.entrance_pupil_position(stop)
+    heights, found = rim_ray_heights(lf, stop, stop_sd, xs, ys, 72, pupil_mag, pupil_z)
     out = []
     for j, s in enumerate(scene.lens.surfaces):
-        if s.semi_diameter_mm is not None and j != stop:
-            out.append(s.semi_diameter_mm)
-        elif j == stop:
+        if j == stop:
             out.append(stop_sd)
-        elif not heights[j] > 0:
-            raise SceneError(f"lens.surfaces.{j}: no ray of the field passes this surface")
+        elif s.semi_diameter_mm is not None:
+            out.append(s.semi_diameter_mm)
         else:
             out.append(1.01 * heights[j])
-    return out
+    return out, found / (xs.size * ys.size * 72)
 
 
 def _check_lens_geometry(scene: Scene, lf: np.ndarray) -> None:
@@ -336,9 +334,14 @@ def compile_scene(scene: Scene) -> CompiledScene:
     if not par.power > 0:
         raise SceneError(f"lens: the prescription has no positive power (EFL {par.efl:.3g} mm)")
     stop_sd = par.stop_semi_diameter_for_epd(stop, par.efl / scene.lens.f_number)
-    semi = _auto_semi_diameters(scene, idx, stop, stop_sd)
+    semi, rim_fraction = _auto_semi_diameters(scene, idx, par, stop, stop_sd)
     lf, image_z = _lens_table(scene, idx, semi)
     _check_lens_geometry(scene, lf)
+    if rim_fraction < 0.9:
+        raise SceneError(
+            f"lens: only {rim_fraction:.0%} of the rim rays of the eye-plane field pass the lens "
+            "(total internal reflection or a surface missed): check the prescription"
+        )
 
     # --- eye (eye frame: z' = −z) --------------------------------------------------------------
     n_eye = eye_indices(eye, wl)

@@ -73,35 +73,74 @@ def trace_lens(lf, x, y, z, dx, dy, dz, path, n_path, record):
 
 
 @njit(cache=True)
-def max_heights(lf, xs, ys, grid, stop):
-    """Largest ray height at each surface over rays that pass every surface and the stop.
+def _stop_point(lf, stop, x0, y0, ax, ay, path):
+    """Where the ray from (x0, y0, 0) toward (ax, ay, z₁) (z₁ the first vertex) meets the stop;
+    NaN if it fails before. ``lf`` should have open apertures."""
+    dx, dy, dz = ax - x0, ay - y0, lf[0, L_Z]
+    inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
+    status, _, _, _, _, _, _, met, _ = trace_lens(
+        lf[: stop + 1], x0, y0, 0.0, dx * inv, dy * inv, dz * inv, path, 0, True
+    )
+    if met <= stop:
+        return math.nan, math.nan
+    return path[stop, 0], path[stop, 1]
 
-    Rays start at object points (x, y, 0) for x in ``xs``, y in ``ys`` and aim at (g₁, g₂, z₀)
-    on the first vertex plane for g₁, g₂ in ``grid``; apertures other than the stop are ignored.
+
+@njit(cache=True)
+def rim_ray_heights(lf, stop, stop_radius, xs, ys, n_azimuth, pupil_mag, pupil_z):
+    """Largest ray height at each surface over the rim rays of a set of field points.
+
+    For each object point (x, y, 0) and each of ``n_azimuth`` points on the stop's rim, the ray
+    through that rim point is found by real-ray aiming (Newton's method on the aim point in the
+    first vertex plane, finite-difference Jacobian), started from the paraxial guess: the ray
+    toward the rim point's image in the entrance pupil (magnification ``pupil_mag``, at world
+    z = ``pupil_z``). ``lf`` must have open apertures. Returns the heights
+    (mm) per surface and the number of rim rays found.
     """
     n = lf.shape[0]
     best = np.zeros(n)
-    heights = np.zeros(n)
     path = np.zeros((n, 3))
-    z0 = lf[0, L_Z]
-    for x in xs:
-        for y in ys:
-            for g1 in grid:
-                for g2 in grid:
-                    dx, dy, dz = g1 - x, g2 - y, z0
-                    inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
-                    status, _, _, _, _, _, _, met, npath = trace_lens(
-                        lf, x, y, 0.0, dx * inv, dy * inv, dz * inv, path, 0, True
-                    )
-                    if status != LENS_PASSED:
-                        continue
-                    for j in range(n):
-                        heights[j] = math.sqrt(path[j, 0] ** 2 + path[j, 1] ** 2)
-                    if heights[stop] > lf[stop, L_SD]:
-                        continue
-                    for j in range(n):
-                        best[j] = max(best[j], heights[j])
-    return best
+    found = 0
+    h = 1e-5
+    for x0 in xs:
+        for y0 in ys:
+            for k in range(n_azimuth):
+                phi = 2.0 * math.pi * k / n_azimuth
+                tx, ty = stop_radius * math.cos(phi), stop_radius * math.sin(phi)
+                f = lf[0, L_Z] / pupil_z
+                ax = x0 + (pupil_mag * tx - x0) * f
+                ay = y0 + (pupil_mag * ty - y0) * f
+                ok = False
+                for _ in range(30):
+                    sx, sy = _stop_point(lf, stop, x0, y0, ax, ay, path)
+                    if math.isnan(sx):
+                        break
+                    ex, ey = sx - tx, sy - ty
+                    if ex * ex + ey * ey < 1e-20:
+                        ok = True
+                        break
+                    s1x, s1y = _stop_point(lf, stop, x0, y0, ax + h, ay, path)
+                    s2x, s2y = _stop_point(lf, stop, x0, y0, ax, ay + h, path)
+                    j11, j21 = (s1x - sx) / h, (s1y - sy) / h
+                    j12, j22 = (s2x - sx) / h, (s2y - sy) / h
+                    det = j11 * j22 - j12 * j21
+                    if math.isnan(det) or det == 0.0:
+                        break
+                    ax -= (j22 * ex - j12 * ey) / det
+                    ay -= (-j21 * ex + j11 * ey) / det
+                if not ok:
+                    continue
+                dx, dy, dz = ax - x0, ay - y0, lf[0, L_Z]
+                inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
+                status, _, _, _, _, _, _, _, _ = trace_lens(
+                    lf, x0, y0, 0.0, dx * inv, dy * inv, dz * inv, path, 0, True
+                )
+                if status != LENS_PASSED:
+                    continue
+                found += 1
+                for j in range(n):
+                    best[j] = max(best[j], math.sqrt(path[j, 0] ** 2 + path[j, 1] ** 2))
+    return best, found
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract", "arcp", "nsz", "reassoc"})
