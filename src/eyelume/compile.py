@@ -18,13 +18,13 @@ import numpy as np
 
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
-from eyelume.kernels.sampling import profile_tables
+from eyelume.kernels.sampling import cos_power_tables, profile_tables
 from eyelume.scene.eye import eye_indices, limbus_geometry, sag
 from eyelume.scene.glass import GlassError, load_catalog
 from eyelume.scene.io import SceneError
 from eyelume.scene.model import Scene
 from eyelume.scene.optics import ParaxialSystem
-from eyelume.scene.sources import led_poses, relative_intensity
+from eyelume.scene.sources import cos_power_exponent, led_poses, relative_intensity
 
 __all__ = ["CompiledScene", "Section", "compile_scene", "lens_paraxial", "lens_indices"]
 
@@ -456,8 +456,13 @@ def compile_scene(scene: Scene) -> CompiledScene:
             tally_b="LED bodies",
         )
     emit = centres + axes * rb * (1.0 + 1e-9)
+    profile = scene.leds.profile
     try:
-        alpha_grid, cdf_grid, omega = profile_tables(relative_intensity(scene.leds.profile))
+        if profile.kind == "cos_power":
+            m = cos_power_exponent(profile.half_intensity_angle_deg)
+            alpha_grid, cdf_grid, omega = cos_power_tables(m)
+        else:
+            alpha_grid, cdf_grid, omega = profile_tables(relative_intensity(profile))
     except ValueError as exc:
         raise SceneError(str(exc)) from None
 

@@ -92,6 +92,15 @@ def profile_tables(relative_intensity, n: int = 4097) -> tuple[np.ndarray, np.nd
     return alpha, cum / total, 2.0 * math.pi * total
 
 
+def cos_power_tables(m: float, n: int = 4097) -> tuple[np.ndarray, np.ndarray, float]:
+    """Closed-form sampling tables of I(α) = I₀ cosᵐ α: CDF(α) = 1 − cos^{m+1} α and
+    Ω_eff = 2π / (m + 1) sr, on the same grid as :func:`profile_tables`."""
+    alpha = np.linspace(0.0, math.pi / 2, n)
+    cdf = 1.0 - np.cos(alpha) ** (m + 1.0)
+    cdf[-1] = 1.0
+    return alpha, cdf, 2.0 * math.pi / (m + 1.0)
+
+
 def profile_pdf(alpha, relative_intensity, omega_eff: float):
     """Density per steradian of directions drawn by the LED sampler: p(ω) = I(α)/I(0) / Ω_eff."""
     return np.asarray(relative_intensity(np.asarray(alpha)), dtype=float) / omega_eff
