@@ -19,11 +19,11 @@ import numpy as np
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
 from eyelume.kernels.sampling import cos_power_tables, profile_tables
-from eyelume.scene.eye import eye_indices, limbus_geometry, sag
+from eyelume.scene.eye import eye_indices, limbus_geometry
 from eyelume.scene.glass import GlassError, load_catalog
 from eyelume.scene.io import SceneError
 from eyelume.scene.model import Scene
-from eyelume.scene.optics import ParaxialSystem
+from eyelume.scene.optics import ParaxialSystem, curvature, sag
 from eyelume.scene.sources import cos_power_exponent, led_poses, relative_intensity
 
 __all__ = ["CompiledScene", "Section", "compile_scene", "lens_paraxial", "lens_indices"]
@@ -172,10 +172,9 @@ def _frame(axis) -> np.ndarray:
 
 def _conic_bound(origin, rot, curv, conic, rmax) -> tuple[np.ndarray, float]:
     """Bounding sphere of a conicoid cap of radius ``rmax`` about its vertex."""
-    R = 1.0 / curv if curv else math.inf
-    s = sag(R, conic, rmax) if math.isfinite(rmax) else math.nan
+    s = float(sag(curv, conic, rmax)) if math.isfinite(rmax) else math.nan
     if math.isnan(s):
-        s = abs(R) if math.isfinite(R) else 0.0
+        s = 1.0 / abs(curv) if curv else 0.0
     centre = np.asarray(origin) + rot[2] * (s / 2.0)
     return centre, math.hypot(rmax, s / 2.0) * 1.000001 + 1e-9
 
@@ -206,7 +205,7 @@ def lens_indices(scene: Scene) -> tuple[list[float], dict[str, float]]:
 def lens_paraxial(scene: Scene, indices: list[float]) -> ParaxialSystem:
     """The imaging lens as a paraxial system (object space = air)."""
     surfaces = scene.lens.surfaces
-    curv = tuple(0.0 if math.isinf(s.radius_mm) else 1.0 / s.radius_mm for s in surfaces)
+    curv = tuple(curvature(s.radius_mm) for s in surfaces)
     gaps = tuple(s.thickness_mm for s in surfaces[:-1])
     return ParaxialSystem(curv, gaps, tuple(indices))
 
@@ -215,7 +214,7 @@ def eye_paraxial(scene: Scene, wavelength_nm: float | None = None) -> ParaxialSy
     """The eye's refracting surfaces as a paraxial system (air → vitreous), eye frame."""
     eye = scene.eye
     refracting = eye.surfaces[:-1]
-    curv = tuple(0.0 if math.isinf(s.radius_mm) else 1.0 / s.radius_mm for s in refracting)
+    curv = tuple(curvature(s.radius_mm) for s in refracting)
     gaps = tuple(s.thickness_mm for s in refracting[:-1])
     idx = eye_indices(eye, wavelength_nm or scene.wavelength_nm)
     return ParaxialSystem(curv, gaps, tuple(idx))
@@ -227,7 +226,7 @@ def _lens_table(scene: Scene, indices: list[float], semi: list[float]) -> tuple[
     z = lens.object_distance_mm
     for j, s in enumerate(lens.surfaces):
         lf[j, Q.L_Z] = z
-        lf[j, Q.L_CURV] = 0.0 if math.isinf(s.radius_mm) else 1.0 / s.radius_mm
+        lf[j, Q.L_CURV] = curvature(s.radius_mm)
         lf[j, Q.L_CONIC] = s.conic
         lf[j, Q.L_SD] = semi[j]
         lf[j, Q.L_N0], lf[j, Q.L_N1] = indices[j], indices[j + 1]
@@ -268,31 +267,29 @@ def _auto_semi_diameters(
     return out, found / (xs.size * ys.size * 72)
 
 
-def _check_lens_geometry(scene: Scene, lf: np.ndarray) -> None:
+def _lens_surface_z(lf: np.ndarray, j: int, r) -> np.ndarray:
+    """World z (mm) of lens surface ``j`` at radial distance ``r``."""
+    return lf[j, Q.L_Z] + sag(lf[j, Q.L_CURV], lf[j, Q.L_CONIC], r)
+
+
+def _check_lens_geometry(lf: np.ndarray) -> None:
     """Reject surfaces whose sag is undefined inside their aperture or that cross a neighbour."""
     for j in range(lf.shape[0]):
-        R = 1.0 / lf[j, Q.L_CURV] if lf[j, Q.L_CURV] else math.inf
-        if math.isnan(sag(R, lf[j, Q.L_CONIC], lf[j, Q.L_SD])):
+        if np.isnan(_lens_surface_z(lf, j, lf[j, Q.L_SD])):
             raise SceneError(
                 f"lens.surfaces.{j}: semi-diameter {lf[j, Q.L_SD]:.3f} mm exceeds the extent of "
-                f"the conicoid (radius {R}, conic {lf[j, Q.L_CONIC]})"
+                f"the conicoid (curvature {lf[j, Q.L_CURV]:.6g}/mm, conic {lf[j, Q.L_CONIC]})"
             )
     for j in range(lf.shape[0] - 1):
-        r_max = min(lf[j, Q.L_SD], lf[j + 1, Q.L_SD])
-        for r in np.linspace(0.0, r_max, 64):
-            z0 = lf[j, Q.L_Z] + sag(
-                1 / lf[j, Q.L_CURV] if lf[j, Q.L_CURV] else math.inf, lf[j, Q.L_CONIC], r
+        r = np.linspace(0.0, min(lf[j, Q.L_SD], lf[j + 1, Q.L_SD]), 64)
+        z0, z1 = _lens_surface_z(lf, j, r), _lens_surface_z(lf, j + 1, r)
+        bad = np.nonzero(z1 < z0 - 1e-9)[0]
+        if bad.size:
+            k = bad[0]
+            raise SceneError(
+                f"lens.surfaces.{j} and lens.surfaces.{j + 1} cross at r = {r[k]:.2f} mm "
+                f"(z {z0[k]:.3f} > {z1[k]:.3f}): impossible geometry"
             )
-            z1 = lf[j + 1, Q.L_Z] + sag(
-                1 / lf[j + 1, Q.L_CURV] if lf[j + 1, Q.L_CURV] else math.inf,
-                lf[j + 1, Q.L_CONIC],
-                r,
-            )
-            if z1 < z0 - 1e-9:
-                raise SceneError(
-                    f"lens.surfaces.{j} and lens.surfaces.{j + 1} cross at r = {r:.2f} mm "
-                    f"(z {z0:.3f} > {z1:.3f}): impossible geometry"
-                )
 
 
 def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray) -> None:
@@ -310,10 +307,9 @@ def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray) -> None:
                 )
         # the body against the lens's first surface, within its clear aperture
         r_c = math.hypot(c[0], c[1])
-        R = 1 / lf[0, Q.L_CURV] if lf[0, Q.L_CURV] else math.inf
         for r in np.linspace(max(0.0, r_c - rb), min(r_c + rb, lf[0, Q.L_SD]), 32):
             half = math.sqrt(max(0.0, rb * rb - (r - r_c) ** 2))
-            if c[2] + half > lf[0, Q.L_Z] + sag(R, lf[0, Q.L_CONIC], r) and half > 0:
+            if half > 0 and c[2] + half > _lens_surface_z(lf, 0, r):
                 raise SceneError(
                     f"leds: LED {i} body at (Y = {r_c:.1f}, Z = {c[2]:.1f}) mm overlaps the "
                     f"imaging lens's first surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
@@ -336,7 +332,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
     stop_sd = par.stop_semi_diameter_for_epd(stop, par.efl / scene.lens.f_number)
     semi, rim_fraction = _auto_semi_diameters(scene, idx, par, stop, stop_sd)
     lf, image_z = _lens_table(scene, idx, semi)
-    _check_lens_geometry(scene, lf)
+    _check_lens_geometry(lf)
     if rim_fraction < 0.9:
         raise SceneError(
             f"lens: only {rim_fraction:.0%} of the rim rays of the eye-plane field pass the lens "
@@ -353,7 +349,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
         zprime += s.thickness_mm
     refracting = eye.surfaces[:-1]
     for j, s in enumerate(refracting):
-        c = 0.0 if math.isinf(s.radius_mm) else 1.0 / s.radius_mm
+        c = curvature(s.radius_mm)
         origin = np.array([0.0, 0.0, -surf_z[j]])
         anterior = j == 0
         t.add(
@@ -372,9 +368,8 @@ def compile_scene(scene: Scene) -> CompiledScene:
             absorb=eye.cornea_absorptance if anterior else 0.0,
             fresnel=anterior and eye.cornea_reflection == "fresnel",
         )
-    # iris: an annulus in the plane of the anterior lens vertex
-    lens_front = next((j for j, s in enumerate(eye.surfaces) if "lens" in s.name), 2)
-    iris_o = np.array([0.0, 0.0, -surf_z[lens_front]])
+    # iris: an annulus in the vertex plane of the surface that carries the pupil
+    iris_o = np.array([0.0, 0.0, -surf_z[eye.iris_surface]])
     t.add(
         "iris",
         G.SHAPE_CONIC,
@@ -386,7 +381,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
     )
     # retina: the prescription's last surface (a cap), seen from the vitreous (side A)
     ret = eye.surfaces[-1]
-    c_r = 0.0 if math.isinf(ret.radius_mm) else 1.0 / ret.radius_mm
+    c_r = curvature(ret.radius_mm)
     ret_o = np.array([0.0, 0.0, -surf_z[-1]])
     t.add(
         "retina",

@@ -13,7 +13,7 @@ import numpy as np
 from eyelume.compile import CompiledScene, Section
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
-from eyelume.scene.eye import sag
+from eyelume.scene.optics import sag
 
 __all__ = ["system_sections"]
 
@@ -61,11 +61,10 @@ def _surface_points(sf: np.ndarray, si: np.ndarray, s: int, extent: float) -> np
     if shape == G.SHAPE_CONIC:
         rmax = min(math.sqrt(sf[s, G.RMAX2]), extent)
         c, k = sf[s, G.CURV], sf[s, G.CONIC]
-        radius = 1.0 / c if c else math.inf
         # the meridian in x = 0: local direction (cos ψ, sin ψ, 0) whose world x part vanishes
         psi = math.atan2(-rot[0, 0], rot[1, 0])
         r = np.linspace(-rmax, rmax, 801)
-        z = np.array([sag(radius, k, abs(v)) for v in r])
+        z = sag(c, k, np.abs(r))
         local = np.stack([r * math.cos(psi), r * math.sin(psi), z], 1)
         return local @ rot + o
     if shape == G.SHAPE_SPHERE:
@@ -116,7 +115,7 @@ def system_sections(cs: CompiledScene, extent: float = 60.0) -> list[Section]:
                 out.append(Section("aperture stop", "stop", np.full(2, cs.lf[j, Q.L_Z]), y))
             continue
         r = np.linspace(-sd, sd, 201)
-        z = cs.lf[j, Q.L_Z] + np.array([sag(1 / c if c else math.inf, k, abs(v)) for v in r])
+        z = cs.lf[j, Q.L_Z] + sag(c, k, np.abs(r))
         out.append(Section(f"lens S{j + 1}", "lens", z, r))
     half = cs.sensor[1] / 2
     out.append(Section("sensor", "sensor", np.full(2, cs.image_z), np.array([-half, half])))

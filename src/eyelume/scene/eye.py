@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from eyelume.scene.model import Eye
+from eyelume.scene.optics import curvature, sag
 
 __all__ = ["LAMBDA_C", "LAMBDA_D", "LAMBDA_F", "eye_index", "eye_indices", "limbus_geometry"]
 
@@ -44,15 +45,6 @@ def eye_indices(eye: Eye, wavelength_nm: float) -> list[float]:
     return out
 
 
-def sag(radius_mm: float, conic: float, r: float) -> float:
-    """Sag z(r) = c r² / (1 + √(1 − (1+k) c² r²)) in mm (c = 1/R; 0 for a plane)."""
-    c = 0.0 if math.isinf(radius_mm) else 1.0 / radius_mm
-    arg = 1.0 - (1.0 + conic) * c * c * r * r
-    if arg < 0:
-        return math.nan
-    return c * r * r / (1.0 + math.sqrt(arg))
-
-
 def limbus_geometry(eye: Eye) -> tuple[float, float, float]:
     """The limbus and the eyeball: (limbus radius, limbus depth z', eyeball-centre depth z').
 
@@ -61,7 +53,7 @@ def limbus_geometry(eye: Eye) -> tuple[float, float, float]:
     """
     cornea = eye.surfaces[0]
     r_l = cornea.semi_diameter_mm
-    z_l = sag(cornea.radius_mm, cornea.conic, r_l)
+    z_l = float(sag(curvature(cornea.radius_mm), cornea.conic, r_l))
     if math.isnan(z_l):
         raise ValueError(
             f"eye.surfaces.0.semi_diameter_mm = {r_l} exceeds the extent of the corneal conicoid"

@@ -128,7 +128,8 @@ class Eye(_Model):
     """A schematic eye with its Lambertian tissues.
 
     ``surfaces`` are the refracting surfaces followed by the retina, in order from the anterior
-    cornea. The iris is a Lambertian annulus in the plane of the anterior lens vertex; the sclera a
+    cornea. The iris is a Lambertian annulus in the vertex plane of surface ``iris_surface`` (the
+    anterior lens, where the Arizona eye has its pupil); the sclera a
     Lambertian sphere of ``sclera_radius_mm`` through the corneal limbus (the edge of the anterior
     cornea's clear aperture); its inner face and the retina reflect ``retina_reflectance``.
     """
@@ -139,6 +140,7 @@ class Eye(_Model):
     cornea_reflection: Literal["fixed", "fresnel"] = "fixed"
     cornea_reflectance: Fraction = 0.024
     cornea_absorptance: Fraction = 0.0
+    iris_surface: int = Field(2, ge=1)
     iris_outer_diameter_mm: Positive = 11.0
     pupil_diameter_mm: Positive = 7.0
     iris_reflectance: Fraction = 0.05
@@ -160,6 +162,11 @@ class Eye(_Model):
             raise ValueError(
                 f"pupil_diameter_mm = {self.pupil_diameter_mm} must be smaller than "
                 f"iris_outer_diameter_mm = {self.iris_outer_diameter_mm}"
+            )
+        if self.iris_surface >= len(self.surfaces) - 1:
+            raise ValueError(
+                f"iris_surface = {self.iris_surface} must index a refracting surface "
+                f"(1 … {len(self.surfaces) - 2})"
             )
         if self.cornea_reflectance + self.cornea_absorptance > 1:
             raise ValueError(

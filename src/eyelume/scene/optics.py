@@ -7,11 +7,33 @@ n′u′ = n u − y c (n′ − n); between surfaces y ← y + t u′ (paraxial
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ParaxialSystem"]
+__all__ = ["ParaxialSystem", "curvature", "sag"]
+
+
+def curvature(radius_mm: float) -> float:
+    """c = 1/R in 1/mm; 0 for a flat surface (R = ±inf)."""
+    return 0.0 if math.isinf(radius_mm) else 1.0 / radius_mm
+
+
+def sag(c: float, k: float, r):
+    """Sag z(r) = c r² / (1 + √(1 − (1+k) c² r²)) in mm of a conicoid with curvature c (1/mm)
+    and conic constant k; NaN beyond the conicoid's extent. ``r`` may be an array.
+
+    Examples
+    --------
+    >>> round(float(sag(1 / 7.8, -0.25, 6.0)), 4)
+    2.6437
+    """
+    r = np.asarray(r, dtype=float)
+    arg = 1.0 - (1.0 + k) * c * c * r * r
+    with np.errstate(invalid="ignore"):
+        out = c * r * r / (1.0 + np.sqrt(arg))
+    return np.where(arg < 0.0, np.nan, out)
 
 
 @dataclass(frozen=True)
