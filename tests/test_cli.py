@@ -171,3 +171,17 @@ def test_bad_led_profile_csv_one_line_exit_2(tmp_path, csv, words):
     assert len(message.splitlines()) == 1, message
     for w in words:
         assert w.lower() in message.lower(), (w, message)
+
+
+def test_render_a_scene_file(tmp_path):
+    """A user's TOML file renders like the preset it was saved from (same seed, same arrays)."""
+    path = tmp_path / "mine.toml"
+    save_scene(load_scene("paper2005"), path)
+    a, b = tmp_path / "a", tmp_path / "b"
+    common = ["--rays", "50000", "--seed", "9"]
+    assert (
+        runner.invoke(app, ["render", "--scene", str(path), *common, "--out", str(a)]).exit_code
+        == 0
+    )
+    assert runner.invoke(app, ["render", *common, "--out", str(b)]).exit_code == 0
+    assert np.array_equal(np.load(a / "eye_image.npy"), np.load(b / "eye_image.npy"))
