@@ -59,3 +59,22 @@ def test_impossible_lens_geometry_is_refused(overrides, words):
     with pytest.raises(SceneError) as info:
         compile_scene(eyelume.load_scene("paper2005", overrides))
     assert all(w in str(info.value) for w in words), str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "words"),
+    [
+        (
+            {"eye.surfaces.3.semi_diameter_mm": "6.0", "eye.surfaces.3.conic": "0.0"},
+            ["eye.surfaces.3", "6.0"],
+        ),
+        (
+            {"eye.surfaces.0.semi_diameter_mm": "9.5"},
+            ["eye.surfaces.0", "9.5"],
+        ),
+    ],
+)
+def test_eye_aperture_beyond_its_conicoid_is_refused(overrides, words):
+    with pytest.raises(SceneError) as info:
+        compile_scene(eyelume.load_scene("paper2005", overrides))
+    assert all(w in str(info.value) for w in words), str(info.value)

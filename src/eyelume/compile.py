@@ -172,9 +172,9 @@ def _frame(axis) -> np.ndarray:
 
 def _conic_bound(origin, rot, curv, conic, rmax) -> tuple[np.ndarray, float]:
     """Bounding sphere of a conicoid cap of radius ``rmax`` about its vertex."""
-    s = float(sag(curv, conic, rmax)) if math.isfinite(rmax) else math.nan
-    if math.isnan(s):
-        s = 1.0 / abs(curv) if curv else 0.0
+    s = float(sag(curv, conic, rmax))
+    if math.isnan(s):  # callers check apertures against the conicoid's extent first
+        raise ValueError(f"aperture {rmax} mm beyond the conicoid (c {curv}, k {conic})")
     centre = np.asarray(origin) + rot[2] * (s / 2.0)
     return centre, math.hypot(rmax, s / 2.0) * 1.000001 + 1e-9
 
@@ -340,6 +340,12 @@ def compile_scene(scene: Scene) -> CompiledScene:
         )
 
     # --- eye (eye frame: z' = −z) --------------------------------------------------------------
+    for j, s in enumerate(eye.surfaces):
+        if math.isnan(float(sag(curvature(s.radius_mm), s.conic, s.semi_diameter_mm))):
+            raise SceneError(
+                f"eye.surfaces.{j}.semi_diameter_mm = {s.semi_diameter_mm} exceeds the extent of "
+                f"the '{s.name}' conicoid (radius {s.radius_mm} mm, conic {s.conic})"
+            )
     n_eye = eye_indices(eye, wl)
     r_l, z_l, z_c = limbus_geometry(eye)
     zprime = 0.0

@@ -39,6 +39,9 @@ class RenderResult:
         Rays behind each bin; a bin's relative standard error is about 1/√count.
     ledger : dict[str, float]
         Where the emitted power ended (W), summing to ``emitted_w``.
+    picture_extent_mm, plane_extent_mm : (left, right, bottom, top)
+        Millimetre coordinates of the picture (the sensor plane turned by 180°, so x_picture =
+        −x_sensor and y_picture = −y_sensor) and of the eye plane (world x, y).
     """
 
     scene: Scene
@@ -54,7 +57,7 @@ class RenderResult:
     ledger: dict[str, float]
     interactions: int
     interrupted: bool
-    sensor_extent_mm: tuple[float, float, float, float]
+    picture_extent_mm: tuple[float, float, float, float]
     plane_extent_mm: tuple[float, float, float, float]
 
     def summary(self) -> dict:
@@ -129,6 +132,6 @@ def render(
         ledger={name: float(n) * w for name, n in zip(cs.tallies, fc.tallies, strict=True)},
         interactions=fc.interactions,
         interrupted=fc.interrupted,
-        sensor_extent_mm=_extent(sc.sensor.width_mm, sc.sensor.height_mm),
+        picture_extent_mm=_extent(sc.sensor.width_mm, sc.sensor.height_mm),
         plane_extent_mm=_extent(sc.eye_plane.width_mm, sc.eye_plane.height_mm),
     )

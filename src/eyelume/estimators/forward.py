@@ -175,22 +175,22 @@ def trace_ray(
         else:  # refracting interface with a partial reflection
             n1 = sf[s, G.N_B] if from_b else sf[s, G.N_A]
             n2 = sf[s, G.N_A] if from_b else sf[s, G.N_B]
-            if si[s, G.FRESNEL]:
-                r = fresnel_reflectance(cos_d, n1, n2)
-            else:
-                r = sf[s, G.REFL]
-            if u < r:
+            ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
+            if not ok:  # total internal reflection: all of it, whatever R and A say
                 dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz)
-            elif u < r + sf[s, G.ABSORB]:
-                entry = si[s, G.TALLY_B] if from_b else si[s, G.TALLY_A]
-                tallies[entry] += 1
-                return entry, interactions, npath
             else:
-                ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
-                if ok:
-                    dx, dy, dz = tx, ty, tz
+                if si[s, G.FRESNEL]:
+                    r = fresnel_reflectance(cos_d, n1, n2)
                 else:
+                    r = sf[s, G.REFL]
+                if u < r:
                     dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz)
+                elif u < r + sf[s, G.ABSORB]:
+                    entry = si[s, G.TALLY_B] if from_b else si[s, G.TALLY_A]
+                    tallies[entry] += 1
+                    return entry, interactions, npath
+                else:
+                    dx, dy, dz = tx, ty, tz
         norm = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
         dx *= norm
         dy *= norm

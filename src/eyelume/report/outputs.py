@@ -40,7 +40,7 @@ def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Pat
     save_irradiance_plot(
         result.eye_image,
         path("eye_image_plot.png"),
-        extent_mm=result.sensor_extent_mm,
+        extent_mm=result.picture_extent_mm,
         title=f"{name}: eye image, {result.rays:,} rays (glints clipped at 99.5 %)",
         xlabel="image x (mm, picture upright)",
         ylabel="image y (mm)",

@@ -135,7 +135,6 @@ class Eye(_Model):
     """
 
     model: str = "arizona"
-    accommodation_d: float = 0.0
     surfaces: list[EyeSurface]
     cornea_reflection: Literal["fixed", "fresnel"] = "fixed"
     cornea_reflectance: Fraction = 0.024
@@ -147,7 +146,6 @@ class Eye(_Model):
     sclera_radius_mm: Positive = 12.0
     sclera_reflectance: Fraction = 0.09
     retina_reflectance: Fraction = 0.0
-    rotation_center_mm: Positive = 13.5
 
     @model_validator(mode="after")
     def _consistent(self) -> Eye:
@@ -193,6 +191,8 @@ class Tissue(_Model):
     Sphere: radius about the centre. Cylinder: radius about the axis. Disk: the plane through the
     centre normal to the axis. The surface exists where local z ∈ ``clip_z_mm`` and the distance
     from the axis ∈ ``clip_r_mm`` (local frame). ``reflectance`` defaults to the face's skin.
+    A tissue reflects on its outer face only (outside a sphere or cylinder, the +axis side of a
+    disk) and absorbs on the other: point a disk's axis toward the light.
     """
 
     name: str
