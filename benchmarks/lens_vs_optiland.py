@@ -100,21 +100,8 @@ def trace_blocks(lf, image_z, x0, y0, z0, dx, dy, dz, xo, yo, lo, mo, status, wo
             mo[i] = work[4, i]
 
 
-@njit
-def trace_serial(lf, image_z, x0, y0, z0, dx, dy, dz, xo, yo, lo, mo, status, met):
-    """The same loop on one thread."""
-    path = np.zeros((1, 3))
-    for i in range(x0.shape[0]):
-        s, x, y, z, ux, uy, uz, m, _ = trace_lens(
-            lf, x0[i], y0[i], z0[i], dx[i], dy[i], dz[i], path, 0, False
-        )
-        t = (image_z - z) / uz
-        xo[i] = x + t * ux
-        yo[i] = y + t * uy
-        lo[i] = ux
-        mo[i] = uy
-        status[i] = s
-        met[i] = m
+#: The same loop on one thread (prange runs as range without parallel=True).
+trace_serial = njit(trace_parallel.py_func)
 
 
 # ------------------------------------------------------------------------------------------------

@@ -40,17 +40,6 @@ T_MIN = 1e-7  # mm: a hit closer than this to a ray's origin is the surface it j
 
 
 @njit(cache=True, inline="always")
-def to_local(sf, s, x, y, z):
-    """World point → local frame of surface ``s``."""
-    px, py, pz = x - sf[s, OX], y - sf[s, OY], z - sf[s, OZ]
-    return (
-        sf[s, R00] * px + sf[s, R01] * py + sf[s, R02] * pz,
-        sf[s, R10] * px + sf[s, R11] * py + sf[s, R12] * pz,
-        sf[s, R20] * px + sf[s, R21] * py + sf[s, R22] * pz,
-    )
-
-
-@njit(cache=True, inline="always")
 def dir_to_local(sf, s, x, y, z):
     """World direction → local frame of surface ``s``."""
     return (
@@ -58,6 +47,12 @@ def dir_to_local(sf, s, x, y, z):
         sf[s, R10] * x + sf[s, R11] * y + sf[s, R12] * z,
         sf[s, R20] * x + sf[s, R21] * y + sf[s, R22] * z,
     )
+
+
+@njit(cache=True, inline="always")
+def to_local(sf, s, x, y, z):
+    """World point → local frame of surface ``s``."""
+    return dir_to_local(sf, s, x - sf[s, OX], y - sf[s, OY], z - sf[s, OZ])
 
 
 @njit(cache=True, inline="always")
