@@ -99,7 +99,7 @@ def schott(lam_um, c: Sequence[float]):
     """
     a = _pad(c, 6)
     w2 = lam_um * lam_um
-    return np.sqrt(a[0] + a[1] * w2 + a[2] / w2 + a[3] / w2**2 + a[4] / w2**3 + a[5] / w2**4)
+    return np.sqrt(a[0] + a[1] * w2 + _inverse_square_series(w2, a[2:]))
 
 
 def sellmeier1(lam_um, c: Sequence[float]):
@@ -254,12 +254,7 @@ def extended(lam_um, c: Sequence[float]):
     """
     a = _pad(c, 8)
     w2 = lam_um * lam_um
-    inv = 1.0 / w2
-    return np.sqrt(
-        a[0]
-        + a[1] * w2
-        + inv * (a[2] + inv * (a[3] + inv * (a[4] + inv * (a[5] + inv * (a[6] + inv * a[7])))))
-    )
+    return np.sqrt(a[0] + a[1] * w2 + _inverse_square_series(w2, a[2:]))
 
 
 def sellmeier5(lam_um, c: Sequence[float]):
@@ -292,13 +287,8 @@ def extended2(lam_um, c: Sequence[float]):
     """
     a = _pad(c, 8)
     w2 = lam_um * lam_um
-    inv = 1.0 / w2
     return np.sqrt(
-        a[0]
-        + a[1] * w2
-        + inv * (a[2] + inv * (a[3] + inv * (a[4] + inv * a[5])))
-        + a[6] * w2**2
-        + a[7] * w2**3
+        a[0] + a[1] * w2 + _inverse_square_series(w2, a[2:6]) + a[6] * w2**2 + a[7] * w2**3
     )
 
 
@@ -317,13 +307,7 @@ def extended3(lam_um, c: Sequence[float]):
     """
     a = _pad(c, 9)
     w2 = lam_um * lam_um
-    inv = 1.0 / w2
-    return np.sqrt(
-        a[0]
-        + a[1] * w2
-        + a[2] * w2**2
-        + inv * (a[3] + inv * (a[4] + inv * (a[5] + inv * (a[6] + inv * (a[7] + inv * a[8])))))
-    )
+    return np.sqrt(a[0] + a[1] * w2 + a[2] * w2**2 + _inverse_square_series(w2, a[3:]))
 
 
 @dataclass(frozen=True)
@@ -355,6 +339,15 @@ def _pad(c: Sequence[float], n: int) -> tuple[float, ...]:
     """The first ``n`` coefficients of ``c``, missing ones taken as 0 (as Zemax does)."""
     c = tuple(c)
     return c[:n] + (0.0,) * (n - len(c))
+
+
+def _inverse_square_series(w2, a: tuple[float, ...]):
+    """Σ a_i λ^(−2(i+1)) = a_0 λ⁻² + a_1 λ⁻⁴ + … by Horner's rule; ``w2`` is λ² in µm²."""
+    inv = 1.0 / w2
+    total = 0.0
+    for coefficient in reversed(a):
+        total = inv * (coefficient + total)
+    return total
 
 
 def _sellmeier_sum(w2, a: tuple[float, ...], terms: int):
