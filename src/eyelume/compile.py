@@ -12,7 +12,7 @@ The compiled scene holds, at the scene's wavelength:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -26,7 +26,7 @@ from eyelume.scene.model import Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
 from eyelume.scene.sources import cos_power_exponent, led_poses, relative_intensity
 
-__all__ = ["CompiledScene", "Section", "compile_scene", "lens_paraxial", "lens_indices"]
+__all__ = ["CompiledScene", "compile_scene", "lens_paraxial", "lens_indices"]
 
 #: Fixed ledger entries; named surfaces follow.
 TALLY_SENSOR, TALLY_ESCAPED, TALLY_VIGNETTED, TALLY_TIR, TALLY_OFF_SENSOR, TALLY_LIMIT = range(6)
@@ -41,16 +41,6 @@ FIXED_TALLIES = (
 
 EYE_AXIS_ROT = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]])
 """World → eye-frame rotation in primary gaze: z' = −z (into the eye), y' = y, x' = −x."""
-
-
-@dataclass(frozen=True)
-class Section:
-    """A polyline of the system's y–z section (x = 0) for layout drawings (world mm)."""
-
-    name: str
-    category: str
-    z: np.ndarray
-    y: np.ndarray
 
 
 @dataclass
@@ -73,7 +63,6 @@ class CompiledScene:
     sensor: np.ndarray  # width, height, cols, rows
     plane: np.ndarray  # width, height, cols, rows
     tallies: list[str]
-    sections: list[Section] = field(default_factory=list)
 
     def kernel_arrays(self) -> tuple:
         """What the forward kernels read, as one tuple: (sf, si, lf, image_z, leds, alpha_grid,

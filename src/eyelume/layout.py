@@ -7,15 +7,26 @@ where a surface's clip ranges end, so each returned polyline is one connected pi
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-from eyelume.compile import CompiledScene, Section
+from eyelume.compile import CompiledScene
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
 from eyelume.scene.optics import sag
 
-__all__ = ["system_sections"]
+__all__ = ["Section", "system_sections"]
+
+
+@dataclass(frozen=True)
+class Section:
+    """A polyline of the system's y–z section (x = 0) for layout drawings (world mm)."""
+
+    name: str
+    category: str
+    z: np.ndarray
+    y: np.ndarray
 
 
 def _category(name: str, action: int) -> str:
