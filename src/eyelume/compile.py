@@ -20,7 +20,7 @@ from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
 from eyelume.kernels.sampling import cos_power_tables, profile_tables
 from eyelume.scene.eye import eye_indices, limbus_geometry
-from eyelume.scene.glass import GlassError, load_catalog
+from eyelume.scene.glass import Glass, GlassError, load_catalog
 from eyelume.scene.io import SceneError
 from eyelume.scene.model import Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
@@ -168,26 +168,25 @@ def _conic_bound(origin, rot, curv, conic, rmax) -> tuple[np.ndarray, float]:
     return centre, math.hypot(rmax, s / 2.0) * 1.000001 + 1e-9
 
 
-def lens_indices(scene: Scene) -> tuple[list[float], dict[str, float]]:
+def lens_indices(scene: Scene) -> tuple[list[float], dict[str, Glass]]:
     """Indices [object space, after surface 1, …] of the lens at the scene wavelength, and the
-    index of each glass used. Raises SceneError for a glass missing from the catalogs."""
+    catalog entry of each glass used. Raises SceneError for a glass missing from the catalogs."""
     lens = scene.lens
     try:
         catalog = load_catalog(*lens.glass_catalogs) if lens.glass_catalogs else load_catalog()
     except GlassError as exc:
         raise SceneError(f"lens.glass_catalogs: {exc}") from None
     indices = [1.0]
-    used: dict[str, float] = {}
+    used: dict[str, Glass] = {}
     for j, s in enumerate(lens.surfaces):
         if not s.glass or s.glass.lower() == "air":
             indices.append(1.0)
             continue
         try:
-            n = catalog[s.glass].index(scene.wavelength_nm)
+            used[s.glass] = catalog[s.glass]
         except GlassError as exc:
             raise SceneError(f"field 'lens.surfaces.{j}.glass' = {s.glass!r}: {exc}") from None
-        used[s.glass] = n
-        indices.append(n)
+        indices.append(used[s.glass].index(scene.wavelength_nm))
     return indices, used
 
 

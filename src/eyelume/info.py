@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from eyelume.compile import compile_scene, eye_paraxial, lens_paraxial
+from eyelume.compile import compile_scene, eye_paraxial, lens_indices, lens_paraxial
 from eyelume.kernels import sequential as Q
 from eyelume.scene.eye import LAMBDA_D, eye_indices
-from eyelume.scene.glass import load_catalog
 from eyelume.scene.model import Scene
 from eyelume.scene.sources import cos_power_exponent
 
@@ -19,11 +18,11 @@ def scene_info(scene: Scene) -> dict:
     par = lens_paraxial(scene, cs.lens_indices)
     s_obj = lens.object_distance_mm
     stop_sd = float(cs.lf[cs.stop_index, Q.L_SD])
-    catalog = load_catalog(*lens.glass_catalogs) if lens.glass_catalogs else load_catalog()
+    _, used = lens_indices(scene)
     glasses = {}
     for j, s in enumerate(lens.surfaces):
-        if s.glass and s.glass.lower() != "air" and s.glass not in glasses:
-            g = catalog[s.glass]
+        if s.glass in used and s.glass not in glasses:
+            g = used[s.glass]
             glasses[s.glass] = {
                 "paper_name": s.paper_glass or s.glass,
                 "index": cs.lens_indices[j + 1],
