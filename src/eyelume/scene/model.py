@@ -295,9 +295,18 @@ class EyePlane(_Model):
 
 
 class Run(_Model):
-    """Defaults of a forward Monte Carlo run."""
+    """Defaults of a render.
 
+    ``estimator`` picks the method: ``forward`` (plain forward Monte Carlo, ``rays`` rays) or
+    ``fast`` (camera-side paths with next-event estimation, ``samples_per_pixel`` per pixel, plus
+    ``light_paths_per_pixel`` × pixels light paths aimed at the cornea; see
+    :mod:`eyelume.estimators.fast`).
+    """
+
+    estimator: Literal["forward", "fast"] = "forward"
     rays: int = Field(1_500_000, ge=1)
+    samples_per_pixel: int = Field(16, ge=1, le=1_000_000)
+    light_paths_per_pixel: float = Field(64.0, ge=0.0, le=1e6)
     seed: int = Field(0, ge=0, lt=2**63)
     batch_size: int = Field(1 << 18, ge=1)
     max_events: int = Field(64, ge=2, le=10_000)
