@@ -12,6 +12,7 @@ from eyelume.estimators.forward import trace_paths
 from eyelume.layout import system_sections
 from eyelume.render import RenderResult
 from eyelume.report.plots import SectionCurve, save_grey_png, save_irradiance_plot, save_layout
+from eyelume.detectors.sensor import camera_summary, digitize
 
 __all__ = ["write_render_outputs"]
 
@@ -20,8 +21,11 @@ def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Pat
     """Write every output of ``eyelume render`` into folder ``out``; returns the paths written.
 
     ``eye_image.npy``/``eye_plane.npy`` (W/mm², float64), their grey PNGs (glints saturate at the
-    99.5th percentile), colour-bar figures ``*_plot.png`` in physical units, ``layout.png`` (a y–z
-    section with a few dozen traced rays) and ``summary.json`` (run facts and power ledger).
+    99.5th percentile), ``eye_image_digital.npy`` (the camera's reading in DN, uint16, from
+    :func:`eyelume.detectors.sensor.digitize` with the render's seed) and ``eye_image_digital.png`` (0 DN
+    black … full scale white, no autoscaling), colour-bar figures ``*_plot.png`` in physical
+    units, ``layout.png`` (a y–z section with a few dozen traced rays) and ``summary.json`` (run
+    facts, power ledger and, under ``"camera"``, the sensor settings and saturated pixels).
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -36,7 +40,11 @@ def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Pat
     np.save(path("eye_plane.npy"), result.eye_plane)
     save_grey_png(result.eye_image, path("eye_image.png"))
     save_grey_png(result.eye_plane, path("eye_plane.png"), clip_percentile=100.0)
-    name = result.scene.name
+    sc = result.scene
+    digital = digitize(result.eye_image, sc.sensor, sc.wavelength_nm, result.seed)
+    np.save(path("eye_image_digital.npy"), digital.counts)
+    save_grey_png(digital.counts, path("eye_image_digital.png"), white=digital.full_scale_dn)
+    name = sc.name
     save_irradiance_plot(
         result.eye_image,
         path("eye_image_plot.png"),
@@ -61,5 +69,7 @@ def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Pat
         title=f"{name}: y–z section, rays reaching the sensor (red) and others (orange)",
         ray_colors=["tab:red" if hit else "tab:orange" for _, hit in rays],
     )
-    path("summary.json").write_text(json.dumps(result.summary(), indent=2) + "\n", encoding="utf-8")
+    summary = result.summary()
+    summary["camera"] = camera_summary(sc.sensor, sc.wavelength_nm, digital)
+    path("summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     return written

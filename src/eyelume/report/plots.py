@@ -115,6 +115,7 @@ def save_grey_png(
     *,
     clip_percentile: float = 99.5,
     min_width_px: int = 640,
+    white: float | None = None,
 ) -> None:
     """Write a 2-D irradiance array as an 8-bit grey PNG a person can look at.
 
@@ -126,7 +127,8 @@ def save_grey_png(
     percentile of the strictly positive entries. Anything brighter than ``E_c`` saturates to white:
     small bright features such as corneal glints are clipped on purpose, because a scale running to
     the maximum would leave the face and pupil nearly black next to a glint. Negative entries are
-    drawn black. Use ``clip_percentile=100`` for a scale to the maximum.
+    drawn black. Use ``clip_percentile=100`` for a scale to the maximum, or ``white`` for a fixed
+    clip value (a camera's full scale, so that exposure and saturation show as they are).
 
     Parameters
     ----------
@@ -141,6 +143,9 @@ def save_grey_png(
         The picture is enlarged by the smallest integer nearest-neighbour factor that makes it at
         least this many pixels wide (each array element becomes a square block), so a small
         detector image is not a thumbnail. Default 640.
+    white : float, optional
+        A fixed clip value ``E_c`` (> 0, same unit as the array); ``clip_percentile`` is then
+        ignored. Default: the percentile.
 
     Raises
     ------
@@ -168,10 +173,13 @@ def save_grey_png(
     if int(min_width_px) != min_width_px or min_width_px < 1:
         raise ValueError(f"min_width_px must be a positive integer, got {min_width_px!r}")
 
+    if white is not None and not (math.isfinite(white) and white > 0):
+        raise ValueError(f"white must be a finite value > 0, got {white!r}")
+
     if arr.size == 0:
         grey = np.zeros((1, 1), dtype=np.uint8)
     else:
-        clip = _positive_percentile(arr, p)
+        clip = _positive_percentile(arr, p) if white is None else float(white)
         if clip > 0.0:
             scaled = np.clip(arr / clip, 0.0, 1.0) * 255.0
             grey = np.rint(scaled).astype(np.uint8)

@@ -274,12 +274,48 @@ class ImagingLens(_Model):
 
 
 class Sensor(_Model):
-    """The image plane, binned into pixels (rows × cols over height × width, centred on axis)."""
+    """The image plane, binned into pixels, and the digital camera that records it.
+
+    Geometry: the image field ``width_mm`` × ``height_mm`` (centred on the axis) is sampled by
+    ``cols`` × ``rows`` pixels. The paper's lens images the 40 × 30 mm eye area at magnification
+    −1.144 onto this 46 × 34.3 mm field, binned 87 × 65.
+
+    Camera: the paper's optics fix the image field and the working F-number, hence the
+    image-plane irradiance E. The digital camera is that optics scaled to a real chip at the same
+    working F-number, so each photosite of pitch ``pixel_pitch_um`` receives the same irradiance
+    E; the grid ``cols`` × ``rows`` is the sampling of the picture (one photosite per sample, at
+    the irradiance averaged over its bin). Mean photo-electrons per pixel
+
+        N̄ = E [W/m²] · p² [m²] · t [s] · QE / (h c / λ),
+
+    then Poisson shot noise, the well clipped at ``full_well_e``, Gaussian read noise
+    ``read_noise_e`` (electrons rms), conversion at ``gain_e_per_dn`` electrons per digital
+    number plus ``black_level_dn``, rounding, and the ADC range 0 … 2^``adc_bits`` − 1
+    (see :mod:`eyelume.detectors.sensor`). ``quantum_efficiency`` is at the scene's wavelength.
+    """
 
     width_mm: Positive = 46.0
     height_mm: Positive = 34.3
     cols: int = Field(87, ge=1, le=4096)
     rows: int = Field(65, ge=1, le=4096)
+    pixel_pitch_um: float = Field(3.0, gt=0, le=100)
+    exposure_ms: float = Field(20.0, gt=0, le=60_000)
+    quantum_efficiency: float = Field(0.30, gt=0, le=1)
+    full_well_e: float = Field(6000.0, gt=0, le=1e8)
+    read_noise_e: NonNegative = 3.0
+    gain_e_per_dn: Positive = 6.0
+    adc_bits: int = Field(10, ge=1, le=16)
+    black_level_dn: NonNegative = 16.0
+
+    @model_validator(mode="after")
+    def _black_level_in_range(self) -> Sensor:
+        full_scale = 2**self.adc_bits - 1
+        if self.black_level_dn >= full_scale:
+            raise ValueError(
+                f"black_level_dn = {self.black_level_dn} must be below the ADC full scale "
+                f"2^adc_bits − 1 = {full_scale}"
+            )
+        return self
 
 
 class EyePlane(_Model):

@@ -1,0 +1,1 @@
+"""Detectors: the sensor model (irradiance → electrons → digital counts)."""
