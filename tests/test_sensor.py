@@ -10,11 +10,11 @@ import pytest
 from PIL import Image
 
 from eyelume.compile import compile_scene
+from eyelume.detectors.sensor import digitize, electrons_per_w_mm2
 from eyelume.render import render
 from eyelume.report.outputs import write_render_outputs
 from eyelume.scene.io import SceneError, load_scene
 from eyelume.scene.model import Sensor
-from eyelume.detectors.sensor import digitize, electrons_per_w_mm2
 
 # Exact SI values (2019 redefinition), independent of scipy.constants.
 H = 6.62607015e-34  # J s

@@ -57,8 +57,9 @@ class CompiledScene:
     image_z: float
     leds: np.ndarray  # (N, 6): emission point xyz, unit axis xyz
     led_centres: np.ndarray
-    alpha_grid: np.ndarray
+    alpha_grid: np.ndarray  # rad, uniform on [0, π/2]
     cdf_grid: np.ndarray
+    intensity_grid: np.ndarray  # I(α)/I₀ on alpha_grid
     omega_eff: float  # sr: Φ_LED = I₀ · omega_eff
     sensor: np.ndarray  # width, height, cols, rows
     plane: np.ndarray  # width, height, cols, rows
@@ -450,8 +451,11 @@ def compile_scene(scene: Scene) -> CompiledScene:
         if profile.kind == "cos_power":
             m = cos_power_exponent(profile.half_intensity_angle_deg)
             alpha_grid, cdf_grid, omega = cos_power_tables(m)
+            intensity_grid = np.cos(alpha_grid) ** m
         else:
-            alpha_grid, cdf_grid, omega = profile_tables(relative_intensity(profile))
+            shape = relative_intensity(profile)
+            alpha_grid, cdf_grid, omega = profile_tables(shape)
+            intensity_grid = np.asarray(shape(alpha_grid), dtype=float)
     except ValueError as exc:
         raise SceneError(str(exc)) from None
 
@@ -484,6 +488,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
         led_centres=centres,
         alpha_grid=alpha_grid,
         cdf_grid=cdf_grid,
+        intensity_grid=np.ascontiguousarray(intensity_grid),
         omega_eff=omega,
         sensor=np.array(
             [scene.sensor.width_mm, scene.sensor.height_mm, scene.sensor.cols, scene.sensor.rows],

@@ -1,12 +1,14 @@
-"""Render a scene with the forward Monte Carlo estimator: eye image, eye-plane irradiance, ledger.
+"""Render a scene: eye image with its per-pixel noise, eye-plane irradiance, region statistics.
 
 This is the Python API behind ``eyelume render``::
 
     import eyelume
     scene = eyelume.load_scene("paper2005", {"leds.height_mm": 40})
-    result = eyelume.render(scene, rays=2_000_000, seed=1)
+    result = eyelume.render(scene, seed=1)                     # the fast estimator
+    result = eyelume.render(scene, rel_error=0.01)     # … to 1 % in the median skin pixel
+    result = eyelume.render(scene, estimator="forward", rays=2_000_000)   # plain forward MC
     result.eye_image          # (rows, cols) W/mm², row 0 at the top of the picture
-    result.ledger             # {"sensor": W, "iris": W, ..., "escaped": W}
+    result.ledger             # forward only: {"sensor": W, "iris": W, ..., "escaped": W}
 """
 
 from __future__ import annotations
@@ -17,7 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from eyelume.analysis.regions import region_masks, region_stats
 from eyelume.compile import CompiledScene, compile_scene
+from eyelume.estimators.fast_run import direct_eye_plane, trace_fast
 from eyelume.estimators.forward import trace_forward
 from eyelume.scene.model import Scene
 
@@ -30,58 +34,88 @@ class RenderResult:
 
     Attributes
     ----------
+    estimator : "forward" or "fast"
     eye_image : (rows, cols) float64
         Image-plane irradiance (W/mm²) binned over the sensor; row 0 is the top of the picture as
         a person views it (world +y), columns run with world +x as seen from the camera.
+    eye_image_variance : (rows, cols) float64
+        Estimated variance of each pixel's value ((W/mm²)²): Poisson for the forward counts, the
+        spread of independent samples for the fast estimator.
     eye_plane : (rows, cols) float64
-        Eye-plane irradiance (W/mm²) toward the eye over the receiver; row 0 at +y.
-    image_counts, plane_counts : int64 arrays
-        Rays behind each bin; a bin's relative standard error is about 1/√count.
-    ledger : dict[str, float]
-        Where the emitted power ended (W), summing to ``emitted_w``.
+        Eye-plane irradiance (W/mm²) toward the eye over the receiver; row 0 at +y. Forward: all
+        light crossing the plane toward the eye; fast: the LEDs' direct light (shadowed).
+    regions : dict[str, (rows, cols) bool]
+        Pupil, iris, sclera, skin and glint masks (:mod:`eyelume.analysis.regions`).
+    rays : int
+        Forward: rays traced. Fast: camera samples plus light paths.
+    image_counts, plane_counts : int64 arrays or None
+        Forward only: rays behind each bin.
+    ledger : dict[str, float] or None
+        Forward only: where the emitted power ended (W), summing to ``emitted_w``.
     picture_extent_mm, plane_extent_mm : (left, right, bottom, top)
         Millimetre coordinates of the picture (the sensor plane turned by 180°, so x_picture =
         −x_sensor and y_picture = −y_sensor) and of the eye plane (world x, y).
     """
 
     scene: Scene
+    estimator: str
     rays: int
     seed: int
     wall_time_s: float
-    ray_power_w: float
     emitted_w: float
     eye_image: np.ndarray
+    eye_image_variance: np.ndarray
     eye_plane: np.ndarray
-    image_counts: np.ndarray
-    plane_counts: np.ndarray
-    ledger: dict[str, float]
-    interactions: int
+    regions: dict[str, np.ndarray]
     interrupted: bool
     picture_extent_mm: tuple[float, float, float, float]
     plane_extent_mm: tuple[float, float, float, float]
+    ray_power_w: float | None = None
+    image_counts: np.ndarray | None = None
+    plane_counts: np.ndarray | None = None
+    ledger: dict[str, float] | None = None
+    interactions: int | None = None
+    samples_per_pixel: int | None = None
+    light_paths: int | None = None
+
+    @property
+    def pixel_area_mm2(self) -> float:
+        sn = self.scene.sensor
+        return (sn.width_mm / sn.cols) * (sn.height_mm / sn.rows)
+
+    def region_stats(self) -> dict[str, dict]:
+        """Mean, median pixel and their relative standard errors per region."""
+        return region_stats(
+            self.eye_image, self.eye_image_variance, self.regions, self.pixel_area_mm2
+        )
 
     def summary(self) -> dict:
         """The run's summary as plain JSON-ready data (``summary.json``)."""
-        absorbed = {
-            k: v for k, v in self.ledger.items() if k not in ("sensor", "escaped") and v > 0
-        }
-        return {
+        out = {
             "scene": self.scene.name,
-            "estimator": "forward",
+            "estimator": self.estimator,
             "rays": self.rays,
             "seed": self.seed,
             "interrupted": self.interrupted,
             "wall_time_s": round(self.wall_time_s, 4),
-            "surface_interactions": self.interactions,
-            "power_w": {
-                "emitted": self.emitted_w,
-                "sensor": self.ledger["sensor"],
-                "absorbed": absorbed,
-                "escaped": self.ledger["escaped"],
-                "sum": float(sum(self.ledger.values())),
-            },
-            "units": {"eye_image": "W/mm^2", "eye_plane": "W/mm^2", "power": "W"},
         }
+        if self.estimator == "fast":
+            out["samples_per_pixel"] = self.samples_per_pixel
+            out["light_paths"] = self.light_paths
+        else:
+            out["surface_interactions"] = self.interactions
+        power = {"emitted": self.emitted_w, "sensor": float(self.eye_image.sum())}
+        power["sensor"] *= self.pixel_area_mm2
+        if self.ledger is not None:
+            power["absorbed"] = {
+                k: v for k, v in self.ledger.items() if k not in ("sensor", "escaped") and v > 0
+            }
+            power["escaped"] = self.ledger["escaped"]
+            power["sum"] = float(sum(self.ledger.values()))
+        out["power_w"] = power
+        out["regions"] = self.region_stats()
+        out["units"] = {"eye_image": "W/mm^2", "eye_plane": "W/mm^2", "power": "W"}
+        return out
 
 
 def _extent(width: float, height: float) -> tuple[float, float, float, float]:
@@ -94,44 +128,92 @@ def render(
     seed: int | None = None,
     batch_size: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    estimator: str | None = None,
+    samples_per_pixel: int | None = None,
+    rel_error: float | None = None,
+    status: Callable[[str], None] | None = None,
 ) -> RenderResult:
-    """Trace a scene with the plain forward Monte Carlo estimator.
+    """Render a scene's eye image and eye-plane irradiance.
 
     Parameters
     ----------
     scene
         A :class:`Scene` (compiled here) or an already compiled scene.
-    rays, seed, batch_size
-        Default to the scene's ``[run]`` table. The result depends on (scene, rays, seed) only.
-    progress
-        Called as ``progress(rays_done, rays_total)`` after each batch.
+    estimator
+        ``"fast"`` (:mod:`eyelume.estimators.fast`) or ``"forward"`` (plain forward Monte Carlo);
+        default the scene's ``run.estimator``.
+    rays, batch_size, progress
+        Forward: rays to trace (default ``run.rays``), rays per batch, and
+        ``progress(rays_done, rays_total)`` after each batch.
+    samples_per_pixel, rel_error, status
+        Fast: camera samples per pixel (default ``run.samples_per_pixel``; with
+        ``run.light_paths_per_pixel`` light paths per pixel and per 16 samples), or keep adding
+        rounds until the median skin pixel's relative standard error is ``rel_error``;
+        ``status(message)`` after each round.
+    seed
+        Default ``run.seed``. The result depends on (scene, budget, seed) only.
     """
     cs = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
     sc = cs.scene
-    rays = sc.run.rays if rays is None else int(rays)
     seed = sc.run.seed if seed is None else int(seed)
+    estimator = estimator or sc.run.estimator
+    extents = {
+        "picture_extent_mm": _extent(sc.sensor.width_mm, sc.sensor.height_mm),
+        "plane_extent_mm": _extent(sc.eye_plane.width_mm, sc.eye_plane.height_mm),
+    }
+    px_area = (sc.sensor.width_mm / sc.sensor.cols) * (sc.sensor.height_mm / sc.sensor.rows)
     t0 = time.perf_counter()
+    if estimator == "fast":
+        spp = sc.run.samples_per_pixel if samples_per_pixel is None else int(samples_per_pixel)
+        pixels = sc.sensor.cols * sc.sensor.rows
+        light = int(round(sc.run.light_paths_per_pixel * pixels * spp / 16))
+        target = None
+        if rel_error is not None:
+            target = region_masks(cs)["skin"]
+        est = trace_fast(cs, spp, light, seed, rel_error, status, target)
+        plane = direct_eye_plane(cs)
+        wall = time.perf_counter() - t0
+        return RenderResult(
+            scene=sc,
+            estimator="fast",
+            rays=est.samples_per_pixel * pixels + est.light_paths,
+            seed=seed,
+            wall_time_s=wall,
+            emitted_w=cs.emitted_w,
+            eye_image=est.image,
+            eye_image_variance=est.variance,
+            eye_plane=plane,
+            regions=region_masks(cs, est.glint_images),
+            interrupted=est.interrupted,
+            samples_per_pixel=est.samples_per_pixel,
+            light_paths=est.light_paths,
+            **extents,
+        )
+    if estimator != "forward":
+        raise ValueError(f"estimator = {estimator!r}: must be 'fast' or 'forward'")
+    rays = sc.run.rays if rays is None else int(rays)
     fc = trace_forward(cs, rays, seed, batch_size, progress)
     wall = time.perf_counter() - t0
     w = cs.emitted_w / fc.rays
-    px_area = (sc.sensor.width_mm / sc.sensor.cols) * (sc.sensor.height_mm / sc.sensor.rows)
     pl_area = (sc.eye_plane.width_mm / sc.eye_plane.cols) * (
         sc.eye_plane.height_mm / sc.eye_plane.rows
     )
     return RenderResult(
         scene=sc,
+        estimator="forward",
         rays=fc.rays,
         seed=seed,
         wall_time_s=wall,
-        ray_power_w=w,
         emitted_w=cs.emitted_w,
         eye_image=fc.image * (w / px_area),
+        eye_image_variance=fc.image * (w / px_area) ** 2,
         eye_plane=fc.plane * (w / pl_area),
+        regions=region_masks(cs),
+        interrupted=fc.interrupted,
+        ray_power_w=w,
         image_counts=fc.image,
         plane_counts=fc.plane,
         ledger={name: float(n) * w for name, n in zip(cs.tallies, fc.tallies, strict=True)},
         interactions=fc.interactions,
-        interrupted=fc.interrupted,
-        picture_extent_mm=_extent(sc.sensor.width_mm, sc.sensor.height_mm),
-        plane_extent_mm=_extent(sc.eye_plane.width_mm, sc.eye_plane.height_mm),
+        **extents,
     )

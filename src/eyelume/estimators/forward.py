@@ -14,10 +14,7 @@ The eye-plane receiver counts every crossing of z = 0 toward the eye without tou
 from __future__ import annotations
 
 import math
-import signal
-import threading
 from collections.abc import Callable
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numba
@@ -33,6 +30,7 @@ from eyelume.compile import (
     TALLY_VIGNETTED,
     CompiledScene,
 )
+from eyelume.estimators.interrupt import interrupt_between_batches
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import fresnel_reflectance, reflect, refract
 from eyelume.kernels.rng import next_uniform, stream_start
@@ -231,30 +229,6 @@ def _trace_batch(
         interactions[c] += inter
 
 
-class _StopFlag:
-    requested = False
-
-
-@contextmanager
-def _interrupt_between_batches():
-    """Turn the first SIGINT into a request to stop after the current batch."""
-    flag = _StopFlag()
-    if threading.current_thread() is not threading.main_thread():
-        yield flag
-        return
-
-    def handler(signum, frame):
-        if flag.requested:
-            raise KeyboardInterrupt
-        flag.requested = True
-
-    previous = signal.signal(signal.SIGINT, handler)
-    try:
-        yield flag
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
 @dataclass
 class ForwardCounts:
     """Integer tallies of a forward run: every ray counted exactly once in ``tallies``.
@@ -296,7 +270,7 @@ def trace_forward(
     inter = np.zeros(n_chunks, dtype=np.int64)
     arrays = cs.kernel_arrays()
     done = 0
-    with _interrupt_between_batches() as stop:
+    with interrupt_between_batches() as stop:
         while done < rays and not stop.requested:
             n = min(batch, rays - done)
             _trace_batch(

@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 
 from eyelume.compile import CompiledScene
+from eyelume.detectors.sensor import camera_summary, digitize
 from eyelume.estimators.forward import trace_paths
 from eyelume.layout import system_sections
 from eyelume.render import RenderResult
 from eyelume.report.plots import SectionCurve, save_grey_png, save_irradiance_plot, save_layout
-from eyelume.detectors.sensor import camera_summary, digitize
 
 __all__ = ["write_render_outputs"]
 
@@ -22,7 +22,8 @@ def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Pat
 
     ``eye_image.npy``/``eye_plane.npy`` (W/mm², float64), their grey PNGs (glints saturate at the
     99.5th percentile), ``eye_image_digital.npy`` (the camera's reading in DN, uint16, from
-    :func:`eyelume.detectors.sensor.digitize` with the render's seed) and ``eye_image_digital.png`` (0 DN
+    :func:`eyelume.detectors.sensor.digitize` with the render's seed) and
+    ``eye_image_digital.png`` (0 DN
     black … full scale white, no autoscaling), colour-bar figures ``*_plot.png`` in physical
     units, ``layout.png`` (a y–z section with a few dozen traced rays) and ``summary.json`` (run
     facts, power ledger and, under ``"camera"``, the sensor settings and saturated pixels).

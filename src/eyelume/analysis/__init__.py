@@ -1,0 +1,1 @@
+"""Analysis of rendered images: regions and their statistics, targets, merits, masks."""

@@ -1,0 +1,89 @@
+"""Regions of the eye image — pupil, iris, sclera, skin, one per glint — and their statistics.
+
+The regions come from the scene's own geometry seen through the camera: each pixel takes the
+surface its chief ray meets first after refraction (never reflection) — through the cornea, the
+iris or, through the pupil, the crystalline lens and fundus. A glint's region is the set of pixels
+where the light that met only the cornea (no Lambertian face) from that LED reaches at least 5 %
+of that glint's peak; glint pixels belong to no other region.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from eyelume.compile import CompiledScene
+from eyelume.estimators.fast_run import primary_surface_map
+
+__all__ = ["region_masks", "region_stats", "GLINT_FRACTION"]
+
+GLINT_FRACTION = 0.05
+_PUPIL_SURFACES = ("anterior lens", "posterior lens", "retina")
+
+
+def region_masks(
+    cs: CompiledScene, glint_images: np.ndarray | None = None
+) -> dict[str, np.ndarray]:
+    """Boolean (rows, cols) masks by region name: ``pupil``, ``iris``, ``sclera``, ``skin`` and
+    ``glint 0`` … (one per LED, when ``glint_images`` (n_leds, rows, cols) is given)."""
+    labels, sides = primary_surface_map(cs)
+    names = cs.surface_names
+    eye = cs.scene.eye
+    tissues = {t.name for t in cs.scene.face.tissues} if cs.scene.face.enabled else set()
+    pupil_names = {eye.surfaces[j].name for j in range(2, len(eye.surfaces))} | set(_PUPIL_SURFACES)
+
+    def of(pred) -> np.ndarray:
+        return np.vectorize(lambda s, b: s >= 0 and pred(names[s], b), otypes=[bool])(labels, sides)
+
+    masks = {
+        "pupil": of(lambda n, b: n in pupil_names or (n == "sclera" and not b)),
+        "iris": of(lambda n, b: n == "iris"),
+        "sclera": of(lambda n, b: n == "sclera" and b),
+        "skin": of(lambda n, b: n in tissues),
+    }
+    if glint_images is not None:
+        any_glint = np.zeros(labels.shape, dtype=bool)
+        for k, g in enumerate(glint_images):
+            peak = g.max()
+            m = g >= GLINT_FRACTION * peak if peak > 0 else np.zeros(labels.shape, dtype=bool)
+            masks[f"glint {k}"] = m
+            any_glint |= m
+        for name in ("pupil", "iris", "sclera", "skin"):
+            masks[name] = masks[name] & ~any_glint
+    return masks
+
+
+def region_stats(
+    image: np.ndarray, variance: np.ndarray, masks: dict[str, np.ndarray], pixel_area_mm2: float
+) -> dict[str, dict]:
+    """Per region: pixels, mean irradiance (W/mm²) and its relative standard error, the median
+    pixel and the median over the region of each pixel's relative standard error; for glints
+    also the total flux (W) and its relative standard error.
+
+    ``variance`` is the estimated variance of each pixel's value; pixels are independent
+    estimates, so the variance of a region's mean is Σ variance / n².
+    """
+    out = {}
+    for name, m in masks.items():
+        n = int(m.sum())
+        if n == 0:
+            out[name] = {"pixels": 0}
+            continue
+        vals, var = image[m], variance[m]
+        mean = float(vals.mean())
+        se = math.sqrt(float(var.sum())) / n
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel = np.where(vals > 0, np.sqrt(var) / vals, np.inf)
+        entry = {
+            "pixels": n,
+            "mean_w_mm2": mean,
+            "mean_rel_error": se / mean if mean > 0 else math.inf,
+            "median_w_mm2": float(np.median(vals)),
+            "median_pixel_rel_error": float(np.median(rel)),
+        }
+        if name.startswith("glint"):
+            entry["flux_w"] = float(vals.sum()) * pixel_area_mm2
+            entry["flux_rel_error"] = entry["mean_rel_error"]
+        out[name] = entry
+    return out

@@ -1,0 +1,244 @@
+"""Running the fast estimator: rounds of camera samples and light paths, a per-pixel variance,
+and stopping at a ray budget or at a target relative error (see :mod:`.fast` for the physics)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from eyelume.compile import CompiledScene
+from eyelume.estimators import fast as F
+from eyelume.estimators.camera import CameraTables, camera_tables
+from eyelume.estimators.interrupt import interrupt_between_batches
+
+__all__ = ["FastEstimate", "trace_fast", "primary_surface_map", "direct_eye_plane"]
+
+_MAX_SETS = 1 << 16
+
+
+@dataclass
+class FastEstimate:
+    """What the fast estimator returns (W/mm² unless stated).
+
+    ``image`` is the mean image-plane irradiance per pixel and ``variance`` the estimated
+    variance of that mean, from the second moments of independent samples. ``glint_images``
+    (n_leds, rows, cols) is the part carried by paths that met no Lambertian face, per LED.
+    """
+
+    image: np.ndarray
+    variance: np.ndarray
+    glint_images: np.ndarray
+    samples_per_pixel: int
+    light_paths: int
+    interrupted: bool
+
+
+class _Accumulator:
+    """Σc, Σc² of the camera samples and fixed-point sums of the light paths' deposits."""
+
+    def __init__(self, cs: CompiledScene, cam: CameraTables) -> None:
+        rows, cols = int(cs.sensor[3]), int(cs.sensor[2])
+        nled = cs.leds.shape[0]
+        chunks = numba.get_num_threads()
+        self.cam_sum = np.zeros((rows, cols))
+        self.cam_sq = np.zeros((rows, cols))
+        self.light = np.zeros((chunks, rows, cols), dtype=np.int64)
+        self.light_sq = np.zeros((chunks, rows, cols), dtype=np.int64)
+        self.led = np.zeros((chunks, nled, rows, cols), dtype=np.int64)
+        self.sets = 0  # stratified sets of F.STRATA camera samples per pixel
+        self.paths = 0
+        sf = cs.sf
+        cornea = cs.surface_names.index(cs.scene.eye.surfaces[0].name)
+        self.cornea = cornea
+        i0 = cs.scene.leds.radiant_intensity_w_sr
+        centre, rb = sf[cornea, 19:22], sf[cornea, 22]
+        dist = np.linalg.norm(cs.leds[:, :3] - centre, axis=1)
+        if np.any(dist <= rb):
+            raise ValueError("an LED lies inside the cornea's bounding sphere")
+        cone = 2 * math.pi * (1 - np.sqrt(1 - (rb / dist) ** 2))
+        per_mm2 = cs.sensor[2] * cs.sensor[3] / (cs.sensor[0] * cs.sensor[1])
+        c_typ = i0 * float(cone.max()) * per_mm2
+        self.q = c_typ * 2.0**-24
+        self.q2 = c_typ * c_typ * 2.0**-20
+        self.i0 = i0
+        self.arrays = (sf, cs.si, cs.lf, cs.image_z, cs.sensor, cam.aim, cs.scene.run.max_events)
+
+    def estimate(self, interrupted: bool) -> FastEstimate:
+        n = max(self.sets, 1)
+        mean_c = self.cam_sum / n
+        var_c = np.maximum(self.cam_sq / n - mean_c**2, 0.0) / n
+        if self.paths:
+            m = self.paths
+            s1 = self.light.sum(axis=0).astype(float) * self.q
+            s2 = self.light_sq.sum(axis=0).astype(float) * self.q2
+            mean_l = s1 / m
+            var_l = np.maximum(s2 / m - mean_l**2, 0.0) / m
+            glints = self.led.sum(axis=0).astype(float) * (self.q / m)
+        else:
+            mean_l = var_l = np.zeros_like(mean_c)
+            glints = np.zeros(self.led.shape[1:])
+        if max(self.light.sum(axis=0).max(initial=0), self.light_sq.sum(axis=0).max(initial=0)) > (
+            1 << 62
+        ):
+            raise OverflowError("fixed-point light sums near overflow: use fewer light paths")
+        return FastEstimate(
+            mean_c + mean_l,
+            var_c + var_l,
+            glints,
+            self.sets * F.STRATA,
+            self.paths,
+            interrupted,
+        )
+
+
+def trace_fast(
+    cs: CompiledScene,
+    samples_per_pixel: int,
+    light_paths: int,
+    seed: int,
+    rel_error: float | None = None,
+    progress: Callable[[str], None] | None = None,
+    target_pixels: np.ndarray | None = None,
+) -> FastEstimate:
+    """Run the fast estimator.
+
+    With ``rel_error`` None: ``samples_per_pixel`` camera samples (rounded up to whole
+    stratified sets, at least two) and ``light_paths`` light paths, in rounds. With
+    ``rel_error``: rounds of the same ratio of light paths to camera samples until the median
+    relative standard error over ``target_pixels`` (a boolean mask; default all pixels with
+    signal) is at most ``rel_error``, each round sized from the error so far.
+    Ctrl-C ends the run after the round in flight (``interrupted``).
+    ``progress(message)`` is called after each round.
+    """
+    if samples_per_pixel < 1:
+        raise ValueError(f"samples_per_pixel = {samples_per_pixel}: must be ≥ 1")
+    if light_paths < 0:
+        raise ValueError(f"light_paths = {light_paths}: must be ≥ 0")
+    if rel_error is not None and not 0.0 < rel_error < 1.0:
+        raise ValueError(f"rel_error = {rel_error}: must be in (0, 1)")
+    cam = camera_tables(cs)
+    acc = _Accumulator(cs, cam)
+    ratio = light_paths / samples_per_pixel
+    sc = cs.scene
+    cam_args = (
+        cs.sf,
+        cs.si,
+        cs.leds,
+        acc.i0,
+        cs.alpha_grid,
+        cs.intensity_grid,
+        cam.lf_rev,
+        cam.lf_open,
+        cam.k_stop,
+        cam.stop_radius,
+        cs.image_z,
+        cam.rear_z,
+        cam.exit_pupil_z,
+        cam.exit_pupil_magnification,
+        cs.sensor,
+        sc.run.max_events,
+    )
+
+    def run_round(n_sets: int) -> None:
+        F.camera_pass(seed, acc.sets, n_sets, *cam_args, acc.cam_sum, acc.cam_sq)
+        acc.sets += n_sets
+        n_paths = int(round(ratio * acc.sets * F.STRATA)) - acc.paths
+        if n_paths > 0:
+            F.light_pass(
+                seed,
+                acc.paths,
+                n_paths,
+                acc.cornea,
+                cs.leds,
+                acc.i0,
+                cs.alpha_grid,
+                cs.intensity_grid,
+                acc.arrays,
+                acc.light,
+                acc.light_sq,
+                acc.led,
+                acc.q,
+                acc.q2,
+            )
+            acc.paths += n_paths
+
+    sets = max(2, math.ceil(samples_per_pixel / F.STRATA))
+    with interrupt_between_batches() as stop:
+        if rel_error is None:
+            step = max(1, math.ceil(sets / 8))
+            while acc.sets < sets and not stop.requested:
+                run_round(min(step, sets - acc.sets))
+                if progress:
+                    progress(f"{acc.sets * F.STRATA}/{sets * F.STRATA} samples per pixel")
+        else:
+            n_next = sets
+            while not stop.requested:
+                run_round(n_next)
+                est = acc.estimate(False)
+                err = median_relative_error(est, target_pixels)
+                if progress:
+                    progress(
+                        f"{acc.sets * F.STRATA} samples per pixel: median relative error {err:.4f}"
+                    )
+                if err <= rel_error or acc.sets >= _MAX_SETS:
+                    break
+                need = acc.sets * (err / rel_error) ** 2 * 1.1
+                n_next = int(min(max(need - acc.sets, 1), 4 * acc.sets, _MAX_SETS - acc.sets))
+    if acc.sets == 0:
+        raise KeyboardInterrupt
+    return acc.estimate(stop.requested)
+
+
+def median_relative_error(est: FastEstimate, pixels: np.ndarray | None = None) -> float:
+    """Median over ``pixels`` (default: every pixel with signal) of √variance / mean."""
+    mask = est.image > 0 if pixels is None else (pixels & (est.image > 0))
+    if not mask.any():
+        return math.inf
+    return float(np.median(np.sqrt(est.variance[mask]) / est.image[mask]))
+
+
+def primary_surface_map(
+    cs: CompiledScene, cam: CameraTables | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, cols) index of the surface each pixel sees in the ideal image (−1: none), and
+    the side it is seen from (1: side B, where the surface normal points)."""
+    cam = cam or camera_tables(cs)
+    shape = (int(cs.sensor[3]), int(cs.sensor[2]))
+    labels = np.empty(shape, dtype=np.int64)
+    sides = np.zeros(shape, dtype=np.int64)
+    F.primary_surfaces(
+        cs.sf,
+        cs.si,
+        cam.lf_rev,
+        cam.lf_open,
+        cam.k_stop,
+        cs.image_z,
+        cam.rear_z,
+        cam.exit_pupil_z,
+        cam.exit_pupil_magnification,
+        cs.sensor,
+        labels,
+        sides,
+    )
+    return labels, sides
+
+
+def direct_eye_plane(cs: CompiledScene, n_sub: int = 8) -> np.ndarray:
+    """Direct LED irradiance (W/mm²) toward the eye over the eye-plane bins, row 0 at +y."""
+    out = np.empty((int(cs.plane[3]), int(cs.plane[2])))
+    F.plane_direct(
+        cs.sf,
+        cs.si,
+        cs.leds,
+        cs.scene.leds.radiant_intensity_w_sr,
+        cs.alpha_grid,
+        cs.intensity_grid,
+        cs.plane,
+        n_sub,
+        out,
+    )
+    return out
