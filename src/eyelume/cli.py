@@ -62,51 +62,100 @@ def _load(scene: str, sets: list[str] | None):
 def render(
     out: Annotated[Path, typer.Option("--out", help="Folder for the outputs (created).")],
     scene: SceneOpt = "paper2005",
+    estimator: Annotated[
+        str | None,
+        typer.Option(help="fast or forward (default: forward with --rays, else run.estimator)."),
+    ] = None,
     rays: Annotated[
-        int | None, typer.Option(help="Rays to trace (default: the scene's run.rays).")
+        int | None, typer.Option(help="Forward: rays to trace (default: run.rays).")
+    ] = None,
+    samples: Annotated[
+        int | None,
+        typer.Option(help="Fast: camera samples per pixel (default: run.samples_per_pixel)."),
+    ] = None,
+    rel_error: Annotated[
+        float | None,
+        typer.Option(
+            "--rel-error",
+            help="Fast: add samples until the median skin pixel's relative standard error is "
+            "at most this (e.g. 0.01), instead of a fixed count.",
+        ),
     ] = None,
     seed: Annotated[
         int | None, typer.Option(help="Random seed (default: the scene's run.seed).")
     ] = None,
     set_: SetOpt = None,
 ) -> None:
-    """Trace a scene (forward Monte Carlo) and write the eye image, eye-plane irradiance,
-    pictures, layout and power ledger into OUT."""
+    """Render a scene and write the eye image (irradiance, its noise, the camera's digital
+    reading), the eye-plane irradiance, pictures, layout and summary into OUT."""
     from eyelume.compile import compile_scene
     from eyelume.render import render as render_scene
     from eyelume.report.outputs import write_render_outputs
 
     sc = _load(scene, set_)
-    if rays is not None and rays < 1:
-        _fail(f"--rays {rays}: must be ≥ 1")
+    estimator = estimator or ("forward" if rays is not None else sc.run.estimator)
+    if estimator not in ("fast", "forward"):
+        _fail(f"--estimator {estimator!r}: must be 'fast' or 'forward'")
+    if rays is not None and (rays < 1 or estimator != "forward"):
+        _fail(f"--rays {rays}: must be ≥ 1, with --estimator forward (fast: --samples)")
+    if samples is not None and (samples < 1 or estimator != "fast"):
+        _fail(f"--samples {samples}: must be ≥ 1, with --estimator fast (forward: --rays)")
+    if rel_error is not None and (not 0 < rel_error < 1 or estimator != "fast"):
+        _fail(f"--rel-error {rel_error}: must be in (0, 1), with --estimator fast")
     if seed is not None and seed < 0:
         _fail(f"--seed {seed}: must be ≥ 0")
     try:
         cs = compile_scene(sc)
     except (SceneError, GlassError) as exc:
         _fail(str(exc))
-    total = sc.run.rays if rays is None else rays
-    err.print(f"tracing {total:,} rays of {sc.name} (Ctrl-C stops after the current batch)")
-    with Progress(
-        TextColumn("[bold]tracing"),
-        BarColumn(),
-        TextColumn("{task.completed:,}/{task.total:,} rays"),
-        TimeElapsedColumn(),
-        TimeRemainingColumn(),
-        console=err,
-        transient=True,
-    ) as bar:
-        task = bar.add_task("trace", total=total)
-        result = render_scene(
-            cs, rays=rays, seed=seed, progress=lambda d, t: bar.update(task, completed=d)
+    if estimator == "fast":
+        goal = (
+            f"to a {rel_error:.2%} relative error in the median skin pixel"
+            if rel_error is not None
+            else f"{samples or sc.run.samples_per_pixel} samples per pixel"
         )
+        err.print(f"rendering {sc.name} (fast estimator, {goal}; Ctrl-C stops after a round)")
+        with err.status("rendering") as spinner:
+            result = render_scene(
+                cs,
+                seed=seed,
+                estimator="fast",
+                samples_per_pixel=samples,
+                rel_error=rel_error,
+                status=lambda msg: spinner.update(f"rendering: {msg}"),
+            )
+    else:
+        total = sc.run.rays if rays is None else rays
+        err.print(f"tracing {total:,} rays of {sc.name} (Ctrl-C stops after the current batch)")
+        with Progress(
+            TextColumn("[bold]tracing"),
+            BarColumn(),
+            TextColumn("{task.completed:,}/{task.total:,} rays"),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=err,
+            transient=True,
+        ) as bar:
+            task = bar.add_task("trace", total=total)
+            result = render_scene(
+                cs,
+                rays=rays,
+                seed=seed,
+                estimator="forward",
+                progress=lambda d, t: bar.update(task, completed=d),
+            )
     if result.interrupted:
         err.print(f"interrupted: writing the {result.rays:,} rays traced so far")
     written = write_render_outputs(result, cs, out)
-    p = result.summary()["power_w"]
+    summary = result.summary()
+    skin = summary["regions"].get("skin", {})
+    noise = (
+        f"; median skin pixel ±{skin['median_pixel_rel_error']:.2%}" if skin.get("pixels") else ""
+    )
     err.print(
-        f"{result.rays:,} rays in {result.wall_time_s:.2f} s; emitted {p['emitted']:.4g} W, "
-        f"on the sensor {p['sensor']:.3g} W; wrote {len(written)} files to {out}"
+        f"{result.rays:,} rays in {result.wall_time_s:.2f} s ({result.estimator}){noise}; "
+        f"on the sensor {summary['power_w']['sensor']:.3g} W of "
+        f"{summary['power_w']['emitted']:.4g} W emitted; wrote {len(written)} files to {out}"
     )
     if result.interrupted:
         raise typer.Exit(130)

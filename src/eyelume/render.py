@@ -141,7 +141,7 @@ def render(
         A :class:`Scene` (compiled here) or an already compiled scene.
     estimator
         ``"fast"`` (:mod:`eyelume.estimators.fast`) or ``"forward"`` (plain forward Monte Carlo);
-        default the scene's ``run.estimator``.
+        default ``"forward"`` when ``rays`` is given, else the scene's ``run.estimator``.
     rays, batch_size, progress
         Forward: rays to trace (default ``run.rays``), rays per batch, and
         ``progress(rays_done, rays_total)`` after each batch.
@@ -156,7 +156,7 @@ def render(
     cs = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
     sc = cs.scene
     seed = sc.run.seed if seed is None else int(seed)
-    estimator = estimator or sc.run.estimator
+    estimator = estimator or ("forward" if rays is not None else sc.run.estimator)
     extents = {
         "picture_extent_mm": _extent(sc.sensor.width_mm, sc.sensor.height_mm),
         "plane_extent_mm": _extent(sc.eye_plane.width_mm, sc.eye_plane.height_mm),

@@ -420,7 +420,8 @@ def _light_path(i, seed, cornea, leds, i0, ag, ig, arrays, img, img2, led_img, q
         st * math.cos(phi), st * math.sin(phi), ct, wx / dist, wy / dist, wz / dist
     )
     cos_a = dx * leds[k, 3] + dy * leds[k, 4] + dz * leds[k, 5]
-    w = i0 * relative_intensity_at(cos_a, ag, ig) * 2.0 * math.pi * (1.0 - cos_max)
+    # path i serves LED i mod N: a share 1/N of the paths estimates each LED's light
+    w = leds.shape[0] * i0 * relative_intensity_at(cos_a, ag, ig) * 2.0 * math.pi * (1.0 - cos_max)
     if w <= 0.0:
         return
     s, t = G.nearest_hit(sf, si, px, py, pz, dx, dy, dz)

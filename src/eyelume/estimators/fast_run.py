@@ -61,7 +61,7 @@ class _Accumulator:
             raise ValueError("an LED lies inside the cornea's bounding sphere")
         cone = 2 * math.pi * (1 - np.sqrt(1 - (rb / dist) ** 2))
         per_mm2 = cs.sensor[2] * cs.sensor[3] / (cs.sensor[0] * cs.sensor[1])
-        c_typ = i0 * float(cone.max()) * per_mm2
+        c_typ = i0 * cs.leds.shape[0] * float(cone.max()) * per_mm2
         self.q = c_typ * 2.0**-24
         self.q2 = c_typ * c_typ * 2.0**-20
         self.i0 = i0
