@@ -171,7 +171,7 @@ def render(
         if rel_error is not None:
             target = region_masks(cs)["skin"]
         est = trace_fast(cs, spp, light, seed, rel_error, status, target)
-        plane = direct_eye_plane(cs)
+        plane = direct_eye_plane(cs, seed)
         wall = time.perf_counter() - t0
         return RenderResult(
             scene=sc,

@@ -61,6 +61,7 @@ __all__ = [
 
 _INV_PI = 1.0 / math.pi
 _LIGHT_TAG = 0x4C49474854  # separates the light paths' streams from the camera paths'
+_PLANE_TAG = 0x504C414E45  # … and the eye-plane points'
 
 
 @njit(cache=True, inline="always")
@@ -236,9 +237,7 @@ def camera_pass(
             continue
         adet = a11 * a22 - a12 * a21
         shift = 1.0 - (image_z - rear_z) / (image_z - xp_z)
-        pseed = mix64(np.uint64(seed) + np.uint64(p))
-        acc = 0.0
-        acc2 = 0.0
+        pseed = mix64(mix64(np.uint64(seed)) + np.uint64(p))
         for m in range(first_set, first_set + n_sets):
             state = stream_start(pseed, m)
             state, ua = next_uniform(state)
@@ -284,10 +283,10 @@ def camera_pass(
                 )
                 total += area * g / det * radiance
             mean = total / STRATA
-            acc += mean
-            acc2 += mean * mean
-        out_sum[row, col] += acc
-        out_sq[row, col] += acc2
+            # one addition per set, in set order: the sums do not depend on how the sets
+            # were split into rounds
+            out_sum[row, col] += mean
+            out_sq[row, col] += mean * mean
 
 
 @njit(cache=True, inline="always")
@@ -497,17 +496,21 @@ def primary_surfaces(
 
 
 @njit(cache=True, parallel=True)
-def plane_direct(sf, si, leds, i0, ag, ig, plane, n_sub, out):
+def plane_direct(seed, sf, si, leds, i0, ag, ig, plane, n_sub, out):
     """Direct LED irradiance (W/mm²) toward the eye on the eye-plane bins (row 0 at +y): the
-    mean over an n_sub × n_sub grid of points per bin, each lit by the LEDs that see it."""
+    mean over n_sub × n_sub jittered points per bin (one uniform point in each cell, so the
+    mean is unbiased where an occluder's edge cuts the bin), each lit by the LEDs that see it."""
     pw, ph, pc, pr = plane[0], plane[1], int(plane[2]), int(plane[3])
     for p in prange(pr * pc):
         row = p // pc
         col = p - row * pc
+        state = stream_start(mix64(np.uint64(seed) ^ np.uint64(_PLANE_TAG)), p)
         acc = 0.0
         for a in range(n_sub):
             for b in range(n_sub):
-                x = (col + (a + 0.5) / n_sub) * pw / pc - 0.5 * pw
-                y = 0.5 * ph - (row + (b + 0.5) / n_sub) * ph / pr
+                state, u1 = next_uniform(state)
+                state, u2 = next_uniform(state)
+                x = (col + (a + u1) / n_sub) * pw / pc - 0.5 * pw
+                y = 0.5 * ph - (row + (b + u2) / n_sub) * ph / pr
                 acc += direct_irradiance(sf, si, leds, i0, ag, ig, x, y, 0.0, 0.0, 0.0, 1.0)
         out[row, col] = acc / (n_sub * n_sub)

@@ -68,15 +68,16 @@ class _Accumulator:
         self.arrays = (sf, cs.si, cs.lf, cs.image_z, cs.sensor, cam.aim, cs.scene.run.max_events)
 
     def estimate(self, interrupted: bool) -> FastEstimate:
-        n = max(self.sets, 1)
+        n = max(self.sets, 2)
         mean_c = self.cam_sum / n
-        var_c = np.maximum(self.cam_sq / n - mean_c**2, 0.0) / n
+        # the variance of a mean of n independent sets: the unbiased sample variance / n
+        var_c = np.maximum(self.cam_sq - n * mean_c**2, 0.0) / (n * (n - 1))
         if self.paths:
             m = self.paths
             s1 = self.light.sum(axis=0).astype(float) * self.q
             s2 = self.light_sq.sum(axis=0).astype(float) * self.q2
             mean_l = s1 / m
-            var_l = np.maximum(s2 / m - mean_l**2, 0.0) / m
+            var_l = np.maximum(s2 - m * mean_l**2, 0.0) / (m * max(m - 1, 1))
             glints = self.led.sum(axis=0).astype(float) * (self.q / m)
         else:
             mean_l = var_l = np.zeros_like(mean_c)
@@ -227,10 +228,12 @@ def primary_surface_map(
     return labels, sides
 
 
-def direct_eye_plane(cs: CompiledScene, n_sub: int = 8) -> np.ndarray:
-    """Direct LED irradiance (W/mm²) toward the eye over the eye-plane bins, row 0 at +y."""
+def direct_eye_plane(cs: CompiledScene, seed: int, n_sub: int = 16) -> np.ndarray:
+    """Direct LED irradiance (W/mm²) toward the eye over the eye-plane bins, row 0 at +y
+    (n_sub² jittered points per bin, each with shadow rays to the LEDs)."""
     out = np.empty((int(cs.plane[3]), int(cs.plane[2])))
     F.plane_direct(
+        seed,
         cs.sf,
         cs.si,
         cs.leds,

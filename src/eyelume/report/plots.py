@@ -8,6 +8,8 @@ Three outputs, all in the package's units (lengths in mm, irradiance in W/mm²):
   a colour bar in physical units.
 - :func:`save_layout`: a y–z cross-section (x = 0) of the whole system, surfaces and rays, like a
   lens-design layout plot.
+- :func:`save_error_time_plot`: relative error against wall time of Monte Carlo runs, log–log
+  (the convergence curves of ``benchmarks/eye_image.py``).
 
 Figures are :class:`matplotlib.figure.Figure` objects drawn by the Agg canvas; pyplot is never
 imported, so nothing leaks between calls or processes. Parent directories of ``path`` are created
@@ -32,6 +34,7 @@ from PIL import Image
 __all__ = [
     "CATEGORY_COLORS",
     "SectionCurve",
+    "save_error_time_plot",
     "save_grey_png",
     "save_irradiance_plot",
     "save_layout",
@@ -486,4 +489,117 @@ def save_layout(
     ax.set_ylabel("y (mm)")
     ax.set_title(title)
     ax.grid(True, linewidth=0.3, alpha=0.5)
+    _save_figure(fig, path)
+
+
+# --------------------------------------------------------------------------------------------------
+# Error against time
+# --------------------------------------------------------------------------------------------------
+
+
+def save_error_time_plot(
+    curves: Sequence[tuple[str, Sequence[float], Sequence[float]]],
+    path: PathLike,
+    *,
+    title: str,
+    targets: Sequence[tuple[str, float, float]] = (),
+    xlabel: str = "wall time (s)",
+    ylabel: str = "relative standard error",
+) -> None:
+    """Write relative error against wall time of Monte Carlo runs as a log–log figure.
+
+    Each curve is a line with markers through its points in the order given. Points that cannot
+    be drawn on log axes (zero, negative, NaN or infinite time or error, e.g. the error of a
+    pixel that received no ray) are left out, and the number left out is added to the curve's
+    legend label. Curves whose label starts with ``"~"`` are drawn dashed (predictions rather
+    than measurements). Each target ``(label, time, error)`` is drawn as a star, with dotted lines
+    bounding the region "at most this error in at most this time". A guide line of slope −½
+    (error ∝ 1/√time, the Monte Carlo rate) runs through the first drawable point of the first
+    curve.
+
+    Parameters
+    ----------
+    curves : sequence of (label, times, errors)
+        Times in seconds and relative errors (dimensionless), equal lengths.
+    path : str or os.PathLike
+        Output PNG file; parent directories are created when missing.
+    title : str
+        Figure title.
+    targets : sequence of (label, time, error), optional
+        Targets to mark.
+    xlabel, ylabel : str, optional
+        Axis labels.
+
+    Raises
+    ------
+    ValueError
+        If a curve's times and errors differ in length, or no curve has a drawable point.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     p = pathlib.Path(d) / "curve.png"
+    ...     save_error_time_plot([("fast", [1, 2, 4], [0.01, 0.007, 0.005])], p, title="Curve",
+    ...                          targets=[("goal", 1.0, 0.01)])
+    ...     p.stat().st_size > 0
+    True
+    """
+    fig = Figure(figsize=(7.0, 5.0), layout="constrained")
+    ax = fig.add_subplot()
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    first: tuple[float, float] | None = None
+    drawn = 0
+    for label, times, errors in curves:
+        t = np.asarray(times, dtype=np.float64).ravel()
+        e = np.asarray(errors, dtype=np.float64).ravel()
+        if t.shape != e.shape:
+            raise ValueError(
+                f"curve {label!r}: {t.size} times but {e.size} errors; they must pair up"
+            )
+        ok = np.isfinite(t) & np.isfinite(e) & (t > 0) & (e > 0)
+        dropped = int(t.size - ok.sum())
+        if not ok.any():
+            continue
+        shown = label + (f" ({dropped} point(s) not drawable)" if dropped else "")
+        ax.plot(
+            t[ok],
+            e[ok],
+            marker="o",
+            markersize=4,
+            linewidth=1.3,
+            linestyle="--" if label.startswith("~") else "-",
+            label=shown,
+        )
+        drawn += 1
+        if first is None:
+            first = (float(t[ok][0]), float(e[ok][0]))
+    if drawn == 0:
+        raise ValueError("no curve has a point with finite, positive time and error")
+    for label, t_max, e_max in targets:
+        ax.plot([t_max], [e_max], marker="*", markersize=12, color="black", linestyle="none")
+        ax.annotate(
+            label, (t_max, e_max), textcoords="offset points", xytext=(6, 6), fontsize="small"
+        )
+        ax.axhline(e_max, color="black", linestyle=":", linewidth=0.8)
+        ax.axvline(t_max, color="black", linestyle=":", linewidth=0.8)
+    if first is not None:
+        x0, y0 = first
+        lo, hi = ax.get_xlim()
+        xs = np.array([lo, hi])
+        ax.plot(
+            xs,
+            y0 * np.sqrt(x0 / xs),
+            color="grey",
+            linewidth=0.8,
+            alpha=0.6,
+            label="slope −½ (error ∝ 1/√time)",
+        )
+        ax.set_xlim(lo, hi)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(True, which="both", linewidth=0.3, alpha=0.5)
+    ax.legend(fontsize="small", loc="best")
     _save_figure(fig, path)

@@ -1,0 +1,282 @@
+"""The fast estimator's parts against closed forms and independent estimators, its noise
+estimates against the scatter of independent runs, and its determinism."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from numba import njit
+from scipy import stats
+
+import eyelume
+from eyelume.compile import compile_scene
+from eyelume.estimators import fast as F
+from eyelume.estimators.camera import (
+    A_P,
+    A_R,
+    A_Z,
+    N_AIM,
+    aim_at_stop,
+    aim_chief,
+    camera_tables,
+    into_scene,
+)
+from eyelume.kernels import geometry as G
+from eyelume.kernels.rng import stream_start
+from eyelume.kernels.sampling import cos_power_tables
+from eyelume.scene.sources import cos_power_exponent
+
+SMALL = {"sensor.cols": 29, "sensor.rows": 22}  # 1.6 mm pixels: quick renders
+
+
+@pytest.fixture(scope="module")
+def cam(paper_compiled):
+    return camera_tables(paper_compiled)
+
+
+def aimed_values(cs, cam, xs, ys, n, seed):
+    """A_stop cos²θ / (d² |det J|) for n uniform stop points seen from sensor point (xs, ys):
+    each an unbiased estimate of ∫ cos θ dω over the directions that pass the lens."""
+    rng = np.random.default_rng(seed)
+    found, qcx, qcy, a11, a12, a21, a22 = aim_chief(
+        cam.lf_open,
+        cam.k_stop,
+        cs.image_z,
+        cam.rear_z,
+        cam.exit_pupil_z,
+        cam.exit_pupil_magnification,
+        xs,
+        ys,
+    )
+    assert found
+    det_c = a11 * a22 - a12 * a21
+    r = cam.stop_radius * np.sqrt(rng.random(n))
+    phi = 2 * np.pi * rng.random(n)
+    out = np.empty(n)
+    for i, (tx, ty) in enumerate(zip(r * np.cos(phi), r * np.sin(phi), strict=True)):
+        ok, qx, qy, det = aim_at_stop(
+            cam.lf_open,
+            cam.k_stop,
+            cs.image_z,
+            cam.rear_z,
+            xs,
+            ys,
+            tx,
+            ty,
+            qcx + (a22 * tx - a12 * ty) / det_c,
+            qcy + (-a21 * tx + a11 * ty) / det_c,
+            a11,
+            a12,
+            a21,
+            a22,
+        )
+        assert ok
+        passed, *_, g = into_scene(cam.lf_rev, cs.image_z, xs, ys, qx, qy, cam.rear_z)
+        out[i] = math.pi * cam.stop_radius**2 * g / det if passed else 0.0
+    return out
+
+
+def test_stop_aiming_gives_the_image_space_cone_on_axis(paper_compiled, cam):
+    """On axis the rays through the stop fill a circular cone of half-angle θ′ (the real rim
+    ray's angle at the sensor): ∫ cos θ dω = π sin²θ′."""
+    cs = paper_compiled
+    vals = aimed_values(cs, cam, 0.0, 0.0, 3000, 1)
+    rim = aimed_values(cs, cam, 0.0, 0.0, 1, 2)  # just to exercise the path at one point
+    assert rim.shape == (1,)
+    # the rim ray: aim at the stop's edge, then its direction at the sensor gives θ′
+    found, qcx, qcy, a11, a12, a21, a22 = aim_chief(
+        cam.lf_open,
+        cam.k_stop,
+        cs.image_z,
+        cam.rear_z,
+        cam.exit_pupil_z,
+        cam.exit_pupil_magnification,
+        0.0,
+        0.0,
+    )
+    det_c = a11 * a22 - a12 * a21
+    t = cam.stop_radius * (1 - 1e-9)
+    ok, qx, qy, _ = aim_at_stop(
+        cam.lf_open,
+        cam.k_stop,
+        cs.image_z,
+        cam.rear_z,
+        0.0,
+        0.0,
+        t,
+        0.0,
+        qcx + a22 * t / det_c,
+        qcy - a21 * t / det_c,
+        a11,
+        a12,
+        a21,
+        a22,
+    )
+    assert ok
+    sin2 = (qx**2 + qy**2) / (qx**2 + qy**2 + (cs.image_z - cam.rear_z) ** 2)
+    expected = math.pi * sin2
+    sem = vals.std(ddof=1) / math.sqrt(vals.size)
+    assert abs(vals.mean() - expected) < 4 * sem + 1e-4 * expected
+
+
+def test_stop_aiming_agrees_with_hit_or_miss_off_axis(paper_compiled, cam):
+    """At a field corner, the aimed estimate of ∫ cos θ dω over the passing directions equals
+    the hit-or-miss one (uniform points of a disk twice the paraxial pupil's size, kept when
+    the lens passes them) within 4σ."""
+    cs = paper_compiled
+    xs, ys = 0.45 * cs.sensor[0], 0.45 * cs.sensor[1]
+    aimed = aimed_values(cs, cam, xs, ys, 2000, 3)
+    s = (cs.image_z - cam.rear_z) / (cs.image_z - cam.exit_pupil_z)
+    cx, cy = xs * (1 - s), ys * (1 - s)
+    rad = 2.0 * abs(cam.exit_pupil_magnification) * cam.stop_radius * s
+    rng = np.random.default_rng(4)
+    n = 40_000
+    r = rad * np.sqrt(rng.random(n))
+    phi = 2 * np.pi * rng.random(n)
+    hits = np.empty(n)
+    for i in range(n):
+        passed, *_, g = into_scene(
+            cam.lf_rev,
+            cs.image_z,
+            xs,
+            ys,
+            cx + r[i] * math.cos(phi[i]),
+            cy + r[i] * math.sin(phi[i]),
+            cam.rear_z,
+        )
+        hits[i] = math.pi * rad**2 * g if passed else 0.0
+    assert 0.1 < (hits > 0).mean() < 0.5  # the wide disk holds the whole passing pupil
+    diff = aimed.mean() - hits.mean()
+    sigma = math.hypot(aimed.std(ddof=1) / math.sqrt(aimed.size), hits.std(ddof=1) / math.sqrt(n))
+    assert abs(diff) < 4 * sigma
+
+
+def test_direct_irradiance_is_inverse_square_with_both_cosines():
+    """E = I₀ cosᵐα cos θ / d² from one LED in empty space."""
+    m = cos_power_exponent(22.5)
+    ag, _, _ = cos_power_tables(m)
+    ig = np.cos(ag) ** m
+    axis = np.array([0.3, -0.2, -1.0])
+    axis /= np.linalg.norm(axis)
+    leds = np.array([[5.0, 8.0, 60.0, *axis]])
+    sf = np.zeros((0, G.N_FLOAT))
+    si = np.zeros((0, G.N_INT), dtype=np.int64)
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        p = np.array([*rng.uniform(-15, 15, 2), rng.uniform(-5, 5)])
+        n = np.array([*rng.uniform(-0.4, 0.4, 2), 1.0])
+        n /= np.linalg.norm(n)
+        v = leds[0, :3] - p
+        d = np.linalg.norm(v)
+        cos_a = -(v / d) @ axis
+        cos_t = (v / d) @ n
+        expected = 0.015 * cos_a**m * cos_t / d**2 if cos_t > 0 and cos_a > 0 else 0.0
+        got = F.direct_irradiance(sf, si, leds, 0.015, ag, ig, *p, *n)
+        assert got == pytest.approx(expected, rel=1e-6, abs=1e-15)
+
+
+@njit
+def _scatter_weights(aim, nx, ny, nz, n):
+    w = np.empty(n)
+    state = stream_start(99, 0)
+    for i in range(n):
+        state, _, _, _, f = F._scatter(state, aim, 1.0, 2.0, 0.0, nx, ny, nz)
+        w[i] = f
+    return w
+
+
+@pytest.mark.parametrize("p_aim", [0.0, 0.5, 0.8])
+def test_aimed_scatter_weights_average_one(p_aim):
+    """E[(cos θ/π) / pdf_mix] = ∫ cos θ / π dω = 1 over the hemisphere, whatever the mixture:
+    the mixture's density is normalised and covers every direction."""
+    aim = np.zeros(N_AIM)
+    aim[A_Z], aim[A_R], aim[A_P] = 150.0, 25.0, p_aim
+    nrm = np.array([0.2, -0.1, 1.0])
+    nrm /= np.linalg.norm(nrm)
+    w = _scatter_weights(aim, *nrm, 200_000)
+    n = w.size
+    sem = w.std(ddof=1) / math.sqrt(n)
+    assert abs(w.mean() - 1.0) < 4 * sem + 1e-12
+
+
+def _small_render(seed, **kw):
+    sc = eyelume.load_scene("paper2005", SMALL)
+    return eyelume.render(sc, estimator="fast", seed=seed, **kw)
+
+
+def test_noise_estimates_match_the_scatter_between_seeds():
+    """Ten independent runs: the spread of each skin pixel and of the region means between runs
+    agrees with the variances each run estimated for itself."""
+    runs = [_small_render(s) for s in range(10)]
+    imgs = np.stack([r.eye_image for r in runs])
+    var_est = np.stack([r.eye_image_variance for r in runs]).mean(axis=0)
+    k = len(runs)
+    skin = runs[0].regions["skin"]
+    s2 = imgs.var(axis=0, ddof=1)[skin]
+    v = var_est[skin]
+    ratio = s2.sum() / v.sum()
+    n_eff = v.sum() ** 2 / (v**2).sum()
+    tol = 4 * math.sqrt(2 / (k - 1) / n_eff + 2 / (2 * k) / n_eff)
+    assert abs(ratio - 1) < tol, f"pixel scatter / estimate = {ratio:.3f} ± {tol / 4:.3f}"
+    lo, hi = stats.chi2.ppf([0.0005, 0.9995], k - 1) / (k - 1)
+    for region in ("skin", "iris", "sclera"):
+        means = np.array([r.region_stats()[region]["mean_w_mm2"] for r in runs])
+        est = np.mean([r.region_stats()[region]["mean_rel_error"] for r in runs]) * means.mean()
+        q = means.var(ddof=1) / est**2
+        assert lo < q < hi, f"{region}: scatter / estimate of the mean's variance = {q:.2f}"
+
+
+def test_same_seed_same_image_whatever_the_thread_count(tmp_path):
+    script = (
+        "import sys, numpy as np, eyelume\n"
+        f"sc = eyelume.load_scene('paper2005', {SMALL!r})\n"
+        "r = eyelume.render(sc, estimator='fast', samples_per_pixel=32, seed=8)\n"
+        "np.save(sys.argv[1], np.stack([r.eye_image, r.eye_image_variance]))\n"
+    )
+    out = {}
+    for threads in (1, 2):
+        path = tmp_path / f"t{threads}.npy"
+        env = dict(os.environ, NUMBA_NUM_THREADS=str(threads))
+        subprocess.run([sys.executable, "-c", script, str(path)], check=True, env=env)
+        out[threads] = np.load(path)
+    np.testing.assert_array_equal(out[1], out[2])
+
+
+def test_rounds_do_not_change_the_result():
+    """A run to a target adds rounds; the samples it drew are those of a fixed-budget run with
+    the same count, so the two images are identical."""
+    a = _small_render(3, rel_error=0.004)
+    b = _small_render(3, samples_per_pixel=a.samples_per_pixel)
+    assert a.samples_per_pixel > 32
+    np.testing.assert_array_equal(a.eye_image, b.eye_image)
+
+
+def test_rel_error_target_is_met():
+    r = _small_render(4, rel_error=0.003)
+    assert r.region_stats()["skin"]["median_pixel_rel_error"] <= 0.003
+
+
+def test_fast_eye_plane_is_the_direct_irradiance(paper_compiled):
+    """Away from occluders the eye plane is the LEDs' direct light: compare with the forward
+    tally (all light crossing the plane toward the eye) bin by bin."""
+    fwd = eyelume.render(paper_compiled, rays=4_000_000, seed=9)
+    fast = eyelume.render(paper_compiled, estimator="fast", samples_per_pixel=32, seed=9)
+    keep = fwd.plane_counts >= 100
+    z = (fast.eye_plane[keep] - fwd.eye_plane[keep]) / (
+        fwd.eye_plane[keep] / np.sqrt(fwd.plane_counts[keep])
+    )
+    assert keep.sum() > 250
+    lo, hi = stats.chi2.ppf([0.001, 0.999], keep.sum())
+    assert lo < (z**2).sum() < hi
+
+
+def test_camera_tables_reject_nothing_on_the_default_scene(paper_compiled):
+    cs = compile_scene(eyelume.load_scene("paper2005", SMALL))
+    t = camera_tables(cs)
+    assert 0 < t.stop_radius < cs.lf[:, 3].max()
+    assert t.k_stop == cs.lf.shape[0] - 1 - cs.stop_index
