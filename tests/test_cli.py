@@ -185,3 +185,50 @@ def test_render_a_scene_file(tmp_path):
     )
     assert runner.invoke(app, ["render", *common, "--out", str(b)]).exit_code == 0
     assert np.array_equal(np.load(a / "eye_image.npy"), np.load(b / "eye_image.npy"))
+
+
+def test_render_fast_default_writes_noise_and_digital_image(tmp_path):
+    out = tmp_path / "fast"
+    res = runner.invoke(
+        app, ["render", "--set", "sensor.cols=29", "--set", "sensor.rows=22", "--out", str(out)]
+    )
+    assert res.exit_code == 0, res.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["estimator"] == "fast" and summary["samples_per_pixel"] == 32
+    skin = summary["regions"]["skin"]
+    assert 0 < skin["median_pixel_rel_error"] < 0.05 and skin["mean_w_mm2"] > 0
+    assert {"pupil", "iris", "sclera", "glint 0"} <= set(summary["regions"])
+    std = np.load(out / "eye_image_std.npy")
+    img = np.load(out / "eye_image.npy")
+    assert std.shape == img.shape == (22, 29) and (std >= 0).all()
+    assert np.load(out / "eye_image_digital.npy").dtype == np.uint16
+
+
+def test_render_rel_error_stops_at_the_target(tmp_path):
+    out = tmp_path / "target"
+    sets = ["--set", "sensor.cols=29", "--set", "sensor.rows=22"]
+    res = runner.invoke(app, ["render", *sets, "--rel-error", "0.003", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["regions"]["skin"]["median_pixel_rel_error"] <= 0.003
+    assert summary["samples_per_pixel"] > 32
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--rel-error", "2"], ["--rel-error", "2"]),
+        (["--rel-error", "0.01", "--estimator", "forward"], ["--rel-error", "fast"]),
+        (["--samples", "0"], ["--samples", "0"]),
+        (["--estimator", "magic"], ["--estimator", "magic"]),
+        (["--rays", "100", "--estimator", "fast"], ["--rays", "forward"]),
+        (["--set", "run.samples_per_pixel=-1"], ["run.samples_per_pixel", "-1"]),
+    ],
+)
+def test_bad_estimator_options_one_line_exit_2(tmp_path, args, words):
+    res = runner.invoke(app, ["render", *args, "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2, res.output
+    message = res.stderr.strip()
+    assert len(message.splitlines()) == 1, message
+    for w in words:
+        assert w.lower() in message.lower(), (w, message)

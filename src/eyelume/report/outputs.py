@@ -20,7 +20,8 @@ __all__ = ["write_render_outputs"]
 def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Path) -> list[Path]:
     """Write every output of ``eyelume render`` into folder ``out``; returns the paths written.
 
-    ``eye_image.npy``/``eye_plane.npy`` (W/mm², float64), their grey PNGs (glints saturate at the
+    ``eye_image.npy``/``eye_plane.npy`` (W/mm², float64), ``eye_image_std.npy`` (each pixel's
+    estimated standard error, W/mm²), their grey PNGs (glints saturate at the
     99.5th percentile), ``eye_image_digital.npy`` (the camera's reading in DN, uint16, from
     :func:`eyelume.detectors.sensor.digitize` with the render's seed) and
     ``eye_image_digital.png`` (0 DN
@@ -38,6 +39,7 @@ def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Pat
         return p
 
     np.save(path("eye_image.npy"), result.eye_image)
+    np.save(path("eye_image_std.npy"), np.sqrt(result.eye_image_variance))
     np.save(path("eye_plane.npy"), result.eye_plane)
     save_grey_png(result.eye_image, path("eye_image.png"))
     save_grey_png(result.eye_plane, path("eye_plane.png"), clip_percentile=100.0)
