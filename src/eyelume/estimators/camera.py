@@ -10,6 +10,8 @@ Three things, all in world millimetres, computed once per compiled scene:
   paraxial exit pupil), with the Jacobian |∂(stop point)/∂(crossing)| that turns a uniform
   density over the stop into a density over directions at the sensor. Camera paths sample the
   stop uniformly, so no sample is wasted on a ray the stop would block;
+* the surfaces (the iris) whose light from the LEDs comes through the cornea, reached from the
+  camera side by a specular connection (:mod:`.cornea_nee`);
 * the *aim table*: for each Lambertian face of the scene, a disk whose line through a scatter
   point leaves toward the camera — the entrance pupil for faces in air, its paraxial image
   through the cornea for the iris — and the probability of aiming at it (0: cosine sampling
@@ -63,6 +65,7 @@ class CameraTables:
     entrance_pupil_z: float
     entrance_pupil_radius: float
     aim: np.ndarray  # (n_surfaces, 2, N_AIM)
+    through_cornea: np.ndarray  # (n_surfaces,) 1 where NEE goes through the cornea (the iris)
 
 
 def _mirrored_lens(lf: np.ndarray) -> np.ndarray:
@@ -204,6 +207,7 @@ def camera_tables(cs: CompiledScene) -> CameraTables:
     k_stop = cs.lf.shape[0] - 1 - cs.stop_index
     aim = np.zeros((cs.sf.shape[0], 2, N_AIM))
     iris_z, iris_r = _cornea_image(cs, ep_z, ep_r)
+    through = np.array([name == "iris" for name in cs.surface_names], dtype=np.int64)
     for s, name in enumerate(cs.surface_names):
         if cs.si[s, G.ACTION] != G.ACT_OPAQUE:
             continue
@@ -227,4 +231,5 @@ def camera_tables(cs: CompiledScene) -> CameraTables:
         ep_z,
         ep_r,
         aim,
+        through,
     )

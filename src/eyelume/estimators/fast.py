@@ -1,39 +1,44 @@
 """The fast estimator: camera-side paths with next-event estimation, plus aimed light paths.
 
-Every light path runs LED → … → camera. We split path space by the path's first segment:
+Every light path runs LED → … → camera. We split path space by how the path leaves its LED:
 
-1. **First hit Lambertian** (skin, lids, sclera — most of the image): estimated from the camera.
-   A camera path starts at a uniform point of a pixel toward a uniform point of the lens's rear
-   disk (:mod:`eyelume.estimators.camera`), is traced back through the lens into the scene, takes
-   the cornea's partial reflection and refraction by analog choices, and at every Lambertian
-   vertex adds next-event estimation to each LED — the LED's radiant intensity I(α) cos θ / d²
-   along a straight, unoccluded segment — then continues by cosine sampling: always after the
-   first Lambertian vertex (weight ρ), with probability ρ after later ones.
-   LEDs are points, so a camera path can never hit one: the NEE term is the only way this
-   estimator receives light, and it is exact for the direct segment.
-2. **First hit the cornea** (the glints, the iris and pupil seen through the cornea, light the
-   cornea reflects onto the face): estimated from the LEDs. A light path leaves an LED uniformly
-   inside the cone that holds the anterior cornea's bounding sphere (weighted I(α)/pdf), is split
-   at the cornea into its reflected (× R) and transmitted (× T) parts, and goes on through
-   refraction. At a Lambertian vertex it scatters into a mixture of directions aimed at the
-   camera's pupil — for the iris, at the pupil's paraxial image through the cornea — and
-   cosine directions (defensive mixture: weight (cos θ/π) / pdf_mix ≤ 1/(1 − p_aim)), so aimed
-   rays the cornea bends away from the lens only cost time, never bias. Paths reaching the
-   sensor deposit their power in their pixel.
+1. **First hit Lambertian** (skin, lids, sclera — most of the image), and **refracted by the
+   anterior and posterior cornea onto the iris**: estimated from the camera. A camera path
+   starts at a point of a pixel and a point of the aperture stop joined by the real ray (stop
+   aiming, :mod:`.camera`), leaves the lens into the scene and, at the first interface it meets
+   (the cornea), splits into its transmitted (× T, × (n₁/n₂)² for radiance) and reflected (× R)
+   parts. At every Lambertian vertex it adds next-event estimation to each LED — the LED's
+   radiant intensity I(α) cos θ / d² along a straight, unoccluded segment — and, on the iris,
+   the light the cornea refracts onto it, by a specular connection (:mod:`.cornea_nee`). It
+   then continues by cosine sampling (the first vertex always, with weight ρ, in IRIS_SPLIT
+   directions on the iris; later ones by Russian roulette). LEDs are points, so a camera path
+   never hits one: these connections are the only way it receives light.
+2. **First hit the cornea, except the refracted paths of part 1** (the glints, the light the
+   cornea reflects onto the face, whatever enters the pupil): estimated from the LEDs. A light
+   path leaves an LED uniformly inside the cone that holds the anterior cornea's bounding sphere
+   (weighted I(α)/pdf), is split at the cornea into its reflected (× R) and transmitted (× T)
+   parts, and goes on through refraction; a transmitted path that the posterior cornea
+   transmits onto the iris belongs to part 1 and ends there. At a Lambertian vertex it scatters
+   into a mixture of directions aimed at the camera's entrance pupil (for the iris, its
+   paraxial image through the cornea) and cosine directions (defensive mixture: weight
+   (cos θ/π) / pdf_mix ≤ 1/(1 − p_aim)), so aimed rays the cornea bends away from the lens cost
+   time, never bias. Paths reaching the sensor deposit their power in their pixel.
 
-Why this split for the light that reaches the iris through the cornea: a straight connection
-from the iris to an LED does not exist (refraction), and the LEDs are points, so neither NEE nor
-hitting the source works from the camera side. Tracing that light forward is exact through any
-number of refractions and needs no manifold solve; the aim toward the pupil's image makes most
-of those paths reach the lens. The two parts cover disjoint sets of paths (first segment ends on
-a Lambertian face or on the cornea), so their sum is unbiased. Not covered by either: light an
-LED sends straight into the lens (impossible for LEDs facing the eye; checked by the agreement
-test against the plain forward estimator).
+Why a specular connection for the iris: a straight connection from the iris to an LED does not
+exist (refraction), and the LEDs are points, so neither plain NEE nor hitting the source works
+from the camera side, while tracing it forward leaves each iris pixel with the few paths that
+happen to scatter into the lens. The cornea maps LED directions to iris points one to one, so
+Newton's method finds the refracted path and its Jacobian gives the irradiance exactly; light
+paths give the rest (glints among it) without a manifold solve. The two parts cover disjoint
+sets of paths, so their sum is unbiased. Not covered by either: light an LED sends straight
+into the lens (impossible for LEDs facing the eye). The agreement test against the plain
+forward estimator checks all of it.
 
-Variance: each pixel keeps Σc and Σc² of its camera samples (independent streams), and of the
-light paths' deposits, so every pixel has its own variance estimate. Light-path deposits are
-accumulated in 64-bit fixed point, so sums do not depend on the order threads add them:
-results depend on (scene, samples, paths, seed) only.
+Variance: each pixel keeps Σm and Σm² over independent stratified sets of camera samples, and
+Σc and Σc² of the light paths' deposits, so every pixel has its own variance estimate.
+Light-path deposits are accumulated in 64-bit fixed point and camera sets are added one at a
+time in order, so sums do not depend on threads or rounds: results depend on (scene, samples,
+paths, seed) only.
 """
 
 from __future__ import annotations
@@ -46,37 +51,27 @@ from numba import njit, prange
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import fresnel_reflectance, reflect, refract
 from eyelume.kernels.rng import mix64, next_uniform, stream_start
-from eyelume.kernels.sampling import about_axis, cosine_hemisphere
+from eyelume.kernels.sampling import (
+    about_axis,
+    cosine_hemisphere,
+    orthonormal_basis,
+    relative_intensity_at,
+)
 from eyelume.kernels.sequential import LENS_PASSED, trace_lens
 
 from .camera import A_P, A_R, A_X, A_Y, A_Z, aim_at_stop, aim_chief, into_scene
+from .cornea_nee import irradiance_through_cornea
 
 __all__ = [
     "camera_pass",
     "light_pass",
     "direct_irradiance",
     "primary_surfaces",
-    "relative_intensity_at",
 ]
 
 _INV_PI = 1.0 / math.pi
 _LIGHT_TAG = 0x4C49474854  # separates the light paths' streams from the camera paths'
 _PLANE_TAG = 0x504C414E45  # … and the eye-plane points'
-
-
-@njit(cache=True, inline="always")
-def relative_intensity_at(cos_a, alpha_grid, intensity_grid):
-    """I(α)/I₀ at cos α, linear in α on the uniform grid of the compiled scene; 0 behind."""
-    if cos_a <= 0.0:
-        return 0.0
-    a = math.acos(min(1.0, cos_a))
-    n = alpha_grid.shape[0]
-    f = a / alpha_grid[n - 1] * (n - 1)
-    i = int(f)
-    if i >= n - 1:
-        return intensity_grid[n - 1]
-    frac = f - i
-    return intensity_grid[i] * (1.0 - frac) + intensity_grid[i + 1] * frac
 
 
 @njit(cache=True)
@@ -106,28 +101,57 @@ def direct_irradiance(sf, si, leds, i0, alpha_grid, intensity_grid, x, y, z, nx,
 def _specular(state, sf, si, s, dx, dy, dz, nx, ny, nz, cos_d, from_b):
     """Analog choice at a refracting interface, as in the forward tracer.
 
-    Returns (state, alive, dx, dy, dz)."""
+    Returns (state, alive, transmitted, dx, dy, dz)."""
     state, u = next_uniform(state)
     n1 = sf[s, G.N_B] if from_b else sf[s, G.N_A]
     n2 = sf[s, G.N_A] if from_b else sf[s, G.N_B]
     ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
     if not ok:
         rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
-        return state, True, rx, ry, rz
+        return state, True, False, rx, ry, rz
     r = fresnel_reflectance(cos_d, n1, n2) if si[s, G.FRESNEL] else sf[s, G.REFL]
     if u < r:
         rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
-        return state, True, rx, ry, rz
+        return state, True, False, rx, ry, rz
     if u < r + sf[s, G.ABSORB]:
-        return state, False, dx, dy, dz
-    return state, True, tx, ty, tz
+        return state, False, False, dx, dy, dz
+    return state, True, True, tx, ty, tz
 
 
 @njit(cache=True)
-def _camera_radiance(state, sf, si, leds, i0, ag, ig, x, y, z, dx, dy, dz, max_events):
-    """Radiance (W/(mm²·sr)) arriving at the lens along −(dx, dy, dz) from (x, y, z)."""
+def _camera_branch(
+    state,
+    sf,
+    si,
+    leds,
+    i0,
+    ag,
+    ig,
+    cornea,
+    through,
+    x,
+    y,
+    z,
+    dx,
+    dy,
+    dz,
+    beta,
+    split,
+    first_vertex,
+    max_events,
+):
+    """Follow one camera path from (x, y, z) along (dx, dy, dz) with throughput ``beta``.
+
+    With ``split``, the first refracting interface met before any Lambertian vertex is not
+    chosen between by chance: the path goes on transmitted (× T) and the reflected part (× R)
+    is handed back to be followed next. With ``first_vertex`` the path stops after the NEE at
+    its first Lambertian vertex and hands that vertex back for its continuation; otherwise
+    every vertex continues by Russian roulette. Returns (state, radiance, has_branch, branch
+    origin xyz, branch direction xyz, branch throughput, vertex surface (−1: none), vertex xyz,
+    its normal xyz, throughput × ρ there)."""
     radiance = 0.0
-    beta = 1.0  # path throughput
+    bx = by = bz = bdx = bdy = bdz = bbeta = 0.0
+    has_branch = False
     diffuse = 0
     for _ in range(max_events):
         s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
@@ -148,33 +172,220 @@ def _camera_radiance(state, sf, si, leds, i0, ag, ig, x, y, z, dx, dy, dz, max_e
                 break
             if not from_b:
                 nx, ny, nz = -nx, -ny, -nz
-            radiance += (
-                beta
-                * rho
-                * _INV_PI
-                * direct_irradiance(sf, si, leds, i0, ag, ig, x, y, z, nx, ny, nz)
-            )
+            e = direct_irradiance(sf, si, leds, i0, ag, ig, x, y, z, nx, ny, nz)
+            if through[s]:
+                e1, e2 = orthonormal_basis(nx, ny, nz)
+                e += irradiance_through_cornea(
+                    sf, si, cornea, s, leds, i0, ag, ig, x, y, z, nx, ny, nz, e1, e2
+                )
+            radiance += beta * rho * _INV_PI * e
             diffuse += 1
-            if diffuse == 1:  # always follow the first bounce (it carries the interreflections)
-                beta *= rho
-            else:  # later ones by Russian roulette
-                state, u = next_uniform(state)
-                if u >= rho:
-                    break
+            if first_vertex:
+                return (
+                    state,
+                    radiance,
+                    has_branch,
+                    bx,
+                    by,
+                    bz,
+                    bdx,
+                    bdy,
+                    bdz,
+                    bbeta,
+                    s,
+                    x,
+                    y,
+                    z,
+                    nx,
+                    ny,
+                    nz,
+                    beta * rho,
+                )
+            state, u = next_uniform(state)
+            if u >= rho:
+                break
             state, u1 = next_uniform(state)
             state, u2 = next_uniform(state)
             lx, ly, lz = cosine_hemisphere(u1, u2)
             dx, dy, dz = about_axis(lx, ly, lz, nx, ny, nz)
         else:
-            state, alive, dx, dy, dz = _specular(
-                state, sf, si, s, dx, dy, dz, nx, ny, nz, cos_d, from_b
-            )
-            if not alive:
-                break
+            n1 = sf[s, G.N_B] if from_b else sf[s, G.N_A]
+            n2 = sf[s, G.N_A] if from_b else sf[s, G.N_B]
+            if split and not has_branch:
+                ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
+                rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
+                if not ok:  # total internal reflection: nothing to split
+                    dx, dy, dz = rx, ry, rz
+                else:
+                    r = fresnel_reflectance(cos_d, n1, n2) if si[s, G.FRESNEL] else sf[s, G.REFL]
+                    has_branch = True
+                    bx, by, bz, bdx, bdy, bdz, bbeta = x, y, z, rx, ry, rz, beta * r
+                    # radiance / n² is what refraction conserves
+                    beta *= (1.0 - r - sf[s, G.ABSORB]) * (n1 / n2) ** 2
+                    dx, dy, dz = tx, ty, tz
+            else:
+                state, alive, transmitted, dx, dy, dz = _specular(
+                    state, sf, si, s, dx, dy, dz, nx, ny, nz, cos_d, from_b
+                )
+                if not alive:
+                    break
+                if transmitted:
+                    beta *= (n1 / n2) ** 2
         inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
         dx *= inv
         dy *= inv
         dz *= inv
+    return (
+        state,
+        radiance,
+        has_branch,
+        bx,
+        by,
+        bz,
+        bdx,
+        bdy,
+        bdz,
+        bbeta,
+        -1,
+        x,
+        y,
+        z,
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+    )
+
+
+#: Continuation rays from the first Lambertian vertex of a camera path: 1, or IRIS_SPLIT on
+#: the surfaces lit through the cornea — the iris, whose light is mostly the face's, reflected
+#: (it is shadowed by the cornea, the skin around it is not).
+IRIS_SPLIT = 8
+
+
+@njit(cache=True)
+def _path_radiance(
+    state, sf, si, leds, i0, ag, ig, cornea, through, x, y, z, dx, dy, dz, beta, split, max_events
+):
+    """A camera path with its first Lambertian vertex's continuation(s); see _camera_branch."""
+    out = _camera_branch(
+        state,
+        sf,
+        si,
+        leds,
+        i0,
+        ag,
+        ig,
+        cornea,
+        through,
+        x,
+        y,
+        z,
+        dx,
+        dy,
+        dz,
+        beta,
+        split,
+        True,
+        max_events,
+    )
+    state, radiance = out[0], out[1]
+    s = out[10]
+    if s >= 0:
+        vx, vy, vz, nx, ny, nz, cbeta = (
+            out[11],
+            out[12],
+            out[13],
+            out[14],
+            out[15],
+            out[16],
+            out[17],
+        )
+        k = IRIS_SPLIT if through[s] else 1
+        for _ in range(k):
+            state, u1 = next_uniform(state)
+            state, u2 = next_uniform(state)
+            lx, ly, lz = cosine_hemisphere(u1, u2)
+            ex, ey, ez = about_axis(lx, ly, lz, nx, ny, nz)
+            more = _camera_branch(
+                state,
+                sf,
+                si,
+                leds,
+                i0,
+                ag,
+                ig,
+                cornea,
+                through,
+                vx,
+                vy,
+                vz,
+                ex,
+                ey,
+                ez,
+                cbeta / k,
+                False,
+                False,
+                max_events,
+            )
+            state = more[0]
+            radiance += more[1]
+    return state, radiance, out[2], out[3], out[4], out[5], out[6], out[7], out[8], out[9]
+
+
+@njit(cache=True)
+def _camera_radiance(
+    state, sf, si, leds, i0, ag, ig, cornea, through, x, y, z, dx, dy, dz, max_events
+):
+    """Radiance (W/(mm²·sr)) arriving at the lens along −(dx, dy, dz) from (x, y, z).
+
+    At a Lambertian vertex on a surface with ``through[s]`` (the iris), the light refracted by
+    the cornea (surfaces ``cornea``, ``cornea + 1``) is added by a specular connection
+    (:mod:`.cornea_nee`); the light paths skip exactly those paths. The camera path is split
+    at the first interface it meets (the cornea's 2.4 % reflection would otherwise be a rare,
+    bright event in every pupil and iris pixel)."""
+    state, radiance, has_branch, bx, by, bz, bdx, bdy, bdz, bbeta = _path_radiance(
+        state,
+        sf,
+        si,
+        leds,
+        i0,
+        ag,
+        ig,
+        cornea,
+        through,
+        x,
+        y,
+        z,
+        dx,
+        dy,
+        dz,
+        1.0,
+        True,
+        max_events,
+    )
+    if has_branch and bbeta > 0.0:
+        state, more, _, _, _, _, _, _, _, _ = _path_radiance(
+            state,
+            sf,
+            si,
+            leds,
+            i0,
+            ag,
+            ig,
+            cornea,
+            through,
+            bx,
+            by,
+            bz,
+            bdx,
+            bdy,
+            bdz,
+            bbeta,
+            False,
+            max_events,
+        )
+        radiance += more
     return state, radiance
 
 
@@ -202,6 +413,8 @@ def camera_pass(
     i0,
     ag,
     ig,
+    cornea,
+    through,
     lf_rev,
     lf_open,
     k_stop,
@@ -279,7 +492,22 @@ def camera_pass(
                 if not ok:
                     continue
                 state, radiance = _camera_radiance(
-                    state, sf, si, leds, i0, ag, ig, x, y, z, dx, dy, dz, max_events
+                    state,
+                    sf,
+                    si,
+                    leds,
+                    i0,
+                    ag,
+                    ig,
+                    cornea,
+                    through,
+                    x,
+                    y,
+                    z,
+                    dx,
+                    dy,
+                    dz,
+                    max_events,
                 )
                 total += area * g / det * radiance
             mean = total / STRATA
@@ -330,11 +558,18 @@ def _scatter(state, aim_row, x, y, z, nx, ny, nz):
     return state, dx, dy, dz, cos_n * _INV_PI / pdf
 
 
+WEAK_SURVIVAL = 0.125
+
+
 @njit(cache=True)
-def _follow(state, w, x, y, z, dx, dy, dz, arrays, img, img2, glint, led, q, q2):
+def _follow(state, w, x, y, z, dx, dy, dz, arrays, img, img2, glint, led, q, q2, chain):
     """Carry a light path of weight ``w`` (W per unit path) until it ends; deposit at the
-    sensor. ``glint`` ≥ 0 while the path has met no Lambertian face (LED index)."""
-    sf, si, lf, image_z, sensor, aim, max_events = arrays
+    sensor. ``glint`` ≥ 0 while the path has met no Lambertian face (LED index). ``chain`` is 1
+    when the path has just been transmitted by the anterior cornea: if it is then transmitted by
+    the posterior cornea and meets a ``through`` surface, the camera paths' specular connection
+    has it, and it ends here; −1 when it has just been reflected by the cornea: at its first
+    Lambertian face it survives with probability WEAK_SURVIVAL (weight / WEAK_SURVIVAL)."""
+    sf, si, lf, image_z, sensor, aim, max_events, cornea, through = arrays
     first_diffuse = True
     for _ in range(max_events):
         s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
@@ -369,10 +604,19 @@ def _follow(state, w, x, y, z, dx, dy, dz, arrays, img, img2, glint, led, q, q2)
         cos_d = dx * nx + dy * ny + dz * nz
         from_b = cos_d < 0.0
         if action == G.ACT_OPAQUE:
+            if chain == 2 and through[s]:
+                return state
             rho = sf[s, G.RHO_B] if from_b else sf[s, G.RHO_A]
             if rho <= 0.0:
                 return state
             glint = -1
+            if chain == -1:  # the cornea's 2.4 % reflection onto the face: a faint part of
+                # the skin's light, which the camera paths give well; thin it by roulette
+                state, u = next_uniform(state)
+                if u >= WEAK_SURVIVAL:
+                    return state
+                w /= WEAK_SURVIVAL
+            chain = 0
             if first_diffuse:
                 w *= rho
                 first_diffuse = False
@@ -387,11 +631,12 @@ def _follow(state, w, x, y, z, dx, dy, dz, arrays, img, img2, glint, led, q, q2)
                 return state
             w *= f
         else:
-            state, alive, dx, dy, dz = _specular(
+            state, alive, transmitted, dx, dy, dz = _specular(
                 state, sf, si, s, dx, dy, dz, nx, ny, nz, cos_d, from_b
             )
             if not alive:
                 return state
+            chain = 2 if chain == 1 and transmitted and s == cornea + 1 and not from_b else 0
         inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
         dx *= inv
         dy *= inv
@@ -435,9 +680,9 @@ def _light_path(i, seed, cornea, leds, i0, ag, ig, arrays, img, img2, led_img, q
     _, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
     r = fresnel_reflectance(cos_d, n1, n2) if si[s, G.FRESNEL] else sf[s, G.REFL]
     rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
-    state = _follow(state, w * r, x, y, z, rx, ry, rz, arrays, img, img2, k, led_img, q, q2)
+    state = _follow(state, w * r, x, y, z, rx, ry, rz, arrays, img, img2, k, led_img, q, q2, -1)
     tau = 1.0 - r - sf[s, G.ABSORB]
-    _follow(state, w * tau, x, y, z, tx, ty, tz, arrays, img, img2, k, led_img, q, q2)
+    _follow(state, w * tau, x, y, z, tx, ty, tz, arrays, img, img2, k, led_img, q, q2, 1)
 
 
 @njit(cache=True, parallel=True)

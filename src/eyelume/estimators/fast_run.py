@@ -65,7 +65,17 @@ class _Accumulator:
         self.q = c_typ * 2.0**-24
         self.q2 = c_typ * c_typ * 2.0**-20
         self.i0 = i0
-        self.arrays = (sf, cs.si, cs.lf, cs.image_z, cs.sensor, cam.aim, cs.scene.run.max_events)
+        self.arrays = (
+            sf,
+            cs.si,
+            cs.lf,
+            cs.image_z,
+            cs.sensor,
+            cam.aim,
+            cs.scene.run.max_events,
+            cornea,
+            cam.through_cornea,
+        )
 
     def estimate(self, interrupted: bool) -> FastEstimate:
         n = max(self.sets, 2)
@@ -123,7 +133,8 @@ def trace_fast(
         raise ValueError(f"rel_error = {rel_error}: must be in (0, 1)")
     cam = camera_tables(cs)
     acc = _Accumulator(cs, cam)
-    ratio = light_paths / samples_per_pixel
+    sets = max(2, math.ceil(samples_per_pixel / F.STRATA))
+    ratio = light_paths / (sets * F.STRATA)  # light paths per camera sample
     sc = cs.scene
     cam_args = (
         cs.sf,
@@ -132,6 +143,8 @@ def trace_fast(
         acc.i0,
         cs.alpha_grid,
         cs.intensity_grid,
+        acc.cornea,
+        cam.through_cornea,
         cam.lf_rev,
         cam.lf_open,
         cam.k_stop,
@@ -167,7 +180,6 @@ def trace_fast(
             )
             acc.paths += n_paths
 
-    sets = max(2, math.ceil(samples_per_pixel / F.STRATA))
     with interrupt_between_batches() as stop:
         if rel_error is None:
             step = max(1, math.ceil(sets / 8))

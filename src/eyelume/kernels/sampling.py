@@ -66,6 +66,21 @@ def profile_polar_angle(u, alpha_grid, cdf_grid):
     return alpha_grid[lo] + f * (alpha_grid[hi] - alpha_grid[lo])
 
 
+@njit(cache=True, inline="always")
+def relative_intensity_at(cos_a, alpha_grid, intensity_grid):
+    """I(α)/I₀ at cos α, linear in α on the uniform grid of the compiled scene; 0 behind."""
+    if cos_a <= 0.0:
+        return 0.0
+    a = math.acos(min(1.0, cos_a))
+    n = alpha_grid.shape[0]
+    f = a / alpha_grid[n - 1] * (n - 1)
+    i = int(f)
+    if i >= n - 1:
+        return intensity_grid[n - 1]
+    frac = f - i
+    return intensity_grid[i] * (1.0 - frac) + intensity_grid[i + 1] * frac
+
+
 def profile_tables(relative_intensity, n: int = 4097) -> tuple[np.ndarray, np.ndarray, float]:
     """Sampling tables for an LED profile and its solid-angle integral.
 
