@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eyelume.analysis.regions import region_masks, region_stats
+from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.compile import CompiledScene, compile_scene
 from eyelume.estimators.fast_run import direct_eye_plane, trace_fast
 from eyelume.estimators.forward import trace_forward
@@ -167,10 +167,8 @@ def render(
         spp = sc.run.samples_per_pixel if samples_per_pixel is None else int(samples_per_pixel)
         pixels = sc.sensor.cols * sc.sensor.rows
         light = int(round(sc.run.light_paths_per_pixel * pixels * spp / 16))
-        target = None
-        if rel_error is not None:
-            target = region_masks(cs)["skin"]
-        est = trace_fast(cs, spp, light, seed, rel_error, status, target)
+        regions = region_masks(cs)
+        est = trace_fast(cs, spp, light, seed, rel_error, status, regions["skin"])
         plane = direct_eye_plane(cs, seed)
         wall = time.perf_counter() - t0
         return RenderResult(
@@ -183,7 +181,7 @@ def render(
             eye_image=est.image,
             eye_image_variance=est.variance,
             eye_plane=plane,
-            regions=region_masks(cs, est.glint_images),
+            regions=with_glints(regions, est.glint_images),
             interrupted=est.interrupted,
             samples_per_pixel=est.samples_per_pixel,
             light_paths=est.light_paths,

@@ -16,7 +16,7 @@ import numpy as np
 from eyelume.compile import CompiledScene
 from eyelume.estimators.fast_run import primary_surface_map
 
-__all__ = ["region_masks", "region_stats", "GLINT_FRACTION"]
+__all__ = ["region_masks", "region_stats", "with_glints", "GLINT_FRACTION"]
 
 GLINT_FRACTION = 0.05
 _PUPIL_SURFACES = ("anterior lens", "posterior lens", "retina")
@@ -42,16 +42,23 @@ def region_masks(
         "sclera": of(lambda n, b: n == "sclera" and b),
         "skin": of(lambda n, b: n in tissues),
     }
-    if glint_images is not None:
-        any_glint = np.zeros(labels.shape, dtype=bool)
-        for k, g in enumerate(glint_images):
-            peak = g.max()
-            m = g >= GLINT_FRACTION * peak if peak > 0 else np.zeros(labels.shape, dtype=bool)
-            masks[f"glint {k}"] = m
-            any_glint |= m
-        for name in ("pupil", "iris", "sclera", "skin"):
-            masks[name] = masks[name] & ~any_glint
-    return masks
+    return masks if glint_images is None else with_glints(masks, glint_images)
+
+
+def with_glints(masks: dict[str, np.ndarray], glint_images: np.ndarray) -> dict[str, np.ndarray]:
+    """``masks`` plus ``glint k`` for each LED's glint image (n_leds, rows, cols); glint pixels
+    are removed from the other regions."""
+    out = dict(masks)
+    shape = glint_images.shape[1:]
+    any_glint = np.zeros(shape, dtype=bool)
+    for k, g in enumerate(glint_images):
+        peak = g.max()
+        m = g >= GLINT_FRACTION * peak if peak > 0 else np.zeros(shape, dtype=bool)
+        out[f"glint {k}"] = m
+        any_glint |= m
+    for name in masks:
+        out[name] = masks[name] & ~any_glint
+    return out
 
 
 def region_stats(

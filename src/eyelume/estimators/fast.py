@@ -397,11 +397,6 @@ def _pixel_point(row, col, u1, u2, sensor):
     return 0.5 * sw - (col + u1) * sw / sc, (row + u2) * sh / sr - 0.5 * sh
 
 
-#: Camera samples come in stratified sets of STRATA: the stop in 4 equal-area rings × 4 sectors,
-#: the pixel in a 4 × 4 grid paired with the rings and sectors by a random odd stride.
-STRATA = 16
-
-
 @njit(cache=True, parallel=True)
 def camera_pass(
     seed,
@@ -425,11 +420,15 @@ def camera_pass(
     xp_m,
     sensor,
     max_events,
+    grid,
     out_sum,
     out_sq,
 ):
     """Add stratified sample sets ``first_set`` … ``first_set + n_sets − 1`` of every pixel:
-    ``out_sum`` += Σ m, ``out_sq`` += Σ m² over the sets, m the mean of a set's STRATA samples.
+    ``out_sum`` += Σ m, ``out_sq`` += Σ m² over the sets, m the mean of a set's grid² samples.
+
+    A set stratifies the stop in ``grid`` equal-area rings × ``grid`` sectors and the pixel in a
+    grid × grid array of cells, paired with the stop's strata by a random odd stride.
 
     A sample is a uniform point of the pixel and a uniform point of the stop joined by the real
     ray (:func:`aim_at_stop`); its value c = A_stop cos²θ / (d² |det J|) · L, L the radiance the
@@ -455,20 +454,21 @@ def camera_pass(
             state = stream_start(pseed, m)
             state, ua = next_uniform(state)
             state, ub = next_uniform(state)
-            stride = 2 * int(ua * 8) + 1
-            offset = int(ub * STRATA)
+            strata = grid * grid
+            stride = 2 * int(ua * strata / 2) + 1
+            offset = int(ub * strata)
             total = 0.0
-            for k in range(STRATA):
+            for k in range(strata):
                 state, u1 = next_uniform(state)
                 state, u2 = next_uniform(state)
                 state, u3 = next_uniform(state)
                 state, u4 = next_uniform(state)
-                cell = (k * stride + offset) % STRATA
+                cell = (k * stride + offset) % strata
                 xs, ys = _pixel_point(
-                    row, col, (cell % 4 + u1) / 4.0, (cell // 4 + u2) / 4.0, sensor
+                    row, col, (cell % grid + u1) / grid, (cell // grid + u2) / grid, sensor
                 )
-                r = stop_r * math.sqrt((k // 4 + u3) / 4.0)
-                phi = 2.0 * math.pi * (k % 4 + u4) / 4.0
+                r = stop_r * math.sqrt((k // grid + u3) / grid)
+                phi = 2.0 * math.pi * (k % grid + u4) / grid
                 tx, ty = r * math.cos(phi), r * math.sin(phi)
                 found, qx, qy, det = aim_at_stop(
                     lf_open,
@@ -510,7 +510,7 @@ def camera_pass(
                     max_events,
                 )
                 total += area * g / det * radiance
-            mean = total / STRATA
+            mean = total / strata
             # one addition per set, in set order: the sums do not depend on how the sets
             # were split into rounds
             out_sum[row, col] += mean

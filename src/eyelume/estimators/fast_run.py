@@ -37,45 +37,103 @@ class FastEstimate:
     interrupted: bool
 
 
-class _Accumulator:
-    """Σc, Σc² of the camera samples and fixed-point sums of the light paths' deposits."""
+#: Stratification grids: sets of 4 × 4 camera samples from 32 samples per pixel on, else of 2 × 2.
+#: Larger sets stratify better; two sets at least are needed for a variance.
+GRID_FINE, GRID_COARSE = 4, 2
 
-    def __init__(self, cs: CompiledScene, cam: CameraTables) -> None:
+
+class _Run:
+    """Σm, Σm² of the camera sets and fixed-point sums of the light paths' deposits, and the
+    rounds that add to them."""
+
+    def __init__(self, cs: CompiledScene, cam: CameraTables, grid: int, seed: int) -> None:
         rows, cols = int(cs.sensor[3]), int(cs.sensor[2])
         nled = cs.leds.shape[0]
         chunks = numba.get_num_threads()
+        self.grid = grid
+        self.seed = seed
         self.cam_sum = np.zeros((rows, cols))
         self.cam_sq = np.zeros((rows, cols))
         self.light = np.zeros((chunks, rows, cols), dtype=np.int64)
         self.light_sq = np.zeros((chunks, rows, cols), dtype=np.int64)
         self.led = np.zeros((chunks, nled, rows, cols), dtype=np.int64)
-        self.sets = 0  # stratified sets of F.STRATA camera samples per pixel
+        self.sets = 0
         self.paths = 0
         sf = cs.sf
-        cornea = cs.surface_names.index(cs.scene.eye.surfaces[0].name)
-        self.cornea = cornea
-        i0 = cs.scene.leds.radiant_intensity_w_sr
+        self.cornea = cornea = cs.surface_names.index(cs.scene.eye.surfaces[0].name)
+        self.i0 = i0 = cs.scene.leds.radiant_intensity_w_sr
         centre, rb = sf[cornea, 19:22], sf[cornea, 22]
         dist = np.linalg.norm(cs.leds[:, :3] - centre, axis=1)
         if np.any(dist <= rb):
             raise ValueError("an LED lies inside the cornea's bounding sphere")
         cone = 2 * math.pi * (1 - np.sqrt(1 - (rb / dist) ** 2))
         per_mm2 = cs.sensor[2] * cs.sensor[3] / (cs.sensor[0] * cs.sensor[1])
-        c_typ = i0 * cs.leds.shape[0] * float(cone.max()) * per_mm2
+        c_typ = i0 * nled * float(cone.max()) * per_mm2
         self.q = c_typ * 2.0**-24
         self.q2 = c_typ * c_typ * 2.0**-20
-        self.i0 = i0
-        self.arrays = (
+        self.cs = cs
+        self.light_args = (
+            cornea,
+            cs.leds,
+            i0,
+            cs.alpha_grid,
+            cs.intensity_grid,
+            (
+                sf,
+                cs.si,
+                cs.lf,
+                cs.image_z,
+                cs.sensor,
+                cam.aim,
+                cs.scene.run.max_events,
+                cornea,
+                cam.through_cornea,
+            ),
+        )
+        self.cam_args = (
             sf,
             cs.si,
-            cs.lf,
-            cs.image_z,
-            cs.sensor,
-            cam.aim,
-            cs.scene.run.max_events,
+            cs.leds,
+            i0,
+            cs.alpha_grid,
+            cs.intensity_grid,
             cornea,
             cam.through_cornea,
+            cam.lf_rev,
+            cam.lf_open,
+            cam.k_stop,
+            cam.stop_radius,
+            cs.image_z,
+            cam.rear_z,
+            cam.exit_pupil_z,
+            cam.exit_pupil_magnification,
+            cs.sensor,
+            cs.scene.run.max_events,
+            grid,
         )
+
+    @property
+    def samples_per_pixel(self) -> int:
+        return self.sets * self.grid * self.grid
+
+    def add(self, n_sets: int, paths_per_sample: float) -> None:
+        """Add ``n_sets`` camera sets to every pixel and light paths in proportion."""
+        F.camera_pass(self.seed, self.sets, n_sets, *self.cam_args, self.cam_sum, self.cam_sq)
+        self.sets += n_sets
+        n_paths = int(round(paths_per_sample * self.samples_per_pixel)) - self.paths
+        if n_paths > 0:
+            F.light_pass(
+                self.seed,
+                self.paths,
+                n_paths,
+                *self.light_args,
+                self.light,
+                self.light_sq,
+                self.led,
+                self.q,
+                self.q2,
+            )
+            self.paths += n_paths
 
     def estimate(self, interrupted: bool) -> FastEstimate:
         n = max(self.sets, 2)
@@ -84,23 +142,21 @@ class _Accumulator:
         var_c = np.maximum(self.cam_sq - n * mean_c**2, 0.0) / (n * (n - 1))
         if self.paths:
             m = self.paths
-            s1 = self.light.sum(axis=0).astype(float) * self.q
-            s2 = self.light_sq.sum(axis=0).astype(float) * self.q2
-            mean_l = s1 / m
+            total, total_sq = self.light.sum(axis=0), self.light_sq.sum(axis=0)
+            if max(total.max(initial=0), total_sq.max(initial=0)) > (1 << 62):
+                raise OverflowError("fixed-point light sums near overflow: use fewer light paths")
+            mean_l = total.astype(float) * (self.q / m)
+            s2 = total_sq.astype(float) * self.q2
             var_l = np.maximum(s2 - m * mean_l**2, 0.0) / (m * max(m - 1, 1))
             glints = self.led.sum(axis=0).astype(float) * (self.q / m)
         else:
             mean_l = var_l = np.zeros_like(mean_c)
             glints = np.zeros(self.led.shape[1:])
-        if max(self.light.sum(axis=0).max(initial=0), self.light_sq.sum(axis=0).max(initial=0)) > (
-            1 << 62
-        ):
-            raise OverflowError("fixed-point light sums near overflow: use fewer light paths")
         return FastEstimate(
             mean_c + mean_l,
             var_c + var_l,
             glints,
-            self.sets * F.STRATA,
+            self.samples_per_pixel,
             self.paths,
             interrupted,
         )
@@ -117,11 +173,14 @@ def trace_fast(
 ) -> FastEstimate:
     """Run the fast estimator.
 
-    With ``rel_error`` None: ``samples_per_pixel`` camera samples (rounded up to whole
-    stratified sets, at least two) and ``light_paths`` light paths, in rounds. With
-    ``rel_error``: rounds of the same ratio of light paths to camera samples until the median
-    relative standard error over ``target_pixels`` (a boolean mask; default all pixels with
-    signal) is at most ``rel_error``, each round sized from the error so far.
+    With ``rel_error`` None: ``samples_per_pixel`` camera samples (in sets of 4 × 4 from 32
+    on, else 2 × 2; rounded up to whole sets, at least two) and ``light_paths`` light paths,
+    in rounds. With ``rel_error``: the same ratio of light paths to camera samples, and camera
+    sets added until the median relative standard error over ``target_pixels`` (a boolean
+    mask; default all pixels with signal) is at most ``rel_error``: a pilot of two 2 × 2 sets
+    first; if the target needs more than 16 samples per pixel at that rate, the run restarts
+    with 4 × 4 sets (better stratified: about half the variance per sample), each round sized
+    from the error so far.
     Ctrl-C ends the run after the round in flight (``interrupted``).
     ``progress(message)`` is called after each round.
     """
@@ -132,78 +191,44 @@ def trace_fast(
     if rel_error is not None and not 0.0 < rel_error < 1.0:
         raise ValueError(f"rel_error = {rel_error}: must be in (0, 1)")
     cam = camera_tables(cs)
-    acc = _Accumulator(cs, cam)
-    sets = max(2, math.ceil(samples_per_pixel / F.STRATA))
-    ratio = light_paths / (sets * F.STRATA)  # light paths per camera sample
-    sc = cs.scene
-    cam_args = (
-        cs.sf,
-        cs.si,
-        cs.leds,
-        acc.i0,
-        cs.alpha_grid,
-        cs.intensity_grid,
-        acc.cornea,
-        cam.through_cornea,
-        cam.lf_rev,
-        cam.lf_open,
-        cam.k_stop,
-        cam.stop_radius,
-        cs.image_z,
-        cam.rear_z,
-        cam.exit_pupil_z,
-        cam.exit_pupil_magnification,
-        cs.sensor,
-        sc.run.max_events,
-    )
+    ratio = light_paths / samples_per_pixel  # light paths per camera sample
 
-    def run_round(n_sets: int) -> None:
-        F.camera_pass(seed, acc.sets, n_sets, *cam_args, acc.cam_sum, acc.cam_sq)
-        acc.sets += n_sets
-        n_paths = int(round(ratio * acc.sets * F.STRATA)) - acc.paths
-        if n_paths > 0:
-            F.light_pass(
-                seed,
-                acc.paths,
-                n_paths,
-                acc.cornea,
-                cs.leds,
-                acc.i0,
-                cs.alpha_grid,
-                cs.intensity_grid,
-                acc.arrays,
-                acc.light,
-                acc.light_sq,
-                acc.led,
-                acc.q,
-                acc.q2,
-            )
-            acc.paths += n_paths
+    def say(run: _Run, err: float | None = None) -> None:
+        if progress:
+            tail = "" if err is None else f": median relative error {err:.4f}"
+            progress(f"{run.samples_per_pixel} samples per pixel{tail}")
 
     with interrupt_between_batches() as stop:
         if rel_error is None:
+            grid = GRID_FINE if samples_per_pixel >= 2 * GRID_FINE**2 else GRID_COARSE
+            run = _Run(cs, cam, grid, seed)
+            sets = max(2, math.ceil(samples_per_pixel / grid**2))
             step = max(1, math.ceil(sets / 8))
-            while acc.sets < sets and not stop.requested:
-                run_round(min(step, sets - acc.sets))
-                if progress:
-                    progress(f"{acc.sets * F.STRATA}/{sets * F.STRATA} samples per pixel")
+            while run.sets < sets and not stop.requested:
+                run.add(min(step, sets - run.sets), ratio)
+                say(run)
         else:
-            n_next = sets
-            while not stop.requested:
-                run_round(n_next)
-                est = acc.estimate(False)
-                err = median_relative_error(est, target_pixels)
-                if progress:
-                    progress(
-                        f"{acc.sets * F.STRATA} samples per pixel: median relative error {err:.4f}"
-                    )
-                if err <= rel_error or acc.sets >= _MAX_SETS:
-                    break
-                need = acc.sets * (err / rel_error) ** 2 * 1.1
-                n_next = int(min(max(need - acc.sets, 1), 4 * acc.sets, _MAX_SETS - acc.sets))
-    if acc.sets == 0:
+            run = _Run(cs, cam, GRID_COARSE, seed)
+            run.add(2, ratio)
+            err = median_relative_error(run.estimate(False), target_pixels)
+            say(run, err)
+            if err > rel_error and not stop.requested:
+                need = run.samples_per_pixel * (err / rel_error) ** 2
+                if need > GRID_FINE**2:
+                    run = _Run(cs, cam, GRID_FINE, seed)
+                    run.add(2, ratio)
+                    err = median_relative_error(run.estimate(False), target_pixels)
+                    say(run, err)
+            while err > rel_error and run.sets < _MAX_SETS and not stop.requested:
+                need = run.sets * (err / rel_error) ** 2 * 1.1
+                run.add(
+                    int(min(max(need - run.sets, 1), 4 * run.sets, _MAX_SETS - run.sets)), ratio
+                )
+                err = median_relative_error(run.estimate(False), target_pixels)
+                say(run, err)
+    if run.sets == 0:
         raise KeyboardInterrupt
-    return acc.estimate(stop.requested)
+    return run.estimate(stop.requested)
 
 
 def median_relative_error(est: FastEstimate, pixels: np.ndarray | None = None) -> float:
