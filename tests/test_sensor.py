@@ -158,3 +158,20 @@ def test_render_writes_the_digital_image_and_camera_summary(tmp_path):
     assert camera["electrons_per_w_mm2"] == pytest.approx(
         electrons_per_w_mm2(scene.sensor, 850.0), rel=1e-12
     )
+
+
+def test_glints_saturate_and_skin_does_not_in_the_default_render():
+    """The paper notes LightTools could not show saturation: in the default scene's camera
+    reading the glints clip at the full well while the skin sits inside the range."""
+    scene = load_scene("paper2005")
+    result = render(scene, seed=3)
+    dig = digitize(result.eye_image, scene.sensor, scene.wavelength_nm, seed=3)
+    glints = [m for name, m in result.regions.items() if name.startswith("glint")]
+    assert len(glints) == 4
+    for m in glints:
+        assert dig.saturated[m].any()
+    any_glint = np.logical_or.reduce(glints)
+    assert not dig.saturated[result.regions["skin"]].any()
+    assert dig.saturated.sum() <= any_glint.sum()
+    full = 2**scene.sensor.adc_bits - 1
+    assert 0.2 * full < np.median(dig.counts[result.regions["skin"]]) < 0.8 * full
