@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 from pathlib import Path
 from typing import Annotated
 
@@ -159,6 +160,125 @@ def render(
     )
     if result.interrupted:
         raise typer.Exit(130)
+
+
+DeltaOpt = Annotated[
+    float, typer.Option("--delta", help="Target falloff δ at the eye plane's corner (0 ≤ δ < 1).")
+]
+
+
+@app.command("sweep-leds")
+def sweep_leds_cmd(
+    out: Annotated[Path, typer.Option("--out", help="Folder for the outputs (created).")],
+    scene: SceneOpt = "paper2005",
+    delta: DeltaOpt = 0.3,
+    target: Annotated[
+        Path | None,
+        typer.Option(help="A user target pattern (.csv or .npy, the eye plane's rows × cols)."),
+    ] = None,
+    set_: SetOpt = None,
+) -> None:
+    """The paper's generator (Section 4.1): the 385 LED placements (Y 20–40 mm, Z 20–70 mm,
+    θ 0–30°) against a target eye-plane pattern, the best one refined, landscapes and the best
+    pattern beside the target, into OUT."""
+    from eyelume.analysis.targets import gaussian_target, load_target
+    from eyelume.optimize.sweep import refine, sweep_leds
+    from eyelume.report.optimize_outputs import write_sweep_outputs
+
+    sc = _load(scene, set_)
+    try:
+        goal = (
+            load_target(target, sc.eye_plane)
+            if target is not None
+            else gaussian_target(delta, sc.eye_plane)
+        )
+    except (ValueError, OSError) as exc:
+        _fail(str(exc))
+    result = sweep_leds(sc, goal)
+    b = result.best
+    refined = refine(sc, goal, start=(b["height_mm"], b["distance_mm"], b["pitch_deg"]))
+    plane = sc.eye_plane
+    extent = (-plane.width_mm / 2, plane.width_mm / 2, -plane.height_mm / 2, plane.height_mm / 2)
+    written = write_sweep_outputs(
+        result, goal, refined, None if target is not None else delta, extent, out
+    )
+    err.print(
+        f"best of {len(result.merit)}: Y {b['height_mm']:g} mm, Z {b['distance_mm']:g} mm, "
+        f"θ {b['pitch_deg']:g}° (merit {b['merit']:.4g}); refined: Y {refined[0]:.2f}, "
+        f"Z {refined[1]:.2f}, θ {refined[2]:.2f} (merit {refined[3]:.4g}); "
+        f"wrote {len(written)} files to {out}"
+    )
+
+
+@app.command()
+def reproduce(
+    preset: Annotated[str, typer.Argument(help="The study's scene: paper2005 or a TOML file.")],
+    out: Annotated[Path, typer.Option("--out", help="Folder for the outputs (created).")],
+    deltas: Annotated[
+        str, typer.Option(help="Comma-separated δ values (the paper: 0 to 0.8 by 0.1).")
+    ] = "0,0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8",
+    samples: Annotated[
+        int, typer.Option(help="Camera samples per pixel of each eye image (fast estimator).")
+    ] = 32,
+    seed: Annotated[int, typer.Option(help="Random seed of every render.")] = 0,
+    direct: Annotated[
+        int,
+        typer.Option(
+            help="Renders for the direct optimisation of the eye image beyond the paper (0: skip)."
+        ),
+    ] = 30,
+    set_: SetOpt = None,
+) -> None:
+    """The paper's Section 4 study: for each δ the generator's best LEDs, their eye image (glints
+    off), the evaluator's merit; the best δ, the direct optimum, and a comparison with the
+    paper, into OUT."""
+    from eyelume.analysis.masks import ideal_mask
+    from eyelume.compile import compile_scene
+    from eyelume.optimize.delta_study import PAPER_CHOICE, PAPER_MERITS, run_delta_study
+    from eyelume.optimize.direct import optimize_direct
+    from eyelume.report.optimize_outputs import write_study_outputs
+
+    sc = _load(preset, set_)
+    try:
+        values = [float(v) for v in deltas.split(",") if v.strip()]
+    except ValueError:
+        _fail(f"--deltas {deltas!r}: expected comma-separated numbers, e.g. 0,0.3,0.5")
+    bad = [v for v in values if not 0 <= v < 1]
+    if not values or bad:
+        _fail(f"--deltas {deltas!r}: each δ must be in [0, 1)")
+    if samples < 1 or direct < 0 or seed < 0:
+        _fail(f"--samples {samples}, --direct {direct}, --seed {seed}: must be ≥ 1, ≥ 0, ≥ 0")
+    try:
+        compile_scene(sc)
+    except (SceneError, GlassError) as exc:
+        _fail(str(exc))
+    t0 = time.perf_counter()
+    rows = run_delta_study(sc, values, samples, seed, progress=err.print)
+    best = min(rows, key=lambda r: r.evaluator_merit)
+    found = None
+    if direct:
+        err.print(f"direct optimisation of the eye image from δ = {best.delta:g}'s placement")
+        found = optimize_direct(
+            sc,
+            ideal_mask(compile_scene(sc)),
+            start=(best.height_mm, best.distance_mm, best.pitch_deg),
+            samples_per_pixel=max(8, samples // 2),
+            seed=seed,
+            max_evaluations=direct,
+            progress=err.print,
+        )
+    meta = {
+        "scene": sc.name,
+        "samples_per_pixel": samples,
+        "seed": seed,
+        "deltas": values,
+        "wall_time_s": round(time.perf_counter() - t0, 2),
+    }
+    written = write_study_outputs(rows, found, PAPER_MERITS, PAPER_CHOICE, meta, out)
+    err.print(
+        f"best δ = {best.delta:g} (Y {best.height_mm:g}, Z {best.distance_mm:g}, "
+        f"θ {best.pitch_deg:g}); {meta['wall_time_s']} s; wrote {len(written)} files to {out}"
+    )
 
 
 @app.command()
