@@ -224,9 +224,15 @@ def reproduce(
     direct: Annotated[
         int,
         typer.Option(
-            help="Renders for the direct optimisation of the eye image beyond the paper (0: skip)."
+            help="Renders per search of the direct optimisation beyond the paper (0: skip)."
         ),
     ] = 30,
+    direct_leds: Annotated[
+        str, typer.Option(help="LED counts the direct optimisation tries, e.g. 4,6,8.")
+    ] = "4",
+    vary_spread: Annotated[
+        bool, typer.Option(help="Let the direct optimisation vary the LEDs' spread angle too.")
+    ] = False,
     set_: SetOpt = None,
 ) -> None:
     """The paper's Section 4 study: for each δ the generator's best LEDs, their eye image (glints
@@ -234,7 +240,12 @@ def reproduce(
     paper, into OUT."""
     from eyelume.analysis.masks import ideal_mask
     from eyelume.compile import compile_scene
-    from eyelume.optimize.delta_study import PAPER_CHOICE, PAPER_MERITS, run_delta_study
+    from eyelume.optimize.delta_study import (
+        PAPER_CHOICE,
+        PAPER_MERITS,
+        evaluate_paper_placement,
+        run_delta_study,
+    )
     from eyelume.optimize.direct import optimize_direct
     from eyelume.report.optimize_outputs import write_study_outputs
 
@@ -249,12 +260,19 @@ def reproduce(
     if samples < 1 or direct < 0 or seed < 0:
         _fail(f"--samples {samples}, --direct {direct}, --seed {seed}: must be ≥ 1, ≥ 0, ≥ 0")
     try:
+        counts = [int(v) for v in direct_leds.split(",") if v.strip()]
+    except ValueError:
+        counts = []
+    if not counts or any(not 1 <= n <= 12 for n in counts):
+        _fail(f"--direct-leds {direct_leds!r}: expected LED counts from 1 to 12, e.g. 4,6,8")
+    try:
         compile_scene(sc)
     except (SceneError, GlassError) as exc:
         _fail(str(exc))
     t0 = time.perf_counter()
     rows = run_delta_study(sc, values, samples, seed, progress=err.print)
     best = min(rows, key=lambda r: r.evaluator_merit)
+    paper = evaluate_paper_placement(sc, samples, seed)
     found = None
     if direct:
         err.print(f"direct optimisation of the eye image from δ = {best.delta:g}'s placement")
@@ -262,7 +280,9 @@ def reproduce(
             sc,
             ideal_mask(compile_scene(sc)),
             start=(best.height_mm, best.distance_mm, best.pitch_deg),
-            samples_per_pixel=max(8, samples // 2),
+            led_counts=counts,
+            vary_spread=vary_spread,
+            samples_per_pixel=samples,
             seed=seed,
             max_evaluations=direct,
             progress=err.print,
@@ -273,6 +293,7 @@ def reproduce(
         "seed": seed,
         "deltas": values,
         "wall_time_s": round(time.perf_counter() - t0, 2),
+        "paper_placement": paper,
     }
     written = write_study_outputs(rows, found, PAPER_MERITS, PAPER_CHOICE, meta, out)
     err.print(

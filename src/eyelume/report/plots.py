@@ -511,8 +511,9 @@ def save_error_time_plot(
     Each curve is a line with markers through its points in the order given. Points that cannot
     be drawn on log axes (zero, negative, NaN or infinite time or error, e.g. the error of a
     pixel that received no ray) are left out, and the number left out is added to the curve's
-    legend label. Curves whose label starts with ``"~"`` are drawn dashed (predictions rather
-    than measurements). Each target ``(label, time, error)`` is drawn as a star, with dotted lines
+    legend label; a curve with no drawable point still gets a legend entry saying so. Curves
+    whose label starts with ``"~"`` are drawn dashed (predictions rather than measurements).
+    Each target ``(label, time, error)`` is drawn as a star, with dotted lines
     bounding the region "at most this error in at most this time". A guide line of slope −½
     (error ∝ 1/√time, the Monte Carlo rate) runs through the first drawable point of the first
     curve.
@@ -561,6 +562,7 @@ def save_error_time_plot(
         ok = np.isfinite(t) & np.isfinite(e) & (t > 0) & (e > 0)
         dropped = int(t.size - ok.sum())
         if not ok.any():
+            ax.plot([], [], linestyle="none", label=f"{label} (no drawable point of {t.size})")
             continue
         shown = label + (f" ({dropped} point(s) not drawable)" if dropped else "")
         ax.plot(
