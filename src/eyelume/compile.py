@@ -26,7 +26,7 @@ from eyelume.scene.model import Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
 from eyelume.scene.sources import cos_power_exponent, led_poses, relative_intensity
 
-__all__ = ["CompiledScene", "compile_scene", "lens_paraxial", "lens_indices"]
+__all__ = ["CompiledScene", "compile_scene", "gaze_rotation", "lens_paraxial", "lens_indices"]
 
 #: Fixed ledger entries; named surfaces follow.
 TALLY_SENSOR, TALLY_ESCAPED, TALLY_VIGNETTED, TALLY_TIR, TALLY_OFF_SENSOR, TALLY_LIMIT = range(6)
@@ -41,6 +41,28 @@ FIXED_TALLIES = (
 
 EYE_AXIS_ROT = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]])
 """World → eye-frame rotation in primary gaze: z' = −z (into the eye), y' = y, x' = −x."""
+
+
+def _rot_x(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _rot_y(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def gaze_rotation(eye, share_vertical: float = 1.0, share_horizontal: float = 1.0):
+    """(R, C): the eye's gaze as a rotation R (primary-gaze world → turned world) about the
+    centre of rotation C (world mm): a primary-gaze point p moves to C + R (p − C).
+
+    Vertical first, about x (positive gaze looks up: the optical axis +z tilts toward +y), then
+    horizontal, about y (positive looks toward +x). ``share_*`` scale the angles (an eyelid's
+    lid–eye coordination)."""
+    v = math.radians(eye.gaze_vertical_deg) * share_vertical
+    h = math.radians(eye.gaze_horizontal_deg) * share_horizontal
+    return _rot_y(h) @ _rot_x(-v), np.array([0.0, 0.0, -eye.rotation_centre_mm])
 
 
 @dataclass
@@ -342,17 +364,24 @@ def compile_scene(scene: Scene) -> CompiledScene:
     for s in eye.surfaces:
         surf_z.append(zprime)
         zprime += s.thickness_mm
+    gaze, centre_rot = gaze_rotation(eye)
+    eye_rot = EYE_AXIS_ROT @ gaze.T  # world → eye frame, gaze included
+
+    def on_eye(z_eye: float) -> np.ndarray:
+        """World point of the eye axis at depth z_eye behind the vertex, gaze included."""
+        return centre_rot + gaze @ (np.array([0.0, 0.0, -z_eye]) - centre_rot)
+
     refracting = eye.surfaces[:-1]
     for j, s in enumerate(refracting):
         c = curvature(s.radius_mm)
-        origin = np.array([0.0, 0.0, -surf_z[j]])
+        origin = on_eye(surf_z[j])
         anterior = j == 0
         t.add(
             s.name,
             G.SHAPE_CONIC,
             origin,
-            EYE_AXIS_ROT,
-            _conic_bound(origin, EYE_AXIS_ROT, c, s.conic, s.semi_diameter_mm),
+            eye_rot,
+            _conic_bound(origin, eye_rot, c, s.conic, s.semi_diameter_mm),
             curv=c,
             conic=s.conic,
             clip_r=(0.0, s.semi_diameter_mm),
@@ -364,12 +393,12 @@ def compile_scene(scene: Scene) -> CompiledScene:
             fresnel=anterior and eye.cornea_reflection == "fresnel",
         )
     # iris: an annulus in the vertex plane of the surface that carries the pupil
-    iris_o = np.array([0.0, 0.0, -surf_z[eye.iris_surface]])
+    iris_o = on_eye(surf_z[eye.iris_surface])
     t.add(
         "iris",
         G.SHAPE_CONIC,
         iris_o,
-        EYE_AXIS_ROT,
+        eye_rot,
         (iris_o, eye.iris_outer_diameter_mm / 2 * 1.000001),
         clip_r=(eye.pupil_diameter_mm / 2, eye.iris_outer_diameter_mm / 2),
         rho_a=eye.iris_reflectance,
@@ -377,25 +406,25 @@ def compile_scene(scene: Scene) -> CompiledScene:
     # retina: the prescription's last surface (a cap), seen from the vitreous (side A)
     ret = eye.surfaces[-1]
     c_r = curvature(ret.radius_mm)
-    ret_o = np.array([0.0, 0.0, -surf_z[-1]])
+    ret_o = on_eye(surf_z[-1])
     t.add(
         "retina",
         G.SHAPE_CONIC,
         ret_o,
-        EYE_AXIS_ROT,
-        _conic_bound(ret_o, EYE_AXIS_ROT, c_r, ret.conic, ret.semi_diameter_mm),
+        eye_rot,
+        _conic_bound(ret_o, eye_rot, c_r, ret.conic, ret.semi_diameter_mm),
         curv=c_r,
         conic=ret.conic,
         clip_r=(0.0, ret.semi_diameter_mm),
         rho_a=eye.retina_reflectance,
     )
     # sclera: the eyeball sphere behind the limbus; its inside is the fundus
-    centre = np.array([0.0, 0.0, -z_c])
+    centre = on_eye(z_c)
     t.add(
         "sclera",
         G.SHAPE_SPHERE,
         centre,
-        EYE_AXIS_ROT,
+        eye_rot,
         (centre, eye.sclera_radius_mm * 1.000001),
         radius=eye.sclera_radius_mm,
         clip_z=(z_l - z_c, math.inf),
@@ -408,8 +437,10 @@ def compile_scene(scene: Scene) -> CompiledScene:
     if scene.face.enabled:
         for tis in scene.face.tissues:
             rho = scene.face.skin_reflectance if tis.reflectance is None else tis.reflectance
-            rot = _frame(tis.axis)
-            o = np.asarray(tis.center_mm, dtype=float)
+            # a lid takes its share of the eye's vertical rotation, about the same centre
+            turn, _ = gaze_rotation(eye, share_vertical=tis.follows_gaze, share_horizontal=0.0)
+            rot = _frame(turn @ np.asarray(tis.axis, dtype=float))
+            o = centre_rot + turn @ (np.asarray(tis.center_mm, dtype=float) - centre_rot)
             zlo, zhi = tis.clip_z_mm
             if tis.shape == "sphere":
                 shape, bound = G.SHAPE_SPHERE, (o, tis.radius_mm * 1.000001)

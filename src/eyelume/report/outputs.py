@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from eyelume.analysis.truth import eye_truth
 from eyelume.compile import CompiledScene
 from eyelume.detectors.sensor import camera_summary, digitize
 from eyelume.estimators.forward import trace_paths
@@ -27,7 +28,9 @@ def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Pat
     ``eye_image_digital.png`` (0 DN
     black … full scale white, no autoscaling), colour-bar figures ``*_plot.png`` in physical
     units, ``layout.png`` (a y–z section with a few dozen traced rays) and ``summary.json`` (run
-    facts, power ledger and, under ``"camera"``, the sensor settings and saturated pixels).
+    facts, power ledger and, under ``"camera"``, the sensor settings and saturated pixels) and
+    ``truth.json`` (the true gaze, apparent pupil and glint positions on the picture:
+    :func:`eyelume.analysis.truth.eye_truth`).
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -75,4 +78,5 @@ def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Pat
     summary = result.summary()
     summary["camera"] = camera_summary(sc.sensor, sc.wavelength_nm, digital)
     path("summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    path("truth.json").write_text(json.dumps(eye_truth(cs), indent=2) + "\n", encoding="utf-8")
     return written

@@ -132,6 +132,11 @@ class Eye(_Model):
     anterior lens, where the Arizona eye has its pupil); the sclera a
     Lambertian sphere of ``sclera_radius_mm`` through the corneal limbus (the edge of the anterior
     cornea's clear aperture); its inner face and the retina reflect ``retina_reflectance``.
+
+    Gaze: the eye turns about its centre of rotation, ``rotation_centre_mm`` behind the anterior
+    corneal vertex of primary gaze, first by ``gaze_vertical_deg`` about the x axis (positive:
+    looking up, +y), then by ``gaze_horizontal_deg`` about the y axis (positive: looking toward
+    +x, the nose of a right eye). The world frame stays that of primary gaze (DESIGN.md).
     """
 
     model: str = "arizona"
@@ -146,6 +151,9 @@ class Eye(_Model):
     sclera_radius_mm: Positive = 12.0
     sclera_reflectance: Fraction = 0.09
     retina_reflectance: Fraction = 0.0
+    gaze_horizontal_deg: float = Field(0.0, ge=-30.0, le=30.0)
+    gaze_vertical_deg: float = Field(0.0, ge=-30.0, le=30.0)
+    rotation_centre_mm: Positive = 13.5
 
     @model_validator(mode="after")
     def _consistent(self) -> Eye:
@@ -193,6 +201,8 @@ class Tissue(_Model):
     from the axis ∈ ``clip_r_mm`` (local frame). ``reflectance`` defaults to the face's skin.
     A tissue reflects on its outer face only (outside a sphere or cylinder, the +axis side of a
     disk) and absorbs on the other: point a disk's axis toward the light.
+    ``follows_gaze`` (0–1) is the share of the eye's vertical rotation the tissue takes, turning
+    about the eye's centre of rotation about the x axis: an eyelid's lid–eye coordination.
     """
 
     name: str
@@ -204,6 +214,7 @@ class Tissue(_Model):
     clip_z_mm: tuple[float, float] = (-1.0e6, 1.0e6)
     clip_r_mm: tuple[float, float] = (0.0, 1.0e6)
     reflectance: Fraction | None = None
+    follows_gaze: float = Field(0.0, ge=0.0, le=1.0)
 
     @model_validator(mode="after")
     def _shape_ok(self) -> Tissue:

@@ -1,0 +1,218 @@
+"""Ground truth of a rendered eye: where the pupil and the glints truly image on the sensor.
+
+Both come from the same real rays the renderer uses: the chief ray of a sensor point (through
+the stop's centre, :func:`eyelume.estimators.camera.aim_chief`) leaves the lens into the scene;
+
+* a pupil point P (on the pupil's edge, or its centre) images where the chief ray, refracted by
+  the anterior and posterior cornea, passes through P — found by Newton's method on the sensor
+  point, so the truth is the *apparent* pupil a camera sees through the cornea;
+* LED k's glint images where the chief ray, reflected by the anterior cornea, passes through the
+  LED's emission point (the centre of the blur disc of the first Purkinje image).
+
+Pixel coordinates follow OpenCV's convention on the upright picture: pixel (column c, row r) has
+its centre at (x, y) = (c, r), row 0 at the top. A point is *visible* when nothing (an eyelid,
+the lens mount) blocks its rays; a glint whose reflection point falls outside the cornea's cap
+does not exist.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from eyelume.compile import CompiledScene, gaze_rotation
+from eyelume.estimators.camera import CameraTables, aim_chief, camera_tables, into_scene
+from eyelume.kernels import geometry as G
+from eyelume.kernels.interact import reflect, refract
+
+__all__ = ["eye_truth", "sensor_to_pixel"]
+
+_H = 1e-4  # mm on the sensor: forward-difference step
+_EDGE_POINTS = 72
+
+
+def sensor_to_pixel(cs: CompiledScene, xs: float, ys: float) -> tuple[float, float]:
+    """Sensor-plane point (mm) → picture pixel coordinates (OpenCV convention, module doc)."""
+    sw, sh, cols, rows = cs.sensor
+    return (0.5 * sw - xs) / sw * cols - 0.5, (ys + 0.5 * sh) / sh * rows - 0.5
+
+
+def _chief_ray(cs: CompiledScene, cam: CameraTables, xs: float, ys: float):
+    found, qx, qy, *_ = aim_chief(
+        cam.lf_open,
+        cam.k_stop,
+        cs.image_z,
+        cam.rear_z,
+        cam.exit_pupil_z,
+        cam.exit_pupil_magnification,
+        xs,
+        ys,
+    )
+    if not found:
+        return None
+    ok, x, y, z, dx, dy, dz, _ = into_scene(cam.lf_rev, cs.image_z, xs, ys, qx, qy, cam.rear_z)
+    return (np.array([x, y, z]), np.array([dx, dy, dz])) if ok else None
+
+
+def _through_cornea(cs: CompiledScene, cornea: int, p: np.ndarray, d: np.ndarray):
+    """The ray after refraction at both cornea surfaces, or None."""
+    for s in (cornea, cornea + 1):
+        t = G.intersect_surface(cs.sf, cs.si, s, *p, *d, math.inf)
+        if t < 0:
+            return None
+        p = p + t * d
+        n = np.array(G.surface_normal(cs.sf, cs.si, s, *p))
+        ok, *dd = refract(*d, *n, cs.sf[s, G.N_A] / cs.sf[s, G.N_B])
+        if not ok:
+            return None
+        d = np.array(dd)
+    return p, d
+
+
+def _off_cornea(cs: CompiledScene, cornea: int, p: np.ndarray, d: np.ndarray):
+    """The ray reflected by the anterior cornea, or None if it misses the cap."""
+    t = G.intersect_surface(cs.sf, cs.si, cornea, *p, *d, math.inf)
+    if t < 0:
+        return None
+    p = p + t * d
+    n = np.array(G.surface_normal(cs.sf, cs.si, cornea, *p))
+    return p, np.array(reflect(*d, *n))
+
+
+def _miss(ray, target: np.ndarray, normal: np.ndarray, e1: np.ndarray, e2: np.ndarray):
+    """Where ``ray`` meets the plane through ``target`` with ``normal``, in the basis (e1, e2)."""
+    if ray is None:
+        return None
+    p, d = ray
+    den = d @ normal
+    if abs(den) < 1e-12:
+        return None
+    h = p + ((target - p) @ normal) / den * d - target
+    return np.array([h @ e1, h @ e2])
+
+
+def _solve(residual, guess: np.ndarray, tol: float = 1e-7):
+    """Newton's method on a 2D residual of the sensor point; None if it fails."""
+    x = np.array(guess, dtype=float)
+    for _ in range(40):
+        r = residual(x)
+        if r is None:
+            return None
+        if r @ r < tol * tol:
+            return x
+        jac = np.empty((2, 2))
+        for k in range(2):
+            step = np.zeros(2)
+            step[k] = _H
+            rk = residual(x + step)
+            if rk is None:
+                return None
+            jac[:, k] = (rk - r) / _H
+        try:
+            x = x - np.linalg.solve(jac, r)
+        except np.linalg.LinAlgError:
+            return None
+    return None
+
+
+def _basis(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(n, helper)
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(n, e1)
+
+
+def _clear(cs: CompiledScene, start: np.ndarray, d: np.ndarray, expect: int) -> bool:
+    s, _ = G.nearest_hit(cs.sf, cs.si, *start, *d)
+    return s == expect
+
+
+def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
+    """The true gaze, apparent pupil (centre and edge) and glints of a compiled scene.
+
+    Returns a JSON-ready dict (``truth.json``): gaze angles; the pupil's 3D centre (world mm),
+    its apparent centre in pixels, the pixel positions of 72 points of its edge, the share of
+    them visible (not under a lid); per LED its glint's pixel position, or why there is none.
+    """
+    cam = cam or camera_tables(cs)
+    eye = cs.scene.eye
+    names = cs.surface_names
+    cornea = names.index(eye.surfaces[0].name)
+    rot, centre = gaze_rotation(eye)
+    axis = rot @ np.array([0.0, 0.0, 1.0])  # the optical axis, out of the eye
+    depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
+    pupil_c = centre + rot @ (np.array([0.0, 0.0, -depth]) - centre)
+    e1, e2 = _basis(axis)
+    par_m = -(cs.image_z - cam.entrance_pupil_z) / (cam.entrance_pupil_z)  # paraxial guess scale
+
+    def image_of(point: np.ndarray):
+        def residual(s):
+            ray = _chief_ray(cs, cam, s[0], s[1])
+            ray = None if ray is None else _through_cornea(cs, cornea, *ray)
+            return _miss(ray, point, axis, e1, e2)
+
+        guess = np.array([-point[0], -point[1]]) * abs(par_m)
+        return _solve(residual, guess)
+
+    out: dict = {
+        "gaze_deg": {
+            "horizontal": eye.gaze_horizontal_deg,
+            "vertical": eye.gaze_vertical_deg,
+        },
+        "optical_axis": axis.tolist(),
+        "pixel_convention": "OpenCV: pixel (column c, row r) centred at (x, y) = (c, r); row 0 "
+        "at the top of the upright picture",
+    }
+    sc = image_of(pupil_c)
+    r = eye.pupil_diameter_mm / 2
+    edge, seen = [], 0
+    for k in range(_EDGE_POINTS):
+        a = 2 * math.pi * k / _EDGE_POINTS
+        point = pupil_c + r * (math.cos(a) * e1 + math.sin(a) * e2)
+        s = image_of(point)
+        if s is None:
+            continue
+        edge.append(sensor_to_pixel(cs, *s))
+        ray = _chief_ray(cs, cam, *s)
+        if ray is not None and _clear(cs, ray[0], ray[1], cornea):
+            seen += 1
+    out["pupil"] = {
+        "centre_mm": pupil_c.tolist(),
+        "diameter_mm": eye.pupil_diameter_mm,
+        "centre_px": None if sc is None else list(sensor_to_pixel(cs, *sc)),
+        "edge_px": [list(p) for p in edge],
+        "visible_fraction": seen / _EDGE_POINTS,
+    }
+    glints = []
+    for k, led in enumerate(cs.leds[:, :3]):
+        to_led = led - (centre + rot @ (np.array([0.0, 0.0, -eye.surfaces[0].radius_mm]) - centre))
+        n = to_led / np.linalg.norm(to_led)
+        g1, g2 = _basis(n)
+
+        def residual(s, led=led, n=n, g1=g1, g2=g2):
+            ray = _chief_ray(cs, cam, s[0], s[1])
+            ray = None if ray is None else _off_cornea(cs, cornea, *ray)
+            return _miss(ray, led, n, g1, g2)
+
+        # first guess: the corneal centre's image, shifted toward the LED
+        c_img = image_of(centre + rot @ (np.array([0.0, 0.0, -3.9]) - centre))
+        guess = (c_img if c_img is not None else np.zeros(2)) - 0.05 * abs(par_m) * led[:2]
+        s = _solve(residual, guess)
+        entry: dict = {"led": k, "centre_px": None, "visible": False, "reason": ""}
+        if s is None:
+            entry["reason"] = "no reflection toward this LED on the cornea's cap"
+        else:
+            entry["centre_px"] = list(sensor_to_pixel(cs, *s))
+            ray = _chief_ray(cs, cam, *s)
+            hit = _off_cornea(cs, cornea, *ray)
+            blocked_in = not _clear(cs, ray[0], ray[1], cornea)
+            blocked_out = hit is None or G.nearest_hit(cs.sf, cs.si, *hit[0], *hit[1])[0] not in (
+                names.index(f"LED {k} body"),
+                -1,
+            )
+            entry["visible"] = not (blocked_in or blocked_out)
+            entry["reason"] = "" if entry["visible"] else "blocked (an eyelid or the face)"
+        glints.append(entry)
+    out["glints"] = glints
+    return out
