@@ -1,0 +1,1 @@
+"""Eye tracking from the camera picture: pupil and glint segmentation, gaze estimation."""
