@@ -366,10 +366,12 @@ def compile_scene(scene: Scene) -> CompiledScene:
         zprime += s.thickness_mm
     gaze, centre_rot = gaze_rotation(eye)
     eye_rot = EYE_AXIS_ROT @ gaze.T  # world → eye frame, gaze included
+    head = np.asarray(scene.head_offset_mm, dtype=float)
 
     def on_eye(z_eye: float) -> np.ndarray:
-        """World point of the eye axis at depth z_eye behind the vertex, gaze included."""
-        return centre_rot + gaze @ (np.array([0.0, 0.0, -z_eye]) - centre_rot)
+        """World point of the eye axis at depth z_eye behind the vertex, gaze and head offset
+        included."""
+        return head + centre_rot + gaze @ (np.array([0.0, 0.0, -z_eye]) - centre_rot)
 
     refracting = eye.surfaces[:-1]
     for j, s in enumerate(refracting):
@@ -440,7 +442,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
             # a lid takes its share of the eye's vertical rotation, about the same centre
             turn, _ = gaze_rotation(eye, share_vertical=tis.follows_gaze, share_horizontal=0.0)
             rot = _frame(turn @ np.asarray(tis.axis, dtype=float))
-            o = centre_rot + turn @ (np.asarray(tis.center_mm, dtype=float) - centre_rot)
+            o = head + centre_rot + turn @ (np.asarray(tis.center_mm, dtype=float) - centre_rot)
             zlo, zhi = tis.clip_z_mm
             if tis.shape == "sphere":
                 shape, bound = G.SHAPE_SPHERE, (o, tis.radius_mm * 1.000001)

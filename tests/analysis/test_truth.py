@@ -67,3 +67,17 @@ def test_glint_truth_matches_the_rendered_glints(gaze):
         assert np.hypot(g["centre_px"][0] - cx, g["centre_px"][1] - cy) < 0.5, g
         checked += 1
     assert checked >= 3
+
+
+def test_head_offset_moves_the_pupil_by_the_magnified_offset():
+    """A 2 mm head offset moves the apparent pupil by 2 mm × |m| / pixel pitch on the picture
+    (paraxial magnification 1.144, 0.529 mm pixels: 4.33 px), to within perspective (the pupil
+    lies 3 mm behind the focused plane: < 2 %)."""
+    base = eye_truth(compile_scene(eyelume.load_scene("paper2005")))["pupil"]["centre_px"]
+    moved = eye_truth(
+        compile_scene(eyelume.load_scene("paper2005", {"head_offset_mm": [2, -2, 0]}))
+    )
+    dx = moved["pupil"]["centre_px"][0] - base[0]
+    dy = moved["pupil"]["centre_px"][1] - base[1]
+    expected = 2.0 * 1.144 / (46.0 / 87)
+    assert dx == pytest.approx(expected, rel=0.02) and dy == pytest.approx(expected, rel=0.02)

@@ -139,10 +139,16 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     eye = cs.scene.eye
     names = cs.surface_names
     cornea = names.index(eye.surfaces[0].name)
-    rot, centre = gaze_rotation(eye)
+    rot, c0 = gaze_rotation(eye)
+    head = np.asarray(cs.scene.head_offset_mm, dtype=float)
+
+    def turned(p: np.ndarray) -> np.ndarray:
+        """A primary-gaze eye point (world mm), turned with the gaze and moved with the head."""
+        return head + c0 + rot @ (p - c0)
+
     axis = rot @ np.array([0.0, 0.0, 1.0])  # the optical axis, out of the eye
     depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
-    pupil_c = centre + rot @ (np.array([0.0, 0.0, -depth]) - centre)
+    pupil_c = turned(np.array([0.0, 0.0, -depth]))
     e1, e2 = _basis(axis)
     par_m = -(cs.image_z - cam.entrance_pupil_z) / (cam.entrance_pupil_z)  # paraxial guess scale
 
@@ -186,7 +192,7 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     }
     glints = []
     for k, led in enumerate(cs.leds[:, :3]):
-        to_led = led - (centre + rot @ (np.array([0.0, 0.0, -eye.surfaces[0].radius_mm]) - centre))
+        to_led = led - turned(np.array([0.0, 0.0, -eye.surfaces[0].radius_mm]))
         n = to_led / np.linalg.norm(to_led)
         g1, g2 = _basis(n)
 
@@ -196,7 +202,7 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
             return _miss(ray, led, n, g1, g2)
 
         # first guess: the corneal centre's image, shifted toward the LED
-        c_img = image_of(centre + rot @ (np.array([0.0, 0.0, -3.9]) - centre))
+        c_img = image_of(turned(np.array([0.0, 0.0, -3.9])))
         guess = (c_img if c_img is not None else np.zeros(2)) - 0.05 * abs(par_m) * led[:2]
         s = _solve(residual, guess)
         entry: dict = {"led": k, "centre_px": None, "visible": False, "reason": ""}

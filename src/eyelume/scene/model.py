@@ -360,7 +360,11 @@ class Run(_Model):
 
 
 class Scene(_Model):
-    """A complete eye illumination and imaging system."""
+    """A complete eye illumination and imaging system.
+
+    ``head_offset_mm`` moves the eye and the face together relative to the headset (LEDs, lens,
+    sensor, eye plane): a headset that slips by −d on the head is a head offset of +d.
+    """
 
     name: str
     description: str = ""
@@ -368,6 +372,7 @@ class Scene(_Model):
     leds: LedArray = LedArray()
     eye: Eye
     face: Face = Face()
+    head_offset_mm: Vector3 = (0.0, 0.0, 0.0)
     lens: ImagingLens
     sensor: Sensor = Sensor()
     eye_plane: EyePlane = EyePlane()
