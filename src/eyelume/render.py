@@ -77,6 +77,7 @@ class RenderResult:
     interactions: int | None = None
     samples_per_pixel: int | None = None
     light_paths: int | None = None
+    variance_dof: int | None = None
 
     @property
     def pixel_area_mm2(self) -> float:
@@ -86,7 +87,11 @@ class RenderResult:
     def region_stats(self) -> dict[str, dict]:
         """Mean, median pixel and their relative standard errors per region."""
         return region_stats(
-            self.eye_image, self.eye_image_variance, self.regions, self.pixel_area_mm2
+            self.eye_image,
+            self.eye_image_variance,
+            self.regions,
+            self.pixel_area_mm2,
+            self.variance_dof,
         )
 
     def summary(self) -> dict:
@@ -185,6 +190,7 @@ def render(
             interrupted=est.interrupted,
             samples_per_pixel=est.samples_per_pixel,
             light_paths=est.light_paths,
+            variance_dof=est.variance_dof,
             **extents,
         )
     if estimator != "forward":

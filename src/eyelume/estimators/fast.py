@@ -8,8 +8,9 @@ Every light path runs LED → … → camera. We split path space by how the pat
    aiming, :mod:`.camera`), leaves the lens into the scene and, at the first interface it meets
    (the cornea), splits into its transmitted (× T, × (n₁/n₂)² for radiance) and reflected (× R)
    parts. At every Lambertian vertex it adds next-event estimation to each LED — the LED's
-   radiant intensity I(α) cos θ / d² along a straight, unoccluded segment — and, on the iris,
-   the light the cornea refracts onto it, by a specular connection (:mod:`.cornea_nee`). It
+   radiant intensity I(α) cos θ / d² along a straight, unoccluded segment (to every LED at the
+   first vertex, to one drawn at random, weighted by their number, at later ones) — and, on the
+   iris, the light the cornea refracts onto it, by a specular connection (:mod:`.cornea_nee`). It
    then continues by cosine sampling (the first vertex always, with weight ρ, in IRIS_SPLIT
    directions on the iris; later ones by Russian roulette). LEDs are points, so a camera path
    never hits one: these connections are the only way it receives light.
@@ -75,25 +76,33 @@ _PLANE_TAG = 0x504C414E45  # … and the eye-plane points'
 
 
 @njit(cache=True)
+def led_irradiance(sf, si, leds, k, i0, alpha_grid, intensity_grid, x, y, z, nx, ny, nz):
+    """Irradiance (W/mm²) at world point (x, y, z) on a face with unit normal n (toward the
+    light's side) from LED k, if it sees the point along a straight unoccluded segment:
+    I₀ f(α) cos θ / d²."""
+    vx, vy, vz = leds[k, 0] - x, leds[k, 1] - y, leds[k, 2] - z
+    d2 = vx * vx + vy * vy + vz * vz
+    d = math.sqrt(d2)
+    ux, uy, uz = vx / d, vy / d, vz / d
+    cos_s = ux * nx + uy * ny + uz * nz
+    if cos_s <= 0.0:
+        return 0.0
+    cos_a = -(ux * leds[k, 3] + uy * leds[k, 4] + uz * leds[k, 5])
+    if cos_a <= 0.0:
+        return 0.0
+    s, t = G.nearest_hit(sf, si, x, y, z, ux, uy, uz)
+    if s >= 0 and t < d * (1.0 - 1e-9) - 1e-6:
+        return 0.0
+    return i0 * relative_intensity_at(cos_a, alpha_grid, intensity_grid) * cos_s / d2
+
+
+@njit(cache=True)
 def direct_irradiance(sf, si, leds, i0, alpha_grid, intensity_grid, x, y, z, nx, ny, nz):
     """Irradiance (W/mm²) at world point (x, y, z) on a face with unit normal n (toward the
     light's side) from every LED that sees it along a straight unoccluded segment."""
     e = 0.0
     for k in range(leds.shape[0]):
-        vx, vy, vz = leds[k, 0] - x, leds[k, 1] - y, leds[k, 2] - z
-        d2 = vx * vx + vy * vy + vz * vz
-        d = math.sqrt(d2)
-        ux, uy, uz = vx / d, vy / d, vz / d
-        cos_s = ux * nx + uy * ny + uz * nz
-        if cos_s <= 0.0:
-            continue
-        cos_a = -(ux * leds[k, 3] + uy * leds[k, 4] + uz * leds[k, 5])
-        if cos_a <= 0.0:
-            continue
-        s, t = G.nearest_hit(sf, si, x, y, z, ux, uy, uz)
-        if s >= 0 and t < d * (1.0 - 1e-9) - 1e-6:
-            continue
-        e += i0 * relative_intensity_at(cos_a, alpha_grid, intensity_grid) * cos_s / d2
+        e += led_irradiance(sf, si, leds, k, i0, alpha_grid, intensity_grid, x, y, z, nx, ny, nz)
     return e
 
 
@@ -172,7 +181,12 @@ def _camera_branch(
                 break
             if not from_b:
                 nx, ny, nz = -nx, -ny, -nz
-            e = direct_irradiance(sf, si, leds, i0, ag, ig, x, y, z, nx, ny, nz)
+            if first_vertex:
+                e = direct_irradiance(sf, si, leds, i0, ag, ig, x, y, z, nx, ny, nz)
+            else:  # interreflections: one LED drawn at random, its light × the LED count
+                state, u = next_uniform(state)
+                k = min(int(u * leds.shape[0]), leds.shape[0] - 1)
+                e = leds.shape[0] * led_irradiance(sf, si, leds, k, i0, ag, ig, x, y, z, nx, ny, nz)
             if through[s]:
                 e1, e2 = orthonormal_basis(nx, ny, nz)
                 e += irradiance_through_cornea(

@@ -35,6 +35,7 @@ class FastEstimate:
     samples_per_pixel: int
     light_paths: int
     interrupted: bool
+    variance_dof: int  # degrees of freedom of each pixel's variance estimate (sets − 1)
 
 
 #: Stratification grids: sets of 4 × 4 camera samples from 32 samples per pixel on, else of 2 × 2.
@@ -159,6 +160,7 @@ class _Run:
             self.samples_per_pixel,
             self.paths,
             interrupted,
+            max(self.sets - 1, 1),
         )
 
 
@@ -176,11 +178,10 @@ def trace_fast(
     With ``rel_error`` None: ``samples_per_pixel`` camera samples (in sets of 4 × 4 from 32
     on, else 2 × 2; rounded up to whole sets, at least two) and ``light_paths`` light paths,
     in rounds. With ``rel_error``: the same ratio of light paths to camera samples, and camera
-    sets added until the median relative standard error over ``target_pixels`` (a boolean
-    mask; default all pixels with signal) is at most ``rel_error``: a pilot of two 2 × 2 sets
-    first; if the target needs more than 16 samples per pixel at that rate, the run restarts
-    with 4 × 4 sets (better stratified: about half the variance per sample), each round sized
-    from the error so far.
+    sets added until the median pixel's relative standard error over ``target_pixels`` (a
+    boolean mask; default all pixels with signal) is at most ``rel_error``: the first round is
+    the ``samples_per_pixel`` budget (its grid as above), each next round sized from the error
+    so far.
     Ctrl-C ends the run after the round in flight (``interrupted``).
     ``progress(message)`` is called after each round.
     """
@@ -208,22 +209,15 @@ def trace_fast(
                 run.add(min(step, sets - run.sets), ratio)
                 say(run)
         else:
-            run = _Run(cs, cam, GRID_COARSE, seed)
-            run.add(2, ratio)
+            grid = GRID_FINE if samples_per_pixel >= 2 * GRID_FINE**2 else GRID_COARSE
+            run = _Run(cs, cam, grid, seed)
+            run.add(max(2, math.ceil(samples_per_pixel / grid**2)), ratio)
             err = median_relative_error(run.estimate(False), target_pixels)
             say(run, err)
-            if err > rel_error and not stop.requested:
-                need = run.samples_per_pixel * (err / rel_error) ** 2
-                if need > GRID_FINE**2:
-                    run = _Run(cs, cam, GRID_FINE, seed)
-                    run.add(2, ratio)
-                    err = median_relative_error(run.estimate(False), target_pixels)
-                    say(run, err)
             while err > rel_error and run.sets < _MAX_SETS and not stop.requested:
                 need = run.sets * (err / rel_error) ** 2 * 1.1
-                run.add(
-                    int(min(max(need - run.sets, 1), 4 * run.sets, _MAX_SETS - run.sets)), ratio
-                )
+                n_more = int(min(max(need - run.sets, 1), 4 * run.sets, _MAX_SETS - run.sets))
+                run.add(n_more, ratio)
                 err = median_relative_error(run.estimate(False), target_pixels)
                 say(run, err)
     if run.sets == 0:
@@ -232,11 +226,15 @@ def trace_fast(
 
 
 def median_relative_error(est: FastEstimate, pixels: np.ndarray | None = None) -> float:
-    """Median over ``pixels`` (default: every pixel with signal) of √variance / mean."""
+    """The median pixel's relative standard error over ``pixels`` (default: every pixel with
+    signal), corrected for the spread of few-set variance estimates
+    (:func:`eyelume.analysis.regions.median_relative_error`)."""
+    from eyelume.analysis.regions import median_relative_error as median_rel
+
     mask = est.image > 0 if pixels is None else (pixels & (est.image > 0))
     if not mask.any():
         return math.inf
-    return float(np.median(np.sqrt(est.variance[mask]) / est.image[mask]))
+    return median_rel(est.image[mask], est.variance[mask], est.variance_dof)
 
 
 def primary_surface_map(

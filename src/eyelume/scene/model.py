@@ -353,7 +353,7 @@ class Run(_Model):
     estimator: Literal["forward", "fast"] = "fast"
     rays: int = Field(1_500_000, ge=1)
     samples_per_pixel: int = Field(32, ge=1, le=1_000_000)
-    light_paths_per_pixel: float = Field(32.0, ge=0.0, le=1e6)
+    light_paths_per_pixel: float = Field(16.0, ge=0.0, le=1e6)
     seed: int = Field(0, ge=0, lt=2**63)
     batch_size: int = Field(1 << 18, ge=1)
     max_events: int = Field(64, ge=2, le=10_000)
