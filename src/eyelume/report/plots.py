@@ -603,5 +603,5 @@ def save_error_time_plot(
     ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.grid(True, which="both", linewidth=0.3, alpha=0.5)
-    ax.legend(fontsize="small", loc="best")
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     _save_figure(fig, path)
