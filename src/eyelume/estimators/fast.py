@@ -435,11 +435,14 @@ def camera_pass(
     sensor,
     max_events,
     grid,
+    pixels,
     out_sum,
     out_sq,
 ):
-    """Add stratified sample sets ``first_set`` … ``first_set + n_sets − 1`` of every pixel:
-    ``out_sum`` += Σ m, ``out_sq`` += Σ m² over the sets, m the mean of a set's grid² samples.
+    """Add stratified sample sets ``first_set`` … ``first_set + n_sets − 1`` of each pixel in
+    ``pixels`` (flat indices, row × cols + col): ``out_sum[i]`` += Σ m, ``out_sq[i]`` += Σ m²
+    over the sets, m the mean of a set's grid² samples. A pixel's samples depend on its index
+    and the seed only.
 
     A set stratifies the stop in ``grid`` equal-area rings × ``grid`` sectors and the pixel in a
     grid × grid array of cells, paired with the stop's strata by a random odd stride.
@@ -449,9 +452,10 @@ def camera_pass(
     lens receives along that ray, is an unbiased estimate of the pixel's mean irradiance
     (W/mm²); so is m, and the sets are independent, so their spread gives the variance.
     """
-    rows, cols = out_sum.shape
+    cols = int(sensor[2])
     area = math.pi * stop_r * stop_r
-    for p in prange(rows * cols):
+    for i in prange(pixels.shape[0]):
+        p = pixels[i]
         row = p // cols
         col = p - row * cols
         # the chief ray of the pixel centre and its Jacobian seed every sample's aim
@@ -527,8 +531,8 @@ def camera_pass(
             mean = total / strata
             # one addition per set, in set order: the sums do not depend on how the sets
             # were split into rounds
-            out_sum[row, col] += mean
-            out_sq[row, col] += mean * mean
+            out_sum[i] += mean
+            out_sq[i] += mean * mean
 
 
 @njit(cache=True, inline="always")
