@@ -1,0 +1,171 @@
+"""Pupil and glint detection (issue 5): ms per 640 × 480 frame on one core. Target ≤ 8 ms.
+
+Run from the repository root::
+
+    python benchmarks/detect.py                       # synthetic frame only, ~5 s
+    python benchmarks/detect.py --render              # + a paper2005 render (~30 s once)
+    python benchmarks/detect.py --frame DIR           # + an existing render's output directory
+
+:func:`eyelume.analysis.tracking.detect` alone (with the four LED azimuths, so the matching is
+included) on one core (``cv2.setNumThreads(1)``), after ``--warmup`` calls: best, median and
+worst of ``--repeats`` (50) calls on the same frame, and the median of each stage's share
+(``Detection.timings_ms``). Frames:
+
+- ``synthetic``: ``draw_eye()`` of ``tests/analysis/test_detect.py`` (the tests' picture: a
+  112 × 100 px pupil, 4 saturated glints, blur σ 1.5 px, noise σ 8 DN, 10-bit), its truth known.
+- ``render``: ``eye_image_digital.npy`` (uint16 DN, 10 bit) of ``eyelume render --set
+  sensor.cols=640 --set sensor.rows=480 --samples 8`` (``--render`` makes one in a temporary
+  directory; ``--frame DIR`` uses yours); errors against the render's ``truth.json`` when there.
+
+Prints the figures and how they were run, and appends a JSON line to
+``benchmarks/results/detect.jsonl``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import math
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _common as C  # noqa: E402
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+
+from eyelume.analysis.tracking import detect, detection_to_dict  # noqa: E402
+
+TARGET_MS = 8.0
+LEDS = (0.0, 90.0, 180.0, 270.0)
+
+
+def _synthetic():
+    path = C.REPO / "tests" / "analysis" / "test_detect.py"
+    spec = importlib.util.spec_from_file_location("_test_detect", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    truth = {
+        "pupil": {"centre_px": list(mod.CENTRE)},
+        "glints": [{"led": k, "centre_px": list(p)} for k, p in enumerate(mod.glint_positions())],
+    }
+    return mod.draw_eye(), truth
+
+
+def _render(out: Path) -> None:
+    exe = Path(sys.executable).parent / "eyelume"
+    cmd = [
+        str(exe) if exe.exists() else "eyelume", "render", "--set", "sensor.cols=640",
+        "--set", "sensor.rows=480", "--samples", "8", "--out", str(out),
+    ]  # fmt: skip
+    print(f"   rendering: eyelume {' '.join(cmd[1:])}")
+    subprocess.run(cmd, check=True, capture_output=True, text=True)
+
+
+def _errors(d, truth: dict | None) -> dict:
+    if not truth:
+        return {}
+    out = {}
+    if d.pupil is not None:
+        t = truth["pupil"]["centre_px"]
+        out["pupil_centre_err_px"] = math.hypot(
+            d.pupil.centre_px[0] - t[0], d.pupil.centre_px[1] - t[1]
+        )
+    by_led = {g["led"]: g["centre_px"] for g in truth.get("glints", []) if g.get("centre_px")}
+    errs = [
+        math.hypot(g.centre_px[0] - by_led[g.led][0], g.centre_px[1] - by_led[g.led][1])
+        for g in d.glints
+        if g.led in by_led
+    ]
+    if errs:
+        out["glint_err_px_max"] = max(errs)
+    return out
+
+
+def bench(name: str, frame: np.ndarray, truth: dict | None, a) -> dict:
+    for _ in range(a.warmup):
+        detect(frame, led_azimuths_deg=LEDS)
+    stages: list[dict] = []
+
+    def one():
+        d = detect(frame, led_azimuths_deg=LEDS)
+        stages.append(d.timings_ms)
+        return d
+
+    t = C.timed(one, a.repeats)
+    d = t.pop("last")
+    share = {k: statistics.median(s[k] for s in stages) for k in stages[0]}
+    err = _errors(d, truth)
+    best, med = 1e3 * t["best_s"], 1e3 * t["median_s"]
+    verdict = "PASS" if med <= TARGET_MS else "FAIL"
+    print(
+        f"   {name:9s} {frame.shape[1]}×{frame.shape[0]} {frame.dtype}: best {best:.2f} ms, "
+        f"median {med:.2f} ms, worst {1e3 * t['worst_s']:.2f} ms  [{verdict} ≤ {TARGET_MS} ms]"
+        f"{C.disturbed(t)}"
+    )
+    print("             stages (median ms): " + ", ".join(f"{k} {v:.2f}" for k, v in share.items()))
+    res = detection_to_dict(d)
+    print(
+        f"             ok={res['ok']} failures={res['failures']} glints={len(res['glints'])}"
+        + "".join(f"  {k}={v:.3f}" for k, v in err.items())
+    )
+    return {
+        "frame": name,
+        "shape": list(frame.shape),
+        "dtype": str(frame.dtype),
+        "best_ms": best,
+        "median_ms": med,
+        "worst_ms": 1e3 * t["worst_s"],
+        "stages_median_ms": share,
+        "timing": {k: v for k, v in t.items() if k != "walls_s"},
+        "detection": res,
+        "errors": err,
+        "pass": med <= TARGET_MS,
+    }
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--repeats", type=int, default=50)
+    p.add_argument("--warmup", type=int, default=5)
+    p.add_argument("--frame", type=Path, help="a render's output directory or an .npy picture")
+    p.add_argument("--render", action="store_true", help="render a 640 × 480 paper2005 frame")
+    a = p.parse_args()
+
+    cv2.setNumThreads(1)
+    info = C.machine()
+    info["opencv"] = cv2.__version__
+    info["cv2_threads"] = cv2.getNumThreads()
+    C.print_header("Pupil and glint detection, one 640 × 480 frame, one core", info)
+    print(f"   OpenCV {cv2.__version__}, cv2.getNumThreads() = {cv2.getNumThreads()}")
+
+    frames = [("synthetic", *_synthetic())]
+    tmp = None
+    src = a.frame
+    if a.render and src is None:
+        tmp = tempfile.TemporaryDirectory()
+        src = Path(tmp.name)
+        _render(src)
+    if src is not None:
+        npy = src / "eye_image_digital.npy" if src.is_dir() else src
+        truth_path = npy.parent / "truth.json"
+        truth = json.loads(truth_path.read_text()) if truth_path.exists() else None
+        frames.append(("render", np.load(npy), truth))
+
+    records = [bench(name, frame, truth, a) for name, frame, truth in frames]
+    if tmp is not None:
+        tmp.cleanup()
+    path = C.append_result(
+        "detect",
+        {"command": C.command_line(), "machine": info, "target_ms": TARGET_MS, "frames": records},
+    )
+    print(f"   appended to {path}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,199 @@
+"""Glints (first Purkinje images): bright-spot threshold, sub-pixel centroids, LED matching.
+
+* **Threshold**: glints are the brightest and smallest things in an eye picture — far less
+  than 1 % of it — so a glint pixel must be brighter than the 99th percentile of the 8-bit
+  picture (:func:`glint_threshold`: the brightest *scene* level, skin or sclera) *and* stand out
+  of its neighbourhood: u8 ≥ m + ``glint_level`` (255 − m), m the mean of the ``glint_window_px``
+  box around it (default odd ≈ min(rows, cols) / 16, ≥ 5: a few glints across). Over bright
+  skin that is halfway from the skin to the maximum; over the dark pupil, where glints sit,
+  half the maximum, so a glint the eye turned dimmer keeps its shoulders. When the maximum is
+  not ``glint_min_contrast`` of the range above the 99th percentile nothing stands out and
+  there are no glints (an over-lit or glint-free picture).
+* **Blobs**: the bright mask is closed with a small elliptical element (``glint_close_px``; by
+  default odd ≈ min(rows, cols) / 160, i.e. none below 240 px, 3 px at 480 rows) so that a glint
+  broken up by noise or a saturated speckle is one blob, then split into blobs (outer outlines,
+  ``cv2.findContours``) kept within the area bounds: ≥ 2 px (the optics spread a glint over
+  several pixels; a hot pixel or a noise spike is one), ≤ 0.5 % of the picture.
+* **Centroid**: intensity-weighted over the blob and a skirt around it, weights max(I − B, 0)
+  with B the local background (:func:`glint_blobs`). Weighting only what is above the threshold
+  would weigh a saturated spot as a nearly hard-edged disc, whose centroid jumps with the pixel
+  grid (0.1 px in the tests); with the skirt down to the background it is smooth.
+* **Matching** (:func:`match_leds`): LED k at azimuth φ_k (0° = picture +x, 90° = picture up, i.e.
+  −row) makes a glint displaced from the glints' centroid toward φ_k; each glint's direction from
+  that centroid is matched to the LED azimuths by the Hungarian algorithm
+  (``scipy.optimize.linear_sum_assignment``) on the angular difference, and a pair further apart
+  than ``match_max_angle_deg`` (default half the smallest gap between LED azimuths) stays
+  unmatched. The first reference is the glints' median point (a stray bright pixel does not
+  move it), then the centre of the LED pattern the matched glints fit — their centroid when
+  all are there, unbiased when one is lost (:func:`match_leds`). Not the pupil centre: with
+  the eye turned the glints' pattern moves off it by more than its own size.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+__all__ = ["glint_blobs", "glint_threshold", "match_leds", "default_max_angle"]
+
+
+def glint_threshold(hist: np.ndarray, percentile: float, min_contrast: float) -> int | None:
+    """8-bit floor of glint pixels (they are brighter than it): the ``percentile`` of the
+    picture, or ``None`` when the maximum is not ``min_contrast`` × 255 above it."""
+    cum = np.cumsum(hist)
+    if cum[-1] == 0:
+        return None
+    base = int(np.searchsorted(cum, percentile / 100.0 * cum[-1]))
+    top = int(np.nonzero(hist)[0][-1])
+    if top - base < min_contrast * 255.0:
+        return None
+    return base
+
+
+def glint_blobs(
+    u8: np.ndarray, img: np.ndarray, floor8: int, params
+) -> tuple[list[dict], np.ndarray]:
+    """Bright blobs as dicts (centre_px, area_px, peak) and the (closed) bright mask (0/255).
+
+    The centroid is weighted by max(I − B, 0) over the blob and a skirt ``m`` = max(2, ⌈r⌉) px
+    around it (r its equivalent radius), B the median of the window around it outside every
+    blob's skirt; where skirts of neighbouring blobs meet, a pixel goes to the nearer blob. The
+    spot's whole profile, down to its background, then weighs in: a saturated (flat-topped)
+    spot's centroid is as smooth in its position as an unsaturated one's.
+    """
+    rows, cols = u8.shape
+    w = params.glint_window_px
+    if w is None:
+        w = max(5, int(round(min(rows, cols) / 16.0)))
+        w = w if w % 2 else w + 1
+    lv = params.glint_level
+    local = cv2.addWeighted(cv2.blur(u8, (w, w)), 1.0 - lv, u8, 0.0, 255.0 * lv)
+    above = cv2.bitwise_and(
+        cv2.compare(u8, local, cv2.CMP_GE), cv2.threshold(u8, floor8, 255, cv2.THRESH_BINARY)[1]
+    )
+    bright = above
+    k = params.glint_close_px
+    if k is None:
+        k = int(round(min(rows, cols) / 160.0))
+        k = k if k % 2 else k + 1
+    if k > 1:
+        bright = cv2.morphologyEx(
+            bright, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+        )
+    contours, hier = cv2.findContours(bright, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    if hier is None:
+        return [], bright
+    max_area = max(params.glint_min_area_px, params.glint_max_area_frac * rows * cols)
+    tops = [c for c, h in zip(contours, hier[0], strict=True) if h[3] == -1]
+    blobs = []
+    for c in tops:
+        approx_area = cv2.contourArea(c) + 0.5 * len(c) + 1.0
+        if approx_area < params.glint_min_area_px or approx_area > 1.5 * max_area + 4:
+            continue
+        m = max(2, int(math.ceil(math.sqrt(approx_area / math.pi))))
+        bx, by, bw, bh = cv2.boundingRect(c)
+        x0, y0 = max(0, bx - m - 2), max(0, by - m - 2)
+        x1, y1 = min(cols, bx + bw + m + 2), min(rows, by + bh + m + 2)
+        shape = (y1 - y0, x1 - x0)
+        own = np.zeros(shape, np.uint8)
+        cv2.drawContours(own, [c], 0, 255, thickness=-1, offset=(-x0, -y0))
+        area = int(np.count_nonzero((above[y0:y1, x0:x1] > 0) & (own > 0)))
+        if area < params.glint_min_area_px or area > max_area:
+            continue
+        win = img[y0:y1, x0:x1].astype(np.float64)
+        others = (bright[y0:y1, x0:x1] > 0) & (own == 0)
+        d_own = cv2.distanceTransform(cv2.bitwise_not(own), cv2.DIST_L2, 3)
+        region = d_own <= m
+        if others.any():
+            d_oth = cv2.distanceTransform((~others).astype(np.uint8) * 255, cv2.DIST_L2, 3)
+            region &= d_own <= d_oth
+            background = (d_own > m) & (d_oth > m)
+        else:
+            background = d_own > m
+        base = float(np.median(win[background])) if background.any() else float(win.min())
+        wgt = np.where(region, np.maximum(win - base, 0.0), 0.0)
+        tot = float(wgt.sum())
+        if tot <= 0:
+            continue
+        xs = np.arange(x0, x1, dtype=np.float64)
+        ys = np.arange(y0, y1, dtype=np.float64)
+        blobs.append(
+            {
+                "centre_px": (
+                    float((wgt.sum(axis=0) * xs).sum() / tot),
+                    float((wgt.sum(axis=1) * ys).sum() / tot),
+                ),
+                "area_px": float(area),
+                "peak": float(win[own > 0].max()),
+            }
+        )
+    return blobs, bright
+
+
+def default_max_angle(led_azimuths_deg: Sequence[float]) -> float:
+    """Half the smallest circular gap between distinct LED azimuths, degrees (180 for one)."""
+    az = np.unique(np.mod(np.asarray(led_azimuths_deg, float), 360.0))
+    if len(az) < 2:
+        return 180.0
+    gaps = np.diff(np.concatenate([az, [az[0] + 360.0]]))
+    return 0.5 * float(gaps.min())
+
+
+def match_leds(
+    centres: np.ndarray,
+    led_azimuths_deg: Sequence[float],
+    reference: tuple[float, float],
+    max_angle_deg: float,
+    iterations: int = 4,
+) -> list[int | None]:
+    """LED index for each glint centre (n, 2) px, or ``None``; one glint per LED at most.
+
+    Each glint's direction from a reference point — atan2(−(y − y_ref), x − x_ref), degrees,
+    0° = picture +x, 90° = picture up — is matched to the LED azimuths minimising the total
+    angular difference (Hungarian algorithm); pairs more than ``max_angle_deg`` apart are not
+    matched. The reference starts at ``reference`` and becomes the centre c of the pattern the
+    matched glints fit, g_k ≈ c + r (cos φ_k, −sin φ_k) (least squares in c and r): with every
+    glint found that is their centroid; with one lost it is still the pattern's centre, where
+    the centroid of the others would be pulled toward them. Repeated until the matching stands.
+
+    >>> match_leds(np.array([[10.0, 5.0], [5.0, 0.0], [0.0, 5.0], [5.0, 10.0]]),
+    ...            [0, 90, 180, 270], (5.0, 5.0), 45.0)
+    [0, 1, 2, 3]
+    """
+    centres = np.asarray(centres, float).reshape(-1, 2)
+    az = np.asarray(led_azimuths_deg, float)
+    out: list[int | None] = [None] * len(centres)
+    if len(centres) == 0 or len(az) == 0:
+        return out
+    u = np.column_stack([np.cos(np.radians(az)), -np.sin(np.radians(az))])
+    ref = np.asarray(reference, float)
+    for _ in range(iterations):
+        rel = centres - ref
+        psi = np.degrees(np.arctan2(-rel[:, 1], rel[:, 0]))
+        diff = np.abs((psi[:, None] - az[None, :] + 180.0) % 360.0 - 180.0)
+        rows, cols = linear_sum_assignment(diff)
+        new: list[int | None] = [None] * len(centres)
+        for r, c in zip(rows, cols, strict=True):
+            if diff[r, c] <= max_angle_deg:
+                new[int(r)] = int(c)
+        if new == out:
+            break
+        out = new
+        pairs = [(j, k) for j, k in enumerate(out) if k is not None]
+        if len(pairs) < 2:
+            break
+        a = np.zeros((2 * len(pairs), 3))
+        b = np.zeros(2 * len(pairs))
+        for i, (j, k) in enumerate(pairs):
+            a[2 * i] = (1.0, 0.0, u[k, 0])
+            a[2 * i + 1] = (0.0, 1.0, u[k, 1])
+            b[2 * i : 2 * i + 2] = centres[j]
+        sol = np.linalg.lstsq(a, b, rcond=None)[0]
+        if not (sol[2] > 0 and np.isfinite(sol).all()):
+            break
+        ref = sol[:2]
+    return out

@@ -1,0 +1,94 @@
+"""Files written by ``eyelume evaluate-tracking``: the per-frame table, the summary and error
+maps over the gaze grid."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+__all__ = ["write_tracking_outputs"]
+
+
+def _grid(frames, value) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    hs = sorted({f.gaze[0] for f in frames})
+    vs = sorted({f.gaze[1] for f in frames})
+    out = np.full((len(vs), len(hs)), np.nan)
+    for f in frames:
+        v = value(f)
+        out[vs.index(f.gaze[1]), hs.index(f.gaze[0])] = np.nan if v is None else v
+    return np.array(hs), np.array(vs), out
+
+
+def _err(est, gaze):
+    return None if est is None else math.hypot(est[0] - gaze[0], est[1] - gaze[1])
+
+
+def save_error_maps(frames, path) -> None:
+    """Four maps over the gaze grid: pupil-centre error (px), glints found, PCCR and geometric
+    gaze errors (°); blank where the frame failed."""
+    maps = [
+        ("pupil-centre error (px)", lambda f: f.pupil_error_px if f.detection.ok else None),
+        ("glints found and matched", lambda f: f.glints_found),
+        ("PCCR gaze error (°)", lambda f: _err(f.pccr, f.gaze)),
+        ("geometric gaze error (°)", lambda f: _err(f.geometric, f.gaze)),
+    ]
+    fig = Figure(figsize=(13, 3.4))
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(1, 4)
+    for ax, (title, fn) in zip(axes, maps, strict=True):
+        hs, vs, z = _grid(frames, fn)
+        im = ax.imshow(
+            z,
+            origin="lower",
+            cmap="viridis",
+            extent=(hs[0] - 5, hs[-1] + 5, vs[0] - 5, vs[-1] + 5),
+            aspect="auto",
+        )
+        for i, v in enumerate(vs):
+            for j, h in enumerate(hs):
+                if np.isfinite(z[i, j]):
+                    ax.text(h, v, f"{z[i, j]:.2g}", ha="center", va="center", fontsize=7)
+                else:
+                    ax.text(h, v, "×", ha="center", va="center", color="red")
+        ax.set_title(title, fontsize=10)
+        ax.set_xlabel("horizontal gaze (°)")
+        fig.colorbar(im, ax=ax)
+    axes[0].set_ylabel("vertical gaze (°)")
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+
+
+def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
+    """``frames.csv``, ``summary.json`` and ``error_maps.png`` in folder ``out``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    written = [out / "frames.csv", out / "summary.json", out / "error_maps.png"]
+    with open(written[0], "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(
+            [
+                "gaze_h_deg", "gaze_v_deg", "detected", "failures", "pupil_error_px",
+                "glints_found", "glints_true", "pccr_h_deg", "pccr_v_deg", "geometric_h_deg",
+                "geometric_v_deg", "render_s", "detect_ms",
+            ]
+        )  # fmt: skip
+        for fr in report.frames:
+            p = fr.pccr or (math.nan, math.nan)
+            g = fr.geometric or (math.nan, math.nan)
+            w.writerow(
+                [
+                    f"{fr.gaze[0]:g}", f"{fr.gaze[1]:g}", int(fr.detection.ok),
+                    "; ".join(fr.detection.failures), f"{fr.pupil_error_px:.4f}",
+                    fr.glints_found, fr.glints_true, f"{p[0]:.4f}", f"{p[1]:.4f}",
+                    f"{g[0]:.4f}", f"{g[1]:.4f}", f"{fr.render_s:.3f}", f"{fr.detect_ms:.3f}",
+                ]
+            )  # fmt: skip
+    summary = {"meta": meta, **report.summary}
+    written[1].write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    save_error_maps(report.frames, written[2])
+    return written
