@@ -25,11 +25,13 @@ Pipeline (each step's choices are explained in :mod:`.pupil` and :mod:`.glints`)
    (Section 2), so the valley separating that mode from the next is the natural cut and needs no
    tuning per image; Otsu's threshold would instead split the picture into two classes of
    comparable variance and, the pupil being ~3 % of the pixels, cut inside the iris/skin modes.
-   A picture with no dark mode of its own (uniform, pupil-free, or all dark noise) gives no
-   threshold and "no pupil".
-4. Dark blob → closing (elliptical element, default ≈ 0.15 × the blob's equivalent diameter,
-   odd, ≥ 3 px) → outer outline → drop points on glints and the image border → sub-pixel edge →
-   robust ellipse fit → support and residual.
+   A picture with no dark mode of its own (uniform, or dark noise with the LEDs off) gives no
+   threshold and "no pupil"; so does a darkest blob outside the area bounds (an iris seen
+   without a pupil is over 10 % of an eye-tracker frame), not compact, or not darker than its
+   surround. (No threshold can tell a pupil-sized dark iris without a pupil from a pupil.)
+4. Dark blob (+ the glints touching it) → closing (elliptical element, default ≈ 0.15 × the
+   blob's equivalent diameter, odd, ≥ 3 px) → outer outline → drop points on glints and the
+   image border → sub-pixel edge → robust ellipse fit → support and residual.
 5. Keep glints within ``glint_search_radius`` × the pupil's major axis of its centre; match to
    LEDs; flag glints on the pupil's outline.
 
@@ -46,7 +48,7 @@ centroid may be biased), a glint matched to no LED, no glints when no LEDs were 
 When ``ok`` is False ``pupil`` may still hold the rejected candidate, for diagnosis: use its
 numbers only when ``ok`` is True.
 
-Performance: about 4–5 ms for a 640 × 480 frame on one core (``benchmarks/detect.py``).
+Performance: 3–4 ms for a 640 × 480 frame on one core (``benchmarks/detect.py``).
 
 >>> import numpy as np, cv2
 >>> img = np.full((120, 160), 200, np.uint8)
