@@ -86,9 +86,8 @@ def into_scene(lf_rev, image_z, xs, ys, qx, qy, rear_z):
     d2 = dx * dx + dy * dy + dz * dz
     d = math.sqrt(d2)
     dx, dy, dz = dx / d, dy / d, dz / d
-    path = np.empty((1, 3))
     status, x, y, z, ex, ey, ez, _, _ = Q.trace_lens(
-        lf_rev, xs, ys, -image_z, dx, dy, -dz, path, 0, False
+        lf_rev, xs, ys, -image_z, dx, dy, -dz, None, 0, False
     )
     return status == Q.LENS_PASSED, x, y, -z, ex, ey, -ez, dz * dz / d2
 
@@ -99,9 +98,8 @@ def _stop_crossing(lf_open, k_stop, image_z, xs, ys, qx, qy, rear_z):
     ``k_stop`` of the reversed lens, apertures open); NaN if it fails before."""
     dx, dy, dz = qx - xs, qy - ys, rear_z - image_z
     inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
-    unused = np.empty((1, 3))
     status, x, y, _, _, _, _, _, _ = Q.trace_lens(
-        lf_open[: k_stop + 1], xs, ys, -image_z, dx * inv, dy * inv, -dz * inv, unused, 0, False
+        lf_open[: k_stop + 1], xs, ys, -image_z, dx * inv, dy * inv, -dz * inv, None, 0, False
     )
     if status != Q.LENS_PASSED:
         return math.nan, math.nan

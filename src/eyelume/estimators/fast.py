@@ -598,8 +598,7 @@ def _follow(state, w, x, y, z, dx, dy, dz, arrays, img, img2, glint, led, q, q2,
             nx, ny, nz = G.surface_normal(sf, si, s, x + t * dx, y + t * dy, z + t * dz)
             if dx * nx + dy * ny + dz * nz < 0.0:
                 return state
-            path = np.empty((1, 3))
-            status, x, y, z, dx, dy, dz, _, _ = trace_lens(lf, x, y, z, dx, dy, dz, path, 0, False)
+            status, x, y, z, dx, dy, dz, _, _ = trace_lens(lf, x, y, z, dx, dy, dz, None, 0, False)
             if status != LENS_PASSED:
                 return state
             t = (image_z - z) / dz

@@ -44,7 +44,8 @@ def trace_lens(lf, x, y, z, dx, dy, dz, path, n_path, record):
     """Trace a world ray (unit direction, dz > 0) through all lens surfaces.
 
     Returns (status, x, y, z, dx, dy, dz, surfaces_met, n_path): the ray after the last surface
-    when status is LENS_PASSED. With ``record`` the hit points are appended to ``path``.
+    when status is LENS_PASSED. With ``record`` the hit points are appended to ``path`` (which
+    may be None when nothing is recorded: no buffer to allocate in a hot loop).
     """
     met = 0
     for j in range(lf.shape[0]):
@@ -58,7 +59,7 @@ def trace_lens(lf, x, y, z, dx, dy, dz, path, n_path, record):
         y += t * dy
         z += t * dz
         met += 1
-        if record and n_path < path.shape[0]:
+        if path is not None and record and n_path < path.shape[0]:
             path[n_path, 0] = x
             path[n_path, 1] = y
             path[n_path, 2] = z
