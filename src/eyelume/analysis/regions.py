@@ -40,7 +40,11 @@ def region_masks(
     pupil_names = {eye.surfaces[j].name for j in range(2, len(eye.surfaces))} | set(_PUPIL_SURFACES)
 
     def of(pred) -> np.ndarray:
-        return np.vectorize(lambda s, b: s >= 0 and pred(names[s], b), otypes=[bool])(labels, sides)
+        """Pixels whose (surface, side) satisfies pred(name, seen from side B)."""
+        table = np.array(
+            [[pred(n, False), pred(n, True)] for n in names] + [[False, False]], dtype=bool
+        )
+        return table[labels, sides]  # label −1 (nothing) indexes the last, all-False row
 
     masks = {
         "pupil": of(lambda n, b: n in pupil_names or (n == "sclera" and not b)),
