@@ -183,7 +183,8 @@ def _pilot(
 ) -> tuple[int, int]:
     """(grid, sets) expected to reach ``rel_error`` in the median target pixel at the least
     cost, from 4 sets of 2 × 2 and 2 sets of 4 × 4 on up to 2048 target pixels (their own
-    samples: a pixel's samples depend on its index and the seed only)."""
+    samples: a pixel's samples depend on its index and the seed only). The prediction aims at
+    the target itself; if the first round falls short, the run adds a round."""
     from eyelume.analysis.regions import median_relative_error as median_rel
 
     idx = np.flatnonzero(target.reshape(-1))
@@ -197,7 +198,7 @@ def _pilot(
         mean = s1 / n
         var = np.maximum(s2 - n * mean**2, 0.0) / (n * (n - 1))
         err = median_rel(mean[mean > 0], var[mean > 0], n - 1)
-        sets = max(2, math.ceil(n * (err / rel_error) ** 2 * 1.1))
+        sets = max(2, math.ceil(n * (err / rel_error) ** 2))
         cost = sets * grid * grid
         if cost < best[2]:
             best = (grid, sets, cost)
