@@ -40,7 +40,7 @@ def main() -> None:
     ap.add_argument("--only", default="reproduce,tracking")
     a = ap.parse_args()
     info = {"machine": machine(), "command": command_line(), "load_start": loadavg()}
-    print_header("study commands, end to end", info)
+    print_header("study commands, end to end", info["machine"])
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         # warm the Numba cache (render, reproduce's kernels, tracking) in throwaway runs
