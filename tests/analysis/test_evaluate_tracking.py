@@ -64,3 +64,39 @@ def test_track_command_on_a_rendered_image(tmp_path):
     assert data["ok"] and len([g for g in data["glints"] if g["led"] is not None]) == 4
     bad = CliRunner().invoke(app, ["track", str(tmp_path / "missing.png")])
     assert bad.exit_code == 2 and "missing.png" in bad.stderr
+
+
+def test_population_slip_after_calibration_and_the_tracking_score():
+    """A slip after calibration moves the pupil–glint vector little (both move with the eye)
+    but the geometric model needs no calibration; the score charges failed frames 10°."""
+    from eyelume.analysis.tracking.evaluate import (
+        FAILED_FRAME_DEG,
+        evaluate_population,
+        tracking_score,
+    )
+
+    scene = eyelume.load_scene("paper2005")
+    members = evaluate_population(
+        scene,
+        population=(("nominal", {}, True), ("slip", {"head_offset_mm": [2.0, 0.0, 0.0]}, False)),
+        test_h=(0.0,),
+        test_v=(0.0,),
+        samples_per_pixel=8,
+    )
+    assert set(members) == {"nominal", "slip"}
+    slip = members["slip"].frames[0]
+    # the slipped eye's truth moved by ~2 mm × 1.144 / 0.529 mm ≈ 4.3 px
+    nominal = members["nominal"].frames[0]
+    dx = slip.truth["pupil"]["centre_px"][0] - nominal.truth["pupil"]["centre_px"][0]
+    assert 4.0 < dx < 4.7
+    for rep in members.values():
+        s = tracking_score(rep)
+        assert 0 <= s <= FAILED_FRAME_DEG
+
+
+def test_score_placement_of_an_impossible_placement_is_infinite():
+    from eyelume.optimize.tracking import score_placement
+
+    # Z = 2 mm: the LED bodies (5 mm) cross the eye plane
+    r = score_placement(eyelume.load_scene("paper2005"), 30.0, 2.0, 10.0, 8, 0)
+    assert r.score_deg == float("inf")
