@@ -233,6 +233,9 @@ def reproduce(
     vary_spread: Annotated[
         bool, typer.Option(help="Let the direct optimisation vary the LEDs' spread angle too.")
     ] = False,
+    vary_azimuths: Annotated[
+        bool, typer.Option(help="Let the direct optimisation move each LED's azimuth too.")
+    ] = False,
     set_: SetOpt = None,
 ) -> None:
     """The paper's Section 4 study: for each δ the generator's best LEDs, their eye image (glints
@@ -282,6 +285,7 @@ def reproduce(
             start=(best.height_mm, best.distance_mm, best.pitch_deg),
             led_counts=counts,
             vary_spread=vary_spread,
+            vary_azimuths=vary_azimuths,
             samples_per_pixel=samples,
             seed=seed,
             max_evaluations=direct,

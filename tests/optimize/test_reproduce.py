@@ -95,3 +95,26 @@ def test_direct_optimum_is_no_worse_than_its_start():
     found = optimize_direct(scene, mask, start, samples_per_pixel=8, seed=5, max_evaluations=8)
     assert found.merit <= m0 + 1e-15
     assert np.isfinite(found.merit_check) and found.merit_check_se > 0
+
+
+def test_direct_optimisation_over_led_count_spread_and_azimuths():
+    """The optional variables run: 4 and 6 LEDs, the spread angle and each LED's azimuth; the
+    result carries them and stays inside their bounds."""
+    scene = eyelume.load_scene("paper2005", SMALL)
+    mask = ideal_mask(compile_scene(scene))
+    found = optimize_direct(
+        scene,
+        mask,
+        (30.0, 60.0, 15.0),
+        led_counts=(4, 6),
+        vary_spread=True,
+        vary_azimuths=True,
+        samples_per_pixel=8,
+        seed=2,
+        max_evaluations=4,
+    )
+    assert found.leds in (4, 6)
+    assert len(found.azimuth_shifts_deg) == found.leds
+    assert all(abs(a) <= 90.0 / found.leds + 1e-9 for a in found.azimuth_shifts_deg)
+    assert 10.0 <= found.half_angle_deg <= 40.0
+    assert np.isfinite(found.merit)

@@ -41,6 +41,7 @@ class DirectResult:
     distance_mm: float
     pitch_deg: float
     half_angle_deg: float
+    azimuth_shifts_deg: tuple[float, ...]
     merit: float
     merit_check: float
     merit_check_se: float
@@ -55,14 +56,16 @@ class DirectResult:
             self.distance_mm,
             self.pitch_deg,
             self.half_angle_deg,
+            list(self.azimuth_shifts_deg) or None,
         )
 
 
-def _overrides(n, offset, y, z, th, half) -> dict[str, object]:
+def _overrides(n, offset, y, z, th, half, shifts=None) -> dict[str, object]:
     step = 360.0 / n
+    shifts = shifts if shifts is not None else [0.0] * n
     return {
         "leds.count": n,
-        "leds.azimuths_deg": [offset + k * step for k in range(n)],
+        "leds.azimuths_deg": [offset + k * step + float(shifts[k]) for k in range(n)],
         "leds.height_mm": float(y),
         "leds.distance_mm": float(z),
         "leds.pitch_deg": float(th),
@@ -76,6 +79,7 @@ def optimize_direct(
     start: tuple[float, float, float],
     led_counts: Sequence[int] = (4,),
     vary_spread: bool = False,
+    vary_azimuths: bool = False,
     try_rotated: bool = False,
     spread_bounds: tuple[float, float] = (10.0, 40.0),
     samples_per_pixel: int = 16,
@@ -88,7 +92,8 @@ def optimize_direct(
     ``start`` is (Y, Z, θ), e.g. the paper's two-step answer; the search stays inside the
     paper's ranges. Impossible placements (an LED body crossing the eye plane or the lens, two
     bodies overlapping) score +inf. Returns the best over ``led_counts`` and, with
-    ``try_rotated``, the azimuths rotated by half a step (an × instead of a +).
+    ``try_rotated``, the azimuths rotated by half a step (an × instead of a +). With
+    ``vary_azimuths`` each LED's azimuth is a variable too (within ± half the even spacing).
     """
     half0 = scene.leds.profile.half_intensity_angle_deg
     best: DirectResult | None = None
@@ -99,8 +104,9 @@ def optimize_direct(
             def objective(x: np.ndarray, n=n, offset=offset, history=history) -> float:
                 y, z, th = x[:3]
                 half = x[3] if vary_spread else half0
+                shifts = x[4 if vary_spread else 3 :] if vary_azimuths else None
                 try:
-                    placed = apply_overrides(scene, _overrides(n, offset, y, z, th, half))
+                    placed = apply_overrides(scene, _overrides(n, offset, y, z, th, half, shifts))
                     _, merit, _, _ = evaluate_placement(placed, mask, samples_per_pixel, seed)
                 except SceneError:
                     merit = float("inf")
@@ -109,6 +115,9 @@ def optimize_direct(
 
             x0 = list(start) + ([half0] if vary_spread else [])
             bounds = list(PAPER_BOUNDS) + ([spread_bounds] if vary_spread else [])
+            if vary_azimuths:  # each LED's azimuth may move ± half the even spacing
+                x0 += [0.0] * n
+                bounds += [(-90.0 / n, 90.0 / n)] * n
             res = minimize(
                 objective,
                 np.array(x0, dtype=float),
@@ -124,6 +133,9 @@ def optimize_direct(
                 distance_mm=float(x[1]),
                 pitch_deg=float(x[2]),
                 half_angle_deg=float(x[3]) if vary_spread else half0,
+                azimuth_shifts_deg=tuple(
+                    float(v) for v in (x[4 if vary_spread else 3 :] if vary_azimuths else [])
+                ),
                 merit=float(res.fun),
                 merit_check=float("nan"),
                 merit_check_se=float("nan"),

@@ -233,7 +233,14 @@ def comparison_markdown(rows, direct, paper_merits, paper_choice, meta) -> str:
             f"- {direct.leds} LEDs, Y = {direct.height_mm:.1f} mm, "
             f"Z = {direct.distance_mm:.1f} mm, "
             f"θ = {direct.pitch_deg:.1f}°, half-intensity angle {direct.half_angle_deg:.1f}° "
-            f"({direct.evaluations} renders).",
+            f"({direct.evaluations} renders)"
+            + (
+                ", azimuths shifted by "
+                + ", ".join(f"{a:+.1f}°" for a in direct.azimuth_shifts_deg)
+                + "."
+                if direct.azimuth_shifts_deg
+                else "."
+            ),
             f"- evaluator merit {direct.merit_check:.5f} ± {direct.merit_check_se:.5f} "
             "(re-rendered "
             f"with an independent seed) against the two-step best {best.evaluator_merit:.5f}: "
