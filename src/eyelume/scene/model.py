@@ -346,8 +346,8 @@ class Run(_Model):
 
     ``estimator`` picks the method: ``forward`` (plain forward Monte Carlo, ``rays`` rays) or
     ``fast`` (camera-side paths with next-event estimation, ``samples_per_pixel`` per pixel, plus
-    ``light_paths_per_pixel`` × pixels light paths aimed at the cornea; see
-    :mod:`eyelume.estimators.fast`).
+    ``light_paths_per_pixel`` × pixels × samples_per_pixel / 16 light paths aimed at the cornea;
+    see :mod:`eyelume.estimators.fast`).
     """
 
     estimator: Literal["forward", "fast"] = "fast"
