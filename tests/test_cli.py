@@ -232,3 +232,16 @@ def test_bad_estimator_options_one_line_exit_2(tmp_path, args, words):
     assert len(message.splitlines()) == 1, message
     for w in words:
         assert w.lower() in message.lower(), (w, message)
+
+
+def test_render_warns_when_the_leds_exceed_the_exempt_group(tmp_path):
+    sets = ["--set", "sensor.cols=16", "--set", "sensor.rows=12"]
+    res = runner.invoke(
+        app,
+        ["render", *sets, "--set", "leds.radiant_intensity_w_sr=1.0", "--samples", "8",
+         "--out", str(tmp_path / "o")],
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    assert "IEC 62471" in res.stderr and "corneal" in res.stderr
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert summary["safety"]["corneal_margin"] < 1

@@ -59,6 +59,18 @@ def _load(scene: str, sets: list[str] | None):
         _fail(str(exc))
 
 
+def _warn_safety(safety: dict) -> None:
+    """A red warning when the LEDs exceed an IEC 62471 exempt-group limit."""
+    for key, what in (("corneal_margin", "corneal IR irradiance"), ("retinal_margin", "retinal "
+                      "thermal radiance")):  # fmt: skip
+        if safety[key] < 1:
+            err.print(
+                f"[bold red]warning:[/] {what} exceeds the IEC 62471 exempt-group limit "
+                f"(margin {safety[key]:.2f})",
+                highlight=False,
+            )
+
+
 @app.command()
 def render(
     out: Annotated[Path, typer.Option("--out", help="Folder for the outputs (created).")],
@@ -149,6 +161,7 @@ def render(
         err.print(f"interrupted: writing the {result.rays:,} rays traced so far")
     written = write_render_outputs(result, cs, out)
     summary = result.summary()
+    _warn_safety(summary["safety"])
     skin = summary["regions"].get("skin", {})
     noise = (
         f"; median skin pixel ±{skin['median_pixel_rel_error']:.2%}" if skin.get("pixels") else ""

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from eyelume.analysis.regions import region_masks, region_stats, with_glints
+from eyelume.analysis.safety import eye_safety
 from eyelume.compile import CompiledScene, compile_scene
 from eyelume.estimators.fast_run import direct_eye_plane, trace_fast
 from eyelume.estimators.forward import trace_forward
@@ -119,6 +120,7 @@ class RenderResult:
             power["sum"] = float(sum(self.ledger.values()))
         out["power_w"] = power
         out["regions"] = self.region_stats()
+        out["safety"] = eye_safety(self.scene)
         out["units"] = {"eye_image": "W/mm^2", "eye_plane": "W/mm^2", "power": "W"}
         return out
 

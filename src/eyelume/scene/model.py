@@ -74,6 +74,9 @@ class LedArray(_Model):
     LED ``i`` sits at azimuth φᵢ (from +x toward +y as seen from the camera), its body centre at
     (Y cos φ, Y sin φ, Z) in the world frame, its axis pitched by θ from −z toward the optical axis.
     Light leaves from the apex of the spherical body (a point source at centre + r·axis).
+    ``emitter_diameter_mm`` is the apparent size of the emitting area (the die as the dome
+    lens shows it), used only for the retinal thermal hazard (its radiance and angular
+    subtense): the tracers emit from a point at the body's apex.
     """
 
     part: str = "American Bright BIR-BO07J4Q-1"
@@ -83,6 +86,7 @@ class LedArray(_Model):
     distance_mm: Positive = 70.0
     pitch_deg: float = Field(20.0, gt=-90, lt=90)
     body_diameter_mm: Positive = 5.0
+    emitter_diameter_mm: Positive = 1.0
     radiant_intensity_w_sr: Positive = 0.015
     profile: LedProfile = LedProfile()
 

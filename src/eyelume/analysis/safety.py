@@ -1,0 +1,74 @@
+"""Eye safety of the LEDs against the IEC 62471 exempt group (photobiological safety of lamps).
+
+Two hazards apply to 850 nm light (IEC 62471:2006, Table 6, exempt group, continuous wave,
+exposure 1000 s; the same values as ANSI/IESNA RP-27.3):
+
+* **infrared radiation hazard for the eye** (cornea and lens, 780–3000 nm): the irradiance at the
+  eye E_IR ≤ 100 W/m²;
+* **retinal thermal hazard, weak visual stimulus** (780–1400 nm): the source's radiance
+  L_IR ≤ 6000 / α W/(m²·sr), α the source's angular subtense in rad, taken within
+  [0.011, 0.1] rad as the standard prescribes.
+
+Here E_IR is the irradiance at the corneal vertex from all LEDs together, each on a surface
+facing it (the standard's worst case: the sum of the LEDs' normal irradiances
+I(α_k) / d_k², d_k the distance from LED k's emission point). L_IR is one LED's mean radiance
+over its apparent emitting disc, I₀ / (π (D/2)²), D = ``leds.emitter_diameter_mm``, and
+α = D / d at the nearest LED's distance. A margin is limit / value (> 1: within the exempt group).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from eyelume.scene.model import Scene
+from eyelume.scene.sources import led_poses, relative_intensity
+
+__all__ = ["E_IR_LIMIT_W_M2", "EXPOSURE_S", "eye_safety", "retinal_thermal_limit"]
+
+E_IR_LIMIT_W_M2 = 100.0
+EXPOSURE_S = 1000.0
+SOURCE = "IEC 62471:2006 Table 6, exempt group (continuous wave, 1000 s)"
+
+
+def retinal_thermal_limit(alpha_rad: float) -> float:
+    """Exempt-group limit of L_IR, W/(m²·sr), for a source of angular subtense α (rad)."""
+    return 6000.0 / min(max(alpha_rad, 0.011), 0.1)
+
+
+def eye_safety(scene: Scene) -> dict:
+    """Corneal IR irradiance and retinal thermal radiance of the scene's LEDs against the
+    exempt-group limits (module docstring), JSON-ready. Positions in world mm: the corneal
+    vertex of primary gaze is the origin (moved by ``head_offset_mm``)."""
+    leds = scene.leds
+    centres, axes = led_poses(leds)
+    emit = centres + axes * leds.body_diameter_mm / 2
+    eye = np.asarray(scene.head_offset_mm, dtype=float)
+    f = relative_intensity(leds.profile)
+    irr = 0.0
+    for p, a in zip(emit, axes, strict=True):
+        v = eye - p
+        d = float(np.linalg.norm(v))  # mm
+        cos_a = float(v @ a) / d
+        if cos_a > 0:
+            irr += (
+                leds.radiant_intensity_w_sr * float(f(math.acos(min(cos_a, 1.0)))) / (d * 1e-3) ** 2
+            )
+    nearest = float(np.min(np.linalg.norm(emit - eye, axis=1)))
+    r_m = leds.emitter_diameter_mm / 2 * 1e-3
+    radiance = leds.radiant_intensity_w_sr / (math.pi * r_m * r_m)
+    alpha = leds.emitter_diameter_mm / nearest
+    l_limit = retinal_thermal_limit(alpha)
+    return {
+        "source": SOURCE,
+        "exposure_s": EXPOSURE_S,
+        "corneal_irradiance_w_m2": irr,
+        "corneal_limit_w_m2": E_IR_LIMIT_W_M2,
+        "corneal_margin": E_IR_LIMIT_W_M2 / irr if irr > 0 else math.inf,
+        "retinal_radiance_w_m2_sr": radiance,
+        "angular_subtense_rad": alpha,
+        "retinal_limit_w_m2_sr": l_limit,
+        "retinal_margin": l_limit / radiance,
+        "within_exempt_group": irr <= E_IR_LIMIT_W_M2 and radiance <= l_limit,
+    }
