@@ -484,6 +484,66 @@ def optimize_tracking_cmd(
 
 
 @app.command()
+def study(
+    study_file: Annotated[Path, typer.Argument(help="The study file (TOML).")],
+    out: Annotated[Path, typer.Option("--out", help="The study's folder (its result store).")],
+    resume: Annotated[
+        bool, typer.Option(help="Skip the runs already in OUT (after Ctrl-C or a crash).")
+    ] = False,
+    workers: Annotated[
+        int | None, typer.Option(help="Worker processes (default: every core).")
+    ] = None,
+) -> None:
+    """Run a study: the base scene with parameters varied by their dotted paths, metrics per
+    run, each finished run committed at once to OUT/results.sqlite (resumable)."""
+    import csv
+
+    from eyelume.optimize.runner import run_study
+    from eyelume.optimize.store import StoreBusy
+    from eyelume.optimize.study import load_study, plan_runs
+
+    try:
+        st = load_study(study_file)
+    except SceneError as exc:
+        _fail(str(exc))
+    if workers is not None and workers < 1:
+        _fail(f"--workers {workers}: must be ≥ 1")
+    total = len(plan_runs(st))
+    err.print(f"study {st.name}: {total} runs into {out} (Ctrl-C, then --resume, loses nothing)")
+    with Progress(
+        TextColumn("[bold]runs"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+        console=err,
+        transient=True,
+    ) as bar:
+        task = bar.add_task("study", total=total)
+        try:
+            rows = run_study(st, out, workers, resume, lambda d, t: bar.update(task, completed=d))
+        except (StoreBusy, ValueError) as exc:
+            _fail(str(exc))
+    names = sorted({k for r in rows for k in r["metrics"]})
+    params = sorted({k for r in rows for k in r["overrides"]})
+    with open(out / "table.csv", "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(["index", *params, *names, "seconds"])
+        for r in rows:
+            w.writerow(
+                [r["index"], *(r["overrides"].get(p) for p in params),
+                 *(r["metrics"].get(n) for n in names), f"{r['seconds']:.3f}"]
+            )  # fmt: skip
+    unsafe = [r for r in rows if r["metrics"].get("within_exempt_group") is False]
+    if unsafe:
+        err.print(
+            f"[bold red]warning:[/] {len(unsafe)} runs exceed an IEC 62471 exempt-group limit",
+            highlight=False,
+        )
+    err.print(f"{len(rows)}/{total} runs in {out / 'results.sqlite'}; table in {out / 'table.csv'}")
+
+
+@app.command()
 def info(
     scene: SceneOpt = "paper2005",
     set_: SetOpt = None,

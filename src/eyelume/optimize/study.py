@@ -1,0 +1,193 @@
+"""A study: one base scene, parameters varied by their dotted scene paths, metrics per run.
+
+A study file (TOML)::
+
+    name = "led-height"
+    scene = "paper2005"            # a preset or a scene file
+    seed = 1                       # for random and Latin-hypercube samples, and every render
+    metrics = ["eye_plane_merit", "eye_image_merit", "skin_uniformity", "safety"]
+    delta = 0.3                    # the eye-plane target of eye_plane_merit
+    samples_per_pixel = 16         # renders of eye_image_merit / skin_uniformity
+
+    [[vary]]                       # one table per parameter; the runs are their product
+    path = "leds.height_mm"
+    grid = [20.0, 40.0, 5]         # start, stop, count (inclusive)
+    [[vary]]
+    path = "leds.pitch_deg"
+    values = [0, 10, 20, 30]       # an explicit list
+    [[vary]]
+    path = "leds.distance_mm"
+    random = [40.0, 70.0]          # uniform in a range ...
+    samples = 4                    # ... this many draws (seed)
+    # latin = [lo, hi] with samples: a Latin hypercube over all `latin` parameters together
+
+Each run is one dict of overrides; its key is the SHA-256 of the base scene's JSON, the
+overrides, the metrics and their settings, so a changed input is a new run and an unchanged one
+is found in the store (:mod:`.store`) and not run again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import tomllib
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from eyelume.scene.io import SceneError, apply_overrides, load_scene
+from eyelume.scene.model import Scene
+
+__all__ = ["METRICS", "Study", "Vary", "load_study", "plan_runs", "run_key", "run_metrics"]
+
+METRICS = ("eye_plane_merit", "eye_image_merit", "skin_uniformity", "safety")
+
+
+class Vary(BaseModel):
+    """One varied parameter: exactly one of grid, values, random, latin."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    path: str
+    grid: tuple[float, float, int] | None = None
+    values: list[float | int | str] | None = None
+    random: tuple[float, float] | None = None
+    latin: tuple[float, float] | None = None
+    samples: int = Field(0, ge=0)
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> Vary:
+        kinds = [k for k in ("grid", "values", "random", "latin") if getattr(self, k) is not None]
+        if len(kinds) != 1:
+            raise ValueError(f"vary '{self.path}': give exactly one of grid, values, random, latin")
+        if kinds[0] in ("random", "latin") and self.samples < 1:
+            raise ValueError(f"vary '{self.path}': {kinds[0]} needs samples ≥ 1")
+        if self.grid is not None and self.grid[2] < 1:
+            raise ValueError(f"vary '{self.path}': grid count {self.grid[2]} must be ≥ 1")
+        return self
+
+
+class Study(BaseModel):
+    """A study file (module docstring)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    name: str
+    scene: str = "paper2005"
+    seed: int = Field(0, ge=0)
+    metrics: list[Literal["eye_plane_merit", "eye_image_merit", "skin_uniformity", "safety"]] = [
+        "eye_plane_merit",
+        "safety",
+    ]
+    delta: float = Field(0.3, ge=0.0, lt=1.0)
+    samples_per_pixel: int = Field(16, ge=1)
+    vary: list[Vary] = []
+
+
+def load_study(path: str | Path) -> Study:
+    """Read and validate a study file; SceneError naming the field and value on bad input."""
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise SceneError(f"study {p}: {exc.strerror or exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"study {p}: not valid TOML: {exc}") from None
+    try:
+        study = Study.model_validate(data)
+    except ValueError as exc:
+        first = exc.errors()[0] if hasattr(exc, "errors") else {"loc": (), "msg": str(exc)}
+        loc = ".".join(str(x) for x in first.get("loc", ()))
+        raise SceneError(f"study {p}: field '{loc}': {first.get('msg')}") from None
+    base = load_scene(study.scene)
+    for v in study.vary:  # every path must be a real scene field
+        probe = v.values[0] if v.values else (v.grid or v.random or v.latin)[0]
+        apply_overrides(base, {v.path: probe})
+    return study
+
+
+def plan_runs(study: Study) -> list[dict]:
+    """The runs of a study: the product of the grid/values/random parameters, with the Latin-
+    hypercube parameters drawn jointly (one draw per run of the product, or ``samples`` when
+    nothing else varies)."""
+    rng = np.random.default_rng(study.seed)
+    axes: list[tuple[str, list]] = []
+    latin = [v for v in study.vary if v.latin is not None]
+    for v in study.vary:
+        if v.grid is not None:
+            lo, hi, n = v.grid
+            axes.append((v.path, [float(x) for x in np.linspace(lo, hi, int(n))]))
+        elif v.values is not None:
+            axes.append((v.path, list(v.values)))
+        elif v.random is not None:
+            lo, hi = v.random
+            axes.append((v.path, [float(x) for x in rng.uniform(lo, hi, v.samples)]))
+    runs = [dict(zip([a[0] for a in axes], combo, strict=True)) for combo in
+            itertools.product(*[a[1] for a in axes])]  # fmt: skip
+    if latin:
+        from scipy.stats import qmc
+
+        n = max(v.samples for v in latin)
+        unit = qmc.LatinHypercube(d=len(latin), seed=rng).random(n)
+        draws = [
+            {v.path: float(v.latin[0] + u[j] * (v.latin[1] - v.latin[0])) for j, v in
+             enumerate(latin)}
+            for u in unit
+        ]  # fmt: skip
+        runs = [{**r, **d} for r in runs for d in draws]
+    return runs
+
+
+def run_key(base: Scene, overrides: dict, study: Study) -> str:
+    """SHA-256 of everything a run's result depends on."""
+    payload = {
+        "scene": base.model_dump(mode="json"),
+        "overrides": overrides,
+        "metrics": sorted(study.metrics),
+        "delta": study.delta,
+        "samples_per_pixel": study.samples_per_pixel,
+        "seed": study.seed,
+    }
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
+
+
+def run_metrics(base: Scene, overrides: dict, study: Study) -> dict:
+    """Compute the study's metrics for one run (a pure function of its inputs)."""
+    from eyelume.analysis.safety import eye_safety
+
+    scene = apply_overrides(base, overrides)
+    out: dict = {}
+    if "eye_plane_merit" in study.metrics:
+        from eyelume.analysis.merit import generator_merit
+        from eyelume.analysis.targets import gaussian_target
+        from eyelume.estimators.closed_form import eye_plane_irradiance
+
+        pattern = eye_plane_irradiance(scene)
+        out["eye_plane_merit"] = float(
+            generator_merit(pattern, gaussian_target(study.delta, scene.eye_plane))
+        )
+    if "eye_image_merit" in study.metrics or "skin_uniformity" in study.metrics:
+        from eyelume.analysis.evaluator import skin_score
+        from eyelume.analysis.masks import ideal_mask
+        from eyelume.compile import compile_scene
+        from eyelume.optimize.delta_study import evaluate_placement
+
+        mask = ideal_mask(compile_scene(scene))
+        result, merit, se, _ = evaluate_placement(scene, mask, study.samples_per_pixel, study.seed)
+        if "eye_image_merit" in study.metrics:
+            out["eye_image_merit"] = merit
+            out["eye_image_merit_se"] = se
+        if "skin_uniformity" in study.metrics:
+            mean, std, cv = skin_score(result.eye_image, result.regions["skin"])
+            out["skin_mean_w_mm2"], out["skin_cv"] = mean, cv
+    if "safety" in study.metrics:
+        s = eye_safety(scene)
+        out["corneal_margin"] = s["corneal_margin"]
+        out["retinal_margin"] = s["retinal_margin"]
+        out["within_exempt_group"] = bool(s["within_exempt_group"])
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+            for k, v in out.items()}  # fmt: skip

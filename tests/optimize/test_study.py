@@ -1,0 +1,141 @@
+"""Studies: planning, a result store that survives kill -9, resume, refusal of a busy folder,
+and identical results whatever the number of workers."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+
+import pytest
+
+from eyelume.optimize.runner import run_study
+from eyelume.optimize.store import ResultStore, StoreBusy
+from eyelume.optimize.study import load_study, plan_runs
+from eyelume.scene.io import SceneError
+
+FAST = """
+name = "fast"
+scene = "paper2005"
+seed = 3
+metrics = ["eye_plane_merit", "safety"]
+[[vary]]
+path = "leds.height_mm"
+grid = [20.0, 40.0, 3]
+[[vary]]
+path = "leds.distance_mm"
+random = [50.0, 70.0]
+samples = 2
+"""
+
+SLOW = """
+name = "slow"
+scene = "paper2005"
+seed = 1
+metrics = ["eye_image_merit", "safety"]
+samples_per_pixel = 8
+[[vary]]
+path = "leds.height_mm"
+grid = [20.0, 40.0, 8]
+"""
+
+
+def write(tmp_path, text, name="study.toml"):
+    p = tmp_path / name
+    p.write_text(text, encoding="utf-8")
+    return p
+
+
+def table(folder):
+    return {r["key"]: (r["index"], r["overrides"], r["metrics"]) for r in _rows(folder)}
+
+
+def _rows(folder):
+    store = ResultStore(folder)
+    try:
+        return store.rows()
+    finally:
+        store.close()
+
+
+def test_plan_is_the_product_and_seeded(tmp_path):
+    st = load_study(write(tmp_path, FAST))
+    runs = plan_runs(st)
+    assert len(runs) == 6
+    assert runs == plan_runs(st)  # the random draws come from the study's seed
+    assert {r["leds.height_mm"] for r in runs} == {20.0, 30.0, 40.0}
+
+
+def test_latin_hypercube_covers_each_stratum(tmp_path):
+    text = FAST.replace("random = [50.0, 70.0]\nsamples = 2", "latin = [50.0, 70.0]\nsamples = 5")
+    runs = plan_runs(load_study(write(tmp_path, text)))
+    z = sorted({r["leds.distance_mm"] for r in runs})
+    assert len(z) == 5
+    assert [int((v - 50.0) / 4.0) for v in z] == [0, 1, 2, 3, 4]  # one draw per fifth
+
+
+@pytest.mark.parametrize(
+    ("edit", "words"),
+    [
+        (lambda t: t.replace('path = "leds.height_mm"', 'path = "leds.nope"'), ["leds.nope"]),
+        (lambda t: t.replace("grid = [20.0, 40.0, 3]", "grid = [20.0, 40.0, 3]\nvalues = [1]"),
+         ["exactly one"]),
+        (lambda t: t.replace('metrics = ["eye_plane_merit", "safety"]', 'metrics = ["magic"]'),
+         ["metrics"]),
+    ],
+)  # fmt: skip
+def test_bad_study_files_name_the_problem(tmp_path, edit, words):
+    with pytest.raises(SceneError) as exc:
+        load_study(write(tmp_path, edit(FAST)))
+    for w in words:
+        assert w in str(exc.value)
+
+
+def test_same_results_with_one_or_two_workers(tmp_path):
+    st = load_study(write(tmp_path, FAST))
+    run_study(st, tmp_path / "a", workers=1)
+    run_study(st, tmp_path / "b", workers=2)
+    assert table(tmp_path / "a") == table(tmp_path / "b")
+
+
+def test_a_busy_folder_is_refused(tmp_path):
+    holder = ResultStore(tmp_path / "busy")
+    try:
+        with pytest.raises(StoreBusy, match="another study"):
+            ResultStore(tmp_path / "busy")
+    finally:
+        holder.close()
+
+
+def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path):
+    study = write(tmp_path, SLOW)
+    killed = tmp_path / "killed"
+    cmd = [sys.executable, "-c", "from eyelume.cli import app; app()", "study", str(study),
+           "--out", str(killed), "--workers", "1"]  # fmt: skip
+    proc = subprocess.Popen(cmd, start_new_session=True, stderr=subprocess.DEVNULL)
+    db = killed / "results.sqlite"
+    deadline = time.time() + 240
+    n = 0
+    while time.time() < deadline:
+        if db.exists():
+            try:
+                with sqlite3.connect(db) as con:
+                    n = con.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
+            except sqlite3.OperationalError:
+                n = 0
+        if n >= 2 or proc.poll() is not None:
+            break
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)  # the study and its workers, mid-run
+    proc.wait()
+    assert 2 <= n < 8, n
+    st = load_study(study)
+    with pytest.raises(ValueError, match="--resume"):
+        run_study(st, killed, workers=1)
+    run_study(st, killed, workers=1, resume=True)
+    run_study(st, tmp_path / "clean", workers=1)
+    assert table(killed) == table(tmp_path / "clean")
+    assert len(table(killed)) == 8
