@@ -493,6 +493,10 @@ def study(
     workers: Annotated[
         int | None, typer.Option(help="Worker processes (default: every core).")
     ] = None,
+    dask: Annotated[
+        str | None,
+        typer.Option(help="Run on Dask: 'local' starts a LocalCluster, else a scheduler address."),
+    ] = None,
 ) -> None:
     """Run a study: the base scene with parameters varied by their dotted paths, metrics per
     run, each finished run committed at once to OUT/results.sqlite (resumable)."""
@@ -521,8 +525,10 @@ def study(
     ) as bar:
         task = bar.add_task("study", total=total)
         try:
-            rows = run_study(st, out, workers, resume, lambda d, t: bar.update(task, completed=d))
-        except (StoreBusy, ValueError) as exc:
+            rows = run_study(
+                st, out, workers, resume, lambda d, t: bar.update(task, completed=d), dask
+            )
+        except (StoreBusy, ValueError, OSError) as exc:
             _fail(str(exc))
     names = sorted({k for r in rows for k in r["metrics"]})
     params = sorted({k for r in rows for k in r["overrides"]})

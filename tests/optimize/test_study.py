@@ -139,3 +139,12 @@ def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path):
     run_study(st, tmp_path / "clean", workers=1)
     assert table(killed) == table(tmp_path / "clean")
     assert len(table(killed)) == 8
+
+
+def test_a_local_dask_cluster_gives_the_same_results(tmp_path):
+    """A real scheduler and two worker processes (distributed.LocalCluster) run the study;
+    the store equals the local pool's, row for row."""
+    st = load_study(write(tmp_path, FAST))
+    run_study(st, tmp_path / "pool", workers=2)
+    run_study(st, tmp_path / "dask", workers=2, dask="local")
+    assert table(tmp_path / "pool") == table(tmp_path / "dask")

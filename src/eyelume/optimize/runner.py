@@ -1,8 +1,11 @@
-"""Running a study on a local process pool, committing each finished run to the store at once.
+"""Running a study on a local process pool or a Dask cluster, committing each finished run to
+the store at once.
 
 Runs are independent and each is a pure function of its inputs (fixed seeds), so results do not
 depend on the number of workers or the order runs finish; the table is read back in plan order.
 Workers are fresh processes (``spawn``) with one Numba thread each, so N workers use N cores.
+``dask="local"`` starts a ``distributed.LocalCluster`` of ``workers`` single-threaded worker
+processes; any other value is a scheduler address. The same runs, the same results.
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ def run_study(
     workers: int | None = None,
     resume: bool = False,
     progress: Callable[[int, int], None] | None = None,
+    dask: str | None = None,
 ) -> list[dict]:
     """Run every planned run not yet in ``out``'s store; returns the store's rows.
 
@@ -65,18 +69,53 @@ def run_study(
         workers = workers or os.cpu_count() or 1
         scene_json = base.model_dump(mode="json")
         study_json = study.model_dump(mode="json")
-        ctx = mp.get_context("spawn")
-        with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker) as pool:
-            pending = {pool.submit(_one, scene_json, r, study_json): (i, r, k) for i, r, k in todo}
-            while pending:
-                ready, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for fut in ready:
-                    i, r, k = pending.pop(fut)
-                    metrics, seconds = fut.result()
-                    store.put(k, i, study.name, r, metrics, seconds)
-                    finished += 1
-                    if progress:
-                        progress(finished, len(runs))
+
+        def commit(i: int, r: dict, k: str, result: tuple[dict, float]) -> None:
+            nonlocal finished
+            store.put(k, i, study.name, r, result[0], result[1])
+            finished += 1
+            if progress:
+                progress(finished, len(runs))
+
+        if dask is not None:
+            _run_on_dask(dask, workers, todo, scene_json, study_json, commit)
+        else:
+            ctx = mp.get_context("spawn")
+            with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker) as pool:
+                pending = {
+                    pool.submit(_one, scene_json, r, study_json): (i, r, k) for i, r, k in todo
+                }
+                while pending:
+                    ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+                    for fut in ready:
+                        commit(*pending.pop(fut), fut.result())
         return store.rows()
     finally:
         store.close()
+
+
+def _run_on_dask(address, workers, todo, scene_json, study_json, commit) -> None:
+    """The same runs on a Dask cluster: a new LocalCluster for "local", else the scheduler at
+    ``address``; each result is committed by this process as it arrives."""
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    cluster = None
+    if address == "local":
+        cluster = LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+        client = Client(cluster)
+    else:
+        client = Client(address)
+    try:
+        client.run(_init_worker)
+        futures = {
+            client.submit(_one, scene_json, r, study_json, key=f"run-{k}", pure=False): (i, r, k)
+            for i, r, k in todo
+        }
+        for fut in as_completed(list(futures)):
+            commit(*futures[fut], fut.result())
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
