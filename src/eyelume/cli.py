@@ -550,6 +550,25 @@ def study(
 
 
 @app.command()
+def report(
+    folder: Annotated[Path, typer.Argument(help="A study's folder (its results.sqlite).")],
+    scene: Annotated[
+        str | None,
+        typer.Option(help="The study's base scene, to render the best run (default: skip)."),
+    ] = None,
+) -> None:
+    """Write FOLDER/report.html: the study's table (unsafe runs in red), merit landscapes, the
+    best runs and, with --scene, the best run's eye-plane pattern and eye image."""
+    from eyelume.report.html import write_report
+
+    try:
+        path = write_report(folder, scene)
+    except (FileNotFoundError, ValueError, SceneError) as exc:
+        _fail(str(exc))
+    err.print(f"wrote {path}")
+
+
+@app.command()
 def info(
     scene: SceneOpt = "paper2005",
     set_: SetOpt = None,

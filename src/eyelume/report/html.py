@@ -1,0 +1,149 @@
+"""``eyelume report DIR``: one self-contained HTML page of a study (figures embedded as PNG).
+
+The page holds the study's table (runs over an IEC 62471 exempt-group limit in red), one figure
+per metric against each varied parameter (the merit landscapes), the best runs, and — for the
+best run by the first merit — its eye-plane pattern and its eye image rendered anew. When the
+page has loaded, a script counts the figures that decoded into ``data-figures`` on the body, so a
+headless browser can check that it renders with its figures.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+__all__ = ["write_report"]
+
+_MERITS = ("eye_image_merit", "eye_plane_merit")
+
+
+def _png(fig: Figure) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90, bbox_inches="tight")
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _figure(w: float, h: float) -> Figure:
+    fig = Figure(figsize=(w, h))
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _landscapes(rows: list[dict], params: list[str], metrics: list[str]) -> list[tuple[str, str]]:
+    out = []
+    for m in metrics:
+        fig = _figure(3.2 * max(1, len(params)), 2.8)
+        axes = fig.subplots(1, max(1, len(params)), squeeze=False)[0]
+        for ax, p in zip(axes, params, strict=False):
+            xs = [r["overrides"].get(p) for r in rows]
+            ys = [r["metrics"].get(m) for r in rows]
+            pts = [(x, y) for x, y in zip(xs, ys, strict=True) if isinstance(y, int | float)]
+            if pts:
+                ax.plot(*zip(*pts, strict=True), "o", ms=4)
+            ax.set_xlabel(p)
+            ax.set_ylabel(m)
+        out.append((f"{m} against each parameter", _png(fig)))
+    return out
+
+
+def _best_images(scene_name: str, overrides: dict) -> list[tuple[str, str]]:
+    import eyelume
+    from eyelume.estimators.closed_form import eye_plane_irradiance
+
+    scene = eyelume.load_scene(scene_name, overrides)
+    pattern = eye_plane_irradiance(scene)
+    image = eyelume.render(scene, samples_per_pixel=16, seed=0).eye_image
+    fig = _figure(9, 3.4)
+    a, b = fig.subplots(1, 2)
+    im = a.imshow(pattern, cmap="inferno")
+    a.set_title("eye-plane irradiance (W/mm²)")
+    fig.colorbar(im, ax=a)
+    b.imshow(image, cmap="gray", vmin=0, vmax=float(np.percentile(image, 99.5)))
+    b.set_title("eye image (fast estimator)")
+    for ax in (a, b):
+        ax.set_xticks([])
+        ax.set_yticks([])
+    return [("best run: eye-plane pattern and eye image", _png(fig))]
+
+
+def write_report(folder: str | Path, scene_name: str | None = None) -> Path:
+    """Write ``folder/report.html`` from the study's store; returns its path."""
+    from eyelume.optimize.store import ResultStore
+
+    folder = Path(folder)
+    if not (folder / "results.sqlite").exists():
+        raise FileNotFoundError(f"{folder}: no results.sqlite (run `eyelume study` first)")
+    store = ResultStore(folder)
+    try:
+        rows = store.rows()
+        studies = sorted(store.studies())
+    finally:
+        store.close()
+    if not rows:
+        raise ValueError(f"{folder}: the study has no finished run yet")
+    params = sorted({k for r in rows for k in r["overrides"]})
+    metrics = sorted({k for r in rows for k, v in r["metrics"].items()
+                      if isinstance(v, int | float) and not isinstance(v, bool)})  # fmt: skip
+    figures = _landscapes(rows, params, metrics)
+    merit = next((m for m in _MERITS if m in metrics), None)
+    best = []
+    if merit is not None:
+        scored = [r for r in rows if isinstance(r["metrics"].get(merit), int | float)]
+        best = sorted(scored, key=lambda r: r["metrics"][merit])[:5]
+        if best and scene_name:
+            figures += _best_images(scene_name, best[0]["overrides"])
+
+    def cell(v) -> str:
+        if isinstance(v, float):
+            return f"{v:.5g}" if math.isfinite(v) else "—"
+        return html.escape(str(v))
+
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in ["#", *params, *metrics])
+    body = []
+    for r in rows:
+        unsafe = r["metrics"].get("within_exempt_group") is False
+        tds = [cell(r["index"]), *(cell(r["overrides"].get(p)) for p in params),
+               *(cell(r["metrics"].get(m)) for m in metrics)]  # fmt: skip
+        cls = ' class="unsafe"' if unsafe else ""
+        body.append(f"<tr{cls}>" + "".join(f"<td>{t}</td>" for t in tds) + "</tr>")
+    best_html = "".join(
+        f"<li>run {r['index']}: {html.escape(str(r['overrides']))} — {merit} "
+        f"{r['metrics'][merit]:.5g}</li>"
+        for r in best
+    )
+    figs = "".join(
+        f'<figure><img alt="{html.escape(t)}" src="data:image/png;base64,{d}">'
+        f"<figcaption>{html.escape(t)}</figcaption></figure>"
+        for t, d in figures
+    )
+    n_unsafe = sum(r["metrics"].get("within_exempt_group") is False for r in rows)
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>eyelume study {html.escape(", ".join(studies))}
+</title><style>
+body {{ font-family: sans-serif; margin: 2em; }} table {{ border-collapse: collapse; }}
+td, th {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; }}
+tr.unsafe td {{ color: #b00; font-weight: bold; }} figure {{ display: inline-block; }}
+</style></head>
+<body data-figures="0">
+<h1>Study {html.escape(", ".join(studies))}</h1>
+<p>{len(rows)} runs; {n_unsafe} over an IEC 62471 exempt-group limit (red).</p>
+<h2>Merit landscapes</h2>{figs}
+<h2>Best runs{f" by {merit}" if merit else ""}</h2><ol>{best_html}</ol>
+<h2>All runs</h2><table><tr>{head}</tr>{"".join(body)}</table>
+<script>
+window.addEventListener("load", () => {{
+  const ok = [...document.images].filter(i => i.complete && i.naturalWidth > 0).length;
+  document.body.dataset.figures = String(ok);
+}});
+</script></body></html>
+"""
+    path = folder / "report.html"
+    path.write_text(page, encoding="utf-8")
+    return path
