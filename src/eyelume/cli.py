@@ -189,6 +189,9 @@ def sweep_leds_cmd(
         Path | None,
         typer.Option(help="A user target pattern (.csv or .npy, the eye plane's rows × cols)."),
     ] = None,
+    eye_safe: Annotated[
+        bool, typer.Option(help="Exclude placements over an IEC 62471 exempt-group limit.")
+    ] = False,
     set_: SetOpt = None,
 ) -> None:
     """The paper's generator (Section 4.1): the 385 LED placements (Y 20–40 mm, Z 20–70 mm,
@@ -207,7 +210,10 @@ def sweep_leds_cmd(
         )
     except (ValueError, OSError) as exc:
         _fail(str(exc))
-    result = sweep_leds(sc, goal)
+    try:
+        result = sweep_leds(sc, goal, eye_safe=eye_safe)
+    except ValueError as exc:
+        _fail(str(exc))
     b = result.best
     refined = refine(sc, goal, start=(b["height_mm"], b["distance_mm"], b["pitch_deg"]))
     plane = sc.eye_plane

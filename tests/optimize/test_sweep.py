@@ -168,3 +168,26 @@ def test_generator_runs_on_a_table_profile(tmp_path, paper_scene):
     b = r.best
     y, z, t, m = refine(scene, target, start=(b["height_mm"], b["distance_mm"], b["pitch_deg"]))
     assert m <= b["merit"]
+
+
+def test_eye_safe_sweep_excludes_placements_over_the_limit():
+    """With LEDs of 0.1 W/sr the close placements exceed 100 W/m² at the cornea: the eye-safe
+    sweep lists them as problems and never chooses one."""
+    import eyelume
+    from eyelume.analysis.safety import eye_safety
+    from eyelume.analysis.targets import gaussian_target
+    from eyelume.optimize.sweep import sweep_leds
+
+    scene = eyelume.load_scene("paper2005", {"leds.radiant_intensity_w_sr": 0.1})
+    target = gaussian_target(0.3, scene.eye_plane)
+    free = sweep_leds(scene, target)
+    safe = sweep_leds(scene, target, eye_safe=True)
+    over = [i for i, w in safe.problems.items() if "IEC 62471" in w]
+    assert over and len(safe.problems) > len(free.problems)
+    b = safe.best
+    placed = eyelume.load_scene(
+        "paper2005",
+        {"leds.radiant_intensity_w_sr": 0.1, "leds.height_mm": b["height_mm"],
+         "leds.distance_mm": b["distance_mm"], "leds.pitch_deg": b["pitch_deg"]},
+    )  # fmt: skip
+    assert eye_safety(placed)["within_exempt_group"]

@@ -114,6 +114,24 @@ def _check_target(scene: Scene, target: np.ndarray) -> np.ndarray:
     return t
 
 
+def _over_limit(scene: Scene, y: float, z: float, th: float) -> str | None:
+    """Why a placement exceeds an IEC 62471 exempt-group limit, or None."""
+    from eyelume.analysis.safety import eye_safety
+    from eyelume.scene.io import apply_overrides
+
+    placed = apply_overrides(
+        scene,
+        {"leds.height_mm": float(y), "leds.distance_mm": float(z), "leds.pitch_deg": float(th)},
+    )
+    s = eye_safety(placed)
+    if s["within_exempt_group"]:
+        return None
+    return (
+        f"over the IEC 62471 exempt group (corneal margin {s['corneal_margin']:.2f}, "
+        f"retinal margin {s['retinal_margin']:.2f})"
+    )
+
+
 def sweep_leds(
     scene: Scene,
     target: np.ndarray,
@@ -122,8 +140,13 @@ def sweep_leds(
     pitches: Sequence[float] = PAPER_GRID[2],
     *,
     order: int | None = None,
+    eye_safe: bool = False,
 ) -> SweepResult:
     """Score every LED placement of the grid against ``target`` (paper §4.1.2).
+
+    With ``eye_safe`` a placement over an IEC 62471 exempt-group limit
+    (:mod:`eyelume.analysis.safety`) is excluded like an impossible one (merit NaN, listed in
+    ``problems``).
 
     Parameters
     ----------
@@ -156,6 +179,8 @@ def sweep_leds(
         raise ValueError("heights, distances and pitches must each hold at least one value")
     y, z, th = product_grid(*axes)
     why = geometry_problems(scene.leds, y, z, th)
+    if eye_safe:
+        why = [w or _over_limit(scene, y[i], z[i], th[i]) for i, w in enumerate(why)]
     problems = {i: w for i, w in enumerate(why) if w is not None}
     ok = np.array([w is None for w in why])
     if not ok.any():
