@@ -148,3 +148,15 @@ def test_a_local_dask_cluster_gives_the_same_results(tmp_path):
     run_study(st, tmp_path / "pool", workers=2)
     run_study(st, tmp_path / "dask", workers=2, dask="local")
     assert table(tmp_path / "pool") == table(tmp_path / "dask")
+
+
+def test_tracking_metric_of_one_run():
+    """The tracking metric: the pipeline's mean geometric gaze error over 9 gazes (a lost frame
+    counted 10°) and the detection rate, with the safety margins beside them."""
+    import eyelume
+    from eyelume.optimize.study import Study, run_metrics
+
+    st = Study(name="t", metrics=["tracking", "safety"], samples_per_pixel=8)
+    m = run_metrics(eyelume.load_scene("paper2005"), {"leds.pitch_deg": 20.0}, st)
+    assert 0 <= m["tracking_score_deg"] <= 10 and 0 <= m["detection_rate"] <= 1
+    assert m["within_exempt_group"] and m["corneal_margin"] > 1

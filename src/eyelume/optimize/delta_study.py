@@ -19,6 +19,7 @@ import numpy as np
 
 from eyelume.analysis.evaluator import evaluator_merit, skin_score
 from eyelume.analysis.masks import IdealMask, glints_off, ideal_mask
+from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.targets import gaussian_target
 from eyelume.compile import compile_scene
 from eyelume.optimize.sweep import refine, sweep_leds
@@ -69,6 +70,8 @@ class DeltaRow:
     skin_cv: float
     pattern: np.ndarray
     image: np.ndarray
+    corneal_margin: float = float("nan")
+    retinal_margin: float = float("nan")
 
 
 def with_placement(scene: Scene, height_mm: float, distance_mm: float, pitch_deg: float) -> Scene:
@@ -137,6 +140,7 @@ def run_delta_study(
         placed = with_placement(scene, y, z, th)
         result, merit, se, bias = evaluate_placement(placed, mask, samples_per_pixel, seed)
         mean, std, cv = skin_score(result.eye_image, result.regions["skin"])
+        safety = eye_safety(placed)
         rows.append(
             DeltaRow(
                 delta=float(delta),
@@ -153,6 +157,8 @@ def run_delta_study(
                 skin_cv=cv,
                 pattern=sweep.patterns[sweep.best_index],
                 image=result.eye_image,
+                corneal_margin=safety["corneal_margin"],
+                retinal_margin=safety["retinal_margin"],
             )
         )
         if progress:

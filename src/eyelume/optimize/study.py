@@ -5,7 +5,7 @@ A study file (TOML)::
     name = "led-height"
     scene = "paper2005"            # a preset or a scene file
     seed = 1                       # for random and Latin-hypercube samples, and every render
-    metrics = ["eye_plane_merit", "eye_image_merit", "skin_uniformity", "safety"]
+    metrics = ["eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", "safety"]
     delta = 0.3                    # the eye-plane target of eye_plane_merit
     samples_per_pixel = 16         # renders of eye_image_merit / skin_uniformity
 
@@ -44,7 +44,7 @@ from eyelume.scene.model import Scene
 
 __all__ = ["METRICS", "Study", "Vary", "load_study", "plan_runs", "run_key", "run_metrics"]
 
-METRICS = ("eye_plane_merit", "eye_image_merit", "skin_uniformity", "safety")
+METRICS = ("eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", "safety")
 
 
 class Vary(BaseModel):
@@ -79,7 +79,9 @@ class Study(BaseModel):
     name: str
     scene: str = "paper2005"
     seed: int = Field(0, ge=0)
-    metrics: list[Literal["eye_plane_merit", "eye_image_merit", "skin_uniformity", "safety"]] = [
+    metrics: list[
+        Literal["eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", "safety"]
+    ] = [
         "eye_plane_merit",
         "safety",
     ]
@@ -184,6 +186,15 @@ def run_metrics(base: Scene, overrides: dict, study: Study) -> dict:
         if "skin_uniformity" in study.metrics:
             mean, std, cv = skin_score(result.eye_image, result.regions["skin"])
             out["skin_mean_w_mm2"], out["skin_cv"] = mean, cv
+    if "tracking" in study.metrics:
+        from eyelume.analysis.tracking.evaluate import evaluate_tracking, tracking_score
+        from eyelume.optimize.tracking import GAZE_H, GAZE_V
+
+        rep = evaluate_tracking(
+            scene, GAZE_H, GAZE_V, study.samples_per_pixel, study.seed, calibrate=False
+        )
+        out["tracking_score_deg"] = tracking_score(rep)
+        out["detection_rate"] = rep.summary["detection_rate"]
     if "safety" in study.metrics:
         s = eye_safety(scene)
         out["corneal_margin"] = s["corneal_margin"]

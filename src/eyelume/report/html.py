@@ -2,7 +2,8 @@
 
 The page holds the study's table (runs over an IEC 62471 exempt-group limit in red), one figure
 per metric against each varied parameter (the merit landscapes), the best runs, and — for the
-best run by the first merit — its eye-plane pattern and its eye image rendered anew. When the
+best run by the first merit — its eye-plane pattern and its eye image rendered anew, and its
+tracking-error maps when the study measured tracking. When the
 page has loaded, a script counts the figures that decoded into ``data-figures`` on the body, so a
 headless browser can check that it renders with its figures.
 """
@@ -73,6 +74,20 @@ def _best_images(scene_name: str, overrides: dict) -> list[tuple[str, str]]:
     return [("best run: eye-plane pattern and eye image", _png(fig))]
 
 
+def _tracking_maps(scene_name: str, overrides: dict) -> list[tuple[str, str]]:
+    import eyelume
+    from eyelume.analysis.tracking.evaluate import evaluate_tracking
+    from eyelume.optimize.tracking import GAZE_H, GAZE_V
+    from eyelume.report.tracking_outputs import save_error_maps
+
+    scene = eyelume.load_scene(scene_name, overrides)
+    rep = evaluate_tracking(scene, GAZE_H, GAZE_V, 8, 0, calibrate=False)
+    buf = io.BytesIO()
+    save_error_maps(rep.frames, buf)
+    return [("best run: tracking errors over the gaze grid", base64.b64encode(buf.getvalue())
+             .decode("ascii"))]  # fmt: skip
+
+
 def write_report(folder: str | Path, scene_name: str | None = None) -> Path:
     """Write ``folder/report.html`` from the study's store; returns its path."""
     from eyelume.optimize.store import ResultStore
@@ -99,6 +114,8 @@ def write_report(folder: str | Path, scene_name: str | None = None) -> Path:
         best = sorted(scored, key=lambda r: r["metrics"][merit])[:5]
         if best and scene_name:
             figures += _best_images(scene_name, best[0]["overrides"])
+            if "tracking_score_deg" in metrics:
+                figures += _tracking_maps(scene_name, best[0]["overrides"])
 
     def cell(v) -> str:
         if isinstance(v, float):

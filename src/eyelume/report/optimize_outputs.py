@@ -98,6 +98,8 @@ def write_study_outputs(
                 "skin_mean_w_mm2",
                 "skin_std_w_mm2",
                 "skin_cv",
+                "corneal_margin",
+                "retinal_margin",
             ]
         )
         for r in rows:
@@ -115,6 +117,8 @@ def write_study_outputs(
                     f"{r.skin_mean_w_mm2:.6g}",
                     f"{r.skin_std_w_mm2:.6g}",
                     f"{r.skin_cv:.5g}",
+                    f"{r.corneal_margin:.4g}",
+                    f"{r.retinal_margin:.4g}",
                 ]
             )
     deltas = [r.delta for r in rows]

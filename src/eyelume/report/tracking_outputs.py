@@ -60,7 +60,7 @@ def save_error_maps(frames, path) -> None:
         ax.set_xlabel("horizontal gaze (°)")
         fig.colorbar(im, ax=ax)
     axes[0].set_ylabel("vertical gaze (°)")
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    fig.savefig(path, dpi=110, bbox_inches="tight", format="png")
 
 
 def write_tracking_outputs(report, meta: dict, out) -> list[Path]:

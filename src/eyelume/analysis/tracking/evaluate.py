@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.tracking.detect import Detection, detect
 from eyelume.analysis.tracking.gaze import GeometricGaze, PccrModel, PinholeCamera
 from eyelume.analysis.truth import eye_truth
@@ -177,6 +178,7 @@ def evaluate_tracking(
     mm_per_px = pinhole_camera(scene).scale_mm  # eye-plane mm per pixel
     report = TrackingReport(frames, calib, mm_per_px)
     report.summary = summarise(report, pccr_calibrated=pccr is not None)
+    report.summary["safety"] = eye_safety(scene)
     return report
 
 
