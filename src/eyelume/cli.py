@@ -536,6 +536,9 @@ def study(
             )
         except (StoreBusy, ValueError, OSError) as exc:
             _fail(str(exc))
+        except KeyboardInterrupt:
+            err.print(f"interrupted: the finished runs are in {out}; --resume continues")
+            raise typer.Exit(130) from None
     names = sorted({k for r in rows for k in r["metrics"]})
     params = sorted({k for r in rows for k in r["overrides"]})
     with open(out / "table.csv", "w", newline="", encoding="utf-8") as f:

@@ -160,3 +160,30 @@ def test_tracking_metric_of_one_run():
     m = run_metrics(eyelume.load_scene("paper2005"), {"leds.pitch_deg": 20.0}, st)
     assert 0 <= m["tracking_score_deg"] <= 10 and 0 <= m["detection_rate"] <= 1
     assert m["within_exempt_group"] and m["corneal_margin"] > 1
+
+
+def test_ctrl_c_keeps_the_finished_runs_and_resume_completes(tmp_path):
+    study = write(tmp_path, SLOW.replace("grid = [20.0, 40.0, 8]", "grid = [20.0, 40.0, 40]"))
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-c", "from eyelume.cli import app; app()", "study", str(study),
+           "--out", str(out), "--workers", "2"]  # fmt: skip
+    proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True)
+    db = out / "results.sqlite"
+    deadline = time.time() + 240
+    while time.time() < deadline and proc.poll() is None:
+        if db.exists():
+            try:
+                with sqlite3.connect(db) as con:
+                    if con.execute("SELECT COUNT(*) FROM runs").fetchone()[0] >= 2:
+                        break
+            except sqlite3.OperationalError:
+                pass
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "--resume" in err
+    done = len(table(out))
+    assert 2 <= done < 40
+    run_study(load_study(study), out, workers=2, resume=True)
+    assert len(table(out)) == 40

@@ -15,6 +15,7 @@ import os
 import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 from eyelume.optimize.store import ResultStore
@@ -81,7 +82,8 @@ def run_study(
             _run_on_dask(dask, workers, todo, scene_json, study_json, commit)
         else:
             ctx = mp.get_context("spawn")
-            with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker) as pool:
+            pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker)
+            try:
                 pending = {
                     pool.submit(_one, scene_json, r, study_json): (i, r, k) for i, r, k in todo
                 }
@@ -89,6 +91,11 @@ def run_study(
                     ready, _ = wait(pending, return_when=FIRST_COMPLETED)
                     for fut in ready:
                         commit(*pending.pop(fut), fut.result())
+            except (KeyboardInterrupt, BrokenProcessPool):
+                # Ctrl-C: what is committed stays; drop the queue instead of waiting for it
+                pool.shutdown(wait=False, cancel_futures=True)
+                raise KeyboardInterrupt from None
+            pool.shutdown()
         return store.rows()
     finally:
         store.close()
