@@ -25,6 +25,7 @@ from eyelume.compile import CompiledScene, gaze_rotation
 from eyelume.estimators.camera import CameraTables, aim_chief, camera_tables, into_scene
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import reflect, refract
+from eyelume.kernels.sampling import orthonormal_basis
 
 __all__ = ["eye_truth", "sensor_to_pixel"]
 
@@ -117,10 +118,9 @@ def _solve(residual, guess: np.ndarray, tol: float = 1e-7):
 
 
 def _basis(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = np.cross(n, helper)
-    e1 /= np.linalg.norm(e1)
-    return e1, np.cross(n, e1)
+    """Two unit vectors completing unit ``n`` to an orthonormal basis."""
+    t, b = orthonormal_basis(*n)
+    return np.array(t), np.array(b)
 
 
 def _clear(cs: CompiledScene, start: np.ndarray, d: np.ndarray, expect: int) -> bool:

@@ -17,8 +17,9 @@ import math
 from pathlib import Path
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+
+from eyelume.report.plots import agg_figure
 
 __all__ = ["write_report"]
 
@@ -31,16 +32,10 @@ def _png(fig: Figure) -> str:
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
-def _figure(w: float, h: float) -> Figure:
-    fig = Figure(figsize=(w, h))
-    FigureCanvasAgg(fig)
-    return fig
-
-
 def _landscapes(rows: list[dict], params: list[str], metrics: list[str]) -> list[tuple[str, str]]:
     out = []
     for m in metrics:
-        fig = _figure(3.2 * max(1, len(params)), 2.8)
+        fig = agg_figure(3.2 * max(1, len(params)), 2.8)
         axes = fig.subplots(1, max(1, len(params)), squeeze=False)[0]
         for ax, p in zip(axes, params, strict=False):
             xs = [r["overrides"].get(p) for r in rows]
@@ -61,7 +56,7 @@ def _best_images(scene_name: str, overrides: dict) -> list[tuple[str, str]]:
     scene = eyelume.load_scene(scene_name, overrides)
     pattern = eye_plane_irradiance(scene)
     image = eyelume.render(scene, samples_per_pixel=16, seed=0).eye_image
-    fig = _figure(9, 3.4)
+    fig = agg_figure(9, 3.4)
     a, b = fig.subplots(1, 2)
     im = a.imshow(pattern, cmap="inferno")
     a.set_title("eye-plane irradiance (W/mm²)")

@@ -7,16 +7,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import LogNorm
-from matplotlib.figure import Figure
 
-
-def _figure(w: float, h: float) -> Figure:
-    fig = Figure(figsize=(w, h))
-    FigureCanvasAgg(fig)
-    return fig
-
+from eyelume.report.plots import agg_figure
 
 __all__ = [
     "save_sweep_heatmaps",
@@ -42,7 +35,7 @@ def save_sweep_heatmaps(
     finite = merit[np.isfinite(merit)]
     vmin, vmax = float(finite.min()), float(finite.max())
     norm = LogNorm(vmin=max(vmin, vmax * 1e-6), vmax=vmax)
-    fig = _figure(3.0 * len(heights) + 1.2, 3.6)
+    fig = agg_figure(3.0 * len(heights) + 1.2, 3.6)
     axes = fig.subplots(1, len(heights), sharey=True, squeeze=False)
     best = np.unravel_index(np.nanargmin(merit), merit.shape)
     im = None
@@ -78,7 +71,7 @@ def save_pattern_vs_target(
     title: str,
 ) -> None:
     """The eye-plane pattern and the target side by side, each scaled to unit mean."""
-    fig = _figure(9, 3.6)
+    fig = agg_figure(9, 3.6)
     axes = fig.subplots(1, 2)
     for ax, data, name in ((axes[0], pattern, "pattern"), (axes[1], target, "target")):
         im = ax.imshow(data / data.mean(), extent=extent_mm, cmap="inferno", vmin=0)
@@ -99,7 +92,7 @@ def save_merit_vs_delta(
 ) -> None:
     """Our evaluator merit against δ (left axis) and the paper's published LightTools merits
     (right axis: another, undocumented scale — compare shapes and minima, not values)."""
-    fig = _figure(6.4, 4)
+    fig = agg_figure(6.4, 4)
     ax = fig.subplots()
     ax.plot(deltas, merits, "o-", color="tab:blue", label="eyelume evaluator merit")
     ax.set_xlabel("falloff δ at the eye plane's corner")
@@ -123,7 +116,7 @@ def save_delta_gallery(
 ) -> None:
     """For each δ, its best eye-plane pattern (top) and the simulated eye image (bottom)."""
     n = len(deltas)
-    fig = _figure(2.2 * n, 4.4)
+    fig = agg_figure(2.2 * n, 4.4)
     axes = fig.subplots(2, n, squeeze=False)
     for j in range(n):
         axes[0][j].imshow(patterns[j], cmap="inferno")

@@ -98,6 +98,13 @@ def _prepare_path(path: PathLike) -> Path:
     return out
 
 
+def agg_figure(width_in: float, height_in: float) -> Figure:
+    """A new figure (inches) on its own Agg canvas, outside pyplot's global state."""
+    fig = Figure(figsize=(width_in, height_in))
+    FigureCanvasAgg(fig)
+    return fig
+
+
 def _save_figure(fig: Figure, path: PathLike) -> None:
     """Render ``fig`` with the Agg canvas to ``path`` and release it."""
     FigureCanvasAgg(fig)

@@ -9,8 +9,8 @@ import math
 from pathlib import Path
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
+
+from eyelume.report.plots import agg_figure
 
 __all__ = ["write_tracking_outputs"]
 
@@ -38,8 +38,7 @@ def save_error_maps(frames, path) -> None:
         ("PCCR gaze error (°)", lambda f: _err(f.pccr, f.gaze)),
         ("geometric gaze error (°)", lambda f: _err(f.geometric, f.gaze)),
     ]
-    fig = Figure(figsize=(13, 3.4))
-    FigureCanvasAgg(fig)
+    fig = agg_figure(13, 3.4)
     axes = fig.subplots(1, 4)
     for ax, (title, fn) in zip(axes, maps, strict=True):
         hs, vs, z = _grid(frames, fn)
