@@ -1,0 +1,44 @@
+"""Is the default render bit-identical to the one recorded before the issue-10 refactor?
+
+    python benchmarks/bit_identity.py
+
+Renders ``eyelume.render(load_scene("paper2005"), seed=1)`` and compares the SHA-256 of its
+``eye_image``, ``eye_image_variance`` and ``eye_plane`` (float64, C order) with
+``results/bit_identity.json``, recorded at commit 3b58b61 on this project's 2-vCPU machine.
+Prints MATCH or DIFFER per array and exits 1 on any difference. (The test suite's
+``tests/test_bit_identity.py`` checks the same arrays to 1e-9 relative, portable across CPUs.)
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import eyelume
+
+RESULTS = Path(__file__).parent / "results" / "bit_identity.json"
+
+
+def main() -> int:
+    want = json.loads(RESULTS.read_text())["sha256"]
+    r = eyelume.render(eyelume.load_scene("paper2005"), seed=1)
+    got = {
+        "eye_image": r.eye_image,
+        "eye_image_variance": r.eye_image_variance,
+        "eye_plane": r.eye_plane,
+    }
+    bad = 0
+    for name, arr in got.items():
+        h = hashlib.sha256(np.ascontiguousarray(arr, dtype=np.float64).tobytes()).hexdigest()
+        ok = h == want[name]
+        bad += not ok
+        print(f"{name:20s} {'MATCH' if ok else 'DIFFER'}  {h[:16]}")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
