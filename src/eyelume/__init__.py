@@ -6,8 +6,17 @@
 4
 """
 
+from eyelume.errors import EyelumeError, SceneError
 from eyelume.render import RenderResult, render
-from eyelume.scene.io import SceneError, apply_overrides, load_scene, save_scene
+from eyelume.scene.io import apply_overrides, load_scene, save_scene
 
-__all__ = ["RenderResult", "SceneError", "apply_overrides", "load_scene", "render", "save_scene"]
+__all__ = [
+    "EyelumeError",
+    "RenderResult",
+    "SceneError",
+    "apply_overrides",
+    "load_scene",
+    "render",
+    "save_scene",
+]
 __version__ = "0.1.0"

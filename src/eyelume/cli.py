@@ -1,6 +1,9 @@
 """The ``eyelume`` command line (Typer). Thin: parses, calls the API, prints; no physics here.
 
-Every error a user can cause ends with a one-line message on stderr and exit code 2.
+Every error a user can cause is an :class:`~eyelume.errors.EyelumeError` (a bad option value is
+an :class:`~eyelume.errors.OptionError`). They are caught in one place,
+:meth:`_OneLineErrors.invoke` (after pbrt-v4's ``main``: errors surface to the top, which
+prints them): a one-line message on stderr and exit code 2.
 """
 
 from __future__ import annotations
@@ -9,22 +12,39 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NoReturn
 
+import click
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from typer.core import TyperGroup
 
-from eyelume.scene.glass import GlassError
-from eyelume.scene.io import SceneError, load_scene
+from eyelume.errors import EyelumeError, OptionError
+from eyelume.scene.io import load_scene
+
+err = Console(stderr=True)
+
+
+class _OneLineErrors(TyperGroup):
+    """The command group; its :meth:`invoke` is the one place that reports an EyelumeError."""
+
+    def invoke(self, ctx: click.Context):
+        try:
+            return super().invoke(ctx)
+        except EyelumeError as exc:
+            err.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
+            raise typer.Exit(2) from None
+
 
 app = typer.Typer(
+    cls=_OneLineErrors,
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     help="Design the near-infrared illumination of an eye tracker in a head-mounted display.",
 )
-err = Console(stderr=True)
 
 SceneOpt = Annotated[
     str, typer.Option("--scene", help="A preset name (paper2005) or a scene TOML file.")
@@ -37,9 +57,9 @@ SetOpt = Annotated[
 ]
 
 
-def _fail(message: str) -> None:
-    err.print(f"[bold red]error:[/] {message}", highlight=False, soft_wrap=True)
-    raise typer.Exit(2)
+def _fail(message: str) -> NoReturn:
+    """Refuse an option value: an OptionError, reported by :class:`_OneLineErrors`."""
+    raise OptionError(message)
 
 
 def _overrides(pairs: list[str] | None) -> dict[str, str]:
@@ -53,10 +73,7 @@ def _overrides(pairs: list[str] | None) -> dict[str, str]:
 
 
 def _load(scene: str, sets: list[str] | None):
-    try:
-        return load_scene(scene, _overrides(sets))
-    except SceneError as exc:
-        _fail(str(exc))
+    return load_scene(scene, _overrides(sets))
 
 
 def _warn_safety(safety: dict) -> None:
@@ -117,10 +134,7 @@ def render(
         _fail(f"--rel-error {rel_error}: must be in (0, 1), with --estimator fast")
     if seed is not None and seed < 0:
         _fail(f"--seed {seed}: must be ≥ 0")
-    try:
-        cs = compile_scene(sc)
-    except (SceneError, GlassError) as exc:
-        _fail(str(exc))
+    cs = compile_scene(sc)
     if estimator == "fast":
         goal = (
             f"to a {rel_error:.2%} relative error in the median skin pixel"
@@ -287,10 +301,7 @@ def reproduce(
         counts = []
     if not counts or any(not 1 <= n <= 12 for n in counts):
         _fail(f"--direct-leds {direct_leds!r}: expected LED counts from 1 to 12, e.g. 4,6,8")
-    try:
-        compile_scene(sc)
-    except (SceneError, GlassError) as exc:
-        _fail(str(exc))
+    compile_scene(sc)
     t0 = time.perf_counter()
     rows = run_delta_study(sc, values, samples, seed, progress=err.print)
     best = min(rows, key=lambda r: r.evaluator_merit)
@@ -396,10 +407,7 @@ def evaluate_tracking_cmd(
     sc = _load(scene, set_)
     if samples < 1 or seed < 0:
         _fail(f"--samples {samples}, --seed {seed}: must be ≥ 1 and ≥ 0")
-    try:
-        compile_scene(sc)
-    except (SceneError, GlassError) as exc:
-        _fail(str(exc))
+    compile_scene(sc)
     t0 = time.perf_counter()
     if population:
         from eyelume.analysis.tracking.evaluate import evaluate_population
@@ -509,13 +517,9 @@ def study(
     import csv
 
     from eyelume.optimize.runner import run_study
-    from eyelume.optimize.store import StoreBusy
     from eyelume.optimize.study import load_study, plan_runs
 
-    try:
-        st = load_study(study_file)
-    except SceneError as exc:
-        _fail(str(exc))
+    st = load_study(study_file)
     if workers is not None and workers < 1:
         _fail(f"--workers {workers}: must be ≥ 1")
     total = len(plan_runs(st))
@@ -534,7 +538,7 @@ def study(
             rows = run_study(
                 st, out, workers, resume, lambda d, t: bar.update(task, completed=d), dask
             )
-        except (StoreBusy, ValueError, OSError) as exc:
+        except (ValueError, OSError) as exc:
             _fail(str(exc))
         except KeyboardInterrupt:
             err.print(f"interrupted: the finished runs are in {out}; --resume continues")
@@ -572,7 +576,7 @@ def report(
 
     try:
         path = write_report(folder, scene)
-    except (FileNotFoundError, ValueError, SceneError) as exc:
+    except (OSError, ValueError) as exc:
         _fail(str(exc))
     err.print(f"wrote {path}")
 
@@ -588,10 +592,7 @@ def info(
     from eyelume.info import scene_info
 
     sc = _load(scene, set_)
-    try:
-        data = scene_info(sc)
-    except (SceneError, GlassError) as exc:
-        _fail(str(exc))
+    data = scene_info(sc)
     if as_json:
         sys.stdout.write(json.dumps(data, indent=2) + "\n")
         return

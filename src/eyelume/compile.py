@@ -16,12 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from eyelume.errors import GeometryError, GlassError, SceneError
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
 from eyelume.kernels.sampling import cos_power_tables, profile_tables
 from eyelume.scene.eye import eye_indices, limbus_geometry
-from eyelume.scene.glass import Glass, GlassError, load_catalog
-from eyelume.scene.io import SceneError
+from eyelume.scene.glass import Glass, load_catalog
 from eyelume.scene.model import Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
 from eyelume.scene.sources import cos_power_exponent, led_poses, relative_intensity
@@ -186,7 +186,7 @@ def _conic_bound(origin, rot, curv, conic, rmax) -> tuple[np.ndarray, float]:
     """Bounding sphere of a conicoid cap of radius ``rmax`` about its vertex."""
     s = float(sag(curv, conic, rmax))
     if math.isnan(s):  # callers check apertures against the conicoid's extent first
-        raise ValueError(f"aperture {rmax} mm beyond the conicoid (c {curv}, k {conic})")
+        raise GeometryError(f"aperture {rmax} mm beyond the conicoid (c {curv}, k {conic})")
     centre = np.asarray(origin) + rot[2] * (s / 2.0)
     return centre, math.hypot(rmax, s / 2.0) * 1.000001 + 1e-9
 

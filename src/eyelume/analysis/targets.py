@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from eyelume.errors import InputFileError
 from eyelume.scene.model import EyePlane
 
 __all__ = ["bin_centres", "gaussian_sigmas", "gaussian_target", "gaussian_value", "load_target"]
@@ -120,39 +121,42 @@ def load_target(path: str | Path, plane: EyePlane) -> np.ndarray:
     """A user-defined target pattern from a ``.csv`` (numbers separated by commas, ``#`` comments)
     or ``.npy`` file: a (rows, cols) array of the eye plane's bins, row 0 at +y, column 0 at −x.
 
-    Raises ValueError naming the file and the problem: unreadable, wrong shape, a value that is
-    not finite or is negative, or all zeros.
+    Raises InputFileError (a ValueError) naming the file and the problem: unreadable, wrong
+    shape, a value that is not finite or is negative, or all zeros.
     """
     path = Path(path)
     p = _plane(plane)
     where = f"target file '{path}'"
     suffix = path.suffix.lower()
     if suffix not in (".csv", ".npy"):
-        raise ValueError(f"{where}: unknown format '{path.suffix}' (use .csv or .npy)")
+        raise InputFileError(f"unknown format '{path.suffix}' (use .csv or .npy)", file=where)
     try:
         if suffix == ".npy":
             data = np.load(path, allow_pickle=False)
         else:
             data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2, dtype=float)
     except OSError as exc:
-        raise ValueError(f"{where}: cannot read ({exc.strerror or exc})") from None
+        raise InputFileError(f"cannot read ({exc.strerror or exc})", file=where) from None
     except ValueError as exc:
-        raise ValueError(f"{where}: not a table of numbers ({exc})") from None
+        raise InputFileError(f"not a table of numbers ({exc})", file=where) from None
     data = np.asarray(data)
     if data.dtype.kind not in "iuf":
-        raise ValueError(f"{where}: holds {data.dtype} values, not numbers")
+        raise InputFileError(f"holds {data.dtype} values, not numbers", file=where)
     data = data.astype(float)
     if data.shape != (p.rows, p.cols):
-        raise ValueError(
-            f"{where}: shape {data.shape} but the eye plane has (rows, cols) = ({p.rows}, {p.cols})"
+        raise InputFileError(
+            f"shape {data.shape} but the eye plane has (rows, cols) = ({p.rows}, {p.cols})",
+            file=where,
         )
     bad = ~np.isfinite(data)
     if bad.any():
         r, c = np.argwhere(bad)[0]
-        raise ValueError(f"{where}: value at row {r}, column {c} is {data[r, c]} (not finite)")
+        raise InputFileError(
+            f"value at row {r}, column {c} is {data[r, c]} (not finite)", file=where
+        )
     if (data < 0).any():
         r, c = np.argwhere(data < 0)[0]
-        raise ValueError(f"{where}: value at row {r}, column {c} is {data[r, c]} (negative)")
+        raise InputFileError(f"value at row {r}, column {c} is {data[r, c]} (negative)", file=where)
     if not data.any():
-        raise ValueError(f"{where}: every value is zero (no pattern to match)")
+        raise InputFileError("every value is zero (no pattern to match)", file=where)
     return data

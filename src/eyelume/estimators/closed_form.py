@@ -37,6 +37,7 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit, prange
 
+from eyelume.errors import GeometryError
 from eyelume.scene.model import EyePlane, LedArray, LedProfile, Scene
 from eyelume.scene.sources import _read_table, cos_power_exponent
 
@@ -384,8 +385,8 @@ def configuration_irradiance(
     """Eye-plane irradiance (n, rows, cols) in W/mm² of the scene's LEDs at n configurations
     (Y[i], Z[i], θ[i]) given as three equal-length sequences (mm, mm, degrees).
 
-    Raises ValueError naming the first configuration whose geometry is impossible
-    (:func:`geometry_problem`).
+    Raises GeometryError (a ValueError) naming the first configuration whose geometry is
+    impossible (:func:`geometry_problem`).
     """
     sc = _scene_of(scene)
     y, z, t = (
@@ -395,7 +396,7 @@ def configuration_irradiance(
         raise ValueError(f"heights, distances, pitches have lengths {len(y)}, {len(z)}, {len(t)}")
     for i, why in enumerate(geometry_problems(sc.leds, y, z, t)):
         if why is not None:
-            raise ValueError(f"configuration {i} (Y, Z, θ) = ({y[i]}, {z[i]}, {t[i]}): {why}")
+            raise GeometryError(f"configuration {i} (Y, Z, θ) = ({y[i]}, {z[i]}, {t[i]}): {why}")
     emit, axes = led_emitters(sc.leds, y, z, t)
     xe, ye = plane_edges(sc.eye_plane)
     return bin_irradiance(

@@ -11,6 +11,7 @@ import numba
 import numpy as np
 
 from eyelume.compile import CompiledScene
+from eyelume.errors import BudgetError, GeometryError
 from eyelume.estimators import fast as F
 from eyelume.estimators.camera import CameraTables, camera_tables
 from eyelume.estimators.interrupt import interrupt_between_batches
@@ -66,7 +67,7 @@ class _Run:
         centre, rb = sf[cornea, 19:22], sf[cornea, 22]
         dist = np.linalg.norm(cs.leds[:, :3] - centre, axis=1)
         if np.any(dist <= rb):
-            raise ValueError("an LED lies inside the cornea's bounding sphere")
+            raise GeometryError("an LED lies inside the cornea's bounding sphere")
         cone = 2 * math.pi * (1 - np.sqrt(1 - (rb / dist) ** 2))
         per_mm2 = cs.sensor[2] * cs.sensor[3] / (cs.sensor[0] * cs.sensor[1])
         c_typ = i0 * nled * float(cone.max()) * per_mm2
@@ -154,7 +155,7 @@ class _Run:
             m = self.paths
             total, total_sq = self.light.sum(axis=0), self.light_sq.sum(axis=0)
             if max(total.max(initial=0), total_sq.max(initial=0)) > (1 << 62):
-                raise OverflowError("fixed-point light sums near overflow: use fewer light paths")
+                raise BudgetError("fixed-point light sums near overflow: use fewer light paths")
             mean_l = total.astype(float) * (self.q / m)
             s2 = total_sq.astype(float) * self.q2
             var_l = np.maximum(s2 - m * mean_l**2, 0.0) / (m * max(m - 1, 1))
@@ -227,11 +228,11 @@ def trace_fast(
     ``progress(message)`` is called after each round.
     """
     if samples_per_pixel < 1:
-        raise ValueError(f"samples_per_pixel = {samples_per_pixel}: must be ≥ 1")
+        raise BudgetError(f"samples_per_pixel = {samples_per_pixel}: must be ≥ 1")
     if light_paths < 0:
-        raise ValueError(f"light_paths = {light_paths}: must be ≥ 0")
+        raise BudgetError(f"light_paths = {light_paths}: must be ≥ 0")
     if rel_error is not None and not 0.0 < rel_error < 1.0:
-        raise ValueError(f"rel_error = {rel_error}: must be in (0, 1)")
+        raise BudgetError(f"rel_error = {rel_error}: must be in (0, 1)")
     cam = camera_tables(cs)
     ratio = light_paths / samples_per_pixel  # light paths per camera sample
 

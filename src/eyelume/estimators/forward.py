@@ -30,6 +30,7 @@ from eyelume.compile import (
     TALLY_VIGNETTED,
     CompiledScene,
 )
+from eyelume.errors import BudgetError
 from eyelume.estimators.interrupt import interrupt_between_batches
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import fresnel_reflectance, reflect, refract
@@ -259,7 +260,7 @@ def trace_forward(
     the finished batches, marked ``interrupted``; a second Ctrl-C aborts at once.
     """
     if rays < 1:
-        raise ValueError(f"rays = {rays}: must be ≥ 1")
+        raise BudgetError(f"rays = {rays}: must be ≥ 1")
     batch = int(batch_size or cs.scene.run.batch_size)
     n_chunks = 4 * numba.get_num_threads()
     rows, cols = int(cs.sensor[3]), int(cs.sensor[2])

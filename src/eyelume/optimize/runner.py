@@ -18,6 +18,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
+from eyelume.errors import StoreError
 from eyelume.optimize.store import ResultStore
 from eyelume.optimize.study import Study, plan_runs, run_key, run_metrics
 from eyelume.scene.io import load_scene
@@ -59,10 +60,10 @@ def run_study(
     try:
         done = store.done()
         if done and not resume:
-            raise ValueError(f"{out}: holds {len(done)} finished runs; use --resume or a new --out")
+            raise StoreError(f"{out}: holds {len(done)} finished runs; use --resume or a new --out")
         others = store.studies() - {study.name}
         if others:
-            raise ValueError(f"{out}: holds runs of another study ({', '.join(sorted(others))})")
+            raise StoreError(f"{out}: holds runs of another study ({', '.join(sorted(others))})")
         todo = [(i, r, k) for i, (r, k) in enumerate(zip(runs, keys, strict=True)) if k not in done]
         finished = len(runs) - len(todo)
         if progress:

@@ -16,11 +16,13 @@ import os
 import sqlite3
 from pathlib import Path
 
+from eyelume.errors import StoreError
+
 __all__ = ["ResultStore", "StoreBusy"]
 
 
-class StoreBusy(RuntimeError):
-    """Another study is writing to this folder."""
+class StoreBusy(StoreError, RuntimeError):
+    """Another study is writing to this folder (a :class:`~eyelume.errors.StoreError`)."""
 
 
 class ResultStore:

@@ -22,6 +22,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from eyelume.analysis.merit import generator_merit
+from eyelume.errors import GeometryError
 from eyelume.estimators.closed_form import (
     auto_order,
     bin_irradiance,
@@ -185,7 +186,9 @@ def sweep_leds(
     ok = np.array([w is None for w in why])
     if not ok.any():
         first = next(iter(problems.items()))
-        raise ValueError(f"no configuration of the grid is possible (e.g. #{first[0]}: {first[1]})")
+        raise GeometryError(
+            f"no configuration of the grid is possible (e.g. #{first[0]}: {first[1]})"
+        )
     patterns = np.full((len(y), *t.shape), np.nan)
     patterns[ok] = configuration_irradiance(scene, y[ok], z[ok], th[ok], order=order)
     merit = np.asarray(generator_merit(patterns, t), dtype=float).reshape(len(y))
@@ -240,7 +243,7 @@ def refine(
     corners = np.array(np.meshgrid(*zip(lo, hi, strict=True), indexing="ij")).reshape(3, -1)
     for why in geometry_problems(scene.leds, *corners):
         if why is not None:
-            raise ValueError(f"bounds {bounds!r} include an impossible placement: {why}")
+            raise GeometryError(f"bounds {bounds!r} include an impossible placement: {why}")
 
     leds = scene.leds
     xe, ye = plane_edges(scene.eye_plane)

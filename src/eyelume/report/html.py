@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from eyelume.errors import StoreError
 from eyelume.report.plots import agg_figure
 
 __all__ = ["write_report"]
@@ -89,7 +90,7 @@ def write_report(folder: str | Path, scene_name: str | None = None) -> Path:
 
     folder = Path(folder)
     if not (folder / "results.sqlite").exists():
-        raise FileNotFoundError(f"{folder}: no results.sqlite (run `eyelume study` first)")
+        raise StoreError(f"{folder}: no results.sqlite (run `eyelume study` first)")
     store = ResultStore(folder)
     try:
         rows = store.rows()
@@ -97,7 +98,7 @@ def write_report(folder: str | Path, scene_name: str | None = None) -> Path:
     finally:
         store.close()
     if not rows:
-        raise ValueError(f"{folder}: the study has no finished run yet")
+        raise StoreError(f"{folder}: the study has no finished run yet")
     params = sorted({k for r in rows for k in r["overrides"]})
     metrics = sorted({k for r in rows for k, v in r["metrics"].items()
                       if isinstance(v, int | float) and not isinstance(v, bool)})  # fmt: skip

@@ -29,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from eyelume.errors import GlassError
+
 __all__ = [
     "FORMULAS",
     "SHIPPED_CATALOG",
@@ -55,15 +57,6 @@ SHIPPED_CATALOG = Path(__file__).resolve().parent / "presets" / "glass" / "eyelu
 """Path of the catalog that :func:`load_catalog` reads when given no file."""
 
 _MAX_NAMES_IN_MESSAGE = 12
-
-
-class GlassError(ValueError):
-    """A glass catalog cannot be read, a glass is missing, or an index cannot be evaluated.
-
-    The message is one line naming what failed: the file and line number and the bad value
-    for a malformed catalog, the glass and the catalogs searched for a missing glass, the
-    wavelength for an index that cannot be evaluated.
-    """
 
 
 # ---------------------------------------------------------------------------------------------

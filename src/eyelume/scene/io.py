@@ -16,15 +16,12 @@ from typing import Any
 import tomli_w
 from pydantic import ValidationError
 
+from eyelume.errors import SceneError
 from eyelume.scene.model import Scene
 
 __all__ = ["SceneError", "apply_overrides", "load_scene", "preset_names", "save_scene"]
 
 _PRESETS = "eyelume.scene.presets"
-
-
-class SceneError(ValueError):
-    """A scene that cannot be used, with a one-line message naming the field and the value."""
 
 
 def preset_names() -> list[str]:
@@ -79,13 +76,13 @@ def validate_scene(data: dict[str, Any], origin: str = "scene") -> Scene:
         field = _format_loc(loc) or "(top level)"
         msg = err["msg"]
         if err["type"] == "extra_forbidden":
-            raise SceneError(f"{origin}: unknown field '{field}'") from None
+            raise SceneError("unknown field", file=origin, field=field) from None
         if err["type"] == "missing":
-            raise SceneError(f"{origin}: field '{field}' is required") from None
+            raise SceneError("is required", file=origin, field=field) from None
         value = err.get("input", _lookup(data, loc))
         if isinstance(value, dict):
             raise SceneError(f"{origin}: {field}: {msg}") from None
-        raise SceneError(f"{origin}: field '{field}' = {value!r}: {msg}") from None
+        raise SceneError(msg, file=origin, field=field, value=value) from None
 
 
 def load_scene(source: str | Path = "paper2005", overrides: dict[str, Any] | None = None) -> Scene:
