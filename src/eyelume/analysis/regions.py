@@ -15,10 +15,10 @@ import numpy as np
 
 from eyelume.compile import CompiledScene
 from eyelume.estimators.fast_run import primary_surface_map
+from eyelume.estimators.statistics import median_pixel_rel_error
 
 __all__ = [
     "GLINT_FRACTION",
-    "median_relative_error",
     "region_masks",
     "region_stats",
     "with_glints",
@@ -71,27 +71,6 @@ def with_glints(masks: dict[str, np.ndarray], glint_images: np.ndarray) -> dict[
     return out
 
 
-def median_relative_error(
-    values: np.ndarray, variance: np.ndarray, dof: int | None = None
-) -> float:
-    """The relative standard error of a region's median pixel: √(median of variance/value²),
-    corrected for the spread of the variance estimates.
-
-    Each pixel's variance is estimated from independent sets; with ``dof`` degrees of freedom
-    it is distributed as σ² χ²_dof / dof, whose median is below σ² (by 0.455 for one degree of
-    freedom), so the median over many similar pixels is divided by median(χ²_dof)/dof. With
-    ``dof`` None the estimates are taken as exact (many samples per pixel, or Poisson counts).
-    """
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rel_var = np.where(values > 0, variance / values**2, np.inf)
-    med = float(np.median(rel_var))
-    if dof is not None and math.isfinite(med):
-        from scipy.stats import chi2
-
-        med /= float(chi2.ppf(0.5, dof)) / dof
-    return math.sqrt(med)
-
-
 def region_stats(
     image: np.ndarray,
     variance: np.ndarray,
@@ -120,7 +99,7 @@ def region_stats(
             "mean_w_mm2": mean,
             "mean_rel_error": se / mean if mean > 0 else math.inf,
             "median_w_mm2": float(np.median(vals)),
-            "median_pixel_rel_error": median_relative_error(vals, var, dof),
+            "median_pixel_rel_error": median_pixel_rel_error(vals, var, dof),
         }
         if name.startswith("glint"):
             entry["flux_w"] = float(vals.sum()) * pixel_area_mm2

@@ -15,8 +15,15 @@ from eyelume.errors import BudgetError, GeometryError
 from eyelume.estimators import fast as F
 from eyelume.estimators.camera import CameraTables, camera_tables
 from eyelume.estimators.interrupt import interrupt_between_batches
+from eyelume.estimators.statistics import median_pixel_rel_error
 
-__all__ = ["FastEstimate", "trace_fast", "primary_surface_map", "direct_eye_plane"]
+__all__ = [
+    "FastEstimate",
+    "direct_eye_plane",
+    "estimate_median_rel_error",
+    "primary_surface_map",
+    "trace_fast",
+]
 
 _MAX_SETS = 1 << 16
 
@@ -186,8 +193,6 @@ def _pilot(
     cost, from 4 sets of 2 × 2 and 2 sets of 4 × 4 on up to 2048 target pixels (their own
     samples: a pixel's samples depend on its index and the seed only). The prediction aims at
     the target itself; if the first round falls short, the run adds a round."""
-    from eyelume.analysis.regions import median_relative_error as median_rel
-
     idx = np.flatnonzero(target.reshape(-1))
     if idx.size > _PILOT_PIXELS:
         idx = np.sort(np.random.default_rng(seed).choice(idx, _PILOT_PIXELS, replace=False))
@@ -198,7 +203,7 @@ def _pilot(
         F.camera_pass(seed, 0, n, *run.cam_args, idx.astype(np.int64), s1, s2)
         mean = s1 / n
         var = np.maximum(s2 - n * mean**2, 0.0) / (n * (n - 1))
-        err = median_rel(mean[mean > 0], var[mean > 0], n - 1)
+        err = median_pixel_rel_error(mean[mean > 0], var[mean > 0], n - 1)
         sets = max(2, math.ceil(n * (err / rel_error) ** 2))
         cost = sets * grid * grid
         if cost < best[2]:
@@ -259,29 +264,27 @@ def trace_fast(
                     progress(f"pilot: {grid}×{grid} sets, {sets * grid * grid} samples per pixel")
             run = _Run(cs, cam, grid, seed)
             run.add(max(2, sets or math.ceil(samples_per_pixel / grid**2)), ratio)
-            err = median_relative_error(run.estimate(False), target_pixels)
+            err = estimate_median_rel_error(run.estimate(False), target_pixels)
             say(run, err)
             while err > rel_error and run.sets < _MAX_SETS and not stop.requested:
                 need = run.sets * (err / rel_error) ** 2 * 1.1
                 n_more = int(min(max(need - run.sets, 1), 4 * run.sets, _MAX_SETS - run.sets))
                 run.add(n_more, ratio)
-                err = median_relative_error(run.estimate(False), target_pixels)
+                err = estimate_median_rel_error(run.estimate(False), target_pixels)
                 say(run, err)
     if run.sets == 0:
         raise KeyboardInterrupt
     return run.estimate(stop.requested)
 
 
-def median_relative_error(est: FastEstimate, pixels: np.ndarray | None = None) -> float:
-    """The median pixel's relative standard error over ``pixels`` (default: every pixel with
-    signal), corrected for the spread of few-set variance estimates
-    (:func:`eyelume.analysis.regions.median_relative_error`)."""
-    from eyelume.analysis.regions import median_relative_error as median_rel
-
+def estimate_median_rel_error(est: FastEstimate, pixels: np.ndarray | None = None) -> float:
+    """The median pixel's relative standard error of an estimate over ``pixels`` (default:
+    every pixel with signal), corrected for the spread of few-set variance estimates
+    (:func:`eyelume.estimators.statistics.median_pixel_rel_error`)."""
     mask = est.image > 0 if pixels is None else (pixels & (est.image > 0))
     if not mask.any():
         return math.inf
-    return median_rel(est.image[mask], est.variance[mask], est.variance_dof)
+    return median_pixel_rel_error(est.image[mask], est.variance[mask], est.variance_dof)
 
 
 def primary_surface_map(
