@@ -16,6 +16,7 @@ import importlib
 import os
 import sys
 import tempfile
+import types
 from pathlib import Path
 
 __all__ = [
@@ -38,6 +39,20 @@ _HOMES = {
     "load_scene": "eyelume.scene.io",
     "save_scene": "eyelume.scene.io",
 }
+
+
+class _Facade(types.ModuleType):
+    """The package module. Importing the submodule ``eyelume.render`` binds it as an attribute
+    of the package; ``eyelume.render`` stays the function :func:`eyelume.render.render`, as it
+    was when the package imported it eagerly."""
+
+    def __setattr__(self, name: str, value) -> None:
+        if name == "render" and isinstance(value, types.ModuleType):
+            value = value.render
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Facade
 
 
 def __getattr__(name: str):
