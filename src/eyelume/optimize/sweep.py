@@ -41,10 +41,8 @@ PAPER_GRID = (range(20, 41, 5), range(20, 71, 5), range(0, 31, 5))
 #: The paper's ranges (§4.1.1): Y 20–40 mm, Z 20–70 mm, θ 0–30°.
 PAPER_BOUNDS = ((20.0, 40.0), (20.0, 70.0), (0.0, 30.0))
 
+
 #: Columns of :meth:`SweepResult.table_rows`.
-TABLE_COLUMNS = ("index", "height_mm", "distance_mm", "pitch_deg", "merit", "best", "problem")
-
-
 @dataclass
 class SweepResult:
     """Every configuration of a sweep, in C order of (heights, distances, pitches).
@@ -85,7 +83,8 @@ class SweepResult:
         return self.merit.reshape(len(self.heights), len(self.distances), len(self.pitches))
 
     def table_rows(self) -> list[dict[str, object]]:
-        """One dict per configuration with the keys :data:`TABLE_COLUMNS`, ready for
+        """One dict per configuration with the keys ``index``, ``height_mm``, ``distance_mm``,
+        ``pitch_deg``, ``merit``, ``best``, ``problem`` (in that order), ready for
         :class:`csv.DictWriter`; ``merit`` is '' and ``problem`` the reason where impossible."""
         rows = []
         for i in range(len(self.merit)):

@@ -11,7 +11,7 @@ from PIL import Image
 
 from eyelume.compile import compile_scene
 from eyelume.detectors.sensor import digitize, electrons_per_w_mm2
-from eyelume.render import render
+from eyelume.render import render, render_extras
 from eyelume.report.outputs import write_render_outputs
 from eyelume.scene.io import SceneError, load_scene
 from eyelume.scene.model import Sensor
@@ -137,7 +137,7 @@ def test_bad_sensor_values_name_the_field(overrides, field):
 def test_render_writes_the_digital_image_and_camera_summary(tmp_path):
     scene = load_scene("paper2005", {"run.estimator": "forward"})
     result = render(scene, rays=200_000, seed=1)
-    write_render_outputs(result, compile_scene(scene), tmp_path)
+    write_render_outputs(result, render_extras(compile_scene(scene), result.seed), tmp_path)
 
     counts = np.load(tmp_path / "eye_image_digital.npy")
     assert counts.shape == (65, 87) and counts.dtype == np.uint16
