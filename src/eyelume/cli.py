@@ -120,6 +120,7 @@ def render(
     reading), the eye-plane irradiance, pictures, layout and summary into OUT."""
     from eyelume.compile import compile_scene
     from eyelume.render import render as render_scene
+    from eyelume.render import render_extras
     from eyelume.report.outputs import write_render_outputs
 
     sc = _load(scene, set_)
@@ -173,7 +174,7 @@ def render(
             )
     if result.interrupted:
         err.print(f"interrupted: writing the {result.rays:,} rays traced so far")
-    written = write_render_outputs(result, cs, out)
+    written = write_render_outputs(result, render_extras(cs, result.seed), out)
     summary = result.summary()
     _warn_safety(summary["safety"])
     skin = summary["regions"].get("skin", {})
@@ -245,7 +246,7 @@ def sweep_leds_cmd(
 
 @app.command()
 def reproduce(
-    preset: Annotated[str, typer.Argument(help="The study's scene: paper2005 or a TOML file.")],
+    preset: Annotated[str, typer.Argument(help="The δ study's scene: paper2005 or a TOML file.")],
     out: Annotated[Path, typer.Option("--out", help="Folder for the outputs (created).")],
     deltas: Annotated[
         str, typer.Option(help="Comma-separated δ values (the paper: 0 to 0.8 by 0.1).")
@@ -271,7 +272,7 @@ def reproduce(
     ] = False,
     set_: SetOpt = None,
 ) -> None:
-    """The paper's Section 4 study: for each δ the generator's best LEDs, their eye image (glints
+    """The paper's Section 4 δ study: for each δ the generator's best LEDs, their eye image (glints
     off), the evaluator's merit; the best δ, the direct optimum, and a comparison with the
     paper, into OUT."""
     from eyelume.analysis.masks import ideal_mask
@@ -282,8 +283,8 @@ def reproduce(
         evaluate_paper_placement,
         run_delta_study,
     )
-    from eyelume.optimize.direct import optimize_direct
-    from eyelume.report.optimize_outputs import write_study_outputs
+    from eyelume.optimize.direct import DirectSearch, optimize_direct
+    from eyelume.report.optimize_outputs import write_delta_study_outputs
 
     sc = _load(preset, set_)
     try:
@@ -313,12 +314,14 @@ def reproduce(
             sc,
             ideal_mask(compile_scene(sc)),
             start=(best.height_mm, best.distance_mm, best.pitch_deg),
-            led_counts=counts,
-            vary_spread=vary_spread,
-            vary_azimuths=vary_azimuths,
-            samples_per_pixel=samples,
-            seed=seed,
-            max_evaluations=direct,
+            search=DirectSearch(
+                led_counts=counts,
+                vary_spread=vary_spread,
+                vary_azimuths=vary_azimuths,
+                samples_per_pixel=samples,
+                seed=seed,
+                max_evaluations=direct,
+            ),
             progress=err.print,
         )
     meta = {
@@ -329,7 +332,7 @@ def reproduce(
         "wall_time_s": round(time.perf_counter() - t0, 2),
         "paper_placement": paper,
     }
-    written = write_study_outputs(rows, found, PAPER_MERITS, PAPER_CHOICE, meta, out)
+    written = write_delta_study_outputs(rows, found, PAPER_MERITS, PAPER_CHOICE, meta, out)
     err.print(
         f"best δ = {best.delta:g} (Y {best.height_mm:g}, Z {best.distance_mm:g}, "
         f"θ {best.pitch_deg:g}); {meta['wall_time_s']} s; wrote {len(written)} files to {out}"
@@ -400,8 +403,8 @@ def evaluate_tracking_cmd(
     (and a 3 × 3 calibration grid), detect pupil and glints on the camera's images, estimate
     gaze (PCCR, Guestrin–Eizenman) and compare with the truth; table, summary and error maps
     into OUT."""
-    from eyelume.analysis.tracking.evaluate import evaluate_tracking
     from eyelume.compile import compile_scene
+    from eyelume.optimize.tracking import evaluate_tracking
     from eyelume.report.tracking_outputs import write_tracking_outputs
 
     sc = _load(scene, set_)
@@ -410,7 +413,7 @@ def evaluate_tracking_cmd(
     compile_scene(sc)
     t0 = time.perf_counter()
     if population:
-        from eyelume.analysis.tracking.evaluate import evaluate_population
+        from eyelume.optimize.tracking import evaluate_population
 
         members = evaluate_population(sc, samples_per_pixel=samples, seed=seed, progress=err.print)
         table = {}
@@ -567,15 +570,23 @@ def report(
     folder: Annotated[Path, typer.Argument(help="A study's folder (its results.sqlite).")],
     scene: Annotated[
         str | None,
-        typer.Option(help="The study's base scene, to render the best run (default: skip)."),
+        typer.Option(
+            help="The study's base scene: evaluate the best run anew (eye-plane pattern, eye "
+            "image, tracking errors) and store it in FOLDER first (default: skip)."
+        ),
     ] = None,
 ) -> None:
     """Write FOLDER/report.html: the study's table (unsafe runs in red), merit landscapes, the
-    best runs and, with --scene, the best run's eye-plane pattern and eye image."""
+    best runs and the best run's stored eye-plane pattern and eye image (--scene stores them)."""
     from eyelume.report.html import write_report
 
     try:
-        path = write_report(folder, scene)
+        if scene is not None:
+            from eyelume.optimize.best_run import save_best_run
+
+            err.print(f"evaluating the best run of {folder} on {scene}")
+            save_best_run(folder, scene)
+        path = write_report(folder)
     except (OSError, ValueError) as exc:
         _fail(str(exc))
     err.print(f"wrote {path}")

@@ -21,12 +21,14 @@ import numpy as np
 
 from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
+from eyelume.analysis.truth import eye_truth
 from eyelume.compile import CompiledScene, compile_scene
 from eyelume.estimators.fast_run import direct_eye_plane, trace_fast
-from eyelume.estimators.forward import trace_forward
+from eyelume.estimators.forward import trace_forward, trace_paths
+from eyelume.layout import Section, system_sections
 from eyelume.scene.model import Scene
 
-__all__ = ["RenderResult", "render"]
+__all__ = ["RenderExtras", "RenderResult", "render", "render_extras"]
 
 
 @dataclass
@@ -223,3 +225,25 @@ def render(
         interactions=fc.interactions,
         **extents,
     )
+
+
+@dataclass
+class RenderExtras:
+    """What ``eyelume render`` draws and records beside its images, computed here (where rays
+    may be traced) so that :mod:`eyelume.report` only writes it.
+
+    ``sections``: every surface's y–z section (:func:`eyelume.layout.system_sections`);
+    ``ray_paths``: a few dozen traced rays, ((k, 3) world vertices in mm, reached the sensor)
+    (:func:`eyelume.estimators.forward.trace_paths`); ``truth``: the true gaze, pupil and glint
+    positions on the picture (:func:`eyelume.analysis.truth.eye_truth`).
+    """
+
+    sections: list[Section]
+    ray_paths: list[tuple[np.ndarray, bool]]
+    truth: dict
+
+
+def render_extras(cs: CompiledScene, seed: int) -> RenderExtras:
+    """The layout section, ray paths (drawn from the seed's stream) and truth of a compiled
+    scene (:class:`RenderExtras`)."""
+    return RenderExtras(system_sections(cs), trace_paths(cs, seed), eye_truth(cs))

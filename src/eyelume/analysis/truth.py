@@ -18,6 +18,7 @@ does not exist.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -128,6 +129,119 @@ def _clear(cs: CompiledScene, start: np.ndarray, d: np.ndarray, expect: int) -> 
     return s == expect
 
 
+@dataclass
+class _View:
+    """What every truth query shares: the compiled scene, the camera, the cornea's surface
+    index, and the eye's pose (gaze rotation about ``c0``, head offset, optical axis with a
+    basis ``e1``, ``e2`` across it)."""
+
+    cs: CompiledScene
+    cam: CameraTables
+    cornea: int
+    rot: np.ndarray
+    c0: np.ndarray
+    head: np.ndarray
+    axis: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    par_m: float  # paraxial guess scale
+
+    def turned(self, p: np.ndarray) -> np.ndarray:
+        """A primary-gaze eye point (world mm), turned with the gaze and moved with the head."""
+        return self.head + self.c0 + self.rot @ (p - self.c0)
+
+    def image_of(self, point: np.ndarray):
+        """The sensor point (mm) whose chief ray, refracted by the cornea, passes through
+        ``point`` (an eye point seen through the cornea), or None."""
+        cs, cam, cornea = self.cs, self.cam, self.cornea
+
+        def residual(s):
+            ray = _chief_ray(cs, cam, s[0], s[1])
+            ray = None if ray is None else _through_cornea(cs, cornea, *ray)
+            return _miss(ray, point, self.axis, self.e1, self.e2)
+
+        guess = np.array([-point[0], -point[1]]) * abs(self.par_m)
+        return _solve(residual, guess)
+
+
+def _view(cs: CompiledScene, cam: CameraTables) -> _View:
+    eye = cs.scene.eye
+    rot, c0 = gaze_rotation(eye)
+    axis = rot @ np.array([0.0, 0.0, 1.0])  # the optical axis, out of the eye
+    e1, e2 = _basis(axis)
+    return _View(
+        cs=cs,
+        cam=cam,
+        cornea=cs.surface_names.index(eye.surfaces[0].name),
+        rot=rot,
+        c0=c0,
+        head=np.asarray(cs.scene.head_offset_mm, dtype=float),
+        axis=axis,
+        e1=e1,
+        e2=e2,
+        par_m=-(cs.image_z - cam.entrance_pupil_z) / (cam.entrance_pupil_z),
+    )
+
+
+def _pupil_truth(v: _View, pupil_c: np.ndarray) -> dict:
+    """The apparent pupil: its centre's and 72 edge points' pixels, the share visible."""
+    cs, eye = v.cs, v.cs.scene.eye
+    sc = v.image_of(pupil_c)
+    r = eye.pupil_diameter_mm / 2
+    edge, seen = [], 0
+    for k in range(_EDGE_POINTS):
+        a = 2 * math.pi * k / _EDGE_POINTS
+        point = pupil_c + r * (math.cos(a) * v.e1 + math.sin(a) * v.e2)
+        s = v.image_of(point)
+        if s is None:
+            continue
+        edge.append(sensor_to_pixel(cs, *s))
+        ray = _chief_ray(cs, v.cam, *s)
+        if ray is not None and _clear(cs, ray[0], ray[1], v.cornea):
+            seen += 1
+    return {
+        "centre_mm": pupil_c.tolist(),
+        "diameter_mm": eye.pupil_diameter_mm,
+        "centre_px": None if sc is None else list(sensor_to_pixel(cs, *sc)),
+        "edge_px": [list(p) for p in edge],
+        "visible_fraction": seen / _EDGE_POINTS,
+    }
+
+
+def _glint_truth(v: _View, k: int, led: np.ndarray) -> dict:
+    """LED ``k``'s glint: the pixel whose chief ray the cornea reflects to the LED, and whether
+    the way in and out is clear."""
+    cs, cam, cornea = v.cs, v.cam, v.cornea
+    to_led = led - v.turned(np.array([0.0, 0.0, -cs.scene.eye.surfaces[0].radius_mm]))
+    n = to_led / np.linalg.norm(to_led)
+    g1, g2 = _basis(n)
+
+    def residual(s):
+        ray = _chief_ray(cs, cam, s[0], s[1])
+        ray = None if ray is None else _off_cornea(cs, cornea, *ray)
+        return _miss(ray, led, n, g1, g2)
+
+    # first guess: the corneal centre's image, shifted toward the LED
+    c_img = v.image_of(v.turned(np.array([0.0, 0.0, -3.9])))
+    guess = (c_img if c_img is not None else np.zeros(2)) - 0.05 * abs(v.par_m) * led[:2]
+    s = _solve(residual, guess)
+    entry: dict = {"led": k, "centre_px": None, "visible": False, "reason": ""}
+    if s is None:
+        entry["reason"] = "no reflection toward this LED on the cornea's cap"
+        return entry
+    entry["centre_px"] = list(sensor_to_pixel(cs, *s))
+    ray = _chief_ray(cs, cam, *s)
+    hit = _off_cornea(cs, cornea, *ray)
+    blocked_in = not _clear(cs, ray[0], ray[1], cornea)
+    blocked_out = hit is None or G.nearest_hit(cs.sf, cs.si, *hit[0], *hit[1])[0] not in (
+        cs.surface_names.index(f"LED {k} body"),
+        -1,
+    )
+    entry["visible"] = not (blocked_in or blocked_out)
+    entry["reason"] = "" if entry["visible"] else "blocked (an eyelid or the face)"
+    return entry
+
+
 def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     """The true gaze, apparent pupil (centre and edge) and glints of a compiled scene.
 
@@ -135,90 +249,17 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     its apparent centre in pixels, the pixel positions of 72 points of its edge, the share of
     them visible (not under a lid); per LED its glint's pixel position, or why there is none.
     """
-    cam = cam or camera_tables(cs)
+    v = _view(cs, cam or camera_tables(cs))
     eye = cs.scene.eye
-    names = cs.surface_names
-    cornea = names.index(eye.surfaces[0].name)
-    rot, c0 = gaze_rotation(eye)
-    head = np.asarray(cs.scene.head_offset_mm, dtype=float)
-
-    def turned(p: np.ndarray) -> np.ndarray:
-        """A primary-gaze eye point (world mm), turned with the gaze and moved with the head."""
-        return head + c0 + rot @ (p - c0)
-
-    axis = rot @ np.array([0.0, 0.0, 1.0])  # the optical axis, out of the eye
     depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
-    pupil_c = turned(np.array([0.0, 0.0, -depth]))
-    e1, e2 = _basis(axis)
-    par_m = -(cs.image_z - cam.entrance_pupil_z) / (cam.entrance_pupil_z)  # paraxial guess scale
-
-    def image_of(point: np.ndarray):
-        def residual(s):
-            ray = _chief_ray(cs, cam, s[0], s[1])
-            ray = None if ray is None else _through_cornea(cs, cornea, *ray)
-            return _miss(ray, point, axis, e1, e2)
-
-        guess = np.array([-point[0], -point[1]]) * abs(par_m)
-        return _solve(residual, guess)
-
-    out: dict = {
+    return {
         "gaze_deg": {
             "horizontal": eye.gaze_horizontal_deg,
             "vertical": eye.gaze_vertical_deg,
         },
-        "optical_axis": axis.tolist(),
+        "optical_axis": v.axis.tolist(),
         "pixel_convention": "OpenCV: pixel (column c, row r) centred at (x, y) = (c, r); row 0 "
         "at the top of the upright picture",
+        "pupil": _pupil_truth(v, v.turned(np.array([0.0, 0.0, -depth]))),
+        "glints": [_glint_truth(v, k, led) for k, led in enumerate(cs.leds[:, :3])],
     }
-    sc = image_of(pupil_c)
-    r = eye.pupil_diameter_mm / 2
-    edge, seen = [], 0
-    for k in range(_EDGE_POINTS):
-        a = 2 * math.pi * k / _EDGE_POINTS
-        point = pupil_c + r * (math.cos(a) * e1 + math.sin(a) * e2)
-        s = image_of(point)
-        if s is None:
-            continue
-        edge.append(sensor_to_pixel(cs, *s))
-        ray = _chief_ray(cs, cam, *s)
-        if ray is not None and _clear(cs, ray[0], ray[1], cornea):
-            seen += 1
-    out["pupil"] = {
-        "centre_mm": pupil_c.tolist(),
-        "diameter_mm": eye.pupil_diameter_mm,
-        "centre_px": None if sc is None else list(sensor_to_pixel(cs, *sc)),
-        "edge_px": [list(p) for p in edge],
-        "visible_fraction": seen / _EDGE_POINTS,
-    }
-    glints = []
-    for k, led in enumerate(cs.leds[:, :3]):
-        to_led = led - turned(np.array([0.0, 0.0, -eye.surfaces[0].radius_mm]))
-        n = to_led / np.linalg.norm(to_led)
-        g1, g2 = _basis(n)
-
-        def residual(s, led=led, n=n, g1=g1, g2=g2):
-            ray = _chief_ray(cs, cam, s[0], s[1])
-            ray = None if ray is None else _off_cornea(cs, cornea, *ray)
-            return _miss(ray, led, n, g1, g2)
-
-        # first guess: the corneal centre's image, shifted toward the LED
-        c_img = image_of(turned(np.array([0.0, 0.0, -3.9])))
-        guess = (c_img if c_img is not None else np.zeros(2)) - 0.05 * abs(par_m) * led[:2]
-        s = _solve(residual, guess)
-        entry: dict = {"led": k, "centre_px": None, "visible": False, "reason": ""}
-        if s is None:
-            entry["reason"] = "no reflection toward this LED on the cornea's cap"
-        else:
-            entry["centre_px"] = list(sensor_to_pixel(cs, *s))
-            ray = _chief_ray(cs, cam, *s)
-            hit = _off_cornea(cs, cornea, *ray)
-            blocked_in = not _clear(cs, ray[0], ray[1], cornea)
-            blocked_out = hit is None or G.nearest_hit(cs.sf, cs.si, *hit[0], *hit[1])[0] not in (
-                names.index(f"LED {k} body"),
-                -1,
-            )
-            entry["visible"] = not (blocked_in or blocked_out)
-            entry["reason"] = "" if entry["visible"] else "blocked (an eyelid or the face)"
-        glints.append(entry)
-    out["glints"] = glints
-    return out

@@ -1,5 +1,6 @@
-"""The paper's Section 4.3 study: for each target falloff δ, the generator's best LED placement,
-its simulated eye image (glints off), and the evaluator's merit; the best δ.
+"""The paper's Section 4.3 δ study (``eyelume reproduce``): for each target falloff δ, the
+generator's best LED placement, its simulated eye image (glints off), and the evaluator's merit;
+the best δ.
 
 For every δ the 385-configuration sweep of :mod:`eyelume.optimize.sweep` picks the placement whose
 eye-plane pattern best matches the δ target (and a bounded refinement is reported beside it); the

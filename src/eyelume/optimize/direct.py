@@ -21,11 +21,12 @@ import numpy as np
 from scipy.optimize import minimize
 
 from eyelume.analysis.masks import IdealMask
+from eyelume.errors import SceneError
 from eyelume.optimize.delta_study import evaluate_placement
-from eyelume.scene.io import SceneError, apply_overrides
+from eyelume.scene.io import apply_overrides
 from eyelume.scene.model import Scene
 
-__all__ = ["DirectResult", "optimize_direct"]
+__all__ = ["DirectResult", "DirectSearch", "optimize_direct"]
 
 #: The paper's ranges (Section 4.1.1): Y 20–40 mm, Z 20–70 mm, θ 0–30°.
 PAPER_BOUNDS = ((20.0, 40.0), (20.0, 70.0), (0.0, 30.0))
@@ -73,75 +74,46 @@ def _overrides(n, offset, y, z, th, half, shifts=None) -> dict[str, object]:
     }
 
 
+@dataclass(frozen=True)
+class DirectSearch:
+    """What the direct search varies and what it may spend.
+
+    ``led_counts``: the LED counts tried (evenly spaced azimuths from 0°); ``vary_spread``: the
+    half-intensity angle is a variable too, within ``spread_bounds`` (degrees); ``vary_azimuths``:
+    each LED's azimuth is a variable (within ± half the even spacing); ``try_rotated``: also the
+    azimuths rotated by half a step (an × instead of a +). Each trial renders
+    ``samples_per_pixel`` samples with ``seed``; each search stops after ``max_evaluations``.
+    """
+
+    led_counts: Sequence[int] = (4,)
+    vary_spread: bool = False
+    vary_azimuths: bool = False
+    try_rotated: bool = False
+    spread_bounds: tuple[float, float] = (10.0, 40.0)
+    samples_per_pixel: int = 16
+    seed: int = 0
+    max_evaluations: int = 40
+
+
 def optimize_direct(
     scene: Scene,
     mask: IdealMask,
     start: tuple[float, float, float],
-    led_counts: Sequence[int] = (4,),
-    vary_spread: bool = False,
-    vary_azimuths: bool = False,
-    try_rotated: bool = False,
-    spread_bounds: tuple[float, float] = (10.0, 40.0),
-    samples_per_pixel: int = 16,
-    seed: int = 0,
-    max_evaluations: int = 40,
+    search: DirectSearch | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> DirectResult:
     """Minimise the evaluator merit of the glints-off eye image over the LED placement.
 
     ``start`` is (Y, Z, θ), e.g. the paper's two-step answer; the search stays inside the
     paper's ranges. Impossible placements (an LED body crossing the eye plane or the lens, two
-    bodies overlapping) score +inf. Returns the best over ``led_counts`` and, with
-    ``try_rotated``, the azimuths rotated by half a step (an × instead of a +). With
-    ``vary_azimuths`` each LED's azimuth is a variable too (within ± half the even spacing).
+    bodies overlapping) score +inf. Returns the best over the LED counts and azimuth offsets of
+    ``search`` (:class:`DirectSearch`), its merit re-rendered with the next seed.
     """
-    half0 = scene.leds.profile.half_intensity_angle_deg
+    search = search or DirectSearch()
     best: DirectResult | None = None
-    for n in led_counts:
-        for offset in (0.0, 180.0 / n) if try_rotated else (0.0,):
-            history: list[tuple[float, ...]] = []
-
-            def objective(x: np.ndarray, n=n, offset=offset, history=history) -> float:
-                y, z, th = x[:3]
-                half = x[3] if vary_spread else half0
-                shifts = x[4 if vary_spread else 3 :] if vary_azimuths else None
-                try:
-                    placed = apply_overrides(scene, _overrides(n, offset, y, z, th, half, shifts))
-                    _, merit, _, _ = evaluate_placement(placed, mask, samples_per_pixel, seed)
-                except SceneError:
-                    merit = float("inf")
-                history.append((*map(float, x), merit))
-                return merit
-
-            x0 = list(start) + ([half0] if vary_spread else [])
-            bounds = list(PAPER_BOUNDS) + ([spread_bounds] if vary_spread else [])
-            if vary_azimuths:  # each LED's azimuth may move ± half the even spacing
-                x0 += [0.0] * n
-                bounds += [(-90.0 / n, 90.0 / n)] * n
-            res = minimize(
-                objective,
-                np.array(x0, dtype=float),
-                method="Nelder-Mead",
-                bounds=bounds,
-                options={"maxfev": max_evaluations, "xatol": 0.25, "fatol": 1e-5},
-            )
-            x = res.x
-            cand = DirectResult(
-                leds=n,
-                azimuth_offset_deg=offset,
-                height_mm=float(x[0]),
-                distance_mm=float(x[1]),
-                pitch_deg=float(x[2]),
-                half_angle_deg=float(x[3]) if vary_spread else half0,
-                azimuth_shifts_deg=tuple(
-                    float(v) for v in (x[4 if vary_spread else 3 :] if vary_azimuths else [])
-                ),
-                merit=float(res.fun),
-                merit_check=float("nan"),
-                merit_check_se=float("nan"),
-                evaluations=int(res.nfev),
-                history=history,
-            )
+    for n in search.led_counts:
+        for offset in (0.0, 180.0 / n) if search.try_rotated else (0.0,):
+            cand = _search_one(scene, mask, start, search, n, offset)
             if progress:
                 progress(
                     f"{n} LEDs from {offset:g}°: merit {cand.merit:.5f} at Y {cand.height_mm:.1f}"
@@ -151,6 +123,60 @@ def optimize_direct(
                 best = cand
     assert best is not None
     placed = apply_overrides(scene, best.overrides())
-    _, merit, se, _ = evaluate_placement(placed, mask, samples_per_pixel, seed + 1)
+    _, merit, se, _ = evaluate_placement(placed, mask, search.samples_per_pixel, search.seed + 1)
     best.merit_check, best.merit_check_se = merit, se
     return best
+
+
+def _search_one(
+    scene: Scene,
+    mask: IdealMask,
+    start: tuple[float, float, float],
+    search: DirectSearch,
+    n: int,
+    offset: float,
+) -> DirectResult:
+    """One bounded Nelder–Mead search with ``n`` LEDs from azimuth ``offset`` (degrees)."""
+    half0 = scene.leds.profile.half_intensity_angle_deg
+    spread, azimuths = search.vary_spread, search.vary_azimuths
+    history: list[tuple[float, ...]] = []
+
+    def objective(x: np.ndarray) -> float:
+        y, z, th = x[:3]
+        half = x[3] if spread else half0
+        shifts = x[4 if spread else 3 :] if azimuths else None
+        try:
+            placed = apply_overrides(scene, _overrides(n, offset, y, z, th, half, shifts))
+            _, merit, _, _ = evaluate_placement(placed, mask, search.samples_per_pixel, search.seed)
+        except SceneError:
+            merit = float("inf")
+        history.append((*map(float, x), merit))
+        return merit
+
+    x0 = list(start) + ([half0] if spread else [])
+    bounds = list(PAPER_BOUNDS) + ([search.spread_bounds] if spread else [])
+    if azimuths:  # each LED's azimuth may move ± half the even spacing
+        x0 += [0.0] * n
+        bounds += [(-90.0 / n, 90.0 / n)] * n
+    res = minimize(
+        objective,
+        np.array(x0, dtype=float),
+        method="Nelder-Mead",
+        bounds=bounds,
+        options={"maxfev": search.max_evaluations, "xatol": 0.25, "fatol": 1e-5},
+    )
+    x = res.x
+    return DirectResult(
+        leds=n,
+        azimuth_offset_deg=offset,
+        height_mm=float(x[0]),
+        distance_mm=float(x[1]),
+        pitch_deg=float(x[2]),
+        half_angle_deg=float(x[3]) if spread else half0,
+        azimuth_shifts_deg=tuple(float(v) for v in (x[4 if spread else 3 :] if azimuths else [])),
+        merit=float(res.fun),
+        merit_check=float("nan"),
+        merit_check_se=float("nan"),
+        evaluations=int(res.nfev),
+        history=history,
+    )

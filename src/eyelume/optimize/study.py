@@ -187,8 +187,8 @@ def run_metrics(base: Scene, overrides: dict, study: Study) -> dict:
             mean, std, cv = skin_score(result.eye_image, result.regions["skin"])
             out["skin_mean_w_mm2"], out["skin_cv"] = mean, cv
     if "tracking" in study.metrics:
-        from eyelume.analysis.tracking.evaluate import evaluate_tracking, tracking_score
-        from eyelume.optimize.tracking import GAZE_H, GAZE_V
+        from eyelume.analysis.tracking.evaluate import tracking_score
+        from eyelume.optimize.tracking import GAZE_H, GAZE_V, evaluate_tracking
 
         rep = evaluate_tracking(
             scene, GAZE_H, GAZE_V, study.samples_per_pixel, study.seed, calibrate=False

@@ -1,11 +1,12 @@
 """``eyelume report DIR``: one self-contained HTML page of a study (figures embedded as PNG).
 
 The page holds the study's table (runs over an IEC 62471 exempt-group limit in red), one figure
-per metric against each varied parameter (the merit landscapes), the best runs, and — for the
-best run by the first merit — its eye-plane pattern and its eye image rendered anew, and its
-tracking-error maps when the study measured tracking. When the
-page has loaded, a script counts the figures that decoded into ``data-figures`` on the body, so a
-headless browser can check that it renders with its figures.
+per metric against each varied parameter (the merit landscapes), the best runs, and — when the
+study's folder holds them (:func:`eyelume.optimize.best_run.save_best_run`, which
+``eyelume report --scene`` runs first) — the best run's eye-plane pattern and eye image, and its
+tracking-error maps when the study measured tracking. The report only reads what is stored: it
+renders nothing. When the page has loaded, a script counts the figures that decoded into
+``data-figures`` on the body, so a headless browser can check that it renders with its figures.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from __future__ import annotations
 import base64
 import html
 import io
+import json
 import math
 from pathlib import Path
 
@@ -20,11 +22,11 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from eyelume.errors import StoreError
+from eyelume.optimize.best_run import BEST_RUN_FILES, best_runs
 from eyelume.report.plots import agg_figure
+from eyelume.report.tracking_outputs import save_error_maps
 
 __all__ = ["write_report"]
-
-_MERITS = ("eye_image_merit", "eye_plane_merit")
 
 
 def _png(fig: Figure) -> str:
@@ -50,13 +52,14 @@ def _landscapes(rows: list[dict], params: list[str], metrics: list[str]) -> list
     return out
 
 
-def _best_images(scene_name: str, overrides: dict) -> list[tuple[str, str]]:
-    import eyelume
-    from eyelume.estimators.closed_form import eye_plane_irradiance
-
-    scene = eyelume.load_scene(scene_name, overrides)
-    pattern = eye_plane_irradiance(scene)
-    image = eyelume.render(scene, samples_per_pixel=16, seed=0).eye_image
+def _best_images(folder: Path) -> list[tuple[str, str]]:
+    """The best run's stored eye-plane pattern and eye image, and its tracking-error maps."""
+    arrays, meta = folder / BEST_RUN_FILES[0], folder / BEST_RUN_FILES[1]
+    if not (arrays.exists() and meta.exists()):
+        return []
+    with np.load(arrays) as data:
+        pattern, image = data["eye_plane"], data["eye_image"]
+    info = json.loads(meta.read_text(encoding="utf-8"))
     fig = agg_figure(9, 3.4)
     a, b = fig.subplots(1, 2)
     im = a.imshow(pattern, cmap="inferno")
@@ -67,25 +70,18 @@ def _best_images(scene_name: str, overrides: dict) -> list[tuple[str, str]]:
     for ax in (a, b):
         ax.set_xticks([])
         ax.set_yticks([])
-    return [("best run: eye-plane pattern and eye image", _png(fig))]
+    out = [(f"best run ({info['index']}): eye-plane pattern and eye image", _png(fig))]
+    if info.get("tracking_rows"):
+        buf = io.BytesIO()
+        save_error_maps(info["tracking_rows"], buf)
+        out.append(("best run: tracking errors over the gaze grid",
+                    base64.b64encode(buf.getvalue()).decode("ascii")))  # fmt: skip
+    return out
 
 
-def _tracking_maps(scene_name: str, overrides: dict) -> list[tuple[str, str]]:
-    import eyelume
-    from eyelume.analysis.tracking.evaluate import evaluate_tracking
-    from eyelume.optimize.tracking import GAZE_H, GAZE_V
-    from eyelume.report.tracking_outputs import save_error_maps
-
-    scene = eyelume.load_scene(scene_name, overrides)
-    rep = evaluate_tracking(scene, GAZE_H, GAZE_V, 8, 0, calibrate=False)
-    buf = io.BytesIO()
-    save_error_maps(rep.frames, buf)
-    return [("best run: tracking errors over the gaze grid", base64.b64encode(buf.getvalue())
-             .decode("ascii"))]  # fmt: skip
-
-
-def write_report(folder: str | Path, scene_name: str | None = None) -> Path:
-    """Write ``folder/report.html`` from the study's store; returns its path."""
+def write_report(folder: str | Path) -> Path:
+    """Write ``folder/report.html`` from the study's store and the best run's stored pictures;
+    returns its path. Raises StoreError when the folder holds no study or no finished run."""
     from eyelume.optimize.store import ResultStore
 
     folder = Path(folder)
@@ -103,15 +99,9 @@ def write_report(folder: str | Path, scene_name: str | None = None) -> Path:
     metrics = sorted({k for r in rows for k, v in r["metrics"].items()
                       if isinstance(v, int | float) and not isinstance(v, bool)})  # fmt: skip
     figures = _landscapes(rows, params, metrics)
-    merit = next((m for m in _MERITS if m in metrics), None)
-    best = []
-    if merit is not None:
-        scored = [r for r in rows if isinstance(r["metrics"].get(merit), int | float)]
-        best = sorted(scored, key=lambda r: r["metrics"][merit])[:5]
-        if best and scene_name:
-            figures += _best_images(scene_name, best[0]["overrides"])
-            if "tracking_score_deg" in metrics:
-                figures += _tracking_maps(scene_name, best[0]["overrides"])
+    merit, best = best_runs(rows)
+    if best:
+        figures += _best_images(folder)
 
     def cell(v) -> str:
         if isinstance(v, float):

@@ -18,7 +18,7 @@ from eyelume.report.optimize_plots import (
 )
 from eyelume.report.plots import save_grey_png
 
-__all__ = ["write_sweep_outputs", "write_study_outputs"]
+__all__ = ["write_delta_study_outputs", "write_sweep_outputs"]
 
 
 def write_sweep_outputs(sweep, target: np.ndarray, refined, delta, plane_extent, out) -> list[Path]:
@@ -65,11 +65,12 @@ def write_sweep_outputs(sweep, target: np.ndarray, refined, delta, plane_extent,
     return written
 
 
-def write_study_outputs(
+def write_delta_study_outputs(
     rows: Sequence, direct, paper_merits: dict, paper_choice: dict, meta: dict, out
 ) -> list[Path]:
-    """``table.csv``, ``merit_vs_delta.png``, ``deltas.png`` (patterns and images), one
-    ``eye_image_delta_X.png`` per δ, ``study.json`` and ``comparison.md``."""
+    """The files of ``eyelume reproduce`` (the δ study): ``table.csv``, ``merit_vs_delta.png``,
+    ``deltas.png`` (patterns and images), one ``eye_image_delta_X.png`` per δ,
+    ``delta_study.json`` and ``comparison.md``."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = []
@@ -148,7 +149,7 @@ def write_study_outputs(
         if direct is None
         else {k: v for k, v in vars(direct).items() if k != "history"},
     }
-    path("study.json").write_text(
+    path("delta_study.json").write_text(
         json.dumps(summary, indent=2, default=float) + "\n", encoding="utf-8"
     )
     path("comparison.md").write_text(
@@ -158,7 +159,7 @@ def write_study_outputs(
 
 
 def comparison_markdown(rows, direct, paper_merits, paper_choice, meta) -> str:
-    """Our study against the paper's conclusions, in words and numbers."""
+    """Our δ study against the paper's conclusions, in words and numbers."""
     best = min(rows, key=lambda r: r.evaluator_merit)
     se = best.evaluator_merit_se
     ties = [

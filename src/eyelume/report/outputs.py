@@ -4,22 +4,24 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from eyelume.analysis.truth import eye_truth
-from eyelume.compile import CompiledScene
 from eyelume.detectors.sensor import camera_summary, digitize
-from eyelume.estimators.forward import trace_paths
-from eyelume.layout import system_sections
-from eyelume.render import RenderResult
 from eyelume.report.plots import SectionCurve, save_grey_png, save_irradiance_plot, save_layout
+
+if TYPE_CHECKING:  # annotations only: report/ never imports what traces rays
+    from eyelume.render import RenderExtras, RenderResult
 
 __all__ = ["write_render_outputs"]
 
 
-def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Path) -> list[Path]:
+def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | Path) -> list[Path]:
     """Write every output of ``eyelume render`` into folder ``out``; returns the paths written.
+
+    ``extras`` (:func:`eyelume.render.render_extras`) holds the layout section, the traced ray
+    paths and the truth, computed by the caller: report/ traces no ray.
 
     ``eye_image.npy``/``eye_plane.npy`` (W/mm², float64), ``eye_image_std.npy`` (each pixel's
     estimated standard error, W/mm²), their grey PNGs (glints saturate at the
@@ -66,8 +68,8 @@ def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Pat
         extent_mm=result.plane_extent_mm,
         title=f"{name}: eye-plane irradiance toward the eye",
     )
-    rays = trace_paths(cs, result.seed)
-    curves = [SectionCurve(s.name, s.category, s.z, s.y) for s in system_sections(cs)]
+    rays = extras.ray_paths
+    curves = [SectionCurve(s.name, s.category, s.z, s.y) for s in extras.sections]
     save_layout(
         curves,
         [p for p, _ in rays],
@@ -78,5 +80,5 @@ def write_render_outputs(result: RenderResult, cs: CompiledScene, out: str | Pat
     summary = result.summary()
     summary["camera"] = camera_summary(sc.sensor, sc.wavelength_nm, digital)
     path("summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-    path("truth.json").write_text(json.dumps(eye_truth(cs), indent=2) + "\n", encoding="utf-8")
+    path("truth.json").write_text(json.dumps(extras.truth, indent=2) + "\n", encoding="utf-8")
     return written

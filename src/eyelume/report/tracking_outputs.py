@@ -10,38 +10,36 @@ from pathlib import Path
 
 import numpy as np
 
+from eyelume.analysis.tracking.evaluate import error_map_rows
 from eyelume.report.plots import agg_figure
 
 __all__ = ["write_tracking_outputs"]
 
 
-def _grid(frames, value) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    hs = sorted({f.gaze[0] for f in frames})
-    vs = sorted({f.gaze[1] for f in frames})
+def _grid(rows: list[dict], key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    hs = sorted({r["gaze"][0] for r in rows})
+    vs = sorted({r["gaze"][1] for r in rows})
     out = np.full((len(vs), len(hs)), np.nan)
-    for f in frames:
-        v = value(f)
-        out[vs.index(f.gaze[1]), hs.index(f.gaze[0])] = np.nan if v is None else v
+    for r in rows:
+        v = r[key]
+        out[vs.index(r["gaze"][1]), hs.index(r["gaze"][0])] = np.nan if v is None else v
     return np.array(hs), np.array(vs), out
 
 
-def _err(est, gaze):
-    return None if est is None else math.hypot(est[0] - gaze[0], est[1] - gaze[1])
-
-
-def save_error_maps(frames, path) -> None:
+def save_error_maps(rows: list[dict], path) -> None:
     """Four maps over the gaze grid: pupil-centre error (px), glints found, PCCR and geometric
-    gaze errors (°); blank where the frame failed."""
+    gaze errors (°); blank where the frame failed. ``rows`` are
+    :func:`eyelume.analysis.tracking.evaluate.error_map_rows` (one per frame)."""
     maps = [
-        ("pupil-centre error (px)", lambda f: f.pupil_error_px if f.detection.ok else None),
-        ("glints found and matched", lambda f: f.glints_found),
-        ("PCCR gaze error (°)", lambda f: _err(f.pccr, f.gaze)),
-        ("geometric gaze error (°)", lambda f: _err(f.geometric, f.gaze)),
+        ("pupil-centre error (px)", "pupil_error_px"),
+        ("glints found and matched", "glints_found"),
+        ("PCCR gaze error (°)", "pccr_error_deg"),
+        ("geometric gaze error (°)", "geometric_error_deg"),
     ]
     fig = agg_figure(13, 3.4)
     axes = fig.subplots(1, 4)
-    for ax, (title, fn) in zip(axes, maps, strict=True):
-        hs, vs, z = _grid(frames, fn)
+    for ax, (title, key) in zip(axes, maps, strict=True):
+        hs, vs, z = _grid(rows, key)
         im = ax.imshow(
             z,
             origin="lower",
@@ -89,5 +87,5 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
             )  # fmt: skip
     summary = {"meta": meta, **report.summary}
     written[1].write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-    save_error_maps(report.frames, written[2])
+    save_error_maps(error_map_rows(report.frames), written[2])
     return written

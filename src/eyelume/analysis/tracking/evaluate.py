@@ -1,19 +1,19 @@
-"""Tracking quality of an illumination scheme: render the eye over a grid of gazes, detect the
-pupil and glints on the camera's digital images, estimate gaze, and compare with the truth.
+"""Tracking quality of given frames: detection against the truth, gaze estimates, statistics.
 
-For each gaze the scene is rendered (fast estimator), read out by the sensor model, run through
-the paper's detection pipeline (:mod:`.detect`) and compared with the renderer's own truth
-(:func:`eyelume.analysis.truth.eye_truth`): pupil-centre error (the detected ellipse's centre
-against the centre of the ellipse through the true apparent pupil edge), glints found and
-matched. Gaze comes from two estimators (:mod:`.gaze`): the PCCR polynomial, calibrated on a
-3 × 3 grid of gazes rendered for that purpose and evaluated on the held-out test grid, and the
-Guestrin–Eizenman geometric model from the glints, which needs no calibration.
+Each frame is a digital picture of the eye at a known gaze with the renderer's truth
+(:func:`eyelume.analysis.truth.eye_truth`). :func:`analyse_frame` runs the paper's detection
+pipeline (:mod:`.detect`) on it and compares with the truth: pupil-centre error (the detected
+ellipse's centre against the centre of the ellipse through the true apparent pupil edge), glints
+found and matched. :func:`analyse_frames` estimates gaze with two estimators (:mod:`.gaze`): the
+PCCR polynomial, calibrated on a 3 × 3 grid of calibration frames and evaluated on the held-out
+test frames, and the Guestrin–Eizenman geometric model from the glints, which needs no
+calibration. Rendering the frames over a gaze grid is :mod:`eyelume.optimize.tracking`'s.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -21,19 +21,15 @@ import numpy as np
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.tracking.detect import Detection, detect
 from eyelume.analysis.tracking.gaze import GeometricGaze, PccrModel, PinholeCamera
-from eyelume.analysis.truth import eye_truth
-from eyelume.compile import compile_scene
-from eyelume.detectors.sensor import digitize
-from eyelume.render import render
-from eyelume.scene.io import apply_overrides
 from eyelume.scene.model import Scene
 
 __all__ = [
-    "POPULATION",
+    "FAILED_FRAME_DEG",
     "Frame",
     "TrackingReport",
-    "evaluate_population",
-    "evaluate_tracking",
+    "analyse_frame",
+    "analyse_frames",
+    "error_map_rows",
     "pinhole_camera",
     "tracking_score",
 ]
@@ -100,14 +96,18 @@ def _truth_ellipse_centre(truth: dict) -> tuple[float, float] | None:
     return float(cx), float(cy)
 
 
-def _frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> Frame:
-    sc = apply_overrides(scene, {"eye.gaze_horizontal_deg": h, "eye.gaze_vertical_deg": v})
-    cs = compile_scene(sc)
-    result = render(cs, estimator="fast", samples_per_pixel=samples, seed=seed)
-    counts = digitize(result.eye_image, sc.sensor, sc.wavelength_nm, seed=seed).counts
-    det = detect(counts, led_azimuths_deg=list(sc.leds.azimuths()))
-    truth = eye_truth(cs)
-    f = Frame((h, v), det, truth, render_s=result.wall_time_s)
+def analyse_frame(
+    gaze: tuple[float, float],
+    counts: np.ndarray,
+    truth: dict,
+    led_azimuths_deg: Sequence[float],
+    render_s: float = 0.0,
+) -> Frame:
+    """Detect the pupil and glints on one digital picture ``counts`` (rows, cols) of the eye at
+    ``gaze`` (h, v degrees) and compare with its ``truth`` (:func:`eyelume.analysis.truth.
+    eye_truth`): pupil-centre error (px), glints found and matched, the pupil–glint vector."""
+    det = detect(counts, led_azimuths_deg=list(led_azimuths_deg))
+    f = Frame(tuple(gaze), det, truth, render_s=render_s)
     f.detect_ms = float(det.timings_ms.get("total", math.nan))
     f.glints_true = sum(1 for g in truth["glints"] if g["visible"])
     f.glints_found = sum(1 for g in det.glints if g.led is not None)
@@ -134,49 +134,25 @@ def _geometric(model: GeometricGaze, frame: Frame, n_leds: int) -> tuple[float, 
     return (est.h_deg, est.v_deg) if est.ok else None
 
 
-def evaluate_tracking(
-    scene: Scene,
-    test_h: Sequence[float] = TEST_H,
-    test_v: Sequence[float] = TEST_V,
-    samples_per_pixel: int = 16,
-    seed: int = 0,
-    progress: Callable[[str], None] | None = None,
-    calibration_scene: Scene | None = None,
-    calibrate: bool = True,
+def analyse_frames(
+    scene: Scene, leds_mm: np.ndarray, frames: list[Frame], calibration: list[Frame]
 ) -> TrackingReport:
-    """Render, detect and estimate gaze over the calibration and test grids (module doc).
-
-    ``calibration_scene`` (default ``scene``) is the scene the PCCR calibration is rendered in:
-    pass the nominal scene to measure a headset slip after calibration. Without ``calibrate``
-    only the geometric model (which needs no calibration) estimates gaze."""
-    calib = []
-    for v in CALIBRATION_V if calibrate else ():
-        for h in CALIBRATION_H:
-            calib.append(_frame(calibration_scene or scene, h, v, samples_per_pixel, seed))
-    frames = []
-    for v in test_v:
-        for h in test_h:
-            frames.append(_frame(scene, h, v, samples_per_pixel, seed))
-            if progress:
-                f = frames[-1]
-                progress(
-                    f"gaze ({h:+.0f}°, {v:+.0f}°): "
-                    + ("ok" if f.detection.ok else "; ".join(f.detection.failures))
-                )
-    usable = [f for f in calib if f.pg_vector is not None]
+    """Gaze estimates and statistics of the test ``frames``: the PCCR polynomial fitted on the
+    ``calibration`` frames (when at least 6 have a pupil–glint vector) and the geometric model
+    of ``scene``'s camera with the LEDs at ``leds_mm`` (n, 3) in the world frame (mm)."""
+    usable = [f for f in calibration if f.pg_vector is not None]
     pccr = None
     if len(usable) >= 6:
         pccr = PccrModel.fit(
             np.array([f.pg_vector for f in usable]), np.array([f.gaze for f in usable])
         )
-    leds = compile_scene(scene).leds[:, :3]
-    geometric = GeometricGaze(pinhole_camera(scene), leds)
+    geometric = GeometricGaze(pinhole_camera(scene), leds_mm)
     for f in frames:
         if pccr is not None and f.pg_vector is not None:
             f.pccr = tuple(float(x) for x in pccr.predict(np.array([f.pg_vector]))[0])
-        f.geometric = _geometric(geometric, f, len(leds))
+        f.geometric = _geometric(geometric, f, len(leds_mm))
     mm_per_px = pinhole_camera(scene).scale_mm  # eye-plane mm per pixel
-    report = TrackingReport(frames, calib, mm_per_px)
+    report = TrackingReport(frames, calibration, mm_per_px)
     report.summary = summarise(report, pccr_calibrated=pccr is not None)
     report.summary["safety"] = eye_safety(scene)
     return report
@@ -234,58 +210,6 @@ def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
     }
 
 
-#: The population of the issue: iris dark to light, skin reflectance range, eyelid aperture,
-#: headset slip of ± 2 mm (after calibration: the PCCR polynomial is the nominal user's).
-#: Reflectances: dark brown iris ~2 %, light blue/grey ~15 % at 850 nm; skin 6–35 % across skin
-#: types in the near infrared (the paper's Table 2 gives 12 % for its Caucasian skin).
-POPULATION: tuple[tuple[str, dict, bool], ...] = (
-    ("nominal", {}, True),
-    ("dark iris", {"eye.iris_reflectance": 0.02}, True),
-    ("light iris", {"eye.iris_reflectance": 0.15}, True),
-    ("dark skin", {"face.skin_reflectance": 0.06}, True),
-    ("light skin", {"face.skin_reflectance": 0.35}, True),
-    (
-        "narrow lids",
-        {"face.tissues.0.clip_z_mm": [3.0, 14.0], "face.tissues.1.clip_z_mm": [4.0, 14.0]},
-        True,
-    ),
-    ("slip +2 mm x", {"head_offset_mm": [2.0, 0.0, 0.0]}, False),
-    ("slip -2 mm y", {"head_offset_mm": [0.0, -2.0, 0.0]}, False),
-)
-
-
-def evaluate_population(
-    scene: Scene,
-    population: Sequence[tuple[str, dict, bool]] = POPULATION,
-    test_h: Sequence[float] = TEST_H,
-    test_v: Sequence[float] = TEST_V,
-    samples_per_pixel: int = 16,
-    seed: int = 0,
-    progress: Callable[[str], None] | None = None,
-) -> dict[str, TrackingReport]:
-    """:func:`evaluate_tracking` for each member of ``population``: (name, scene overrides,
-    whether the user calibrates in that state — False for a slip after calibration)."""
-    out = {}
-    for name, overrides, recalibrate in population:
-        member = apply_overrides(scene, overrides) if overrides else scene
-        out[name] = evaluate_tracking(
-            member,
-            test_h,
-            test_v,
-            samples_per_pixel,
-            seed,
-            calibration_scene=None if recalibrate else scene,
-        )
-        if progress:
-            s = out[name].summary
-            progress(
-                f"{name}: detection {s['detection_rate']:.0%}, geometric gaze "
-                f"{s['gaze_geometric'].get('mean_deg', math.nan):.2f}° mean, PCCR "
-                f"{s['gaze_pccr'].get('mean_deg', math.nan):.2f}°"
-            )
-    return out
-
-
 #: Gaze error charged to a frame whose detection failed (degrees): a tracker that loses the eye
 #: is worse than one that is a few degrees off.
 FAILED_FRAME_DEG = 10.0
@@ -304,3 +228,27 @@ def tracking_score(report: TrackingReport) -> float:
         )
         errs.append(FAILED_FRAME_DEG if e is None else min(e, FAILED_FRAME_DEG))
     return float(np.mean(errs)) if errs else math.inf
+
+
+def _err(est: tuple[float, float] | None, gaze: tuple[float, float]) -> float | None:
+    return None if est is None else math.hypot(est[0] - gaze[0], est[1] - gaze[1])
+
+
+def _finite(x: float | None) -> float | None:
+    return float(x) if x is not None and math.isfinite(x) else None
+
+
+def error_map_rows(frames: Sequence[Frame]) -> list[dict]:
+    """One plain row per frame for the error maps over the gaze grid: ``gaze`` (h, v °),
+    ``pupil_error_px`` (None where detection failed), ``glints_found``, ``pccr_error_deg`` and
+    ``geometric_error_deg`` (None without an estimate). JSON-ready: a study stores them."""
+    return [
+        {
+            "gaze": [float(f.gaze[0]), float(f.gaze[1])],
+            "pupil_error_px": _finite(f.pupil_error_px) if f.detection.ok else None,
+            "glints_found": int(f.glints_found),
+            "pccr_error_deg": _finite(_err(f.pccr, f.gaze)),
+            "geometric_error_deg": _finite(_err(f.geometric, f.gaze)),
+        }
+        for f in frames
+    ]

@@ -1,7 +1,8 @@
-"""Wall time of the two study commands, end to end in a fresh process each (issues 4 and 5).
+"""Wall time of two commands, end to end in a fresh process each (issues 4 and 5): reproduce
+(the paper's δ study) and evaluate-tracking.
 
-    python benchmarks/studies.py             # reproduce + evaluate-tracking, ~1.5 min
-    python benchmarks/studies.py --only reproduce
+    python benchmarks/end_to_end.py          # reproduce + evaluate-tracking, ~1.5 min
+    python benchmarks/end_to_end.py --only reproduce
 
 - ``reproduce``: ``eyelume reproduce paper2005 --out TMP`` with its defaults (9 δ, 32 camera
   samples per pixel per eye image, 30 renders of direct optimisation). Target ≤ 60 s.
@@ -25,7 +26,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent))
 from _common import command_line, loadavg, machine, print_header  # noqa: E402
 
-RESULTS = Path(__file__).parent / "results" / "studies.jsonl"
+RESULTS = Path(__file__).parent / "results" / "end_to_end.jsonl"
 
 
 def run(args: list[str]) -> float:
@@ -40,7 +41,7 @@ def main() -> None:
     ap.add_argument("--only", default="reproduce,tracking")
     a = ap.parse_args()
     info = {"machine": machine(), "command": command_line(), "load_start": loadavg()}
-    print_header("study commands, end to end", info["machine"])
+    print_header("reproduce and evaluate-tracking, end to end", info["machine"])
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         # warm the Numba cache (render, reproduce's kernels, tracking) in throwaway runs
@@ -49,8 +50,8 @@ def main() -> None:
             warm = ["--deltas", "0.3", "--direct", "2", "--out", f"{tmp}/w2"]
             run(["reproduce", "paper2005", *warm])
             wall = run(["reproduce", "paper2005", "--out", f"{tmp}/r"])
-            study = json.loads(Path(f"{tmp}/r/study.json").read_text())
-            out["reproduce"] = {"wall_s": wall, "best_delta": study["best_delta"]}
+            delta_study = json.loads(Path(f"{tmp}/r/delta_study.json").read_text())
+            out["reproduce"] = {"wall_s": wall, "best_delta": delta_study["best_delta"]}
             status = "PASS" if wall <= 60 else "FAIL"
             print(f"[{status}] eyelume reproduce paper2005: {wall:.1f} s (target ≤ 60 s)")
         if "tracking" in a.only:

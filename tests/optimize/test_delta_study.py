@@ -1,4 +1,4 @@
-"""The Section 4 study end to end (reduced budgets), the evaluator merit's noise estimate, and the
+"""The Section 4 δ study end to end (reduced budgets), the evaluator merit's noise estimate, and the
 direct optimisation's guarantee."""
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from eyelume.analysis.masks import ideal_mask
 from eyelume.cli import app
 from eyelume.compile import compile_scene
 from eyelume.optimize.delta_study import evaluate_placement, with_placement
-from eyelume.optimize.direct import optimize_direct
+from eyelume.optimize.direct import DirectSearch, optimize_direct
 
 runner = CliRunner()
 SMALL = {"sensor.cols": 44, "sensor.rows": 33}
@@ -37,7 +37,7 @@ def test_reproduce_runs_end_to_end(tmp_path):
     text = (out / "comparison.md").read_text(encoding="utf-8")
     assert "Best δ" in text and ("agrees" in text or "disagrees" in text)
     assert "Beyond the paper" in text
-    study = json.loads((out / "study.json").read_text(encoding="utf-8"))
+    study = json.loads((out / "delta_study.json").read_text(encoding="utf-8"))
     assert study["best_delta"] in (0.0, 0.3, 0.8) and study["direct"]["evaluations"] >= 1
 
 
@@ -92,7 +92,8 @@ def test_direct_optimum_is_no_worse_than_its_start():
     mask = ideal_mask(compile_scene(scene))
     start = (30.0, 60.0, 15.0)
     _, m0, _, _ = evaluate_placement(with_placement(scene, *start), mask, 8, 5)
-    found = optimize_direct(scene, mask, start, samples_per_pixel=8, seed=5, max_evaluations=8)
+    search = DirectSearch(samples_per_pixel=8, seed=5, max_evaluations=8)
+    found = optimize_direct(scene, mask, start, search)
     assert found.merit <= m0 + 1e-15
     assert np.isfinite(found.merit_check) and found.merit_check_se > 0
 
@@ -106,12 +107,14 @@ def test_direct_optimisation_over_led_count_spread_and_azimuths():
         scene,
         mask,
         (30.0, 60.0, 15.0),
-        led_counts=(4, 6),
-        vary_spread=True,
-        vary_azimuths=True,
-        samples_per_pixel=8,
-        seed=2,
-        max_evaluations=4,
+        DirectSearch(
+            led_counts=(4, 6),
+            vary_spread=True,
+            vary_azimuths=True,
+            samples_per_pixel=8,
+            seed=2,
+            max_evaluations=4,
+        ),
     )
     assert found.leds in (4, 6)
     assert len(found.azimuth_shifts_deg) == found.leds

@@ -1,4 +1,5 @@
-"""Tracking on rendered frames: detection against the renderer's truth, gaze estimates, a
+"""Tracking evaluated on rendered frames (optimize/tracking.py renders, analysis/tracking/
+evaluate.py analyses): detection against the renderer's truth, gaze estimates, a
 hidden pupil reported as a failure, and the evaluate-tracking command end to end (small grid)."""
 
 from __future__ import annotations
@@ -9,14 +10,14 @@ import numpy as np
 from typer.testing import CliRunner
 
 import eyelume
-from eyelume.analysis.tracking.evaluate import _frame, evaluate_tracking
 from eyelume.cli import app
+from eyelume.optimize.tracking import evaluate_tracking, render_frame
 
 
 def test_detection_recovers_the_true_pupil_and_glints_in_primary_gaze():
     """At 87 × 65 (0.46 mm of eye per pixel) the detected pupil centre lies within 0.5 px of the
     centre of the true apparent pupil outline, and each glint within 0.5 px of its truth."""
-    f = _frame(eyelume.load_scene("paper2005"), 0.0, 0.0, 16, 1)
+    f = render_frame(eyelume.load_scene("paper2005"), 0.0, 0.0, 16, 1)
     assert f.detection.ok, f.detection.failures
     assert f.pupil_error_px < 0.5
     truth = {g["led"]: g["centre_px"] for g in f.truth["glints"]}
@@ -30,7 +31,7 @@ def test_a_pupil_hidden_by_the_eyelid_is_a_failure_not_a_gaze():
     """Lower the upper lid's margin to 2 mm below the corneal vertex: the pupil is mostly
     covered; the frame must be reported as failed."""
     scene = eyelume.load_scene("paper2005", {"face.tissues.0.clip_z_mm": [-2.0, 14.0]})
-    f = _frame(scene, 0.0, 0.0, 16, 1)
+    f = render_frame(scene, 0.0, 0.0, 16, 1)
     assert not f.detection.ok
     assert f.pg_vector is None
     assert any("pupil" in r for r in f.detection.failures)
@@ -69,11 +70,8 @@ def test_track_command_on_a_rendered_image(tmp_path):
 def test_population_slip_after_calibration_and_the_tracking_score():
     """A slip after calibration moves the pupil–glint vector little (both move with the eye)
     but the geometric model needs no calibration; the score charges failed frames 10°."""
-    from eyelume.analysis.tracking.evaluate import (
-        FAILED_FRAME_DEG,
-        evaluate_population,
-        tracking_score,
-    )
+    from eyelume.analysis.tracking.evaluate import FAILED_FRAME_DEG, tracking_score
+    from eyelume.optimize.tracking import evaluate_population
 
     scene = eyelume.load_scene("paper2005")
     members = evaluate_population(

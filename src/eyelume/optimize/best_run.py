@@ -1,0 +1,99 @@
+"""A study's best run, evaluated anew and stored beside its results for the report.
+
+The report (:mod:`eyelume.report.html`) only reads stored results. What it shows of the best run
+beyond its metrics — the eye-plane pattern, the eye image and, when the study measured tracking,
+the tracking errors over the gaze grid — is computed here and stored in the study's folder:
+
+- ``best_run.npz``: ``eye_plane`` (rows, cols) W/mm² (closed form,
+  :func:`eyelume.estimators.closed_form.eye_plane_irradiance`) and ``eye_image`` (rows, cols)
+  W/mm² (fast estimator, 16 samples per pixel, seed 0);
+- ``best_run.json``: the run's index, overrides, the merit it is best by and its value, and
+  ``tracking_rows`` (:func:`eyelume.analysis.tracking.evaluate.error_map_rows` over the 3 × 3
+  gaze grid of :mod:`.tracking`) or null.
+
+The best run is the one with the lowest value of the first merit in :data:`MERITS` the study
+measured.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from eyelume.errors import StoreError
+
+__all__ = ["BEST_RUN_FILES", "MERITS", "best_runs", "save_best_run"]
+
+#: The merits a study's runs are ranked by, in order of preference (lower is better).
+MERITS = ("eye_image_merit", "eye_plane_merit")
+#: The files :func:`save_best_run` writes into the study's folder.
+BEST_RUN_FILES = ("best_run.npz", "best_run.json")
+
+
+def best_runs(rows: list[dict], count: int = 5) -> tuple[str | None, list[dict]]:
+    """(merit, the ``count`` best rows by it) of a study's stored rows; (None, []) when the study
+    measured no merit of :data:`MERITS`."""
+    measured = {k for r in rows for k, v in r["metrics"].items() if _is_number(v)}
+    merit = next((m for m in MERITS if m in measured), None)
+    if merit is None:
+        return None, []
+    scored = [r for r in rows if _is_number(r["metrics"].get(merit))]
+    return merit, sorted(scored, key=lambda r: r["metrics"][merit])[:count]
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool)
+
+
+def _stored_rows(folder: Path) -> list[dict]:
+    from eyelume.optimize.store import ResultStore
+
+    if not (folder / "results.sqlite").exists():
+        raise StoreError(f"{folder}: no results.sqlite (run `eyelume study` first)")
+    store = ResultStore(folder)
+    try:
+        return store.rows()
+    finally:
+        store.close()
+
+
+def save_best_run(folder: str | Path, scene: str) -> Path | None:
+    """Evaluate the best run of the study in ``folder`` on its base scene ``scene`` (a preset
+    name or a TOML file) and store ``best_run.npz`` and ``best_run.json`` there (module doc).
+    Returns the JSON's path, or None when the study measured no merit to rank by.
+
+    Raises StoreError when the folder holds no study, SceneError for a bad scene."""
+    import eyelume
+    from eyelume.analysis.tracking.evaluate import error_map_rows
+    from eyelume.estimators.closed_form import eye_plane_irradiance
+    from eyelume.optimize.tracking import GAZE_H, GAZE_V, evaluate_tracking
+
+    folder = Path(folder)
+    rows = _stored_rows(folder)
+    merit, best = best_runs(rows, 1)
+    if not best:
+        return None
+    run = best[0]
+    sc = eyelume.load_scene(scene, run["overrides"])
+    pattern = eye_plane_irradiance(sc)
+    image = eyelume.render(sc, samples_per_pixel=16, seed=0).eye_image
+    tracking = None
+    if any("tracking_score_deg" in r["metrics"] for r in rows):
+        rep = evaluate_tracking(sc, GAZE_H, GAZE_V, 8, 0, calibrate=False)
+        tracking = error_map_rows(rep.frames)
+    np.savez(folder / BEST_RUN_FILES[0], eye_plane=pattern, eye_image=image)
+    value = run["metrics"][merit]
+    meta = {
+        "index": run["index"],
+        "overrides": run["overrides"],
+        "merit": merit,
+        "value": value if math.isfinite(value) else None,
+        "scene": str(scene),
+        "tracking_rows": tracking,
+    }
+    path = folder / BEST_RUN_FILES[1]
+    path.write_text(json.dumps(meta, indent=2) + "\n", encoding="utf-8")
+    return path
