@@ -936,7 +936,7 @@ def _finite_json(obj):
     return obj
 
 
-def main(argv: list[str] | None = None) -> None:
+def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--quick", action="store_true", help="smoke run (< 2 min): small budgets")
     p.add_argument(
@@ -971,17 +971,11 @@ def main(argv: list[str] | None = None) -> None:
         default=[2_500_000, 5_000_000, 10_000_000, 20_000_000, 40_000_000],
         help=argparse.SUPPRESS,
     )
-    a = p.parse_args(argv)
+    return p
 
-    if a.worker:
-        res = WORKERS[a.worker](a)
-        print(RESULT_TAG + json.dumps(res, default=C._jsonable))
-        return
 
-    only = [s for s in a.only.split(",") if s]
-    bad = set(only) - set(SECTIONS)
-    if bad:
-        p.error(f"--only: unknown section(s) {sorted(bad)}; choose from {', '.join(SECTIONS)}")
+def _budgets(a: argparse.Namespace) -> tuple[int, int]:
+    """Set the memory cases and, with --quick, the small budgets; returns the large size."""
     big = (640, 480)
     a.memory_cases = [
         ("fast", 87, 65, 32),
@@ -1001,6 +995,58 @@ def main(argv: list[str] | None = None) -> None:
             ("forward", 1280, 1024, 1_000_000),
         ]
         big = (120, 90)
+    return big
+
+
+def _run_sections(a, only: list[str], out: dict, S: Summary, big: tuple[int, int]) -> None:
+    if "target_87x65" in only:
+        bench_target(a, out, S, "target_87x65", DEFAULT_SIZE, 0.01, 1.0)
+    if "target_640x480" in only:
+        bench_target(a, out, S, "target_640x480", big, 0.02, None if a.quick else 20.0)
+    if "noise_check" in only:
+        bench_noise(a, out, S)
+    if "efficiency" in only:
+        bench_efficiency(a, out, S)
+    if "memory" in only:
+        bench_memory(a, out, S)
+    if "curve" in only:
+        bench_curve(a, out, S)
+
+
+def _print_summary(a, info: dict, out: dict, S: Summary, path: Path) -> None:
+    print(
+        "\n== summary (issue 3, paper2005, "
+        f"{info['nproc_cmd']} cores, NUMBA_NUM_THREADS={a.threads})"
+    )
+    print(f"   command: {out['command']}   (cwd {os.getcwd()})")
+    for row in S.rows:
+        print(f"   [{row['status']}] {row['figure']}: {row['value']}  — target {row['target']}")
+        print(f"          by: {row['command']}")
+    print(
+        f"   loadavg start {info['loadavg_at_start']} end {out['loadavg_at_end']}; "
+        f"src dirty={info['src_dirty']} (commit {info['commit']})"
+    )
+    if S.disturbed:
+        print("   machine busy during: " + "; ".join(S.disturbed))
+    else:
+        print("   no timing was flagged as disturbed")
+    print(f"   total {out['total_s']:.0f} s; appended to {path.relative_to(C.REPO)}")
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = _parser()
+    a = p.parse_args(argv)
+
+    if a.worker:
+        res = WORKERS[a.worker](a)
+        print(RESULT_TAG + json.dumps(res, default=C._jsonable))
+        return
+
+    only = [s for s in a.only.split(",") if s]
+    bad = set(only) - set(SECTIONS)
+    if bad:
+        p.error(f"--only: unknown section(s) {sorted(bad)}; choose from {', '.join(SECTIONS)}")
+    big = _budgets(a)
     info = C.machine()
     C.print_header("eyelume eye images (issue 3), scene paper2005", info)
     print(f"   threads : NUMBA_NUM_THREADS={a.threads} in every worker; Numba cache {C.WARM_CACHE}")
@@ -1028,41 +1074,13 @@ def main(argv: list[str] | None = None) -> None:
     }
     S = Summary()
     t0 = time.perf_counter()
-    if "target_87x65" in only:
-        bench_target(a, out, S, "target_87x65", DEFAULT_SIZE, 0.01, 1.0)
-    if "target_640x480" in only:
-        bench_target(a, out, S, "target_640x480", big, 0.02, None if a.quick else 20.0)
-    if "noise_check" in only:
-        bench_noise(a, out, S)
-    if "efficiency" in only:
-        bench_efficiency(a, out, S)
-    if "memory" in only:
-        bench_memory(a, out, S)
-    if "curve" in only:
-        bench_curve(a, out, S)
+    _run_sections(a, only, out, S, big)
     out["loadavg_at_end"] = C.loadavg()
     out["total_s"] = time.perf_counter() - t0
     out["summary"] = S.rows
     out["disturbed"] = S.disturbed
     path = C.append_result("eye_image", _finite_json(out))
-
-    print(
-        "\n== summary (issue 3, paper2005, "
-        f"{info['nproc_cmd']} cores, NUMBA_NUM_THREADS={a.threads})"
-    )
-    print(f"   command: {out['command']}   (cwd {os.getcwd()})")
-    for row in S.rows:
-        print(f"   [{row['status']}] {row['figure']}: {row['value']}  — target {row['target']}")
-        print(f"          by: {row['command']}")
-    print(
-        f"   loadavg start {info['loadavg_at_start']} end {out['loadavg_at_end']}; "
-        f"src dirty={info['src_dirty']} (commit {info['commit']})"
-    )
-    if S.disturbed:
-        print("   machine busy during: " + "; ".join(S.disturbed))
-    else:
-        print("   no timing was flagged as disturbed")
-    print(f"   total {out['total_s']:.0f} s; appended to {path.relative_to(C.REPO)}")
+    _print_summary(a, info, out, S, path)
 
 
 if __name__ == "__main__":

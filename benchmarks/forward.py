@@ -159,13 +159,11 @@ def worker_memory(a: argparse.Namespace) -> dict:
     }
 
 
-def worker_anatomy(a: argparse.Namespace) -> dict:
-    """Cost of one non-sequential nearest-hit search on the scene's emission rays (1 thread)."""
-    import numpy as np
+def _anatomy_kernels():
+    """The three timed kernels of :func:`worker_anatomy`: emission, nearest-hit search, and the
+    LED profile's inverse-CDF search (compiled here, after the worker has set its threads)."""
     from numba import njit
 
-    import eyelume
-    from eyelume.compile import compile_scene
     from eyelume.estimators.forward import emit_ray
     from eyelume.kernels.geometry import nearest_hit
     from eyelume.kernels.sampling import profile_polar_angle
@@ -198,6 +196,17 @@ def worker_anatomy(a: argparse.Namespace) -> dict:
             acc += profile_polar_angle(u[i], alpha_grid, cdf_grid)
         return acc
 
+    return emission_rays, search_all, polar_only
+
+
+def worker_anatomy(a: argparse.Namespace) -> dict:
+    """Cost of one non-sequential nearest-hit search on the scene's emission rays (1 thread)."""
+    import numpy as np
+
+    import eyelume
+    from eyelume.compile import compile_scene
+
+    emission_rays, search_all, polar_only = _anatomy_kernels()
     out = {}
     for face in (True, False):
         cs = compile_scene(eyelume.load_scene(SCENE, _overrides(face)))
