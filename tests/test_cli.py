@@ -39,6 +39,7 @@ def test_render_writes_every_output(tmp_path):
     assert summary["wall_time_s"] > 0
 
 
+@pytest.mark.slow
 def test_set_overrides_a_field(tmp_path):
     out = tmp_path / "o"
     two = ["--set", "leds.count=2", "--set", "leds.azimuths_deg=[0.0, 180.0]"]

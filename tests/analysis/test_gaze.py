@@ -293,6 +293,7 @@ def _optical_axis(gaze, pupil, glints):
     return est.optical_axis
 
 
+@pytest.mark.slow
 def test_geometric_degrades_smoothly_with_noise(camera, leds, grid_features, rng):
     """Mean (RMS) error over the 7 × 5 grid, 4 trials each: 0.44° (0.49°), 0.84° (0.94°),
     1.69° (1.95°), 4.01° (4.51°) at σ = 0.05, 0.1, 0.2, 0.5 px on every pupil and glint

@@ -175,6 +175,7 @@ def test_glints_off_scene(paper_scene):
     assert fres.eye.cornea_absorptance == pytest.approx(0.0246, abs=2e-4)
 
 
+@pytest.mark.slow
 def test_glints_off_render_has_no_glints(paper_scene):
     on = eyelume.render(paper_scene, seed=11)
     off = eyelume.render(glints_off(paper_scene), seed=11)

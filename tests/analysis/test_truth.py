@@ -47,6 +47,7 @@ def test_pupil_truth_matches_the_labelled_pupil(gaze):
     assert np.hypot(x - cx, y - cy) < 1.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("gaze", [(15.0, 10.0)])
 def test_glint_truth_matches_the_rendered_glints(gaze):
     scene = eyelume.load_scene(

@@ -160,6 +160,7 @@ def test_render_writes_the_digital_image_and_camera_summary(tmp_path):
     )
 
 
+@pytest.mark.slow
 def test_glints_saturate_and_skin_does_not_in_the_default_render():
     """The paper notes LightTools could not show saturation: in the default scene's camera
     reading the glints clip at the full well while the skin sits inside the range."""

@@ -73,6 +73,7 @@ def test_single_led_on_axis_bins_match_a_brute_force_midpoint_sum(paper_scene):
         assert e[row, col] == pytest.approx(brute, rel=1e-6), (row, col)
 
 
+@pytest.mark.slow
 def test_doubling_the_order_changes_no_bin_by_more_than_1e6(paper_scene):
     """Every configuration of the paper's grid; and a narrow (5° half-angle) LED, which needs a
     higher order, on the grid's nearest, middle and farthest distances."""

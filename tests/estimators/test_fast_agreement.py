@@ -41,6 +41,7 @@ def bin3(a: np.ndarray) -> np.ndarray:
     return a[:r, :c].reshape(r // 3, 3, c // 3, 3).sum(axis=(1, 3))
 
 
+@pytest.mark.slow
 def test_per_bin_z_scores_are_noise(fig6b_render, fast_render):
     fwd, fast = fig6b_render, fast_render
     counts = bin3(fwd.image_counts)
@@ -55,6 +56,7 @@ def test_per_bin_z_scores_are_noise(fig6b_render, fast_render):
     assert lo < chi2 < hi, f"Σz² = {chi2:.0f} over {n} bins, outside [{lo:.0f}, {hi:.0f}]"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "region", ["pupil", "iris", "sclera", "skin", "glint 0", "glint 1", "glint 2", "glint 3"]
 )

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from scipy import ndimage
 
 from eyelume.compile import lens_paraxial
@@ -69,6 +70,7 @@ def predicted_glints(cs):
     return np.array(out)
 
 
+@pytest.mark.slow
 def test_dark_pupil_iris_and_skin(fig6b_render, paper_compiled):
     counts = fig6b_render.image_counts
     X, Y, _ = pixel_object_coords(paper_compiled)
@@ -114,6 +116,7 @@ def centroid(counts, r0, c0):
     return np.array([xm, ym]), np.array([sx, sy])
 
 
+@pytest.mark.slow
 def test_four_glints_where_the_led_geometry_puts_them(fig6b_render, paper_compiled):
     cs = paper_compiled
     counts = fig6b_render.image_counts
@@ -143,6 +146,7 @@ def test_four_glints_where_the_led_geometry_puts_them(fig6b_render, paper_compil
     assert leds[predicted[:, 0].argmax()][0] > 0
 
 
+@pytest.mark.slow
 def test_eye_plane_orientation(fig6b_render):
     """Row 0 is +y and columns run with +x: the nose (medial, +x) leans forward below the eye
     and crosses z = 0 only in the lower +x corner, shading it; the upper +x corner is lit."""

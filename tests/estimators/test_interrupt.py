@@ -11,6 +11,7 @@ import time
 import pytest
 
 
+@pytest.mark.slow
 def test_ctrl_c_writes_the_finished_batches(tmp_path):
     out = tmp_path / "out"
     cmd = [

@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 import eyelume
 
@@ -47,6 +48,7 @@ np.save(sys.argv[1], np.concatenate([r.eye_image.ravel(), r.eye_plane.ravel()]))
 """
 
 
+@pytest.mark.slow
 def test_same_seed_same_arrays_whatever_the_thread_count(tmp_path):
     outs = []
     for threads, batch in (("1", "200000"), ("2", "65536")):

@@ -21,6 +21,7 @@ runner = CliRunner()
 SMALL = {"sensor.cols": 44, "sensor.rows": 33}
 
 
+@pytest.mark.slow
 def test_reproduce_runs_end_to_end(tmp_path):
     out = tmp_path / "study"
     args = ["reproduce", "paper2005", "--out", str(out), "--deltas", "0,0.3,0.8"]

@@ -94,6 +94,7 @@ def test_bad_study_files_name_the_problem(tmp_path, edit, words):
         assert w in str(exc.value)
 
 
+@pytest.mark.slow
 def test_same_results_with_one_or_two_workers(tmp_path):
     st = load_study(write(tmp_path, FAST))
     run_study(st, tmp_path / "a", workers=1)
@@ -110,6 +111,7 @@ def test_a_busy_folder_is_refused(tmp_path):
         holder.close()
 
 
+@pytest.mark.slow
 def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path):
     study = write(tmp_path, SLOW)
     killed = tmp_path / "killed"
@@ -141,6 +143,7 @@ def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path):
     assert len(table(killed)) == 8
 
 
+@pytest.mark.slow
 def test_a_local_dask_cluster_gives_the_same_results(tmp_path):
     """A real scheduler and two worker processes (distributed.LocalCluster) run the study;
     the store equals the local pool's, row for row."""
@@ -150,6 +153,7 @@ def test_a_local_dask_cluster_gives_the_same_results(tmp_path):
     assert table(tmp_path / "pool") == table(tmp_path / "dask")
 
 
+@pytest.mark.slow
 def test_tracking_metric_of_one_run():
     """The tracking metric: the pipeline's mean geometric gaze error over 9 gazes (a lost frame
     counted 10°) and the detection rate, with the safety margins beside them."""
@@ -162,6 +166,7 @@ def test_tracking_metric_of_one_run():
     assert m["within_exempt_group"] and m["corneal_margin"] > 1
 
 
+@pytest.mark.slow
 def test_ctrl_c_keeps_the_finished_runs_and_resume_completes(tmp_path):
     study = write(tmp_path, SLOW.replace("grid = [20.0, 40.0, 8]", "grid = [20.0, 40.0, 40]"))
     out = tmp_path / "out"

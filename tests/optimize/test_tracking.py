@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 import eyelume
@@ -37,6 +38,7 @@ def test_a_pupil_hidden_by_the_eyelid_is_a_failure_not_a_gaze():
     assert any("pupil" in r for r in f.detection.failures)
 
 
+@pytest.mark.slow
 def test_evaluate_tracking_small_grid():
     scene = eyelume.load_scene("paper2005")
     rep = evaluate_tracking(scene, test_h=(-10.0, 10.0), test_v=(0.0,), samples_per_pixel=8)
@@ -67,6 +69,7 @@ def test_track_command_on_a_rendered_image(tmp_path):
     assert bad.exit_code == 2 and "missing.png" in bad.stderr
 
 
+@pytest.mark.slow
 def test_population_slip_after_calibration_and_the_tracking_score():
     """A slip after calibration moves the pupil–glint vector little (both move with the eye)
     but the geometric model needs no calibration; the score charges failed frames 10°."""

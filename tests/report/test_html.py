@@ -7,6 +7,8 @@ import re
 import shutil
 import subprocess
 
+import pytest
+
 from eyelume.optimize.best_run import save_best_run
 from eyelume.optimize.runner import run_study
 from eyelume.optimize.study import load_study
@@ -26,6 +28,7 @@ values = [0.015, 1.0]
 """
 
 
+@pytest.mark.slow
 def test_report_renders_in_headless_chromium_with_its_figures(tmp_path):
     p = tmp_path / "study.toml"
     p.write_text(STUDY, encoding="utf-8")
