@@ -405,7 +405,7 @@ def evaluate_tracking_cmd(
     into OUT."""
     from eyelume.compile import compile_scene
     from eyelume.optimize.tracking import evaluate_tracking
-    from eyelume.report.tracking_outputs import write_tracking_outputs
+    from eyelume.report.tracking_outputs import write_population_outputs, write_tracking_outputs
 
     sc = _load(scene, set_)
     if samples < 1 or seed < 0:
@@ -416,13 +416,7 @@ def evaluate_tracking_cmd(
         from eyelume.optimize.tracking import evaluate_population
 
         members = evaluate_population(sc, samples_per_pixel=samples, seed=seed, progress=err.print)
-        table = {}
-        for name, rep in members.items():
-            folder = out / name.replace(" ", "_").replace("+", "plus").replace("-", "minus")
-            write_tracking_outputs(rep, {"scene": sc.name, "member": name}, folder)
-            table[name] = {k: v for k, v in rep.summary.items() if k != "failures"}
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "population.json").write_text(json.dumps(table, indent=2) + "\n", "utf-8")
+        write_population_outputs(members, sc.name, out)
         report = members["nominal"]
     else:
         report = evaluate_tracking(sc, samples_per_pixel=samples, seed=seed, progress=err.print)
@@ -455,11 +449,10 @@ def optimize_tracking_cmd(
 ) -> None:
     """Choose the LEDs for tracking itself: 27 placements scored by the gaze error of the whole
     pipeline over 9 gazes, against the generator's δ-optimal placement and the paper's."""
-    import csv
-
     from eyelume.analysis.targets import gaussian_target
     from eyelume.optimize.sweep import sweep_leds
     from eyelume.optimize.tracking import sweep_tracking
+    from eyelume.report.optimize_outputs import write_tracking_sweep_outputs
 
     sc = _load(scene, set_)
     if samples < 1 or seed < 0 or not 0 <= delta < 1:
@@ -469,31 +462,13 @@ def optimize_tracking_cmd(
     rows, best, d_row, paper = sweep_tracking(
         sc, dopt, samples=samples, seed=seed, progress=err.print
     )
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "tracking_sweep.csv", "w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f)
-        w.writerow(["label", "height_mm", "distance_mm", "pitch_deg", "score_deg",
-                    "detection_rate", "geometric_mean_deg"])  # fmt: skip
-        for r in [*rows, d_row, paper]:
-            w.writerow([r.label, r.height_mm, r.distance_mm, r.pitch_deg, f"{r.score_deg:.4f}",
-                        f"{r.detection_rate:.3f}", f"{r.geometric_mean_deg:.4f}"])  # fmt: skip
-    lines = [
-        "# Tracking-optimal against δ-optimal LED placement",
-        "",
-        f"Score: mean geometric gaze error over 9 gazes (±20° h, ±10° v), a failed frame counted "
-        f"as 10°; {samples} samples per pixel, seed {seed}, sensor "
-        f"{sc.sensor.cols} × {sc.sensor.rows}.",
-        "",
-        "| placement | Y (mm) | Z (mm) | θ (°) | score (°) | detection |",
-        "|---|---|---|---|---|---|",
-    ]
-    for r, name in ((best, "tracking-optimal (grid)"), (d_row, f"δ = {delta:g} generator"),
-                    (paper, "paper (δ = 0.3)")):  # fmt: skip
-        lines.append(
-            f"| {name} | {r.height_mm:g} | {r.distance_mm:g} | {r.pitch_deg:g} | "
-            f"{r.score_deg:.2f} | {r.detection_rate:.0%} |"
-        )
-    (out / "comparison.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    meta = {
+        "delta": delta,
+        "samples_per_pixel": samples,
+        "seed": seed,
+        "sensor": [sc.sensor.cols, sc.sensor.rows],
+    }
+    write_tracking_sweep_outputs(rows, best, d_row, paper, meta, out)
     err.print(
         f"tracking-optimal: Y {best.height_mm:g} Z {best.distance_mm:g} θ {best.pitch_deg:g} "
         f"({best.score_deg:.2f}°); δ-optimal {d_row.score_deg:.2f}°; paper {paper.score_deg:.2f}°"
@@ -517,10 +492,9 @@ def study(
 ) -> None:
     """Run a study: the base scene with parameters varied by their dotted paths, metrics per
     run, each finished run committed at once to OUT/results.sqlite (resumable)."""
-    import csv
-
     from eyelume.optimize.runner import run_study
     from eyelume.optimize.study import load_study, plan_runs
+    from eyelume.report.optimize_outputs import write_study_table
 
     st = load_study(study_file)
     if workers is not None and workers < 1:
@@ -546,23 +520,14 @@ def study(
         except KeyboardInterrupt:
             err.print(f"interrupted: the finished runs are in {out}; --resume continues")
             raise typer.Exit(130) from None
-    names = sorted({k for r in rows for k in r["metrics"]})
-    params = sorted({k for r in rows for k in r["overrides"]})
-    with open(out / "table.csv", "w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f)
-        w.writerow(["index", *params, *names, "seconds"])
-        for r in rows:
-            w.writerow(
-                [r["index"], *(r["overrides"].get(p) for p in params),
-                 *(r["metrics"].get(n) for n in names), f"{r['seconds']:.3f}"]
-            )  # fmt: skip
+    table = write_study_table(rows, out)
     unsafe = [r for r in rows if r["metrics"].get("within_exempt_group") is False]
     if unsafe:
         err.print(
             f"[bold red]warning:[/] {len(unsafe)} runs exceed an IEC 62471 exempt-group limit",
             highlight=False,
         )
-    err.print(f"{len(rows)}/{total} runs in {out / 'results.sqlite'}; table in {out / 'table.csv'}")
+    err.print(f"{len(rows)}/{total} runs in {out / 'results.sqlite'}; table in {table}")
 
 
 @app.command()

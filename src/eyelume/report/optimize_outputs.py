@@ -18,7 +18,12 @@ from eyelume.report.optimize_plots import (
 )
 from eyelume.report.plots import save_grey_png
 
-__all__ = ["write_delta_study_outputs", "write_sweep_outputs"]
+__all__ = [
+    "write_delta_study_outputs",
+    "write_study_table",
+    "write_sweep_outputs",
+    "write_tracking_sweep_outputs",
+]
 
 
 def write_sweep_outputs(sweep, target: np.ndarray, refined, delta, plane_extent, out) -> list[Path]:
@@ -280,3 +285,55 @@ def _why_placements_differ(ours, paper: dict) -> str:
         "in LightTools' patterns, which our closed-form generator does not have. The model "
         "was not tuned toward the paper's numbers."
     )
+
+
+def write_tracking_sweep_outputs(rows, best, d_row, paper, meta: dict, out) -> list[Path]:
+    """The files of ``eyelume optimize-tracking``: ``tracking_sweep.csv`` (every placement's
+    score, then the δ-optimal's and the paper's) and ``comparison.md`` (the tracking-optimal
+    placement against the generator's and the paper's). ``meta`` holds ``delta``,
+    ``samples_per_pixel``, ``seed`` and ``sensor`` (cols, rows)."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    cols, rows_px = meta["sensor"]
+    with open(out / "tracking_sweep.csv", "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(["label", "height_mm", "distance_mm", "pitch_deg", "score_deg",
+                    "detection_rate", "geometric_mean_deg"])  # fmt: skip
+        for r in [*rows, d_row, paper]:
+            w.writerow([r.label, r.height_mm, r.distance_mm, r.pitch_deg, f"{r.score_deg:.4f}",
+                        f"{r.detection_rate:.3f}", f"{r.geometric_mean_deg:.4f}"])  # fmt: skip
+    lines = [
+        "# Tracking-optimal against δ-optimal LED placement",
+        "",
+        f"Score: mean geometric gaze error over 9 gazes (±20° h, ±10° v), a failed frame counted "
+        f"as 10°; {meta['samples_per_pixel']} samples per pixel, seed {meta['seed']}, sensor "
+        f"{cols} × {rows_px}.",
+        "",
+        "| placement | Y (mm) | Z (mm) | θ (°) | score (°) | detection |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r, name in ((best, "tracking-optimal (grid)"), (d_row, f"δ = {meta['delta']:g} generator"),
+                    (paper, "paper (δ = 0.3)")):  # fmt: skip
+        lines.append(
+            f"| {name} | {r.height_mm:g} | {r.distance_mm:g} | {r.pitch_deg:g} | "
+            f"{r.score_deg:.2f} | {r.detection_rate:.0%} |"
+        )
+    (out / "comparison.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return [out / "tracking_sweep.csv", out / "comparison.md"]
+
+
+def write_study_table(rows: list[dict], out) -> Path:
+    """``table.csv`` of a parameter study's finished runs (the store's rows): index, each varied
+    parameter, each metric, seconds."""
+    names = sorted({k for r in rows for k in r["metrics"]})
+    params = sorted({k for r in rows for k in r["overrides"]})
+    path = Path(out) / "table.csv"
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(["index", *params, *names, "seconds"])
+        for r in rows:
+            w.writerow(
+                [r["index"], *(r["overrides"].get(p) for p in params),
+                 *(r["metrics"].get(n) for n in names), f"{r['seconds']:.3f}"]
+            )  # fmt: skip
+    return path

@@ -13,7 +13,7 @@ import numpy as np
 from eyelume.analysis.tracking.evaluate import error_map_rows
 from eyelume.report.plots import agg_figure
 
-__all__ = ["write_tracking_outputs"]
+__all__ = ["save_error_maps", "write_population_outputs", "write_tracking_outputs"]
 
 
 def _grid(rows: list[dict], key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -89,3 +89,18 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
     written[1].write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     save_error_maps(error_map_rows(report.frames), written[2])
     return written
+
+
+def write_population_outputs(members: dict, scene_name: str, out) -> list[Path]:
+    """Each member's tracking outputs (:func:`write_tracking_outputs`) in its own folder of
+    ``out`` (its name with spaces, + and - spelled out) and ``population.json``: each member's
+    summary without its failures."""
+    out = Path(out)
+    written, table = [], {}
+    for name, rep in members.items():
+        folder = out / name.replace(" ", "_").replace("+", "plus").replace("-", "minus")
+        written += write_tracking_outputs(rep, {"scene": scene_name, "member": name}, folder)
+        table[name] = {k: v for k, v in rep.summary.items() if k != "failures"}
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "population.json").write_text(json.dumps(table, indent=2) + "\n", "utf-8")
+    return [*written, out / "population.json"]
