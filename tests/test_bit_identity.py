@@ -25,3 +25,16 @@ def test_default_render_matches_recorded_reference():
     np.testing.assert_allclose(r.eye_image, ref["eye_image"], rtol=1e-9, atol=0)
     np.testing.assert_allclose(r.eye_image_variance, ref["eye_image_variance"], rtol=1e-9, atol=0)
     np.testing.assert_allclose(r.eye_plane, ref["eye_plane"], rtol=1e-9, atol=0)
+
+
+def test_chunks_of_work_change_nothing(monkeypatch):
+    """Ctrl-C is looked at between chunks of camera samples and light paths; the chunking must
+    not move a sample: the reference again with many small chunks."""
+    from eyelume.estimators import fast_run
+
+    monkeypatch.setattr(fast_run, "CHUNK_SAMPLES", 1000)
+    monkeypatch.setattr(fast_run, "CHUNK_PATHS", 3001)
+    ref = np.load(REF)
+    r = eyelume.render(eyelume.load_scene("paper2005"), seed=1)
+    np.testing.assert_allclose(r.eye_image, ref["eye_image"], rtol=1e-9, atol=0)
+    np.testing.assert_allclose(r.eye_image_variance, ref["eye_image_variance"], rtol=1e-9, atol=0)

@@ -23,7 +23,12 @@ from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import CompiledScene, compile_scene
-from eyelume.estimators.fast_run import direct_eye_plane, trace_fast
+from eyelume.estimators.fast_run import (
+    MAX_SAMPLES_REL_ERROR,
+    direct_eye_plane,
+    trace_fast,
+    warm_up,
+)
 from eyelume.estimators.forward import trace_forward, trace_paths
 from eyelume.layout import Section, system_sections
 from eyelume.scene.model import Scene
@@ -81,6 +86,9 @@ class RenderResult:
     samples_per_pixel: int | None = None
     light_paths: int | None = None
     variance_dof: int | None = None
+    kernel_load_s: float | None = None
+    target_reached: bool | None = None
+    rel_error_achieved: float | None = None
 
     @property
     def pixel_area_mm2(self) -> float:
@@ -107,9 +115,19 @@ class RenderResult:
             "interrupted": self.interrupted,
             "wall_time_s": round(self.wall_time_s, 4),
         }
+        if self.kernel_load_s is not None:
+            out["kernel_compile_s"] = round(self.kernel_load_s, 4)
         if self.estimator == "fast":
             out["samples_per_pixel"] = self.samples_per_pixel
             out["light_paths"] = self.light_paths
+            if self.variance_dof == 0:
+                out["note"] = (
+                    "interrupted after one camera sample set: each pixel's value is the "
+                    "unbiased mean of that set, but its variance is unknown (no spread of sets)"
+                )
+            if self.target_reached is not None:
+                out["rel_error_target_reached"] = self.target_reached
+                out["rel_error_achieved"] = self.rel_error_achieved
         else:
             out["surface_interactions"] = self.interactions
         power = {"emitted": self.emitted_w, "sensor": float(self.eye_image.sum())}
@@ -141,6 +159,8 @@ def render(
     samples_per_pixel: int | None = None,
     rel_error: float | None = None,
     status: Callable[[str], None] | None = None,
+    advance: Callable[[int, int], None] | None = None,
+    max_samples_per_pixel: int = MAX_SAMPLES_REL_ERROR,
 ) -> RenderResult:
     """Render a scene's eye image and eye-plane irradiance.
 
@@ -157,8 +177,12 @@ def render(
     samples_per_pixel, rel_error, status
         Fast: camera samples per pixel (default ``run.samples_per_pixel``; with
         ``run.light_paths_per_pixel`` light paths per pixel and per 16 samples), or keep adding
-        rounds until the median skin pixel's relative standard error is ``rel_error``;
-        ``status(message)`` after each round.
+        rounds until the median skin pixel's relative standard error is ``rel_error`` or
+        ``max_samples_per_pixel`` is reached (``target_reached``); ``status(message)`` after
+        each round, ``advance(done, planned)`` every fraction of a second
+        (:func:`eyelume.estimators.fast_run.trace_fast`). The kernels' compilation (or loading
+        from Numba's cache), the first time in a process, is timed apart in ``kernel_load_s``
+        and not counted in ``wall_time_s``.
     seed
         Default ``run.seed``. The result depends on (scene, budget, seed) only.
     """
@@ -171,13 +195,24 @@ def render(
         "plane_extent_mm": _extent(sc.eye_plane.width_mm, sc.eye_plane.height_mm),
     }
     px_area = (sc.sensor.width_mm / sc.sensor.cols) * (sc.sensor.height_mm / sc.sensor.rows)
-    t0 = time.perf_counter()
     if estimator == "fast":
+        kernel_s = warm_up(cs) or None
+        t0 = time.perf_counter()
         spp = sc.run.samples_per_pixel if samples_per_pixel is None else int(samples_per_pixel)
         pixels = sc.sensor.cols * sc.sensor.rows
         light = int(round(sc.run.light_paths_per_pixel * pixels * spp / 16))
         regions = region_masks(cs)
-        est = trace_fast(cs, spp, light, seed, rel_error, status, regions["skin"])
+        est = trace_fast(
+            cs,
+            spp,
+            light,
+            seed,
+            rel_error,
+            status,
+            regions["skin"],
+            advance=advance,
+            max_samples_per_pixel=max_samples_per_pixel,
+        )
         plane = direct_eye_plane(cs, seed)
         wall = time.perf_counter() - t0
         return RenderResult(
@@ -195,11 +230,15 @@ def render(
             samples_per_pixel=est.samples_per_pixel,
             light_paths=est.light_paths,
             variance_dof=est.variance_dof,
+            kernel_load_s=kernel_s,
+            target_reached=est.target_reached,
+            rel_error_achieved=est.rel_error_achieved,
             **extents,
         )
     if estimator != "forward":
         raise ValueError(f"estimator = {estimator!r}: must be 'fast' or 'forward'")
     rays = sc.run.rays if rays is None else int(rays)
+    t0 = time.perf_counter()
     fc = trace_forward(cs, rays, seed, batch_size, progress)
     wall = time.perf_counter() - t0
     w = cs.emitted_w / fc.rays

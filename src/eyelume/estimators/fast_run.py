@@ -35,6 +35,10 @@ class FastEstimate:
     ``image`` is the mean image-plane irradiance per pixel and ``variance`` the estimated
     variance of that mean, from the second moments of independent samples. ``glint_images``
     (n_leds, rows, cols) is the part carried by paths that met no Lambertian face, per LED.
+
+    A run interrupted after a single camera set has an unbiased ``image`` (the mean of that
+    set and of the light paths done) but no spread to estimate a variance from: ``variance``
+    is then +inf everywhere and ``variance_dof`` 0 ("unknown").
     """
 
     image: np.ndarray
@@ -43,8 +47,18 @@ class FastEstimate:
     samples_per_pixel: int
     light_paths: int
     interrupted: bool
-    variance_dof: int  # degrees of freedom of each pixel's variance estimate (sets − 1)
+    variance_dof: int  # degrees of freedom of each pixel's variance (sets − 1; 0: unknown)
+    target_reached: bool | None = None  # rel_error runs: whether the target was reached
+    rel_error_achieved: float | None = None  # rel_error runs: the median error reached
 
+
+#: Work between two looks at the Ctrl-C flag: camera samples (pixels × sets × grid²) and light
+#: paths per kernel call — a fraction of a second each on this project's 2-core machine, so an
+#: interrupt is answered within about a second even in a 4096 × 4096 render. Chunking changes no
+#: result: a pixel's camera samples depend on its index and the seed only, and light paths add
+#: integer fixed-point sums.
+CHUNK_SAMPLES = 1 << 15
+CHUNK_PATHS = 1 << 16
 
 #: Stratification grids: sets of 4 × 4 camera samples from 32 samples per pixel on, else of 2 × 2.
 #: Larger sets stratify better; two sets at least are needed for a variance.
@@ -125,25 +139,46 @@ class _Run:
     def samples_per_pixel(self) -> int:
         return self.sets * self.grid * self.grid
 
-    def add(self, n_sets: int, paths_per_sample: float) -> None:
-        """Add ``n_sets`` camera sets to every pixel and light paths in proportion."""
+    def add(
+        self,
+        n_sets: int,
+        paths_per_sample: float,
+        stop=None,
+        tick: Callable[[int], None] | None = None,
+    ) -> bool:
+        """Add ``n_sets`` camera sets to every pixel and light paths in proportion, in chunks
+        (:data:`CHUNK_SAMPLES`, :data:`CHUNK_PATHS`), looking at ``stop.requested`` between
+        chunks. A round stopped among its camera chunks is undone (every pixel keeps the same
+        sets) and False returned; stopped among its light chunks, the paths done are kept (each
+        is an independent sample). ``tick(units)`` after each chunk: camera samples or paths."""
         every = np.arange(self.cam_sum.size, dtype=np.int64)
-        F.camera_pass(
-            self.seed,
-            self.sets,
-            n_sets,
-            *self.cam_args,
-            every,
-            self.cam_sum.reshape(-1),
-            self.cam_sq.reshape(-1),
-        )
+        flat_sum, flat_sq = self.cam_sum.reshape(-1), self.cam_sq.reshape(-1)
+        per = max(1, CHUNK_SAMPLES // (n_sets * self.grid * self.grid))
+        saved = []
+        for a in range(0, every.size, per):
+            b = min(every.size, a + per)
+            if stop is not None and stop.requested:
+                for a0, s, q in saved:  # undo the partial round
+                    flat_sum[a0 : a0 + s.size] = s
+                    flat_sq[a0 : a0 + s.size] = q
+                return False
+            if stop is not None:
+                saved.append((a, flat_sum[a:b].copy(), flat_sq[a:b].copy()))
+            F.camera_pass(
+                self.seed, self.sets, n_sets, *self.cam_args, every[a:b], flat_sum[a:b],
+                flat_sq[a:b],
+            )  # fmt: skip
+            if tick:
+                tick((b - a) * n_sets * self.grid * self.grid)
+        del saved
         self.sets += n_sets
         n_paths = int(round(paths_per_sample * self.samples_per_pixel)) - self.paths
-        if n_paths > 0:
+        while n_paths > 0 and not (stop is not None and stop.requested):
+            c = min(CHUNK_PATHS, n_paths)
             F.light_pass(
                 self.seed,
                 self.paths,
-                n_paths,
+                c,
                 *self.light_args,
                 self.light,
                 self.light_sq,
@@ -151,13 +186,22 @@ class _Run:
                 self.q,
                 self.q2,
             )
-            self.paths += n_paths
+            self.paths += c
+            n_paths -= c
+            if tick:
+                tick(c)
+        return True
 
     def estimate(self, interrupted: bool) -> FastEstimate:
-        n = max(self.sets, 2)
+        n = self.sets
+        if n < 1:
+            raise ValueError("no camera set has finished: nothing to estimate")
         mean_c = self.cam_sum / n
-        # the variance of a mean of n independent sets: the unbiased sample variance / n
-        var_c = np.maximum(self.cam_sq - n * mean_c**2, 0.0) / (n * (n - 1))
+        if n >= 2:
+            # the variance of a mean of n independent sets: the unbiased sample variance / n
+            var_c = np.maximum(self.cam_sq - n * mean_c**2, 0.0) / (n * (n - 1))
+        else:  # one set: the mean is unbiased, its variance unknown
+            var_c = np.full_like(mean_c, np.inf)
         if self.paths:
             m = self.paths
             total, total_sq = self.light.sum(axis=0), self.light_sq.sum(axis=0)
@@ -177,7 +221,7 @@ class _Run:
             self.samples_per_pixel,
             self.paths,
             interrupted,
-            max(self.sets - 1, 1),
+            self.sets - 1,
         )
 
 
@@ -211,6 +255,101 @@ def _pilot(
     return best[0], min(best[1], _MAX_SETS)
 
 
+def planned_sets(samples_per_pixel: int) -> tuple[int, int]:
+    """(grid, sets) of a fixed budget: sets of 4 × 4 camera samples from 32 samples per pixel on,
+    else of 2 × 2, rounded up to whole sets and two at least (a variance needs two), so the
+    samples rendered are ``sets × grid²`` ≥ the samples asked (1 → 8, 9 → 12, 33 → 48).
+
+    >>> [planned_sets(n) for n in (1, 8, 9, 31, 32, 33)]
+    [(2, 2), (2, 2), (2, 3), (2, 8), (4, 2), (4, 3)]
+    """
+    grid = GRID_FINE if samples_per_pixel >= 2 * GRID_FINE**2 else GRID_COARSE
+    return grid, max(2, math.ceil(samples_per_pixel / grid**2))
+
+
+def array_bytes(cs: CompiledScene) -> int:
+    """Bytes of the fast estimator's per-pixel arrays for ``cs``: Σm and Σm² of the camera sets
+    (and their undo copies for a round stopped by Ctrl-C), and each Numba thread's fixed-point
+    light and per-LED glint sums — what grows with the picture (a 4096 × 4096 picture, 4 LEDs,
+    2 threads: 2.4 GB)."""
+    pixels = int(cs.sensor[2] * cs.sensor[3])
+    chunks = numba.get_num_threads()
+    return 8 * pixels * (4 + chunks * (2 + int(cs.leds.shape[0])))
+
+
+def pilot_rates(
+    cs: CompiledScene, seed: int, grid: int, pixels: int = 1024, paths: int = 8192
+) -> tuple[float, float]:
+    """(camera samples per second, light paths per second) of this scene on this machine: one
+    set on ``pixels`` evenly spread pixels and ``paths`` light paths, into throwaway sums (the
+    light paths onto a 1 × 1 pixel array of the same sensor), so a run's own samples are not
+    touched. A projection, not a promise: the machine's load varies. Call it after
+    :func:`warm_up`, or it times the compilation."""
+    import time
+
+    cam = camera_tables(cs)
+    total = int(cs.sensor[2] * cs.sensor[3])
+    idx = np.unique(np.linspace(0, total - 1, min(pixels, total)).astype(np.int64))
+    # pixel indices address the full sensor; the sums are throwaway arrays of idx's length
+    run = _Run(_tiny(cs), cam, grid, seed)  # its arguments without full-size arrays
+    c_args = (*run.cam_args[:-3], cs.sensor, *run.cam_args[-2:])
+    s1, s2 = np.zeros(idx.size), np.zeros(idx.size)
+    t0 = time.perf_counter()
+    F.camera_pass(seed, 0, 1, *c_args, idx, s1, s2)
+    cam_rate = idx.size * grid * grid / max(time.perf_counter() - t0, 1e-9)
+    t0 = time.perf_counter()
+    F.light_pass(seed, 0, paths, *run.light_args, run.light, run.light_sq, run.led, run.q, run.q2)
+    return cam_rate, paths / max(time.perf_counter() - t0, 1e-9)
+
+
+def kernels_cached() -> bool | None:
+    """Whether Numba's on-disk cache holds the fast estimator's kernels (False: the first call
+    compiles them, ~45 s on this project's machine; None: cannot tell). True also when they are
+    already loaded in this process."""
+    disp = (F.camera_pass, F.light_pass)
+    if all(d.signatures for d in disp):
+        return True
+    try:
+        return all(bool(d._cache._cache_file._load_index()) for d in disp)
+    except Exception:  # noqa: BLE001 - Numba internals: unknown rather than wrong
+        return None
+
+
+def warm_up(cs: CompiledScene) -> float:
+    """Compile (or load from Numba's cache) the fast estimator's kernels with calls that do no
+    work; returns the seconds it took (0 when already loaded in this process), so that render
+    times exclude compilation."""
+    import time
+
+    if all(d.signatures for d in (F.camera_pass, F.light_pass, F.plane_direct)):
+        return 0.0
+    t0 = time.perf_counter()
+    cam = camera_tables(cs)
+    tiny = _tiny(cs)
+    run = _Run(tiny, cam, GRID_COARSE, 0)  # the kernels' arguments, 1 × 1 pixel arrays
+    none = np.zeros(0, dtype=np.int64)
+    F.camera_pass(0, 0, 1, *run.cam_args, none, np.zeros(0), np.zeros(0))
+    F.light_pass(0, 0, 0, *run.light_args, run.light, run.light_sq, run.led, run.q, run.q2)
+    direct_eye_plane(tiny, 0, n_sub=1)
+    return time.perf_counter() - t0
+
+
+def _tiny(cs: CompiledScene) -> CompiledScene:
+    """``cs`` with a 1 × 1 sensor and eye plane (only array sizes differ: the same kernel
+    types, so the same compiled code)."""
+    import dataclasses
+
+    sensor, plane = np.array(cs.sensor, copy=True), np.array(cs.plane, copy=True)
+    sensor[2:4] = plane[2:4] = 1
+    return dataclasses.replace(cs, sensor=sensor, plane=plane)
+
+
+#: The most camera samples per pixel a ``rel_error`` run adds before it stops short of its target
+#: and says so (the default of ``max_samples_per_pixel``); at 87 × 65 on this project's machine
+#: about a minute.
+MAX_SAMPLES_REL_ERROR = 4096
+
+
 def trace_fast(
     cs: CompiledScene,
     samples_per_pixel: int,
@@ -219,18 +358,29 @@ def trace_fast(
     rel_error: float | None = None,
     progress: Callable[[str], None] | None = None,
     target_pixels: np.ndarray | None = None,
+    advance: Callable[[int, int], None] | None = None,
+    max_samples_per_pixel: int = MAX_SAMPLES_REL_ERROR,
 ) -> FastEstimate:
     """Run the fast estimator.
 
-    With ``rel_error`` None: ``samples_per_pixel`` camera samples (in sets of 4 × 4 from 32
-    on, else 2 × 2; rounded up to whole sets, at least two) and ``light_paths`` light paths,
+    With ``rel_error`` None: ``samples_per_pixel`` camera samples (:func:`planned_sets`:
+    whole sets of 4 × 4 from 32 on, else 2 × 2, at least two) and ``light_paths`` light paths,
     in rounds. With ``rel_error``: the same ratio of light paths to camera samples, and camera
     sets added until the median pixel's relative standard error over ``target_pixels`` (a
     boolean mask; default all pixels with signal) is at most ``rel_error``: the first round is
     the ``samples_per_pixel`` budget (its grid as above), each next round sized from the error
-    so far.
-    Ctrl-C ends the run after the round in flight (``interrupted``).
-    ``progress(message)`` is called after each round.
+    so far — but never beyond ``max_samples_per_pixel``: a target that needs more stops there
+    (``target_reached`` False, ``rel_error_achieved`` the error reached, and ``progress`` says
+    so as soon as the projection shows it).
+
+    Ctrl-C (SIGINT) is looked at between chunks of a fraction of a second
+    (:data:`CHUNK_SAMPLES`): it ends the run with the whole rounds finished (``interrupted``;
+    a round stopped half way is undone, so every pixel holds the same sets). With one camera
+    set finished the image is that set's unbiased mean and the variance unknown (+inf,
+    ``variance_dof`` 0); with none, KeyboardInterrupt (nothing usable finished).
+    ``progress(message)`` is called after each round; ``advance(done, planned)`` after each
+    chunk, in units of camera samples plus light paths (``planned`` grows with ``rel_error``
+    rounds).
     """
     if samples_per_pixel < 1:
         raise BudgetError(f"samples_per_pixel = {samples_per_pixel}: must be ≥ 1")
@@ -238,43 +388,80 @@ def trace_fast(
         raise BudgetError(f"light_paths = {light_paths}: must be ≥ 0")
     if rel_error is not None and not 0.0 < rel_error < 1.0:
         raise BudgetError(f"rel_error = {rel_error}: must be in (0, 1)")
+    if max_samples_per_pixel < 1:
+        raise BudgetError(f"max_samples_per_pixel = {max_samples_per_pixel}: must be ≥ 1")
     cam = camera_tables(cs)
     ratio = light_paths / samples_per_pixel  # light paths per camera sample
+    pixels = int(cs.sensor[2] * cs.sensor[3])
+    work = {"done": 0, "planned": 0}
+
+    def plan(run: _Run, sets_total: int) -> None:
+        spp = sets_total * run.grid * run.grid
+        work["planned"] = spp * pixels + int(round(ratio * spp))
+
+    def tick(units: int) -> None:
+        work["done"] += units
+        if advance:
+            advance(work["done"], max(work["planned"], work["done"]))
 
     def say(run: _Run, err: float | None = None) -> None:
         if progress:
             tail = "" if err is None else f": median relative error {err:.4f}"
             progress(f"{run.samples_per_pixel} samples per pixel{tail}")
 
+    target_reached: bool | None = None
+    err = math.inf
     with interrupt_between_batches() as stop:
         if rel_error is None:
-            grid = GRID_FINE if samples_per_pixel >= 2 * GRID_FINE**2 else GRID_COARSE
+            grid, sets = planned_sets(samples_per_pixel)
             run = _Run(cs, cam, grid, seed)
-            sets = max(2, math.ceil(samples_per_pixel / grid**2))
+            plan(run, sets)
             step = max(1, math.ceil(sets / 8))
             while run.sets < sets and not stop.requested:
-                run.add(min(step, sets - run.sets), ratio)
+                run.add(min(step, sets - run.sets), ratio, stop, tick)
                 say(run)
         else:
-            grid, sets = GRID_FINE if samples_per_pixel >= 2 * GRID_FINE**2 else GRID_COARSE, 0
-            pixels = int(cs.sensor[2] * cs.sensor[3])
+            grid, sets = planned_sets(samples_per_pixel)
+            sets = 0
+            max_sets = max(2, min(_MAX_SETS, max_samples_per_pixel // (grid * grid)))
             if pixels > _PILOT_ABOVE and target_pixels is not None and target_pixels.any():
                 grid, sets = _pilot(cs, cam, seed, target_pixels, rel_error)
+                max_sets = max(2, min(_MAX_SETS, max_samples_per_pixel // (grid * grid)))
                 if progress:
                     progress(f"pilot: {grid}×{grid} sets, {sets * grid * grid} samples per pixel")
+                if sets > max_sets and progress:
+                    progress(
+                        f"the target {rel_error:g} needs ~{sets * grid * grid} samples per "
+                        f"pixel, over the cap of {max_samples_per_pixel}: rendering to the cap"
+                    )
+                sets = min(sets, max_sets)
             run = _Run(cs, cam, grid, seed)
-            run.add(max(2, sets or math.ceil(samples_per_pixel / grid**2)), ratio)
-            err = estimate_median_rel_error(run.estimate(False), target_pixels)
-            say(run, err)
-            while err > rel_error and run.sets < _MAX_SETS and not stop.requested:
-                need = run.sets * (err / rel_error) ** 2 * 1.1
-                n_more = int(min(max(need - run.sets, 1), 4 * run.sets, _MAX_SETS - run.sets))
-                run.add(n_more, ratio)
+            first = max(2, sets or math.ceil(samples_per_pixel / grid**2))
+            plan(run, first)
+            if run.add(first, ratio, stop, tick):
                 err = estimate_median_rel_error(run.estimate(False), target_pixels)
                 say(run, err)
+                need = run.sets * (err / rel_error) ** 2
+                if err > rel_error and need > max_sets and progress:
+                    progress(
+                        f"the target {rel_error:g} needs ~{int(need) * grid * grid} samples per "
+                        f"pixel, over the cap of {max_samples_per_pixel}: rendering to the cap"
+                    )
+            while err > rel_error and run.sets < max_sets and not stop.requested:
+                need = run.sets * (err / rel_error) ** 2 * 1.1
+                n_more = int(min(max(need - run.sets, 1), 4 * run.sets, max_sets - run.sets))
+                plan(run, run.sets + n_more)
+                if not run.add(n_more, ratio, stop, tick):
+                    break
+                err = estimate_median_rel_error(run.estimate(False), target_pixels)
+                say(run, err)
+            target_reached = err <= rel_error
     if run.sets == 0:
-        raise KeyboardInterrupt
-    return run.estimate(stop.requested)
+        raise KeyboardInterrupt("interrupted before a camera set finished: nothing usable")
+    est = run.estimate(stop.requested)
+    est.target_reached = target_reached
+    est.rel_error_achieved = None if rel_error is None or not math.isfinite(err) else err
+    return est
 
 
 def estimate_median_rel_error(est: FastEstimate, pixels: np.ndarray | None = None) -> float:
