@@ -9,6 +9,7 @@ prints them): a one-line message on stderr and exit code 2.
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -23,6 +24,12 @@ from typer.core import TyperGroup
 
 from eyelume.errors import EyelumeError, OptionError
 from eyelume.scene.io import load_scene
+from eyelume.scene.model import Run
+
+#: The model's cap on camera samples per pixel (``run.samples_per_pixel``), checked at the CLI.
+_SAMPLES_CAP = next(
+    m.le for m in Run.model_fields["samples_per_pixel"].metadata if getattr(m, "le", None)
+)
 
 err = Console(stderr=True)
 
@@ -62,6 +69,14 @@ def _fail(message: str) -> NoReturn:
     raise OptionError(message)
 
 
+@app.callback()
+def _main() -> None:
+    # SIGTERM ends a command as Ctrl-C does: what is finished is kept, workers end, exit 143
+    from eyelume.estimators.interrupt import sigterm_as_interrupt
+
+    sigterm_as_interrupt()
+
+
 def _overrides(pairs: list[str] | None) -> dict[str, str]:
     out = {}
     for pair in pairs or []:
@@ -88,6 +103,55 @@ def _warn_safety(safety: dict) -> None:
             )
 
 
+def _check_out(out: Path, option: str = "--out") -> None:
+    """Refuse an output folder that cannot take the outputs, before any work: an existing file,
+    a path under a file, a place where nothing can be written (probed with a temporary file in
+    the folder, or in its nearest existing parent when it is still to be created; nothing is
+    left behind)."""
+    import tempfile
+
+    if out.exists() and not out.is_dir():
+        _fail(f"{option} {out}: exists and is not a folder")
+    probe = out.absolute()
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir():
+        _fail(f"{option} {out}: {probe} is a file, not a folder")
+    try:
+        with tempfile.TemporaryFile(dir=probe):
+            pass
+    except OSError as exc:
+        _fail(f"{option} {out}: cannot write in {probe} ({exc.strerror or exc})")
+
+
+def _exit_interrupted() -> None:
+    """Exit 128 + the signal that stopped the run: 130 after Ctrl-C, 143 after SIGTERM."""
+    import signal
+
+    from eyelume.estimators.interrupt import last_signal
+
+    raise typer.Exit(128 + int(last_signal() or signal.SIGINT))
+
+
+def _bytes(n: float) -> str:
+    return f"{n / 2**20:,.0f} MiB" if n < 2**30 else f"{n / 2**30:.1f} GiB"
+
+
+def _seconds(s: float) -> str:
+    if s < 120:
+        return f"{s:.0f} s"
+    return f"{s / 60:.0f} min" if s < 7200 else f"{s / 3600:.1f} h"
+
+
+def _warm_up(cs) -> float:
+    """Compile (or load) the fast kernels, saying so when it is the slow first compilation."""
+    from eyelume.estimators.fast_run import kernels_cached, warm_up
+
+    if kernels_cached() is False:
+        err.print("compiling kernels (first run only; about a minute)…")
+    return warm_up(cs)
+
+
 @app.command()
 def render(
     out: Annotated[Path, typer.Option("--out", help="Folder for the outputs (created).")],
@@ -111,6 +175,14 @@ def render(
             "at most this (e.g. 0.01), instead of a fixed count.",
         ),
     ] = None,
+    max_samples: Annotated[
+        int,
+        typer.Option(
+            "--max-samples",
+            help="Fast, with --rel-error: stop at this many samples per pixel and say what was "
+            "reached if the target needs more.",
+        ),
+    ] = 4096,
     seed: Annotated[
         int | None, typer.Option(help="Random seed (default: the scene's run.seed).")
     ] = None,
@@ -129,29 +201,19 @@ def render(
         _fail(f"--estimator {estimator!r}: must be 'fast' or 'forward'")
     if rays is not None and (rays < 1 or estimator != "forward"):
         _fail(f"--rays {rays}: must be ≥ 1, with --estimator forward (fast: --samples)")
-    if samples is not None and (samples < 1 or estimator != "fast"):
-        _fail(f"--samples {samples}: must be ≥ 1, with --estimator fast (forward: --rays)")
+    cap = _SAMPLES_CAP
+    if samples is not None and (not 1 <= samples <= cap or estimator != "fast"):
+        _fail(f"--samples {samples}: must be 1 to {cap:,}, with --estimator fast (forward: --rays)")
     if rel_error is not None and (not 0 < rel_error < 1 or estimator != "fast"):
         _fail(f"--rel-error {rel_error}: must be in (0, 1), with --estimator fast")
+    if not 1 <= max_samples <= cap:
+        _fail(f"--max-samples {max_samples}: must be 1 to {cap:,}")
     if seed is not None and seed < 0:
         _fail(f"--seed {seed}: must be ≥ 0")
+    _check_out(out)
     cs = compile_scene(sc)
     if estimator == "fast":
-        goal = (
-            f"to a {rel_error:.2%} relative error in the median skin pixel"
-            if rel_error is not None
-            else f"{samples or sc.run.samples_per_pixel} samples per pixel"
-        )
-        err.print(f"rendering {sc.name} (fast estimator, {goal}; Ctrl-C stops after a round)")
-        with err.status("rendering") as spinner:
-            result = render_scene(
-                cs,
-                seed=seed,
-                estimator="fast",
-                samples_per_pixel=samples,
-                rel_error=rel_error,
-                status=lambda msg: spinner.update(f"rendering: {msg}"),
-            )
+        result = _render_fast(cs, samples, rel_error, max_samples, seed)
     else:
         total = sc.run.rays if rays is None else rays
         err.print(f"tracing {total:,} rays of {sc.name} (Ctrl-C stops after the current batch)")
@@ -172,22 +234,125 @@ def render(
                 estimator="forward",
                 progress=lambda d, t: bar.update(task, completed=d),
             )
-    if result.interrupted:
-        err.print(f"interrupted: writing the {result.rays:,} rays traced so far")
+        if result.interrupted:
+            err.print(f"interrupted: writing the {result.rays:,} rays traced so far")
     written = write_render_outputs(result, render_extras(cs, result.seed), out)
     summary = result.summary()
     _warn_safety(summary["safety"])
     skin = summary["regions"].get("skin", {})
-    noise = (
-        f"; median skin pixel ±{skin['median_pixel_rel_error']:.2%}" if skin.get("pixels") else ""
+    rel = skin.get("median_pixel_rel_error") if skin.get("pixels") else None
+    noise = f"; median skin pixel ±{rel:.2%}" if rel is not None and math.isfinite(rel) else ""
+    compiled = (
+        f" (+ {result.kernel_load_s:.1f} s loading the kernels)"
+        if result.kernel_load_s and result.kernel_load_s >= 0.5
+        else ""
     )
     err.print(
-        f"{result.rays:,} rays in {result.wall_time_s:.2f} s ({result.estimator}){noise}; "
+        f"{result.rays:,} rays in {result.wall_time_s:.2f} s{compiled} ({result.estimator})"
+        f"{noise}; "
         f"on the sensor {summary['power_w']['sensor']:.3g} W of "
         f"{summary['power_w']['emitted']:.4g} W emitted; wrote {len(written)} files to {out}"
     )
     if result.interrupted:
-        raise typer.Exit(130)
+        _exit_interrupted()
+
+
+def _render_fast(cs, samples, rel_error, max_samples, seed):
+    """The fast estimator with a projection first (arrays, time from a pilot), a progress bar
+    with an ETA, Ctrl-C/SIGTERM answered within about a second (nothing written when no sample
+    set had finished), and a warning when a --rel-error target stops at --max-samples."""
+    from eyelume.estimators.fast_run import array_bytes, pilot_rates, planned_sets
+    from eyelume.render import render as render_scene
+
+    sc = cs.scene
+    asked = samples or sc.run.samples_per_pixel
+    grid, sets = planned_sets(asked)
+    t_load = _warm_up(cs)
+    need = array_bytes(cs)
+    avail = _available_memory()
+    if avail is not None and need > avail:
+        _fail(
+            f"sensor {sc.sensor.cols} × {sc.sensor.rows}: the fast estimator needs "
+            f"~{_bytes(need)} of arrays, {_bytes(avail)} are available: render fewer pixels"
+        )
+    pixels = sc.sensor.cols * sc.sensor.rows
+    cam_rate, light_rate = pilot_rates(cs, sc.run.seed if seed is None else seed, grid)
+    light_per_sample = sc.run.light_paths_per_pixel / 16
+
+    def projection(spp: int) -> str:
+        s = spp * pixels * (1 / cam_rate + light_per_sample / light_rate)
+        return f"~{_seconds(s)} and ~{_bytes(need)} of arrays (a pilot's projection)"
+
+    if rel_error is not None:
+        goal = (
+            f"to a {rel_error:.2%} relative error in the median skin pixel, at most "
+            f"{max_samples:,} samples per pixel (first round {sets * grid * grid})"
+        )
+        plan = f"first round {projection(sets * grid * grid)}"
+    else:
+        spp = sets * grid * grid
+        note = "" if spp == asked else f" (asked {asked}: whole {grid}×{grid} sets, two at least)"
+        goal = f"{spp} samples per pixel{note}"
+        plan = projection(spp)
+    err.print(f"rendering {sc.name} (fast estimator, {goal}); {plan}; Ctrl-C stops")
+    with Progress(
+        TextColumn("[bold]rendering[/] {task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+        console=err,
+        transient=True,
+    ) as bar:
+        task = bar.add_task("", total=None)
+        try:
+            result = render_scene(
+                cs,
+                seed=seed,
+                estimator="fast",
+                samples_per_pixel=samples,
+                rel_error=rel_error,
+                max_samples_per_pixel=max_samples,
+                status=lambda msg: bar.update(task, description=msg),
+                advance=lambda d, t: bar.update(task, completed=d, total=t),
+            )
+        except KeyboardInterrupt:
+            bar.stop()
+            err.print("interrupted before a camera sample set finished: nothing usable, no output")
+            _exit_interrupted()
+    if t_load:
+        result.kernel_load_s = t_load
+    if result.interrupted:
+        err.print(
+            f"interrupted: writing the {result.samples_per_pixel} samples per pixel finished"
+            + (
+                " — one sample set only: the values are unbiased, their noise unknown"
+                if result.variance_dof == 0
+                else ""
+            )  # fmt: skip
+        )
+    if result.target_reached is False:
+        got = result.rel_error_achieved
+        err.print(
+            f"[yellow]warning:[/] --rel-error {rel_error:g} not reached within "
+            f"{result.samples_per_pixel:,} samples per pixel (--max-samples {max_samples:,}): "
+            f"reached {got:.4g}"
+            if got is not None
+            else "nothing",
+            highlight=False,
+        )
+    return result
+
+
+def _available_memory() -> int | None:
+    """Bytes of memory available now (Linux /proc/meminfo), or None when it cannot be read."""
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
 
 
 DeltaOpt = Annotated[
@@ -217,6 +382,7 @@ def sweep_leds_cmd(
     from eyelume.report.optimize_outputs import write_sweep_outputs
 
     sc = _load(scene, set_)
+    _check_out(out)
     try:
         goal = (
             load_target(target, sc.eye_plane)
@@ -302,6 +468,7 @@ def reproduce(
         counts = []
     if not counts or any(not 1 <= n <= 12 for n in counts):
         _fail(f"--direct-leds {direct_leds!r}: expected LED counts from 1 to 12, e.g. 4,6,8")
+    _check_out(out)
     compile_scene(sc)
     t0 = time.perf_counter()
     rows = run_delta_study(sc, values, samples, seed, progress=err.print)
@@ -410,6 +577,7 @@ def evaluate_tracking_cmd(
     sc = _load(scene, set_)
     if samples < 1 or seed < 0:
         _fail(f"--samples {samples}, --seed {seed}: must be ≥ 1 and ≥ 0")
+    _check_out(out)
     compile_scene(sc)
     t0 = time.perf_counter()
     if population:
@@ -457,6 +625,7 @@ def optimize_tracking_cmd(
     sc = _load(scene, set_)
     if samples < 1 or seed < 0 or not 0 <= delta < 1:
         _fail(f"--samples {samples}, --seed {seed}, --delta {delta}: need ≥ 1, ≥ 0, [0, 1)")
+    _check_out(out)
     b = sweep_leds(sc, gaussian_target(delta, sc.eye_plane)).best
     dopt = (b["height_mm"], b["distance_mm"], b["pitch_deg"])
     rows, best, d_row, paper = sweep_tracking(
@@ -499,6 +668,7 @@ def study(
     st = load_study(study_file)
     if workers is not None and workers < 1:
         _fail(f"--workers {workers}: must be ≥ 1")
+    _check_out(out)
     total = len(plan_runs(st))
     err.print(f"study {st.name}: {total} runs into {out} (Ctrl-C, then --resume, loses nothing)")
     with Progress(

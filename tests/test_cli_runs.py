@@ -1,0 +1,126 @@
+"""Runs from the command line (issue 12): a bad --out is refused before any work with one line
+and exit 2; budgets beyond the model are refused; what is rendered is said; a large render
+answers SIGTERM within seconds (exit 143) and writes nothing when no sample set had finished."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from typer.testing import CliRunner
+
+from eyelume.cli import app
+
+runner = CliRunner()
+
+STUDY = """
+name = "s"
+scene = "paper2005"
+metrics = ["safety"]
+[[vary]]
+path = "leds.height_mm"
+values = [20.0, 30.0]
+"""
+
+COMMANDS = {
+    "render": ["render"],
+    "sweep-leds": ["sweep-leds"],
+    "reproduce": ["reproduce", "paper2005"],
+    "evaluate-tracking": ["evaluate-tracking"],
+    "optimize-tracking": ["optimize-tracking"],
+    "study": ["study", "STUDY"],
+}
+#: The work each command would start with: called means the --out check came too late.
+WORK = {
+    "render": "eyelume.compile.compile_scene",
+    "sweep-leds": "eyelume.optimize.sweep.sweep_leds",
+    "reproduce": "eyelume.optimize.delta_study.run_delta_study",
+    "evaluate-tracking": "eyelume.analysis.tracking.evaluate.evaluate_tracking",
+    "optimize-tracking": "eyelume.optimize.tracking.sweep_tracking",
+    "study": "eyelume.optimize.runner.run_study",
+}
+
+
+def _one_line_exit_2(res):
+    assert res.exit_code == 2, res.output
+    lines = [ln for ln in res.output.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error:"), res.output
+    assert "Traceback" not in res.output
+    return lines[0]
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+@pytest.mark.parametrize("kind", ["an existing file", "under a file"])
+def test_a_bad_out_is_refused_before_any_work(tmp_path, monkeypatch, command, kind):
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY, encoding="utf-8")
+    blocker = tmp_path / "taken.txt"
+    blocker.write_text("not a folder", encoding="utf-8")
+    out = blocker if kind == "an existing file" else blocker / "out"
+
+    def no_work(*a, **k):
+        raise AssertionError("work started before --out was checked")
+
+    module, name = WORK[command].rsplit(".", 1)
+    monkeypatch.setattr(f"{module}.{name}", no_work)
+    args = [a.replace("STUDY", str(study)) for a in COMMANDS[command]]
+    line = _one_line_exit_2(runner.invoke(app, [*args, "--out", str(out)]))
+    assert "--out" in line and str(out) in line.replace("\n", "")
+    assert blocker.read_text(encoding="utf-8") == "not a folder"
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--samples", "10000000"], ["--samples 10000000", "1,000,000"]),
+        (["--samples", "0"], ["--samples 0"]),
+        (["--rel-error", "0.01", "--max-samples", "0"], ["--max-samples 0"]),
+    ],
+)
+def test_budgets_beyond_the_model_are_refused(tmp_path, args, words):
+    line = _one_line_exit_2(runner.invoke(app, ["render", *args, "--out", str(tmp_path / "o")]))
+    for w in words:
+        assert w in line
+
+
+def test_the_console_says_what_is_rendered(tmp_path):
+    res = runner.invoke(app, ["render", "--samples", "9", "--out", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    text = " ".join(res.output.split())
+    assert "12 samples per pixel (asked 9" in text
+    assert "pilot's projection" in text
+
+
+def test_a_large_render_answers_sigterm_within_seconds(tmp_path):
+    """1024 × 768 at 64 samples per pixel: a camera set over every pixel takes minutes here,
+    so the signal lands before any set has finished: nothing usable, said, nothing written,
+    exit 143 — within seconds, not after the round."""
+    out = tmp_path / "big"
+    cmd = [sys.executable, "-c", "from eyelume.cli import app; app()", "render",
+           "--set", "sensor.cols=1024", "--set", "sensor.rows=768", "--samples", "64",
+           "--out", str(out)]  # fmt: skip
+    proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+    try:
+        deadline = time.time() + 240
+        line = ""
+        while time.time() < deadline and "rendering" not in line:
+            line = proc.stderr.readline()
+            if not line and proc.poll() is not None:
+                break
+        assert "rendering" in line, line
+        time.sleep(3.0)
+        t0 = time.time()
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+        answered = time.time() - t0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 143, err
+    assert "nothing usable" in err
+    assert answered < 20, answered  # a chunk is a fraction of a second; generous for load
+    assert not (out / "eye_image.npy").exists()
