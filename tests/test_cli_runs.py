@@ -38,7 +38,7 @@ WORK = {
     "render": "eyelume.compile.compile_scene",
     "sweep-leds": "eyelume.optimize.sweep.sweep_leds",
     "reproduce": "eyelume.optimize.delta_study.run_delta_study",
-    "evaluate-tracking": "eyelume.analysis.tracking.evaluate.evaluate_tracking",
+    "evaluate-tracking": "eyelume.optimize.tracking.evaluate_tracking",
     "optimize-tracking": "eyelume.optimize.tracking.sweep_tracking",
     "study": "eyelume.optimize.runner.run_study",
 }
@@ -124,3 +124,46 @@ def test_a_large_render_answers_sigterm_within_seconds(tmp_path):
     assert "nothing usable" in err
     assert answered < 20, answered  # a chunk is a fraction of a second; generous for load
     assert not (out / "eye_image.npy").exists()
+
+
+def test_a_saturated_picture_is_written_with_a_warning(tmp_path):
+    out = tmp_path / "o"
+    res = runner.invoke(app, ["render", "--samples", "8", "--set", "sensor.exposure_ms=2000",
+                              "--out", str(out)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    import json
+
+    share = json.loads((out / "summary.json").read_text())["camera"]["saturated_share"]
+    assert share > 0.5  # 100× the exposure that puts skin at half scale
+    text = " ".join(res.output.split())
+    assert f"{share:.0%} of the camera's pixels saturate" in text
+
+
+def test_nominal_picture_has_no_saturation_warning(tmp_path):
+    res = runner.invoke(app, ["render", "--samples", "8", "--out", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    assert "saturate" not in res.output
+
+
+def test_lost_tracking_frames_name_saturation_as_the_reason():
+    import eyelume
+    from eyelume.analysis.tracking.evaluate import failure_reason
+    from eyelume.optimize.tracking import evaluate_tracking
+
+    sc = eyelume.load_scene("paper2005", {"sensor.exposure_ms": 2000.0})
+    rep = evaluate_tracking(sc, [0.0], [0.0], 8, 0, calibrate=False)
+    s = rep.summary
+    assert s["detection_rate"] == 0.0 and s["saturated_share"] > 0.5
+    assert failure_reason(s).startswith("saturation: ")
+    nominal = evaluate_tracking(eyelume.load_scene("paper2005"), [0.0], [0.0], 8, 0,
+                                calibrate=False).summary  # fmt: skip
+    assert nominal["detection_rate"] == 1.0 and failure_reason(nominal) is None
+
+
+@pytest.mark.parametrize("command", ["evaluate-tracking", "optimize-tracking"])
+def test_tracking_commands_refuse_a_gaze_override(tmp_path, command):
+    res = runner.invoke(app, [command, "--set", "eye.gaze_horizontal_deg=10", "--out",
+                              str(tmp_path / "o")])  # fmt: skip
+    line = _one_line_exit_2(res)
+    assert "eye.gaze_horizontal_deg" in line and "sets the gaze itself" in line
+    assert not (tmp_path / "o").exists()

@@ -152,6 +152,7 @@ def camera_summary(sensor: Sensor, wavelength_nm: float, digital: DigitalImage) 
         "photon_energy_j": digital.photon_energy_j,
         "electrons_per_w_mm2": electrons_per_w_mm2(sensor, wavelength_nm),
         "saturated_pixels": digital.saturated_pixels,
+        "saturated_share": digital.saturated_pixels / max(digital.counts.size, 1),
         "median_dn": float(np.median(digital.counts)) if digital.counts.size else 0.0,
         "units": {"counts": "DN", "electrons_per_w_mm2": "e-/(W/mm^2)", "exposure": "ms"},
     }

@@ -18,7 +18,6 @@ generator and the paper's placement are scored the same way for comparison.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -31,6 +30,8 @@ from eyelume.analysis.tracking.evaluate import (
     TrackingReport,
     analyse_frame,
     analyse_frames,
+    failure_reason,
+    mean_deg,
     tracking_score,
 )
 from eyelume.analysis.truth import eye_truth
@@ -62,10 +63,12 @@ def render_frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> F
     sc = apply_overrides(scene, {"eye.gaze_horizontal_deg": h, "eye.gaze_vertical_deg": v})
     cs = compile_scene(sc)
     result = render(cs, estimator="fast", samples_per_pixel=samples, seed=seed)
-    counts = digitize(result.eye_image, sc.sensor, sc.wavelength_nm, seed=seed).counts
-    return analyse_frame(
-        (h, v), counts, eye_truth(cs), list(sc.leds.azimuths()), render_s=result.wall_time_s
+    digital = digitize(result.eye_image, sc.sensor, sc.wavelength_nm, seed=seed)
+    frame = analyse_frame(
+        (h, v), digital.counts, eye_truth(cs), list(sc.leds.azimuths()), render_s=result.wall_time_s
     )
+    frame.saturated_share = digital.saturated_pixels / max(digital.counts.size, 1)
+    return frame
 
 
 def evaluate_tracking(
@@ -145,10 +148,11 @@ def evaluate_population(
         )
         if progress:
             s = out[name].summary
+            why = failure_reason(s)
             progress(
                 f"{name}: detection {s['detection_rate']:.0%}, geometric gaze "
-                f"{s['gaze_geometric'].get('mean_deg', math.nan):.2f}° mean, PCCR "
-                f"{s['gaze_pccr'].get('mean_deg', math.nan):.2f}°"
+                f"{mean_deg(s['gaze_geometric'])} mean, PCCR {mean_deg(s['gaze_pccr'])}"
+                + (f" — {why}" if why else "")
             )
     return out
 

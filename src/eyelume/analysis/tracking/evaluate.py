@@ -57,6 +57,7 @@ class Frame:
     geometric: tuple[float, float] | None = None
     render_s: float = 0.0
     detect_ms: float = 0.0
+    saturated_share: float = 0.0  # of the frame's pixels at the full well or full scale
 
 
 @dataclass
@@ -202,12 +203,57 @@ def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
         "gaze_geometric": stats(_errors(frames, "geometric")),
         "render_s_per_frame": float(np.mean([f.render_s for f in frames])),
         "detect_ms_per_frame": float(np.nanmean([f.detect_ms for f in frames])),
+        "saturated_share": float(np.mean([f.saturated_share for f in frames])) if frames else 0.0,
+        "failure_causes": failure_causes(frames),
         "failures": {
             f"{f.gaze[0]:+.0f},{f.gaze[1]:+.0f}": f.detection.failures
             for f in frames
             if f.detection.failures
         },
     }
+
+
+def failure_causes(frames: list[Frame]) -> dict[str, int]:
+    """Frames per kind of detection failure (the text before the first colon: "glint lost",
+    "pupil cut or hidden", …), most frequent first; warnings are not counted."""
+    counts: dict[str, int] = {}
+    for f in frames:
+        if f.detection.ok:
+            continue
+        kinds = {x.split(":")[0] for x in f.detection.failures if not x.startswith("warning")}
+        for k in kinds or {"no detection"}:
+            counts[k] = counts.get(k, 0) + 1
+    return dict(sorted(counts.items(), key=lambda kv: -kv[1]))
+
+
+#: A share of saturated pixels above which saturation is named as the cause of lost frames: a
+#: picture where most of the face is white has no pupil/iris contrast left to threshold.
+SATURATED_CAUSE = 0.25
+
+
+def failure_reason(summary: dict) -> str | None:
+    """Why frames were lost, in a few words (None when every frame was detected): saturation
+    when the frames' mean saturated share exceeds :data:`SATURATED_CAUSE`, else the most
+    frequent cause with its count."""
+    if summary.get("detection_rate", 1.0) >= 1.0:
+        return None
+    share = summary.get("saturated_share", 0.0)
+    if share > SATURATED_CAUSE:
+        return (
+            f"saturation: {share:.0%} of the pixels at full scale (shorten sensor.exposure_ms "
+            "or dim the LEDs)"
+        )
+    causes = summary.get("failure_causes") or {}
+    if not causes:
+        return None
+    kind, n = next(iter(causes.items()))
+    return f"mostly {kind} ({n} of {summary['frames']} frames)"
+
+
+def mean_deg(stats: dict) -> str:
+    """A gaze error's mean in degrees, or "no estimate" when no frame gave one."""
+    mean = stats.get("mean_deg")
+    return "no estimate" if mean is None or not math.isfinite(mean) else f"{mean:.2f}°"
 
 
 #: Gaze error charged to a frame whose detection failed (degrees): a tracker that loses the eye
