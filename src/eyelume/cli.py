@@ -103,6 +103,33 @@ def _warn_safety(safety: dict) -> None:
             )
 
 
+#: A saturated share of the picture worth a warning: the glints alone are ~0.6 % at 87 × 65.
+_SATURATION_WARN = 0.05
+
+
+def _warn_saturation(summary_json: Path) -> None:
+    """A warning naming the saturated share of the camera's picture when it is large."""
+    cam = json.loads(summary_json.read_text(encoding="utf-8")).get("camera", {})
+    share = cam.get("saturated_share")
+    if share is not None and share > _SATURATION_WARN:
+        err.print(
+            f"[bold yellow]warning:[/] {share:.0%} of the camera's pixels saturate (full well or "
+            "ADC full scale): the digital picture has lost that detail; shorten "
+            "sensor.exposure_ms or dim the LEDs",
+            highlight=False,
+        )
+
+
+def _refuse_gaze(sets: list[str] | None, command: str) -> None:
+    """The tracking commands turn the eye themselves: a --set of the gaze would be ignored."""
+    for key in _overrides(sets):
+        if key.startswith("eye.gaze_"):
+            _fail(
+                f"--set {key}: {command} sets the gaze itself (a grid over ±30° × ±20° and a "
+                "calibration grid); leave it out, or use `eyelume render` for one gaze"
+            )
+
+
 def _check_out(out: Path, option: str = "--out") -> None:
     """Refuse an output folder that cannot take the outputs, before any work: an existing file,
     a path under a file, a place where nothing can be written (probed with a temporary file in
@@ -197,19 +224,7 @@ def render(
 
     sc = _load(scene, set_)
     estimator = estimator or ("forward" if rays is not None else sc.run.estimator)
-    if estimator not in ("fast", "forward"):
-        _fail(f"--estimator {estimator!r}: must be 'fast' or 'forward'")
-    if rays is not None and (rays < 1 or estimator != "forward"):
-        _fail(f"--rays {rays}: must be ≥ 1, with --estimator forward (fast: --samples)")
-    cap = _SAMPLES_CAP
-    if samples is not None and (not 1 <= samples <= cap or estimator != "fast"):
-        _fail(f"--samples {samples}: must be 1 to {cap:,}, with --estimator fast (forward: --rays)")
-    if rel_error is not None and (not 0 < rel_error < 1 or estimator != "fast"):
-        _fail(f"--rel-error {rel_error}: must be in (0, 1), with --estimator fast")
-    if not 1 <= max_samples <= cap:
-        _fail(f"--max-samples {max_samples}: must be 1 to {cap:,}")
-    if seed is not None and seed < 0:
-        _fail(f"--seed {seed}: must be ≥ 0")
+    _check_render_options(estimator, rays, samples, rel_error, max_samples, seed)
     _check_out(out)
     cs = compile_scene(sc)
     if estimator == "fast":
@@ -239,6 +254,7 @@ def render(
     written = write_render_outputs(result, render_extras(cs, result.seed), out)
     summary = result.summary()
     _warn_safety(summary["safety"])
+    _warn_saturation(out / "summary.json")
     skin = summary["regions"].get("skin", {})
     rel = skin.get("median_pixel_rel_error") if skin.get("pixels") else None
     noise = f"; median skin pixel ±{rel:.2%}" if rel is not None and math.isfinite(rel) else ""
@@ -255,6 +271,22 @@ def render(
     )
     if result.interrupted:
         _exit_interrupted()
+
+
+def _check_render_options(estimator, rays, samples, rel_error, max_samples, seed) -> None:
+    if estimator not in ("fast", "forward"):
+        _fail(f"--estimator {estimator!r}: must be 'fast' or 'forward'")
+    if rays is not None and (rays < 1 or estimator != "forward"):
+        _fail(f"--rays {rays}: must be ≥ 1, with --estimator forward (fast: --samples)")
+    cap = _SAMPLES_CAP
+    if samples is not None and (not 1 <= samples <= cap or estimator != "fast"):
+        _fail(f"--samples {samples}: must be 1 to {cap:,}, with --estimator fast (forward: --rays)")
+    if rel_error is not None and (not 0 < rel_error < 1 or estimator != "fast"):
+        _fail(f"--rel-error {rel_error}: must be in (0, 1), with --estimator fast")
+    if not 1 <= max_samples <= cap:
+        _fail(f"--max-samples {max_samples}: must be 1 to {cap:,}")
+    if seed is not None and seed < 0:
+        _fail(f"--seed {seed}: must be ≥ 0")
 
 
 def _render_fast(cs, samples, rel_error, max_samples, seed):
@@ -570,10 +602,12 @@ def evaluate_tracking_cmd(
     (and a 3 × 3 calibration grid), detect pupil and glints on the camera's images, estimate
     gaze (PCCR, Guestrin–Eizenman) and compare with the truth; table, summary and error maps
     into OUT."""
+    from eyelume.analysis.tracking.evaluate import failure_reason
     from eyelume.compile import compile_scene
     from eyelume.optimize.tracking import evaluate_tracking
     from eyelume.report.tracking_outputs import write_population_outputs, write_tracking_outputs
 
+    _refuse_gaze(set_, "evaluate-tracking")
     sc = _load(scene, set_)
     if samples < 1 or seed < 0:
         _fail(f"--samples {samples}, --seed {seed}: must be ≥ 1 and ≥ 0")
@@ -598,11 +632,19 @@ def evaluate_tracking_cmd(
     written = write_tracking_outputs(report, meta, out)
     s = report.summary
     gp, gg = s["gaze_pccr"], s["gaze_geometric"]
+    pe = s["pupil_error_px"]["mean"]
+    why = failure_reason(s)
+
+    def deg(stats: dict) -> str:
+        return f"{stats['mean_deg']:.3g}° mean" if stats.get("mean_deg") is not None else "none"
+
     err.print(
-        f"detection {s['detection_rate']:.0%}; pupil error {s['pupil_error_px']['mean']:.3g} px; "
-        f"gaze PCCR {gp.get('mean_deg', float('nan')):.3g}° mean, "
-        f"geometric {gg.get('mean_deg', float('nan')):.3g}° mean; {meta['wall_time_s']} s; "
-        f"wrote {len(written)} files to {out}"
+        f"detection {s['detection_rate']:.0%}"
+        + (f" ({why})" if why else "")
+        + f"; pupil error {f'{pe:.3g} px' if pe is not None else 'none'}; "
+        f"gaze PCCR {deg(gp)}, geometric {deg(gg)}; {meta['wall_time_s']} s; "
+        f"wrote {len(written)} files to {out}",
+        highlight=False,
     )
 
 
@@ -622,6 +664,7 @@ def optimize_tracking_cmd(
     from eyelume.optimize.tracking import sweep_tracking
     from eyelume.report.optimize_outputs import write_tracking_sweep_outputs
 
+    _refuse_gaze(set_, "optimize-tracking")
     sc = _load(scene, set_)
     if samples < 1 or seed < 0 or not 0 <= delta < 1:
         _fail(f"--samples {samples}, --seed {seed}, --delta {delta}: need ≥ 1, ≥ 0, [0, 1)")
@@ -658,6 +701,14 @@ def study(
         str | None,
         typer.Option(help="Run on Dask: 'local' starts a LocalCluster, else a scheduler address."),
     ] = None,
+    lock_timeout: Annotated[
+        float,
+        typer.Option(
+            "--lock-timeout",
+            help="Seconds a commit waits (after SQLite's 5 s) while another program holds the "
+            "store's write lock, before the study stops (exit 2; --resume continues).",
+        ),
+    ] = 60.0,
 ) -> None:
     """Run a study: the base scene with parameters varied by their dotted paths, metrics per
     run, each finished run committed at once to OUT/results.sqlite (resumable)."""
@@ -668,6 +719,8 @@ def study(
     st = load_study(study_file)
     if workers is not None and workers < 1:
         _fail(f"--workers {workers}: must be ≥ 1")
+    if not 0 <= lock_timeout <= 86400:
+        _fail(f"--lock-timeout {lock_timeout}: must be 0 to 86400 s")
     _check_out(out)
     total = len(plan_runs(st))
     err.print(f"study {st.name}: {total} runs into {out} (Ctrl-C, then --resume, loses nothing)")
@@ -683,13 +736,22 @@ def study(
         task = bar.add_task("study", total=total)
         try:
             rows = run_study(
-                st, out, workers, resume, lambda d, t: bar.update(task, completed=d), dask
+                st,
+                out,
+                workers,
+                resume,
+                lambda d, t: bar.update(task, completed=d),
+                dask,
+                lock_timeout_s=lock_timeout,
+                note=lambda msg: err.print(f"[yellow]{msg}[/]", highlight=False),
             )
         except (ValueError, OSError) as exc:
+            bar.stop()
             _fail(str(exc))
         except KeyboardInterrupt:
+            bar.stop()
             err.print(f"interrupted: the finished runs are in {out}; --resume continues")
-            raise typer.Exit(130) from None
+            _exit_interrupted()
     table = write_study_table(rows, out)
     unsafe = [r for r in rows if r["metrics"].get("within_exempt_group") is False]
     if unsafe:
@@ -710,18 +772,28 @@ def report(
             "image, tracking errors) and store it in FOLDER first (default: skip)."
         ),
     ] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="The page to write (default: FOLDER/report.html)."),
+    ] = None,
 ) -> None:
-    """Write FOLDER/report.html: the study's table (unsafe runs in red), merit landscapes, the
-    best runs and the best run's stored eye-plane pattern and eye image (--scene stores them)."""
+    """Write FOLDER/report.html (or --out): the study's table (unsafe runs in red), merit
+    landscapes, the best runs and the best run's stored eye-plane pattern and eye image (--scene
+    stores them). Reads the store read-only: a study still running is reported as far as it has
+    committed; a read-only FOLDER needs --out (and no --scene)."""
     from eyelume.report.html import write_report
 
+    if out is not None:
+        if out.is_dir():
+            _fail(f"--out {out}: is a folder; give the page's file name, e.g. {out}/report.html")
+        _check_out(out.parent)
     try:
         if scene is not None:
             from eyelume.optimize.best_run import save_best_run
 
             err.print(f"evaluating the best run of {folder} on {scene}")
             save_best_run(folder, scene)
-        path = write_report(folder)
+        path = write_report(folder, out)
     except (OSError, ValueError) as exc:
         _fail(str(exc))
     err.print(f"wrote {path}")

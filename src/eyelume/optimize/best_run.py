@@ -23,8 +23,6 @@ from pathlib import Path
 
 import numpy as np
 
-from eyelume.errors import StoreError
-
 __all__ = ["BEST_RUN_FILES", "MERITS", "best_runs", "save_best_run"]
 
 #: The merits a study's runs are ranked by, in order of preference (lower is better).
@@ -49,15 +47,10 @@ def _is_number(v) -> bool:
 
 
 def _stored_rows(folder: Path) -> list[dict]:
-    from eyelume.optimize.store import ResultStore
+    """The committed runs, read read-only (a study may still be writing)."""
+    from eyelume.optimize.store import read_rows
 
-    if not (folder / "results.sqlite").exists():
-        raise StoreError(f"{folder}: no results.sqlite (run `eyelume study` first)")
-    store = ResultStore(folder)
-    try:
-        return store.rows()
-    finally:
-        store.close()
+    return read_rows(folder)[0]
 
 
 def save_best_run(folder: str | Path, scene: str) -> Path | None:

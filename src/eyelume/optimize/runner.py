@@ -6,12 +6,21 @@ depend on the number of workers or the order runs finish; the table is read back
 Workers are fresh processes (``spawn``) with one Numba thread each, so N workers use N cores.
 ``dask="local"`` starts a ``distributed.LocalCluster`` of ``workers`` single-threaded worker
 processes; any other value is a scheduler address. The same runs, the same results.
+
+Workers end with their parent: each asks the kernel for SIGKILL when its parent dies
+(``prctl(PR_SET_PDEATHSIG)``, Linux) and watches its parent's pid once a second (elsewhere), so a
+study killed with ``kill -9`` leaves no worker behind. When the study stops — Ctrl-C, SIGTERM (the
+command line turns it into the same interrupt), a commit that cannot be made — the queue is
+dropped and the workers are terminated at once: no run is computed only to be thrown away.
 """
 
 from __future__ import annotations
 
+import ctypes
 import multiprocessing as mp
 import os
+import signal
+import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -19,7 +28,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 from eyelume.errors import StoreError
-from eyelume.optimize.store import ResultStore
+from eyelume.optimize.store import LOCK_TIMEOUT_S, ResultStore
 from eyelume.optimize.study import Study, plan_runs, run_key, run_metrics
 from eyelume.scene.io import load_scene
 from eyelume.scene.model import Scene
@@ -27,10 +36,44 @@ from eyelume.scene.model import Scene
 __all__ = ["run_study"]
 
 
-def _init_worker() -> None:
+def _init_worker(parent: int | None = None) -> None:
     import numba
 
     numba.set_num_threads(1)
+    if parent is not None:
+        _die_with_parent(parent)
+
+
+def _die_with_parent(parent: int) -> None:
+    """End this worker when the process ``parent`` ends, however it ends (module docstring)."""
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # 1 = PR_SET_PDEATHSIG
+    except (AttributeError, OSError):
+        pass  # not Linux: the watcher below
+
+    def watch() -> None:
+        while True:
+            if os.getppid() != parent:
+                os._exit(1)
+            time.sleep(1.0)
+
+    if os.getppid() != parent:  # the parent died before prctl took effect
+        os._exit(1)
+    threading.Thread(target=watch, name="eyelume-parent-watch", daemon=True).start()
+
+
+def _end_pool(pool: ProcessPoolExecutor) -> None:
+    """Drop the queue and terminate the workers now (their runs in flight are lost; what is
+    committed stays)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in procs:
+        proc.join(timeout=5)
+        if proc.is_alive():
+            proc.kill()
 
 
 def _one(scene_json: dict, overrides: dict, study_json: dict) -> tuple[dict, float]:
@@ -47,16 +90,22 @@ def run_study(
     resume: bool = False,
     progress: Callable[[int, int], None] | None = None,
     dask: str | None = None,
+    lock_timeout_s: float = LOCK_TIMEOUT_S,
+    note: Callable[[str], None] | None = None,
 ) -> list[dict]:
     """Run every planned run not yet in ``out``'s store; returns the store's rows.
 
     Without ``resume`` a folder that already holds runs is refused (ValueError); with it, the
-    finished runs are skipped. ``progress(done, total)`` after each commit.
+    finished runs are skipped. ``progress(done, total)`` after each commit; ``note(message)``
+    when a commit waits for another program's write lock (up to ``lock_timeout_s``, then
+    :class:`~eyelume.optimize.store.StoreLocked`). KeyboardInterrupt (Ctrl-C, or SIGTERM via the
+    command line) and any error stop the workers at once; what is committed stays.
     """
     base = load_scene(study.scene)
     runs = plan_runs(study)
     keys = [run_key(base, r, study) for r in runs]
-    store = ResultStore(out)
+    store = ResultStore(out, lock_timeout_s)
+    store.on_wait = note
     try:
         done = store.done()
         if done and not resume:
@@ -82,24 +131,34 @@ def run_study(
         if dask is not None:
             _run_on_dask(dask, workers, todo, scene_json, study_json, commit)
         else:
-            ctx = mp.get_context("spawn")
-            pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker)
-            try:
-                pending = {
-                    pool.submit(_one, scene_json, r, study_json): (i, r, k) for i, r, k in todo
-                }
-                while pending:
-                    ready, _ = wait(pending, return_when=FIRST_COMPLETED)
-                    for fut in ready:
-                        commit(*pending.pop(fut), fut.result())
-            except (KeyboardInterrupt, BrokenProcessPool):
-                # Ctrl-C: what is committed stays; drop the queue instead of waiting for it
-                pool.shutdown(wait=False, cancel_futures=True)
-                raise KeyboardInterrupt from None
-            pool.shutdown()
+            _run_on_pool(workers, todo, scene_json, study_json, commit)
         return store.rows()
     finally:
         store.close()
+
+
+def _run_on_pool(workers, todo, scene_json, study_json, commit) -> None:
+    """The runs on a local pool of ``spawn`` worker processes that end with this one; each
+    result is committed as it arrives; an interrupt or error ends the workers at once."""
+    ctx = mp.get_context("spawn")
+    pool = ProcessPoolExecutor(
+        workers, mp_context=ctx, initializer=_init_worker, initargs=(os.getpid(),)
+    )
+    try:
+        pending = {pool.submit(_one, scene_json, r, study_json): (i, r, k) for i, r, k in todo}
+        while pending:
+            ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in ready:
+                commit(*pending.pop(fut), fut.result())
+    except (KeyboardInterrupt, BrokenProcessPool):
+        # Ctrl-C / SIGTERM (a worker hit by Ctrl-C breaks the pool): what is committed stays;
+        # drop the queue and end the workers instead of waiting for them
+        _end_pool(pool)
+        raise KeyboardInterrupt from None
+    except BaseException:
+        _end_pool(pool)  # e.g. StoreLocked: compute nothing that cannot be kept
+        raise
+    pool.shutdown()
 
 
 def _run_on_dask(address, workers, todo, scene_json, study_json, commit) -> None:

@@ -6,6 +6,18 @@ server and no dependency (Parquet parts would need pyarrow and one file per run)
 by the SHA-256 of the run's exact inputs, so a resumed study skips what is done. One study at a
 time may write to a folder: an exclusive ``flock`` on ``.lock`` (released by the kernel when the
 process dies, however it dies) refuses a second one with a clear error.
+
+Readers (``eyelume report``) never take that lock and never write: :func:`read_rows` opens the
+database read-only (SQLite ``mode=ro``), so it reports what is committed while a study is still
+running, and falls back to ``immutable=1`` (the main file only, without the write-ahead log's
+uncheckpointed pages) in a folder it cannot write to (SQLite's ``mode=ro`` needs to create the
+WAL index there).
+
+Another program holding the database's write lock (an SQLite browser in a transaction, a backup
+tool) makes a commit wait: SQLite's busy timeout (5 s), then once more up to ``lock_timeout_s``
+(60 s by default); then :class:`StoreLocked` — the study stops at once, keeps what it committed,
+and ``--resume`` continues. A file that is not an SQLite database (or a damaged one) is a
+:class:`~eyelume.errors.StoreError` naming it.
 """
 
 from __future__ import annotations
@@ -14,22 +26,56 @@ import fcntl
 import json
 import os
 import sqlite3
+from collections.abc import Callable
 from pathlib import Path
 
 from eyelume.errors import StoreError
 
-__all__ = ["ResultStore", "StoreBusy"]
+__all__ = ["LOCK_TIMEOUT_S", "ResultStore", "StoreBusy", "StoreLocked", "read_rows"]
+
+#: Seconds a commit waits for another program's write lock before the study stops.
+LOCK_TIMEOUT_S = 60.0
+_FIRST_WAIT_S = 5.0
+
+_COLUMNS = "key, idx, study, overrides, metrics, seconds"
 
 
 class StoreBusy(StoreError, RuntimeError):
     """Another study is writing to this folder (a :class:`~eyelume.errors.StoreError`)."""
 
 
-class ResultStore:
-    """Finished runs of one study folder (module docstring)."""
+class StoreLocked(StoreError):
+    """Another program held the database's write lock longer than the store waits."""
 
-    def __init__(self, folder: str | Path) -> None:
+
+def _damaged(path: Path, exc: sqlite3.Error) -> StoreError:
+    return StoreError(
+        f"not a readable study store ({exc}): move it away or use another folder", file=path
+    )
+
+
+def _as_rows(cursor) -> list[dict]:
+    return [
+        {
+            "key": key,
+            "index": idx,
+            "study": study,
+            "overrides": json.loads(ov),
+            "metrics": json.loads(me),
+            "seconds": sec,
+        }
+        for key, idx, study, ov, me, sec in cursor
+    ]
+
+
+class ResultStore:
+    """Finished runs of one study folder (module docstring); the one writer."""
+
+    def __init__(self, folder: str | Path, lock_timeout_s: float = LOCK_TIMEOUT_S) -> None:
         self.folder = Path(folder)
+        self.path = self.folder / "results.sqlite"
+        self.lock_timeout_s = float(lock_timeout_s)
+        self.on_wait: Callable[[str], None] | None = None
         self.folder.mkdir(parents=True, exist_ok=True)
         self._lock = open(self.folder / ".lock", "a+")  # noqa: SIM115 - held for the run
         try:
@@ -43,13 +89,48 @@ class ResultStore:
         self._lock.truncate()
         self._lock.write(str(os.getpid()))
         self._lock.flush()
-        self.db = sqlite3.connect(self.folder / "results.sqlite", isolation_level=None)
-        self.db.execute("PRAGMA journal_mode=WAL")
-        self.db.execute("PRAGMA synchronous=NORMAL")
-        self.db.execute(
-            "CREATE TABLE IF NOT EXISTS runs (key TEXT PRIMARY KEY, idx INTEGER, study TEXT, "
-            "overrides TEXT, metrics TEXT, seconds REAL)"
-        )
+        try:
+            self.db = sqlite3.connect(self.path, isolation_level=None, timeout=_FIRST_WAIT_S)
+            self._write("PRAGMA journal_mode=WAL")
+            self._write("PRAGMA synchronous=NORMAL")
+            self._write(
+                "CREATE TABLE IF NOT EXISTS runs (key TEXT PRIMARY KEY, idx INTEGER, study TEXT, "
+                "overrides TEXT, metrics TEXT, seconds REAL)"
+            )
+        except StoreError:
+            self._unlock()
+            raise
+        except sqlite3.DatabaseError as exc:
+            self._unlock()
+            raise _damaged(self.path, exc) from None
+
+    def _write(self, sql: str, args: tuple = ()) -> None:
+        """Execute a write; while another program holds the lock, wait (module docstring)."""
+        try:
+            self.db.execute(sql, args)
+            return
+        except sqlite3.OperationalError as exc:
+            if "locked" not in str(exc) and "busy" not in str(exc):
+                raise
+        if self.on_wait:
+            self.on_wait(
+                f"{self.path}: another program holds the write lock; waiting up to "
+                f"{self.lock_timeout_s:g} s"
+            )
+        self.db.execute(f"PRAGMA busy_timeout = {int(self.lock_timeout_s * 1000)}")
+        try:
+            self.db.execute(sql, args)
+        except sqlite3.OperationalError as exc:
+            if "locked" not in str(exc) and "busy" not in str(exc):
+                raise
+            waited = _FIRST_WAIT_S + self.lock_timeout_s
+            raise StoreLocked(
+                f"another program held the write lock for over {waited:g} s; the study "
+                "stopped, the runs committed before are kept: --resume continues",
+                file=self.path,
+            ) from None
+        finally:
+            self.db.execute(f"PRAGMA busy_timeout = {int(_FIRST_WAIT_S * 1000)}")
 
     def done(self) -> set[str]:
         """Keys of the finished runs."""
@@ -62,31 +143,63 @@ class ResultStore:
     def put(
         self, key: str, idx: int, study: str, overrides: dict, metrics: dict, seconds: float
     ) -> None:
-        """Commit one finished run (atomic, durable on return)."""
-        self.db.execute(
+        """Commit one finished run (atomic, durable on return); StoreLocked when another
+        program holds the write lock too long."""
+        self._write(
             "INSERT OR REPLACE INTO runs VALUES (?, ?, ?, ?, ?, ?)",
             (key, idx, study, json.dumps(overrides), json.dumps(metrics), seconds),
         )
 
     def rows(self) -> list[dict]:
         """Every finished run, in plan order."""
-        out = []
-        for key, idx, study, ov, me, sec in self.db.execute(
-            "SELECT key, idx, study, overrides, metrics, seconds FROM runs ORDER BY idx"
-        ):
-            out.append(
-                {
-                    "key": key,
-                    "index": idx,
-                    "study": study,
-                    "overrides": json.loads(ov),
-                    "metrics": json.loads(me),
-                    "seconds": sec,
-                }
-            )
-        return out
+        return _as_rows(self.db.execute(f"SELECT {_COLUMNS} FROM runs ORDER BY idx"))
+
+    def _unlock(self) -> None:
+        fcntl.flock(self._lock, fcntl.LOCK_UN)
+        self._lock.close()
 
     def close(self) -> None:
         self.db.close()
-        fcntl.flock(self._lock, fcntl.LOCK_UN)
-        self._lock.close()
+        self._unlock()
+
+
+def read_rows(folder: str | Path) -> tuple[list[dict], str | None]:
+    """(every committed run in plan order, a note or None), read without writing or locking:
+    SQLite ``mode=ro``, or ``immutable=1`` where the folder cannot be written (the note says
+    so: runs still in the write-ahead log are then missing). StoreError for a missing or
+    damaged store."""
+    path = Path(folder) / "results.sqlite"
+    if not path.is_file():
+        raise StoreError("no results.sqlite (run `eyelume study` first)", file=Path(folder))
+    uri = path.absolute().as_uri()
+    frozen = (
+        f"{uri}?immutable=1",
+        f"{path.parent} cannot be written: read results.sqlite as it is (runs not yet "
+        "checkpointed from results.sqlite-wal, if any, are not shown)",
+    )
+    attempts = [(f"{uri}?mode=ro", None), frozen]
+    if _read_only_fs(path.parent) or not os.access(path.parent, os.W_OK):
+        attempts = [frozen]
+    last: sqlite3.Error | None = None
+    for target, note in attempts:
+        try:
+            db = sqlite3.connect(target, uri=True, timeout=_FIRST_WAIT_S)
+            try:
+                rows = _as_rows(db.execute(f"SELECT {_COLUMNS} FROM runs ORDER BY idx"))
+            finally:
+                db.close()
+            return rows, note
+        except sqlite3.OperationalError as exc:
+            if "no such table" in str(exc):
+                raise _damaged(path, exc) from None
+            last = exc  # e.g. mode=ro cannot create the WAL index here: try immutable
+        except sqlite3.DatabaseError as exc:
+            raise _damaged(path, exc) from None
+    raise _damaged(path, last) from None
+
+
+def _read_only_fs(folder: Path) -> bool:
+    try:
+        return bool(os.statvfs(folder).f_flag & os.ST_RDONLY)
+    except OSError:
+        return False

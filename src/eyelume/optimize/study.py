@@ -3,7 +3,7 @@
 A study file (TOML)::
 
     name = "led-height"
-    scene = "paper2005"            # a preset or a scene file
+    scene = "paper2005"            # a preset or a scene file (relative: to the study file)
     seed = 1                       # for random and Latin-hypercube samples, and every render
     metrics = ["eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", "safety"]
     delta = 0.3                    # the eye-plane target of eye_plane_merit
@@ -39,7 +39,7 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from eyelume.scene.io import SceneError, apply_overrides, load_scene
+from eyelume.scene.io import SceneError, apply_overrides, load_scene, preset_names
 from eyelume.scene.model import Scene
 
 __all__ = ["METRICS", "Study", "Vary", "load_study", "plan_runs", "run_key", "run_metrics"]
@@ -105,6 +105,10 @@ def load_study(path: str | Path) -> Study:
         first = exc.errors()[0] if hasattr(exc, "errors") else {"loc": (), "msg": str(exc)}
         loc = ".".join(str(x) for x in first.get("loc", ()))
         raise SceneError(f"study {p}: field '{loc}': {first.get('msg')}") from None
+    if study.scene not in preset_names() and not Path(study.scene).is_absolute():
+        # a scene file named by a relative path is the study file's neighbour, not the
+        # current directory's
+        study = study.model_copy(update={"scene": str((p.parent / study.scene).absolute())})
     base = load_scene(study.scene)
     for v in study.vary:  # every path must be a real scene field
         probe = v.values[0] if v.values else (v.grid or v.random or v.latin)[0]

@@ -79,22 +79,20 @@ def _best_images(folder: Path) -> list[tuple[str, str]]:
     return out
 
 
-def write_report(folder: str | Path) -> Path:
-    """Write ``folder/report.html`` from the study's store and the best run's stored pictures;
-    returns its path. Raises StoreError when the folder holds no study or no finished run."""
-    from eyelume.optimize.store import ResultStore
+def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
+    """Write the study's page to ``out`` (default ``folder/report.html``) from what its store
+    has committed and the best run's stored pictures; returns the page's path. The store is
+    read read-only (:func:`eyelume.optimize.store.read_rows`), so a study still running or a
+    read-only folder can be reported. StoreError for a missing, damaged or empty store, and
+    for a default ``out`` in a folder that cannot be written (give ``out``)."""
+    from eyelume.optimize.store import read_rows
 
     folder = Path(folder)
-    if not (folder / "results.sqlite").exists():
-        raise StoreError(f"{folder}: no results.sqlite (run `eyelume study` first)")
-    store = ResultStore(folder)
-    try:
-        rows = store.rows()
-        studies = sorted(store.studies())
-    finally:
-        store.close()
+    rows, note = read_rows(folder)
     if not rows:
-        raise StoreError(f"{folder}: the study has no finished run yet")
+        raise StoreError("the study has no finished run yet", file=folder)
+    path = folder / "report.html" if out is None else Path(out)
+    studies = sorted({r["study"] for r in rows})
     params = sorted({k for r in rows for k in r["overrides"]})
     metrics = sorted({k for r in rows for k, v in r["metrics"].items()
                       if isinstance(v, int | float) and not isinstance(v, bool)})  # fmt: skip
@@ -136,7 +134,8 @@ tr.unsafe td {{ color: #b00; font-weight: bold; }} figure {{ display: inline-blo
 </style></head>
 <body data-figures="0">
 <h1>Study {html.escape(", ".join(studies))}</h1>
-<p>{len(rows)} runs; {n_unsafe} over an IEC 62471 exempt-group limit (red).</p>
+<p>{len(rows)} runs committed; {n_unsafe} over an IEC 62471 exempt-group limit (red).</p>
+{f"<p>{html.escape(note)}</p>" if note else ""}
 <h2>Merit landscapes</h2>{figs}
 <h2>Best runs{f" by {merit}" if merit else ""}</h2><ol>{best_html}</ol>
 <h2>All runs</h2><table><tr>{head}</tr>{"".join(body)}</table>
@@ -147,6 +146,12 @@ window.addEventListener("load", () => {{
 }});
 </script></body></html>
 """
-    path = folder / "report.html"
-    path.write_text(page, encoding="utf-8")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(page, encoding="utf-8")
+    except OSError as exc:
+        hint = "; give --out FILE elsewhere" if out is None else ""
+        raise StoreError(
+            f"cannot write the report ({exc.strerror or exc}){hint}", file=path
+        ) from None
     return path
