@@ -278,7 +278,7 @@ def array_bytes(cs: CompiledScene) -> int:
 
 
 def pilot_rates(
-    cs: CompiledScene, seed: int, grid: int, pixels: int = 1024, paths: int = 8192
+    cs: CompiledScene, seed: int, grid: int, pixels: int = 256, paths: int = 4096
 ) -> tuple[float, float]:
     """(camera samples per second, light paths per second) of this scene on this machine: one
     set on ``pixels`` evenly spread pixels and ``paths`` light paths, into throwaway sums (the
