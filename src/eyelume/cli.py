@@ -209,7 +209,7 @@ def render(
             help="Fast, with --rel-error: stop at this many samples per pixel and say what was "
             "reached if the target needs more.",
         ),
-    ] = 4096,
+    ] = 4096,  # eyelume.estimators.fast_run.MAX_SAMPLES_REL_ERROR
     seed: Annotated[
         int | None, typer.Option(help="Random seed (default: the scene's run.seed).")
     ] = None,

@@ -23,12 +23,7 @@ from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import CompiledScene, compile_scene
-from eyelume.estimators.fast_run import (
-    MAX_SAMPLES_REL_ERROR,
-    direct_eye_plane,
-    trace_fast,
-    warm_up,
-)
+from eyelume.estimators.fast_run import direct_eye_plane, trace_fast, warm_up
 from eyelume.estimators.forward import trace_forward, trace_paths
 from eyelume.layout import Section, system_sections
 from eyelume.scene.model import Scene
@@ -160,7 +155,7 @@ def render(
     rel_error: float | None = None,
     status: Callable[[str], None] | None = None,
     advance: Callable[[int, int], None] | None = None,
-    max_samples_per_pixel: int = MAX_SAMPLES_REL_ERROR,
+    max_samples_per_pixel: int | None = None,
 ) -> RenderResult:
     """Render a scene's eye image and eye-plane irradiance.
 

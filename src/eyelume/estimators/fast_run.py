@@ -344,9 +344,9 @@ def _tiny(cs: CompiledScene) -> CompiledScene:
     return dataclasses.replace(cs, sensor=sensor, plane=plane)
 
 
-#: The most camera samples per pixel a ``rel_error`` run adds before it stops short of its target
-#: and says so (the default of ``max_samples_per_pixel``); at 87 × 65 on this project's machine
-#: about a minute.
+#: The command line's default cap on the camera samples per pixel of a ``--rel-error`` render
+#: (``--max-samples``): 23 M camera samples at 87 × 65. The API's default cap is the hard limit of
+#: 65 536 sets per pixel.
 MAX_SAMPLES_REL_ERROR = 4096
 
 
@@ -359,7 +359,7 @@ def trace_fast(
     progress: Callable[[str], None] | None = None,
     target_pixels: np.ndarray | None = None,
     advance: Callable[[int, int], None] | None = None,
-    max_samples_per_pixel: int = MAX_SAMPLES_REL_ERROR,
+    max_samples_per_pixel: int | None = None,
 ) -> FastEstimate:
     """Run the fast estimator.
 
@@ -369,7 +369,8 @@ def trace_fast(
     sets added until the median pixel's relative standard error over ``target_pixels`` (a
     boolean mask; default all pixels with signal) is at most ``rel_error``: the first round is
     the ``samples_per_pixel`` budget (its grid as above), each next round sized from the error
-    so far — but never beyond ``max_samples_per_pixel``: a target that needs more stops there
+    so far — but never beyond ``max_samples_per_pixel`` (None: 65 536 sets): a target that
+    needs more stops there
     (``target_reached`` False, ``rel_error_achieved`` the error reached, and ``progress`` says
     so as soon as the projection shows it).
 
@@ -388,6 +389,8 @@ def trace_fast(
         raise BudgetError(f"light_paths = {light_paths}: must be ≥ 0")
     if rel_error is not None and not 0.0 < rel_error < 1.0:
         raise BudgetError(f"rel_error = {rel_error}: must be in (0, 1)")
+    if max_samples_per_pixel is None:
+        max_samples_per_pixel = _MAX_SETS * GRID_FINE**2
     if max_samples_per_pixel < 1:
         raise BudgetError(f"max_samples_per_pixel = {max_samples_per_pixel}: must be ≥ 1")
     cam = camera_tables(cs)
