@@ -43,6 +43,9 @@ class _OneLineErrors(TyperGroup):
         except EyelumeError as exc:
             err.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
             raise typer.Exit(2) from None
+        except KeyboardInterrupt:  # Ctrl-C or SIGTERM where a command keeps nothing partial
+            err.print("interrupted")
+            _exit_interrupted()
 
 
 app = typer.Typer(

@@ -90,6 +90,12 @@ def _gone(pids, timeout=15.0):
     return alive
 
 
+def _pool_workers():
+    """This process's multiprocessing workers (not its resource tracker)."""
+    return [c.pid for c in psutil.Process().children(recursive=True)
+            if "spawn_main" in " ".join(c.cmdline())]  # fmt: skip
+
+
 def _end(proc):
     if proc.poll() is None:
         proc.kill()
@@ -153,6 +159,7 @@ def test_another_program_holding_the_write_lock_stops_the_study_at_once(tmp_path
             holder.append(p)
             assert p.stdout.readline().strip() == "locked"
             holder.append(time.time())
+            holder.append(_pool_workers())
 
     waits = []
     try:
@@ -164,9 +171,8 @@ def test_another_program_holding_the_write_lock_stops_the_study_at_once(tmp_path
         assert waits and "write lock" in waits[0]
         # one run in flight may finish first; then 5 s of SQLite's wait + the 1 s asked
         assert stopped < 6.0 + 30, stopped
-        assert psutil.Process().children() == [holder[0]] or all(
-            c.pid == holder[0].pid for c in psutil.Process().children()
-        ), "workers left computing runs that would be thrown away"
+        assert holder[2], "no pool worker seen"
+        assert _gone(holder[2], timeout=5) == [], "workers left computing runs to throw away"
     finally:
         if holder:
             holder[0].kill()
@@ -179,6 +185,7 @@ def test_another_program_holding_the_write_lock_stops_the_study_at_once(tmp_path
 def test_the_cli_says_the_lock_in_one_line(tmp_path):
     study, out = _write(tmp_path, FAST), tmp_path / "out"
     assert runner.invoke(app, ["study", str(study), "--out", str(out)]).exit_code == 0
+    study.write_text(FAST.replace("40.0]", "40.0, 50.0]"), encoding="utf-8")  # one run more
     con = sqlite3.connect(out / "results.sqlite", isolation_level=None)
     con.execute("BEGIN IMMEDIATE")
     try:
@@ -190,7 +197,11 @@ def test_the_cli_says_the_lock_in_one_line(tmp_path):
         con.close()
     assert res.exit_code == 2, res.output
     lines = [ln for ln in res.stderr.splitlines() if ln.startswith("error:")]
-    assert len(lines) == 1 and "write lock" in lines[0], res.stderr
+    assert len(lines) == 1 and "write lock" in lines[0] and "--resume" in lines[0], res.stderr
+    assert "Traceback" not in res.output
+    res = runner.invoke(app, ["study", str(study), "--out", str(out), "--resume"])
+    assert res.exit_code == 0, res.output
+    assert len(read_rows(out)[0]) == 4
 
 
 def test_a_study_file_finds_its_scene_beside_it(tmp_path, monkeypatch):
@@ -219,7 +230,7 @@ def test_a_damaged_store_is_one_line_and_exit_2(tmp_path, damage):
         res = runner.invoke(app, args)
         assert res.exit_code == 2, (args, res.output)
         assert "Traceback" not in res.output
-        lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+        lines = [ln for ln in res.stderr.splitlines() if ln.startswith("error:")]
         assert len(lines) == 1 and "results.sqlite" in lines[0], res.stderr
     with pytest.raises(StoreError):
         read_rows(out)
