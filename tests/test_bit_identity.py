@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 import eyelume
+from eyelume.compile import compile_scene
 
 REF = Path(__file__).parent / "reference" / "default_render_seed1.npz"
 
@@ -28,8 +29,9 @@ def test_default_render_matches_recorded_reference():
 
 
 def test_chunks_of_work_change_nothing(monkeypatch):
-    """Ctrl-C is looked at between chunks of camera samples and light paths; the chunking must
-    not move a sample: the reference again with many small chunks."""
+    """Ctrl-C is looked at between chunks of camera samples and light paths (and bands of rows
+    of the region map); the chunking must not move a sample: the reference again with many
+    small chunks, and the same region map in bands as in one piece."""
     from eyelume.estimators import fast_run
 
     monkeypatch.setattr(fast_run, "CHUNK_SAMPLES", 1000)
@@ -38,3 +40,9 @@ def test_chunks_of_work_change_nothing(monkeypatch):
     r = eyelume.render(eyelume.load_scene("paper2005"), seed=1)
     np.testing.assert_allclose(r.eye_image, ref["eye_image"], rtol=1e-9, atol=0)
     np.testing.assert_allclose(r.eye_image_variance, ref["eye_image_variance"], rtol=1e-9, atol=0)
+    r_cs = compile_scene(r.scene)
+    banded = fast_run.primary_surface_map(r_cs)
+    monkeypatch.setattr(fast_run, "CHUNK_SAMPLES", 1 << 20)  # the whole 87 × 65 in one band
+    whole = fast_run.primary_surface_map(r_cs)
+    for a, b in zip(banded, whole, strict=True):
+        np.testing.assert_array_equal(a, b)

@@ -719,18 +719,20 @@ def light_pass(seed, first, count, cornea, leds, i0, ag, ig, arrays, img, img2, 
 
 @njit(cache=True, parallel=True)
 def primary_surfaces(
-    sf, si, lf_rev, lf_open, k_stop, image_z, rear_z, xp_z, xp_m, sensor, labels, sides
+    sf, si, lf_rev, lf_open, k_stop, image_z, rear_z, xp_z, xp_m, sensor, row0, labels, sides
 ):
     """The surface each pixel sees in the ideal (refraction-only) image: the chief ray from the
     pixel centre through the stop's centre, always refracting (never reflecting), to the first
     opaque surface (``labels``; −1: nothing, or no chief ray) and the side it meets (``sides``:
-    1 = side B, the side the surface's normal points to)."""
+    1 = side B, the side the surface's normal points to). ``labels`` and ``sides`` hold the band
+    of sensor rows from ``row0`` (so a large sensor is mapped band by band)."""
     rows, cols = labels.shape
     for p in prange(rows * cols):
-        row = p // cols
-        col = p - row * cols
+        band_row = p // cols
+        col = p - band_row * cols
+        row = row0 + band_row
         xs, ys = _pixel_point(row, col, 0.5, 0.5, sensor)
-        labels[row, col] = -1
+        labels[band_row, col] = -1
         found, qx, qy, _, _, _, _ = aim_chief(lf_open, k_stop, image_z, rear_z, xp_z, xp_m, xs, ys)
         if not found:
             continue
@@ -740,10 +742,10 @@ def primary_surfaces(
         for _ in range(32):
             s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
             if s < 0 or si[s, G.ACTION] != G.ACT_REFRACT:
-                labels[row, col] = s
+                labels[band_row, col] = s
                 if s >= 0:
                     nx, ny, nz = G.surface_normal(sf, si, s, x + t * dx, y + t * dy, z + t * dz)
-                    sides[row, col] = 1 if dx * nx + dy * ny + dz * nz < 0.0 else 0
+                    sides[band_row, col] = 1 if dx * nx + dy * ny + dz * nz < 0.0 else 0
                 break
             x += t * dx
             y += t * dy

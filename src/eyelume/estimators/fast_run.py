@@ -481,25 +481,30 @@ def primary_surface_map(
     cs: CompiledScene, cam: CameraTables | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """(rows, cols) index of the surface each pixel sees in the ideal image (−1: none), and
-    the side it is seen from (1: side B, where the surface normal points)."""
+    the side it is seen from (1: side B, where the surface normal points). Mapped in bands of
+    rows (about :data:`CHUNK_SAMPLES` × 4 pixels each), so Ctrl-C interrupts a large sensor's
+    map between bands instead of minutes later."""
     cam = cam or camera_tables(cs)
     shape = (int(cs.sensor[3]), int(cs.sensor[2]))
     labels = np.empty(shape, dtype=np.int64)
     sides = np.zeros(shape, dtype=np.int64)
-    F.primary_surfaces(
-        cs.sf,
-        cs.si,
-        cam.lf_rev,
-        cam.lf_open,
-        cam.k_stop,
-        cs.image_z,
-        cam.rear_z,
-        cam.exit_pupil_z,
-        cam.exit_pupil_magnification,
-        cs.sensor,
-        labels,
-        sides,
-    )
+    band = max(1, (4 * CHUNK_SAMPLES) // shape[1])
+    for r0 in range(0, shape[0], band):
+        F.primary_surfaces(
+            cs.sf,
+            cs.si,
+            cam.lf_rev,
+            cam.lf_open,
+            cam.k_stop,
+            cs.image_z,
+            cam.rear_z,
+            cam.exit_pupil_z,
+            cam.exit_pupil_magnification,
+            cs.sensor,
+            r0,
+            labels[r0 : r0 + band],
+            sides[r0 : r0 + band],
+        )
     return labels, sides
 
 
