@@ -167,3 +167,27 @@ def test_tracking_commands_refuse_a_gaze_override(tmp_path, command):
     line = _one_line_exit_2(res)
     assert "eye.gaze_horizontal_deg" in line and "sets the gaze itself" in line
     assert not (tmp_path / "o").exists()
+
+
+def test_kernel_loading_is_timed_apart_and_first_compilation_is_said(tmp_path):
+    """A new process loads the kernels (from Numba's cache here): summary.json keeps that time
+    apart from the render's wall time. With an empty cache the first call compiles: the check
+    behind the console's 'compiling kernels (first run only)' says so."""
+    import json
+    import os
+
+    out = tmp_path / "o"
+    cmd = [*(sys.executable, "-c", "from eyelume.cli import app; app()"), "render", "--samples",
+           "8", "--out", str(out)]  # fmt: skip
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+    assert res.returncode == 0, res.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["kernel_compile_s"] > 0 and summary["wall_time_s"] > 0
+    probe = "from eyelume.estimators.fast_run import kernels_cached; print(kernels_cached())"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "empty-cache")}
+    fresh = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                           timeout=300, env=env)  # fmt: skip
+    assert fresh.stdout.strip() == "False", fresh.stderr
+    warm = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=300)  # fmt: skip
+    assert warm.stdout.strip() == "True", warm.stderr

@@ -173,6 +173,18 @@ def _seconds(s: float) -> str:
     return f"{s / 60:.0f} min" if s < 7200 else f"{s / 3600:.1f} h"
 
 
+def _warm_up_forward(cs) -> float | None:
+    """Compile (or load) the forward tracer, saying so when it is the slow first compilation."""
+    from eyelume.estimators import forward
+    from eyelume.estimators.fast_run import kernels_cached
+    from eyelume.render import warm_up_forward
+
+    kernel = getattr(forward, "_trace_batch", None)
+    if kernel is not None and kernels_cached((kernel,)) is False:
+        err.print("compiling kernels (first run only; about a minute)…")
+    return warm_up_forward(cs)
+
+
 def _warm_up(cs) -> float:
     """Compile (or load) the fast kernels, saying so when it is the slow first compilation."""
     from eyelume.estimators.fast_run import kernels_cached, warm_up
@@ -234,6 +246,7 @@ def render(
         result = _render_fast(cs, samples, rel_error, max_samples, seed)
     else:
         total = sc.run.rays if rays is None else rays
+        t_load = _warm_up_forward(cs)
         err.print(f"tracing {total:,} rays of {sc.name} (Ctrl-C stops after the current batch)")
         with Progress(
             TextColumn("[bold]tracing"),
@@ -252,6 +265,8 @@ def render(
                 estimator="forward",
                 progress=lambda d, t: bar.update(task, completed=d),
             )
+        if t_load:
+            result.kernel_load_s = t_load
         if result.interrupted:
             err.print(f"interrupted: writing the {result.rays:,} rays traced so far")
     written = write_render_outputs(result, render_extras(cs, result.seed), out)

@@ -302,11 +302,11 @@ def pilot_rates(
     return cam_rate, paths / max(time.perf_counter() - t0, 1e-9)
 
 
-def kernels_cached() -> bool | None:
-    """Whether Numba's on-disk cache holds the fast estimator's kernels (False: the first call
-    compiles them, ~45 s on this project's machine; None: cannot tell). True also when they are
-    already loaded in this process."""
-    disp = (F.camera_pass, F.light_pass)
+def kernels_cached(dispatchers: tuple | None = None) -> bool | None:
+    """Whether Numba's on-disk cache holds the kernels (default: the fast estimator's; False:
+    the first call compiles them, ~45 s on this project's machine; None: cannot tell). True
+    also when they are already loaded in this process."""
+    disp = dispatchers or (F.camera_pass, F.light_pass)
     if all(d.signatures for d in disp):
         return True
     try:
