@@ -23,7 +23,7 @@ from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import CompiledScene, compile_scene
-from eyelume.estimators.fast_run import direct_eye_plane, trace_fast, warm_up
+from eyelume.estimators.fast_run import RunControl, direct_eye_plane, trace_fast, warm_up
 from eyelume.estimators.forward import trace_forward, trace_paths
 from eyelume.layout import Section, system_sections
 from eyelume.scene.model import Scene
@@ -223,8 +223,7 @@ def render(
             rel_error,
             status,
             regions["skin"],
-            advance=advance,
-            max_samples_per_pixel=max_samples_per_pixel,
+            control=RunControl(advance, max_samples_per_pixel),
         )
         plane = direct_eye_plane(cs, seed)
         wall = time.perf_counter() - t0

@@ -68,7 +68,9 @@ def test_a_round_stopped_half_way_is_undone(paper_compiled, flag, monkeypatch):
         if calls and done > 4 * cs.scene.sensor.cols * cs.scene.sensor.rows + 6000:
             flag.requested = True  # a few camera chunks into round 2
 
-    half = FR.trace_fast(cs, SPP, _light(cs, SPP), 7, progress=after_round, advance=tick)
+    half = FR.trace_fast(
+        cs, SPP, _light(cs, SPP), 7, progress=after_round, control=FR.RunControl(advance=tick)
+    )
     assert half.interrupted and half.samples_per_pixel == 4  # round 2 undone, every pixel
 
     flag.requested = False
@@ -91,8 +93,9 @@ def test_an_unreachable_target_stops_at_the_cap_and_says_so(paper_compiled):
     cs = paper_compiled
     said = []
     skin = region_masks(cs)["skin"]
+    cap = FR.RunControl(max_samples_per_pixel=32)
     est = FR.trace_fast(cs, 8, _light(cs, 8), 3, rel_error=1e-6, progress=said.append,
-                        target_pixels=skin, max_samples_per_pixel=32)  # fmt: skip
+                        target_pixels=skin, control=cap)  # fmt: skip
     assert est.target_reached is False and not est.interrupted
     assert est.samples_per_pixel <= 32
     assert 1e-6 < est.rel_error_achieved < 0.2

@@ -19,6 +19,7 @@ from eyelume.estimators.statistics import median_pixel_rel_error
 
 __all__ = [
     "FastEstimate",
+    "RunControl",
     "direct_eye_plane",
     "estimate_median_rel_error",
     "primary_surface_map",
@@ -350,6 +351,98 @@ def _tiny(cs: CompiledScene) -> CompiledScene:
 MAX_SAMPLES_REL_ERROR = 4096
 
 
+@dataclass
+class RunControl:
+    """How a fast run reports its work and where a ``rel_error`` run stops.
+
+    ``advance(done, planned)`` is called after each chunk of work, in camera samples plus light
+    paths (``planned`` grows with ``rel_error`` rounds); ``max_samples_per_pixel`` caps a
+    ``rel_error`` run (None: 65 536 sets, the hard limit)."""
+
+    advance: Callable[[int, int], None] | None = None
+    max_samples_per_pixel: int | None = None
+
+
+class _Work:
+    """Work done and planned, in camera samples plus light paths, for ``advance``."""
+
+    def __init__(self, pixels: int, ratio: float, advance) -> None:
+        self.pixels, self.ratio, self.advance = pixels, ratio, advance
+        self.done = self.planned = 0
+
+    def plan(self, run: _Run, sets_total: int) -> None:
+        spp = sets_total * run.grid * run.grid
+        self.planned = spp * self.pixels + int(round(self.ratio * spp))
+
+    def tick(self, units: int) -> None:
+        self.done += units
+        if self.advance:
+            self.advance(self.done, max(self.planned, self.done))
+
+
+def _say(progress, run: _Run, err: float | None = None) -> None:
+    if progress:
+        tail = "" if err is None else f": median relative error {err:.4f}"
+        progress(f"{run.samples_per_pixel} samples per pixel{tail}")
+
+
+def _over_cap(progress, rel_error: float, samples: float, cap: int) -> None:
+    if progress and samples > cap:
+        progress(
+            f"the target {rel_error:g} needs ~{int(samples)} samples per pixel, over the cap "
+            f"of {cap}: rendering to the cap"
+        )
+
+
+def _fixed_budget(args: tuple, stop, work: _Work, progress) -> _Run:
+    """Rounds of a fixed budget; ``args`` = (cs, cam, samples_per_pixel, ratio, seed)."""
+    cs, cam, samples_per_pixel, ratio, seed = args
+    grid, sets = planned_sets(samples_per_pixel)
+    run = _Run(cs, cam, grid, seed)
+    work.plan(run, sets)
+    step = max(1, math.ceil(sets / 8))
+    while run.sets < sets and not stop.requested:
+        run.add(min(step, sets - run.sets), ratio, stop, work.tick)
+        _say(progress, run)
+    return run
+
+
+def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, cap: int):
+    """(run, error reached): rounds until ``target = (rel_error, pixels)`` or ``cap`` samples
+    per pixel; ``args`` = (cs, cam, samples_per_pixel, ratio, seed)."""
+    cs, cam, samples_per_pixel, ratio, seed = args
+    rel_error, target_pixels = target
+    grid, sets = planned_sets(samples_per_pixel)[0], 0
+    if (
+        int(cs.sensor[2] * cs.sensor[3]) > _PILOT_ABOVE
+        and target_pixels is not None
+        and (target_pixels.any())
+    ):
+        grid, sets = _pilot(cs, cam, seed, target_pixels, rel_error)
+        if progress:
+            progress(f"pilot: {grid}×{grid} sets, {sets * grid * grid} samples per pixel")
+        _over_cap(progress, rel_error, sets * grid * grid, cap)
+    max_sets = max(2, min(_MAX_SETS, cap // (grid * grid)))
+    run = _Run(cs, cam, grid, seed)
+    first = max(2, min(sets, max_sets) or math.ceil(samples_per_pixel / grid**2))
+    work.plan(run, first)
+    err = math.inf
+    if run.add(first, ratio, stop, work.tick):
+        err = estimate_median_rel_error(run.estimate(False), target_pixels)
+        _say(progress, run, err)
+        if err > rel_error:
+            _over_cap(progress, rel_error, run.samples_per_pixel * (err / rel_error) ** 2, cap)
+    while err > rel_error and run.sets < max_sets and not stop.requested:
+        need = run.sets * (err / rel_error) ** 2 * 1.1
+        n_more = int(min(max(need - run.sets, 1), 4 * run.sets, max_sets - run.sets))
+        work.plan(run, run.sets + n_more)
+        if not run.add(n_more, ratio, stop, work.tick):
+            break
+        err = estimate_median_rel_error(run.estimate(False), target_pixels)
+        _say(progress, run, err)
+    return run, err
+
+
 def trace_fast(
     cs: CompiledScene,
     samples_per_pixel: int,
@@ -358,8 +451,7 @@ def trace_fast(
     rel_error: float | None = None,
     progress: Callable[[str], None] | None = None,
     target_pixels: np.ndarray | None = None,
-    advance: Callable[[int, int], None] | None = None,
-    max_samples_per_pixel: int | None = None,
+    control: RunControl | None = None,
 ) -> FastEstimate:
     """Run the fast estimator.
 
@@ -369,101 +461,44 @@ def trace_fast(
     sets added until the median pixel's relative standard error over ``target_pixels`` (a
     boolean mask; default all pixels with signal) is at most ``rel_error``: the first round is
     the ``samples_per_pixel`` budget (its grid as above), each next round sized from the error
-    so far — but never beyond ``max_samples_per_pixel`` (None: 65 536 sets): a target that
-    needs more stops there
-    (``target_reached`` False, ``rel_error_achieved`` the error reached, and ``progress`` says
-    so as soon as the projection shows it).
+    so far — but never beyond ``control.max_samples_per_pixel`` (:class:`RunControl`): a
+    target that needs more stops there (``target_reached`` False, ``rel_error_achieved`` the
+    error reached, and ``progress`` says so as soon as the projection shows it).
 
-    Ctrl-C (SIGINT) is looked at between chunks of a fraction of a second
+    Ctrl-C (SIGINT) or SIGTERM is looked at between chunks of a fraction of a second
     (:data:`CHUNK_SAMPLES`): it ends the run with the whole rounds finished (``interrupted``;
     a round stopped half way is undone, so every pixel holds the same sets). With one camera
     set finished the image is that set's unbiased mean and the variance unknown (+inf,
     ``variance_dof`` 0); with none, KeyboardInterrupt (nothing usable finished).
-    ``progress(message)`` is called after each round; ``advance(done, planned)`` after each
-    chunk, in units of camera samples plus light paths (``planned`` grows with ``rel_error``
-    rounds).
+    ``progress(message)`` is called after each round, ``control.advance`` after each chunk.
     """
+    control = control or RunControl()
+    cap = control.max_samples_per_pixel
+    cap = _MAX_SETS * GRID_FINE**2 if cap is None else cap
     if samples_per_pixel < 1:
         raise BudgetError(f"samples_per_pixel = {samples_per_pixel}: must be ≥ 1")
     if light_paths < 0:
         raise BudgetError(f"light_paths = {light_paths}: must be ≥ 0")
     if rel_error is not None and not 0.0 < rel_error < 1.0:
         raise BudgetError(f"rel_error = {rel_error}: must be in (0, 1)")
-    if max_samples_per_pixel is None:
-        max_samples_per_pixel = _MAX_SETS * GRID_FINE**2
-    if max_samples_per_pixel < 1:
-        raise BudgetError(f"max_samples_per_pixel = {max_samples_per_pixel}: must be ≥ 1")
+    if cap < 1:
+        raise BudgetError(f"max_samples_per_pixel = {cap}: must be ≥ 1")
     cam = camera_tables(cs)
     ratio = light_paths / samples_per_pixel  # light paths per camera sample
-    pixels = int(cs.sensor[2] * cs.sensor[3])
-    work = {"done": 0, "planned": 0}
-
-    def plan(run: _Run, sets_total: int) -> None:
-        spp = sets_total * run.grid * run.grid
-        work["planned"] = spp * pixels + int(round(ratio * spp))
-
-    def tick(units: int) -> None:
-        work["done"] += units
-        if advance:
-            advance(work["done"], max(work["planned"], work["done"]))
-
-    def say(run: _Run, err: float | None = None) -> None:
-        if progress:
-            tail = "" if err is None else f": median relative error {err:.4f}"
-            progress(f"{run.samples_per_pixel} samples per pixel{tail}")
-
-    target_reached: bool | None = None
-    err = math.inf
+    work = _Work(int(cs.sensor[2] * cs.sensor[3]), ratio, control.advance)
+    args = (cs, cam, samples_per_pixel, ratio, seed)
     with interrupt_between_batches() as stop:
         if rel_error is None:
-            grid, sets = planned_sets(samples_per_pixel)
-            run = _Run(cs, cam, grid, seed)
-            plan(run, sets)
-            step = max(1, math.ceil(sets / 8))
-            while run.sets < sets and not stop.requested:
-                run.add(min(step, sets - run.sets), ratio, stop, tick)
-                say(run)
+            run, err = _fixed_budget(args, stop, work, progress), math.inf
         else:
-            grid, sets = planned_sets(samples_per_pixel)
-            sets = 0
-            max_sets = max(2, min(_MAX_SETS, max_samples_per_pixel // (grid * grid)))
-            if pixels > _PILOT_ABOVE and target_pixels is not None and target_pixels.any():
-                grid, sets = _pilot(cs, cam, seed, target_pixels, rel_error)
-                max_sets = max(2, min(_MAX_SETS, max_samples_per_pixel // (grid * grid)))
-                if progress:
-                    progress(f"pilot: {grid}×{grid} sets, {sets * grid * grid} samples per pixel")
-                if sets > max_sets and progress:
-                    progress(
-                        f"the target {rel_error:g} needs ~{sets * grid * grid} samples per "
-                        f"pixel, over the cap of {max_samples_per_pixel}: rendering to the cap"
-                    )
-                sets = min(sets, max_sets)
-            run = _Run(cs, cam, grid, seed)
-            first = max(2, sets or math.ceil(samples_per_pixel / grid**2))
-            plan(run, first)
-            if run.add(first, ratio, stop, tick):
-                err = estimate_median_rel_error(run.estimate(False), target_pixels)
-                say(run, err)
-                need = run.sets * (err / rel_error) ** 2
-                if err > rel_error and need > max_sets and progress:
-                    progress(
-                        f"the target {rel_error:g} needs ~{int(need) * grid * grid} samples per "
-                        f"pixel, over the cap of {max_samples_per_pixel}: rendering to the cap"
-                    )
-            while err > rel_error and run.sets < max_sets and not stop.requested:
-                need = run.sets * (err / rel_error) ** 2 * 1.1
-                n_more = int(min(max(need - run.sets, 1), 4 * run.sets, max_sets - run.sets))
-                plan(run, run.sets + n_more)
-                if not run.add(n_more, ratio, stop, tick):
-                    break
-                err = estimate_median_rel_error(run.estimate(False), target_pixels)
-                say(run, err)
-            target_reached = err <= rel_error
+            target = (rel_error, target_pixels)
+            run, err = _to_target(args, stop, work, progress, target, cap)
     if run.sets == 0:
         raise KeyboardInterrupt("interrupted before a camera set finished: nothing usable")
     est = run.estimate(stop.requested)
-    est.target_reached = target_reached
-    est.rel_error_achieved = None if rel_error is None or not math.isfinite(err) else err
+    if rel_error is not None:
+        est.target_reached = err <= rel_error
+        est.rel_error_achieved = err if math.isfinite(err) else None
     return est
 
 
