@@ -94,6 +94,7 @@ def test_the_console_says_what_is_rendered(tmp_path):
     assert "pilot's projection" in text
 
 
+@pytest.mark.slow
 def test_a_large_render_answers_sigterm_within_seconds(tmp_path):
     """1024 × 768 at 64 samples per pixel: a camera set over every pixel takes minutes here,
     so the signal lands before any set has finished: nothing usable, said, nothing written,
@@ -145,6 +146,7 @@ def test_nominal_picture_has_no_saturation_warning(tmp_path):
     assert "saturate" not in res.output
 
 
+@pytest.mark.slow
 def test_lost_tracking_frames_name_saturation_as_the_reason():
     import eyelume
     from eyelume.analysis.tracking.evaluate import failure_reason
@@ -169,6 +171,7 @@ def test_tracking_commands_refuse_a_gaze_override(tmp_path, command):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 def test_kernel_loading_is_timed_apart_and_first_compilation_is_said(tmp_path):
     """A new process loads the kernels (from Numba's cache here): summary.json keeps that time
     apart from the render's wall time. With an empty cache the first call compiles: the check

@@ -102,6 +102,7 @@ def _end(proc):
         proc.wait(timeout=30)
 
 
+@pytest.mark.slow
 def test_sigterm_keeps_what_is_committed_ends_the_workers_and_report_reads_meanwhile(tmp_path):
     study, out = _write(tmp_path, SLOW), tmp_path / "out"
     proc = _start_study(study, out)
@@ -127,6 +128,7 @@ def test_sigterm_keeps_what_is_committed_ends_the_workers_and_report_reads_meanw
     assert len(read_rows(out)[0]) == 30
 
 
+@pytest.mark.slow
 def test_kill_9_of_the_parent_alone_leaves_no_worker(tmp_path):
     study, out = _write(tmp_path, SLOW), tmp_path / "out"
     proc = _start_study(study, out)
@@ -144,6 +146,7 @@ def test_kill_9_of_the_parent_alone_leaves_no_worker(tmp_path):
             os.kill(pid, signal.SIGKILL)
 
 
+@pytest.mark.slow
 def test_another_program_holding_the_write_lock_stops_the_study_at_once(tmp_path):
     study = load_study(_write(tmp_path, SLOW.replace("30]", "6]")))
     out = tmp_path / "out"
@@ -246,6 +249,7 @@ def test_a_read_only_folder_is_read_as_it_is(tmp_path, monkeypatch):
     assert len(rows) == 3 and "cannot be written" in note
 
 
+@pytest.mark.slow
 def test_report_of_a_really_read_only_folder(tmp_path):
     """A read-only bind mount (in a user and mount namespace: `unshare -rm`): report with --out
     elsewhere works; without it, one line and exit 2."""
