@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 import pytest
 
-from eyelume.analysis.tracking import detect, detection_to_dict
+from eyelume.analysis.tracking import DetectParams, detect, detection_to_dict
 
 FULL = 1023.0
 LEDS = (0.0, 90.0, 180.0, 270.0)
@@ -102,8 +102,10 @@ def test_clean_picture_pupil_and_glints_to_a_tenth_of_a_pixel():
     p = d.pupil
     assert _err(p.centre_px, CENTRE) < 0.1
     # The edge is where the blurred step rises ¼ of the way from pupil to iris: Φ⁻¹(¾) σ =
-    # 0.674 σ inside the drawn edge.
-    narrowed = [a - 2 * 0.674 * BLUR for a in AXES]
+    # 0.674 σ inside the drawn edge, σ² = BLUR² + σ_s² with σ_s the detector's own smoothing
+    # before it reads the edge (DetectParams.refine_smooth_px).
+    sigma = math.hypot(BLUR, DetectParams().refine_smooth_px)
+    narrowed = [a - 2 * 0.674 * sigma for a in AXES]
     assert p.axes_px == pytest.approx(narrowed, abs=0.2)
     assert p.angle_deg == pytest.approx(ANGLE, abs=1.0)
     assert p.boundary_support > 0.95 and p.fit_residual_px < 0.1
@@ -232,10 +234,25 @@ def test_detection_to_dict_is_json_ready():
 def test_bad_input_raises():
     with pytest.raises(ValueError, match="2-D"):
         detect(np.zeros((4, 4, 3)))
-    bad = np.ones((8, 8))
-    bad[2, 2] = np.nan
-    with pytest.raises(ValueError, match="NaN"):
-        detect(bad)
+    with pytest.raises(ValueError, match="non-empty"):
+        detect(np.zeros((0, 5)))
+    with pytest.raises(ValueError, match="no valid pixel"):
+        detect(np.full((8, 8), np.nan))
+    with pytest.raises(ValueError, match="LED azimuths"):
+        detect(np.ones((8, 8)), led_azimuths_deg=[float("nan"), 90.0])
+
+
+def test_nan_pixels_are_missing_pixels():
+    """Issue 12/13: a float picture with NaN pixels (a dead column, a masked patch, one
+    pixel in the pupil) is measured from the rest, as before within 0.1 px."""
+    img = draw_eye(seed=11, dtype=np.float64)
+    img[:, 30] = np.nan  # a dead column far from the eye
+    img[int(CENTRE[1]), int(CENTRE[0])] = np.nan  # one pixel inside the pupil
+    img[200:204, 250:254] = np.inf
+    d = detect(img, led_azimuths_deg=LEDS)
+    assert d.ok, d.failures
+    assert _err(d.pupil.centre_px, CENTRE) < 0.1
+    _check_glints(d)
 
 
 def test_rendered_paper2005_picture(paper_scene):

@@ -11,34 +11,34 @@ Conventions
 * **Angles**: an ellipse's ``angle_deg`` is its major axis' direction in degrees from +x toward
   +y (clockwise as displayed), in [0, 180) — what ``cv2.ellipse`` takes. LED azimuths are
   counter-clockwise as displayed: 0° = picture +x, 90° = picture up (−y).
-* **Grey levels**: the picture is normalised to 8 bits by its own range, u8 = round(255 (I −
-  min) / (max − min)), for the histogram, thresholds and masks; edge levels, centroid weights and
-  reported thresholds and peaks are in the input's own units.
+* **Grey levels**: the glints are found on the picture scaled by its own range, u8 = round(255
+  (I − min) / (max − min)); the pupil on one scaled from its darkest pixel to its 99th
+  percentile (:mod:`.pupil`). Edge levels, centroid weights and reported thresholds and peaks
+  are in the input's own units.
+* **Missing pixels**: non-finite pixels (NaN, inf) of a float picture and pixels outside the
+  optional ``valid`` mask are missing: no dark region touching them is the pupil, no outline
+  point next to them is used. A picture with none left is a ValueError.
 
 Pipeline (each step's choices are explained in :mod:`.pupil` and :mod:`.glints`)
 ----------------------------------------------------------------------------------
-1. Normalise; the 256-bin histogram.
-2. Glint pixels: above the 99th percentile (the brightest scene level) and halfway from their
-   neighbourhood's mean to the maximum. Bright blobs and their intensity-weighted centroids.
-3. Pupil threshold: the valley after the darkest mode of the histogram smoothed by a Gaussian of
-   σ = 2 bins. The paper's pupil is "the darkest feature" and its histogram a distinct dark mode
-   (Section 2), so the valley separating that mode from the next is the natural cut and needs no
-   tuning per image; Otsu's threshold would instead split the picture into two classes of
-   comparable variance and, the pupil being ~3 % of the pixels, cut inside the iris/skin modes.
-   A picture with no dark mode of its own (uniform, or dark noise with the LEDs off) gives no
-   threshold and "no pupil"; so does a darkest blob outside the area bounds (an iris seen
-   without a pupil is over 10 % of an eye-tracker frame), not compact, or not darker than its
-   surround. (No threshold can tell a pupil-sized dark iris without a pupil from a pupil.)
-4. Dark blob (+ the glints touching it) → closing (elliptical element, default ≈ 0.15 × the
-   blob's equivalent diameter, odd, ≥ 3 px) → outer outline → drop points on glints and the
-   image border → sub-pixel edge → robust ellipse fit → support and residual.
+1. :func:`_prepare`: the array, its missing pixels, the 8-bit picture for the glints.
+2. Glints (:func:`~.glints.find_glints`): pixels above the 99th percentile and halfway from
+   their neighbourhood's mean to the maximum; bright blobs; a blob must stand above its local
+   background by ``glint_min_snr`` × the pixel noise; intensity-weighted centroids.
+3. Pupil (:func:`~.pupil.find_pupil`): threshold ladder → the darkest compact blob stable over
+   neighbouring levels → closing → contrast against its own surround and the pixel noise →
+   outline off glints and border → sub-pixel edge → robust ellipse fit → support. The old
+   "valley after the darkest histogram mode" assumed the pupil had a mode of its own; on real
+   pictures with a dark iris it had not (issue 13).
+4. :func:`_pupil_result`: the pupil and the checks that make it untrustworthy.
 5. Keep glints within ``glint_search_radius`` × the pupil's major axis of its centre; match to
-   LEDs; flag glints on the pupil's outline.
+   LEDs (:func:`_match_glints`); 6. warnings (:func:`_glint_warnings`).
 
 Which failures make ``ok`` False
 --------------------------------
 ``ok`` is False on: no pupil; a pupil whose fitted outline is less than ``min_boundary_support``
-(60 %) backed by edge points (cut by an eyelid or the image border, or hidden); a pupil outline
+(45 %) backed by edge points or has an unbacked arc over ``max_boundary_gap`` (40 %) of it (cut
+by an eyelid or the image border, or hidden); a pupil outline
 that is not an ellipse (RMS residual of its edge points above max(``max_fit_residual_px``,
 ``max_fit_residual_frac`` × the semi-minor axis)); a glint lost (LED azimuths
 given and an LED has no glint). Messages starting ``"warning: "`` leave ``ok`` True: a glint on
@@ -48,7 +48,8 @@ centroid may be biased), a glint matched to no LED, no glints when no LEDs were 
 When ``ok`` is False ``pupil`` may still hold the rejected candidate, for diagnosis: use its
 numbers only when ``ok`` is True.
 
-Performance: 3–4 ms for a 640 × 480 frame on one core (``benchmarks/detect.py``).
+Performance: measured by ``benchmarks/detect.py`` (one core) and, on real pictures,
+``benchmarks/detect_real.py``.
 
 >>> import numpy as np, cv2
 >>> img = np.full((120, 160), 200, np.uint8)
@@ -69,13 +70,8 @@ from dataclasses import asdict, dataclass, field
 import cv2
 import numpy as np
 
-from eyelume.analysis.tracking.glints import (
-    default_max_angle,
-    glint_blobs,
-    glint_threshold,
-    match_leds,
-)
-from eyelume.analysis.tracking.pupil import find_pupil, pupil_threshold, sampson_distance
+from eyelume.analysis.tracking.glints import default_max_angle, find_glints, match_leds
+from eyelume.analysis.tracking.pupil import find_pupil, sampson_distance
 
 __all__ = ["DetectParams", "Detection", "Glint", "Pupil", "detect", "detection_to_dict"]
 
@@ -147,24 +143,34 @@ class DetectParams:
         the smallest gap between LED azimuths: 45° for four LEDs 90° apart).
     """
 
-    hist_sigma_bins: float = 2.0
-    mode_significance: float = 4.0
+    scale_percentile: float = 99.0
+    ladder_rows: float = 80.0
+    ladder_levels: int = 32
+    ladder_top_percentile: float = 60.0
+    ladder_max_growth: float = 1.0
+    max_candidates: int = 3
     pupil_min_area_px: int = 30
+    pupil_tiny_area_px: int = 6
     pupil_max_area_frac: float = 0.10
     pupil_min_solidity: float = 0.8
-    pupil_min_contrast: float = 0.05
+    pupil_min_contrast_sigma: float = 5.0
+    pupil_min_contrast: float = 0.03
     closing_kernel_px: int | None = None
     closing_kernel_frac: float = 0.15
     border_margin_px: float = 1.5
     glint_margin_px: float = 1.5
     edge_fraction: float = 0.25
     refine_reach_px: float = 3.0
-    refine_reach_frac: float = 0.06
+    refine_reach_frac: float = 0.10
+    refine_smooth_px: float = 0.0
+    refine_tangential_px: int = 1
     inlier_tol_px: float = 1.0
+    inlier_tol_frac: float = 0.03
     fit_iterations: int = 6
     outlier_trim_points: int = 3
     min_edge_points: int = 8
-    min_boundary_support: float = 0.6
+    min_boundary_support: float = 0.45
+    max_boundary_gap: float = 0.4
     max_fit_residual_px: float = 0.5
     max_fit_residual_frac: float = 0.03
     glint_percentile: float = 99.0
@@ -226,28 +232,121 @@ class Detection:
     glint_threshold: float | None = None
 
 
-def _normalise(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
+def _prepare(image: np.ndarray, valid: np.ndarray | None):
+    """Step 1: the picture as a contiguous array (uint8/uint16/int16/float32 kept, other reals
+    converted), its invalid pixels (non-finite, or outside ``valid``; ``None`` when none) set to
+    the darkest valid value, and its 8-bit version u8 = 255 (I − min) / (max − min) for the
+    glints. Raises ValueError for a picture that is not 2-D, empty, or has no valid pixel."""
     img = np.asarray(image)
     if img.ndim != 2:
         raise ValueError(f"detect needs a 2-D grey picture, got shape {img.shape}")
     if img.size == 0:
-        raise ValueError("detect needs a non-empty picture")
+        raise ValueError(f"detect needs a non-empty picture, got shape {img.shape}")
     if img.dtype == bool or img.dtype not in (np.uint8, np.uint16, np.int16, np.float32):
         img = img.astype(np.float64 if img.dtype.kind == "f" else np.float32)
-    if img.dtype.kind == "f" and not np.isfinite(img).all():
-        raise ValueError("the picture holds NaN or inf")
-    img = np.ascontiguousarray(img)
+    invalid = None
+    if img.dtype.kind == "f":
+        bad = ~np.isfinite(img)
+        if bad.any():
+            invalid = bad
+    if valid is not None:
+        valid = np.asarray(valid, bool)
+        if valid.shape != img.shape:
+            raise ValueError(f"valid-area mask has shape {valid.shape}, the picture {img.shape}")
+        invalid = ~valid if invalid is None else invalid | ~valid
+    img = np.array(img, order="C", copy=invalid is not None)
+    if invalid is not None:
+        if invalid.all():
+            raise ValueError("the picture has no valid pixel (all NaN/inf or masked out)")
+        img[invalid] = img[~invalid].min()
     lo, hi, _, _ = cv2.minMaxLoc(img)
     if hi <= lo:
-        return img, np.zeros(img.shape, np.uint8), float(lo), float(hi)
+        return img, invalid, np.zeros(img.shape, np.uint8), float(lo), float(hi)
     u8 = cv2.normalize(img, None, 0, 255, cv2.NORM_MINMAX, dtype=cv2.CV_8U)
-    return img, u8, float(lo), float(hi)
+    return img, invalid, u8, float(lo), float(hi)
+
+
+def _pupil_result(fit, params) -> tuple[Pupil | None, list[str]]:
+    """Step 4: the :class:`Pupil` and the errors that make it untrustworthy (cut, not an
+    ellipse), or (None, [refusal])."""
+    if not fit:
+        return None, [fit.reason]
+    errors = []
+    major, minor, ang = fit.ellipse.major_minor_angle
+    pupil = Pupil(
+        centre_px=(fit.ellipse.cx, fit.ellipse.cy),
+        axes_px=(major, minor),
+        angle_deg=ang,
+        area_px=fit.area_px,
+        threshold=fit.threshold,
+        boundary_support=fit.support,
+        fit_residual_px=fit.residual_px,
+    )
+    if fit.support < params.min_boundary_support or fit.gap > params.max_boundary_gap:
+        dr = fit.dropped or {}
+        errors.append(
+            f"pupil cut or hidden: {100 * fit.support:.0f} % of its fitted outline is backed by "
+            f"edge points (need {100 * params.min_boundary_support:.0f} %), the longest "
+            f"unbacked arc is {100 * fit.gap:.0f} % of it (at most "
+            f"{100 * params.max_boundary_gap:.0f} %); "
+            f"outline points dropped: {dr.get('border', 0)} on the image border, "
+            f"{dr.get('glint', 0)} on glints, {dr.get('outlier', 0)} off the ellipse "
+            "(e.g. an eyelid's edge)"
+        )
+    limit = max(params.max_fit_residual_px, params.max_fit_residual_frac * 0.5 * minor)
+    if fit.residual_px > limit:
+        errors.append(
+            f"pupil outline is not an ellipse: RMS residual {fit.residual_px:.2f} px "
+            f"(limit {limit:.2f} px)"
+        )
+    return pupil, errors
+
+
+def _match_glints(glints: list[Glint], led_azimuths_deg, params) -> list[str]:
+    """Step 5b: each glint's LED (in place); the error for LEDs left without a glint."""
+    n_led = len(led_azimuths_deg)
+    centres = np.array([g.centre_px for g in glints]).reshape(-1, 2)
+    ref = tuple(np.median(centres, axis=0)) if len(glints) else (0.0, 0.0)
+    max_ang = params.match_max_angle_deg
+    if max_ang is None:
+        max_ang = default_max_angle(led_azimuths_deg)
+    for g, k in zip(glints, match_leds(centres, led_azimuths_deg, ref, max_ang), strict=True):
+        g.led = k
+    matched = {g.led for g in glints if g.led is not None}
+    missing = [k for k in range(n_led) if k not in matched]
+    if not missing:
+        return []
+    return [
+        f"glint lost: {len(matched)} of {n_led} LEDs have a glint "
+        f"(no glint for LED {', '.join(str(k) for k in missing)})"
+    ]
+
+
+def _glint_warnings(glints, fit, led_azimuths_deg, params) -> list[str]:
+    """Step 6: warnings that leave ``ok`` alone (unmatched glints, none, glints on the edge)."""
+    warnings = []
+    if led_azimuths_deg is not None:
+        warnings += [
+            f"warning: glint {i} matches no LED" for i, g in enumerate(glints) if g.led is None
+        ]
+    elif not glints:
+        warnings.append("warning: no glints found")
+    if fit:
+        for i, g in enumerate(glints):
+            d = float(abs(sampson_distance(fit.ellipse, g.centre_px[0], g.centre_px[1])))
+            if d < math.sqrt(g.area_px / math.pi) + params.glint_edge_margin_px:
+                warnings.append(
+                    f"warning: glint {i} on the pupil edge ({d:.1f} px from the fitted "
+                    "outline): the outline under it was left out; its centroid may be biased"
+                )
+    return warnings
 
 
 def detect(
     image: np.ndarray,
     *,
     led_azimuths_deg: Sequence[float] | None = None,
+    valid: np.ndarray | None = None,
     params: DetectParams = DetectParams(),  # noqa: B008 - frozen, never mutated
 ) -> Detection:
     """Find the pupil and glints in a grey eye picture (module doc: conventions, pipeline).
@@ -255,84 +354,38 @@ def detect(
     Parameters
     ----------
     image : (rows, cols) uint8, uint16 or float — DN or irradiance; any other real dtype is
-        converted. Normalised internally by its own range.
+        converted. Non-finite pixels (NaN, inf) are missing pixels.
     led_azimuths_deg : the LEDs' azimuths (0° = picture +x, 90° = up); when given, each glint
         is matched to its LED and a missing one is a failure.
+    valid : optional (rows, cols) bool, True where the picture shows the eye (e.g. inside a
+        headset's lens); dark regions touching the rest are never the pupil.
     params : :class:`DetectParams`.
 
     Raises
     ------
     ValueError
-        If the picture is not 2-D, is empty, or holds NaN or inf.
+        If the picture is not 2-D, is empty, or has no valid (finite, unmasked) pixel; if
+        ``valid`` has another shape; if an LED azimuth is not finite.
     """
+    if led_azimuths_deg is not None and not np.isfinite(np.asarray(led_azimuths_deg, float)).all():
+        raise ValueError(f"LED azimuths must be finite degrees, got {list(led_azimuths_deg)}")
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    img, u8, lo, hi = _normalise(image)
-    errors: list[str] = []
-    warnings: list[str] = []
+    img, invalid, u8, lo, hi = _prepare(image, valid)
     if hi <= lo:
         timings["total"] = 1e3 * (time.perf_counter() - t_start)
         return Detection(
             False, [f"no pupil: the picture is uniform (every pixel {lo:.6g})"], None, [], timings
         )
-    span = hi - lo
-    hist = cv2.calcHist([u8], [0], None, [256], [0, 256]).ravel()
     t1 = time.perf_counter()
     timings["normalise"] = 1e3 * (t1 - t_start)
-
-    tg8 = glint_threshold(hist, params.glint_percentile, params.glint_min_contrast)
-    if tg8 is None:
-        blobs, bright = [], np.zeros_like(u8)
-        tg_value = None
-    else:
-        tg_value = lo + (tg8 + 0.5) / 255.0 * span
-        blobs, bright = glint_blobs(u8, img, tg8, params)
+    blobs, bright, tg_value = find_glints(u8, img, invalid, (lo, hi), params)
     t2 = time.perf_counter()
     timings["glints"] = 1e3 * (t2 - t1)
-
-    pupil = None
-    fit = None
-    tp8 = pupil_threshold(
-        hist, params.hist_sigma_bins, params.mode_significance, params.pupil_min_area_px
-    )
-    if tp8 is None:
-        errors.append(
-            "no pupil: the histogram has no dark mode separated from the rest "
-            "(uniform, pupil-free or all-dark picture)"
-        )
-    else:
-        fit = find_pupil(u8, img, tp8, bright, (lo, hi), params)
-        if fit.ellipse is None:
-            errors.append(fit.reason)
-        else:
-            major, minor, ang = fit.ellipse.major_minor_angle
-            pupil = Pupil(
-                centre_px=(fit.ellipse.cx, fit.ellipse.cy),
-                axes_px=(major, minor),
-                angle_deg=ang,
-                area_px=fit.area_px,
-                threshold=lo + (tp8 + 0.5) / 255.0 * span,
-                boundary_support=fit.support,
-                fit_residual_px=fit.residual_px,
-            )
-            if fit.support < params.min_boundary_support:
-                dr = fit.dropped or {}
-                errors.append(
-                    f"pupil cut or hidden: only {100 * fit.support:.0f} % of its fitted outline "
-                    f"is backed by edge points (need {100 * params.min_boundary_support:.0f} %); "
-                    f"outline points dropped: {dr.get('border', 0)} on the image border, "
-                    f"{dr.get('glint', 0)} on glints, {dr.get('outlier', 0)} off the ellipse "
-                    "(e.g. an eyelid's edge)"
-                )
-            limit = max(params.max_fit_residual_px, params.max_fit_residual_frac * 0.5 * minor)
-            if fit.residual_px > limit:
-                errors.append(
-                    f"pupil outline is not an ellipse: RMS residual {fit.residual_px:.2f} px "
-                    f"(limit {limit:.2f} px)"
-                )
+    fit = find_pupil(img, invalid, bright, params)
+    pupil, errors = _pupil_result(fit, params)
     t3 = time.perf_counter()
     timings["pupil"] = 1e3 * (t3 - t2)
-
     if pupil is not None:
         cx, cy = pupil.centre_px
         r_max = params.glint_search_radius * pupil.axes_px[0]
@@ -341,36 +394,9 @@ def detect(
         ]
     glints = [Glint(b["centre_px"], b["area_px"], b["peak"]) for b in blobs]
     if led_azimuths_deg is not None and len(led_azimuths_deg) > 0:
-        n_led = len(led_azimuths_deg)
-        centres = np.array([g.centre_px for g in glints]).reshape(-1, 2)
-        ref = tuple(np.median(centres, axis=0)) if len(glints) else (0.0, 0.0)
-        max_ang = params.match_max_angle_deg
-        if max_ang is None:
-            max_ang = default_max_angle(led_azimuths_deg)
-        for g, k in zip(glints, match_leds(centres, led_azimuths_deg, ref, max_ang), strict=True):
-            g.led = k
-        matched = {g.led for g in glints if g.led is not None}
-        missing = [k for k in range(n_led) if k not in matched]
-        if missing:
-            errors.append(
-                f"glint lost: {len(matched)} of {n_led} LEDs have a glint "
-                f"(no glint for LED {', '.join(str(k) for k in missing)})"
-            )
+        errors += _match_glints(glints, led_azimuths_deg, params)
     glints.sort(key=lambda g: (g.led is None, g.led if g.led is not None else 0, -g.peak))
-    if led_azimuths_deg is not None:
-        for i, g in enumerate(glints):
-            if g.led is None:
-                warnings.append(f"warning: glint {i} matches no LED")
-    elif not glints:
-        warnings.append("warning: no glints found")
-    if fit is not None and fit.ellipse is not None:
-        for i, g in enumerate(glints):
-            d = float(abs(sampson_distance(fit.ellipse, g.centre_px[0], g.centre_px[1])))
-            if d < math.sqrt(g.area_px / math.pi) + params.glint_edge_margin_px:
-                warnings.append(
-                    f"warning: glint {i} on the pupil edge ({d:.1f} px from the fitted "
-                    "outline): the outline under it was left out; its centroid may be biased"
-                )
+    warnings = _glint_warnings(glints, fit, led_azimuths_deg, params)
     t4 = time.perf_counter()
     timings["match"] = 1e3 * (t4 - t3)
     timings["total"] = 1e3 * (t4 - t_start)

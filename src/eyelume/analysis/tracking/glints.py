@@ -38,7 +38,7 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-__all__ = ["glint_blobs", "glint_threshold", "match_leds", "default_max_angle"]
+__all__ = ["find_glints", "glint_blobs", "glint_threshold", "match_leds", "default_max_angle"]
 
 
 def glint_threshold(hist: np.ndarray, percentile: float, min_contrast: float) -> int | None:
@@ -52,6 +52,19 @@ def glint_threshold(hist: np.ndarray, percentile: float, min_contrast: float) ->
     if top - base < min_contrast * 255.0:
         return None
     return base
+
+
+def find_glints(u8: np.ndarray, img: np.ndarray, invalid, value_range, params):
+    """Step 2 of :func:`~eyelume.analysis.tracking.detect.detect`: the glint blobs (dicts), the
+    bright mask (uint8 0/255) and the glint floor in the input's units (``None`` when nothing
+    stands out). ``u8`` is the picture scaled by its own range, ``img`` the input."""
+    hist = cv2.calcHist([u8], [0], None, [256], [0, 256]).ravel()
+    tg8 = glint_threshold(hist, params.glint_percentile, params.glint_min_contrast)
+    if tg8 is None:
+        return [], np.zeros_like(u8), None
+    lo, hi = value_range
+    blobs, bright = glint_blobs(u8, img, tg8, params)
+    return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
 
 
 def glint_blobs(

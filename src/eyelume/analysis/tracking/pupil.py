@@ -1,39 +1,51 @@
-"""The dark pupil: histogram threshold, closing, outline, sub-pixel edge and a robust ellipse fit.
+"""The dark pupil: a threshold ladder, the darkest stable compact blob, sub-pixel edge, ellipse.
 
-The paper's Figure 2 — threshold the picture, close the holes, fit an ellipse — with what makes
-its centre trustworthy to a fraction of a pixel and its failures visible:
+The paper's Figure 2 — threshold the picture, close the holes, fit an ellipse — without its
+assumption that the pupil has a histogram mode of its own (with a dark iris the two make one
+mode; a black border or a headset's dark corners make a darker one). Each step is a function
+that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-image's
+``EllipseModel`` returns a result or a falsy failure):
 
-1. **Threshold** (:func:`pupil_threshold`): the valley after the darkest mode of the smoothed
-   grey-level histogram (module doc of :mod:`eyelume.analysis.tracking.detect`).
-2. **Blob**: the largest dark blob (outer outline, ``cv2.findContours``) within the area bounds,
-   preferring ones that do not touch the image border; a blob that is not compact (solidity) or
-   not darker than its surround by ``pupil_min_contrast`` is passed over.
-3. **Closing** (``cv2.morphologyEx``, ``MORPH_CLOSE``) with an elliptical structuring element
-   (``cv2.getStructuringElement(MORPH_ELLIPSE)``) of ``closing_kernel_px``, by default odd ≥ 3
-   near 0.15 × the blob's equivalent diameter: it fills the notch a glint cuts into the pupil's
-   edge; holes wholly inside the pupil do not matter since only the outer outline is taken.
-   (0.15: a glint is 0.2–0.25 of the pupil across in the paper's pictures, and only the part of
-   it over the edge notches the outline; a closing costs ∝ the element's size.)
-4. **Outline** (``cv2.findContours``, outer, every point); points within ``glint_margin_px`` of
-   a glint pixel or ``border_margin_px`` of the image border are dropped: they are not the
-   pupil–iris boundary.
-5. **Sub-pixel edge** (:func:`_refine_edge`): each outline point moves along the normal of a
-   first ellipse fit to where the image (in its own units, bilinear) crosses the edge level —
-   ``edge_fraction`` (¼) of the way from the pupil's median to that profile's own outer (iris)
+1. **Working picture** (:func:`work_picture`): 8 bits from the darkest valid pixel to the 99th
+   percentile (saturated glints and stuck pixels, a small share of any eye picture, are
+   clipped instead of stretching the scale); glint pixels take the darkest value around them
+   (a glint inside the pupil would punch a hole in it); invalid pixels (NaN, outside the
+   valid-area mask) are bright. The pixel noise σ (:func:`noise_sigma`, Immerkær 1996).
+2. **Threshold ladder** (:func:`ladder`): the picture reduced to ~80 rows and thresholded at
+   up to 32 levels from its darkest to its 60th percentile; at each level the compact dark
+   blobs off the picture's border and the invalid area are kept (box fill ≥ 0.5, aspect ≤ 3,
+   centroid inside), nested blobs of successive levels form a chain, and each blob's stability
+   is MSER's q = (A₊ − A₋) / A over the neighbouring levels (Matas et al. 2002). The ladder
+   stops once the darkest chain has settled.
+3. **Choice** (:func:`choose`): chains darkest first; a chain's blob is its first level with
+   q ≤ 1 walked on to the local minimum of q — the pupil's area holds while the threshold
+   crosses its edge band, then jumps when it merges with the iris. Refusals: "pupil merged with
+   iris" (compact dark blobs, none stable), "pupil too small: N px", "no dark pupil:
+   bright-pupil image?" (no dark blob but a compact bright one of a pupil's size).
+4. **Full-resolution blob** (:func:`full_res_blob`): the picture (σ 1 px Gaussian) thresholded
+   at the chosen level around the blob; glints touching it joined; a closing with an
+   elliptical element of ≈ 0.15 × its diameter (odd, ≥ 3) fills what is left of a glint's
+   notch; refused when not compact (solidity < 0.8).
+5. **Contrast and edge** (:func:`blob_contrast`, :func:`edge_points`, :func:`_refine_smoothed`):
+   the pupil's median against its own surround (a ring 0.05–0.1 × its diameter outside), at
+   least 5 σ of the pixel noise and 3 % of the robust range, else "pupil merged with iris";
+   the outline points less those on glints (grown by their own radius: a glint's skirt
+   brightens the edge under it), the picture's border and invalid pixels; each point moves
+   along the normal of a first ellipse fit to where the profile (the mean of three parallel
+   profiles 1 px apart, which averages the noise along the edge without moving it across)
+   crosses ``edge_fraction`` (¼) of the way from the pupil's level to the profile's own outer
    level. Under a symmetric blur every such iso-line is an ellipse with the pupil's centre,
    whatever the threshold; a per-profile level keeps an unevenly lit iris from shifting it, and
    a low fraction reads the edge on the quiet dark side, where the iris's shading and texture
-   and the glints' skirts weigh least (on paper2005 renders over ±30° × ±20° of gaze the
-   median centre error against the true apparent pupil is 0.15 px at ¼, 0.20 px at ½, and 31
-   rather than 26 of the 35 frames pass the checks). The
-   axes are those of that iso-line: narrower than the sharp pupil's by 2 × 0.674 σ for a
-   Gaussian blur of σ (Φ⁻¹(¾) = 0.674).
-6. **Robust fit** (:func:`_robust_fit`): ``cv2.fitEllipse`` (least squares) on the edge points;
-   when more than 5 % of them lie off it, the best of fits to contiguous runs of the outline, so
-   an eyelid's edge or a lash drops out instead of pulling the centre.
-7. **Support**: the fraction of the fitted ellipse's outline (in equal eccentric-anomaly bins
-   about 2 px of arc long) that holds at least one inlier edge point. A pupil cut by an eyelid or
-   the image border leaves part of the ellipse unsupported.
+   and the glints' skirts weigh least. The axes are those of that iso-line: narrower than the
+   sharp pupil's by 2 × 0.674 σ for a Gaussian blur of σ (Φ⁻¹(¾) = 0.674).
+6. **Robust fit** (:func:`_robust_fit`): ``cv2.fitEllipse`` on the edge points; when more than
+   5 % lie off it, the best of fits to contiguous runs of the outline, so an eyelid's edge or a
+   lash drops out. The inlier tolerance scales with the pupil: max(1 px, 3σ_edge, 0.03 ×
+   its diameter).
+7. **Support** (:func:`support_of`): the fraction of the ellipse's outline backed by inlier
+   edge points and its longest unbacked arc: a lid or the border hides one long arc, a ragged
+   real edge leaves short gaps.
 
 Coordinates: OpenCV's — pixel (column c, row r) has its centre at (x, y) = (c, r); ellipse
 angles in degrees from +x toward +y (down the picture, clockwise as displayed).
@@ -46,10 +58,8 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
-from scipy.signal import find_peaks
 
-__all__ = ["Ellipse", "PupilFit", "find_pupil", "pupil_threshold", "sampson_distance"]
+__all__ = ["Ellipse", "PupilFit", "Refusal", "find_pupil", "noise_sigma", "sampson_distance"]
 
 
 @dataclass(frozen=True)
@@ -110,52 +120,6 @@ def sampson_distance(e: Ellipse, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return f / np.maximum(g, 1e-12)
 
 
-def pupil_threshold(
-    hist: np.ndarray, sigma_bins: float, significance: float, min_mass: int
-) -> int | None:
-    """8-bit pupil threshold: the valley after the darkest mode of the smoothed histogram.
-
-    ``hist`` (256,) counts of the 8-bit picture is smoothed by a Gaussian of ``sigma_bins`` and
-    its modes found as peaks whose prominence is ≥ ``significance`` × the counting noise of a
-    smoothed bin of the peak's height, whatever the picture's size. For each pair of successive
-    modes, darkest first, the threshold is the middle of the valley between them (the bins
-    within 5 % of the peak-to-floor height of the floor, around the minimum); the first whose
-    darker side holds ≥ ``min_mass`` pixels is returned (a handful of dead pixels is not a
-    pupil). ``None`` when the histogram has no such dark mode (a single population: a uniform
-    picture, or dark noise with the LEDs off). Pixels ≤ the threshold are "dark".
-
-    >>> h = np.zeros(256)
-    >>> h[10:20] = 30.0                       # pupil: 300 px
-    >>> h[100:160] = 200.0                    # the rest
-    >>> pupil_threshold(h, 2.0, 4.0, 30)
-    58
-    """
-    hs = gaussian_filter1d(hist.astype(np.float64), sigma_bins, mode="constant")
-    pad = 4
-    padded = np.concatenate([np.zeros(pad), hs, np.zeros(pad)])
-    peaks, props = find_peaks(padded, prominence=1e-9)
-    # A mode is real when it stands ``significance`` counting-noise σ above its valleys: the
-    # smoothed bin of height h has σ = √(h / (2√π σ_bins)) (√(h / 7) at 2 bins).
-    noise = np.sqrt(np.maximum(padded[peaks], 1.0) / (2.0 * math.sqrt(math.pi) * sigma_bins))
-    real = props["prominences"] >= significance * noise
-    peaks = peaks[real] - pad
-    cum = np.cumsum(hist)
-    for p0, p1 in zip(peaks[:-1], peaks[1:], strict=True):
-        seg = hs[p0 : p1 + 1]
-        i_min = int(np.argmin(seg))
-        floor = seg[i_min]
-        low = seg <= floor + 0.05 * (hs[p0] - floor)
-        lo = hi = i_min
-        while lo > 0 and low[lo - 1]:
-            lo -= 1
-        while hi < len(seg) - 1 and low[hi + 1]:
-            hi += 1
-        t = int(p0 + round(0.5 * (lo + hi)))
-        if cum[t] >= min_mass:
-            return t
-    return None
-
-
 @dataclass
 class PupilFit:
     """What :func:`find_pupil` found: the ellipse and the evidence behind it, or why not."""
@@ -163,6 +127,7 @@ class PupilFit:
     ellipse: Ellipse | None
     area_px: float = 0.0
     support: float = 0.0
+    gap: float = 1.0
     residual_px: float = math.inf
     edge_noise_px: float = math.inf
     edge_level: float = math.nan
@@ -170,6 +135,10 @@ class PupilFit:
     n_points: int = 0
     dropped: dict | None = None
     reason: str = ""
+    threshold: float = math.nan
+
+    def __bool__(self) -> bool:
+        return self.ellipse is not None
 
 
 def _odd(n: float) -> int:
@@ -199,6 +168,7 @@ def _refine_edge(
     pupil_level: float,
     reach: float,
     fraction: float,
+    tangential: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Move each point along the ellipse's outward normal to the nearest rising crossing of its
     edge level within ± ``reach`` px (bilinear samples every 0.5 px, linear interpolation); the
@@ -209,6 +179,10 @@ def _refine_edge(
     px = x[:, None] + nx[:, None] * t[None, :]
     py = y[:, None] + ny[:, None] * t[None, :]
     v = _bilinear(img, px, py)
+    for off in range(1, tangential + 1):  # parallel profiles ± off px along the tangent
+        for sgn in (-off, off):
+            v = v + _bilinear(img, px - sgn * ny[:, None], py + sgn * nx[:, None])
+    v = v / (2 * tangential + 1)
     # Each profile's own edge level, from the pupil's level toward its outer half (the iris
     # there): an unevenly lit iris then moves no edge. A profile reaching a much brighter
     # neighbour (a lid's skin, a glint) is held to the iris's level, median + 3 σ (MAD), lest
@@ -259,7 +233,7 @@ def _robust_fit(x: np.ndarray, y: np.ndarray, diam: float, params):
     # outline (var = 1.5 σ² for independent points).
     hf = ds - 0.5 * (np.roll(ds, 1) + np.roll(ds, -1))
     sigma = 1.4826 * float(np.median(np.abs(hf))) / math.sqrt(1.5)
-    tol = max(params.inlier_tol_px, 3.0 * sigma)
+    tol = max(params.inlier_tol_px, 3.0 * sigma, params.inlier_tol_frac * diam)
     if (d <= tol).mean() >= 0.95:
         sigma = max(sigma, 1.4826 * float(np.median(d)))
     else:
@@ -273,7 +247,7 @@ def _robust_fit(x: np.ndarray, y: np.ndarray, diam: float, params):
                     dh = np.abs(sampson_distance(h, x, y))
                     hyps.append((h, dh, 1.4826 * float(np.median(dh[idx]))))
         sigma = min(h[2] for h in hyps)
-        tol = max(params.inlier_tol_px, 3.0 * sigma)
+        tol = max(params.inlier_tol_px, 3.0 * sigma, params.inlier_tol_frac * diam)
         e, d, _ = max(hyps, key=lambda h: int((h[1] <= tol).sum()))
     inl = d <= tol
     for _ in range(params.fit_iterations):
@@ -296,111 +270,430 @@ def _robust_fit(x: np.ndarray, y: np.ndarray, diam: float, params):
     return e, inl, sigma
 
 
-def find_pupil(
-    u8: np.ndarray,
-    img: np.ndarray,
-    threshold8: int,
-    bright: np.ndarray,
-    value_range: tuple[float, float],
-    params,
-) -> PupilFit:
-    """Find and fit the pupil (module doc). ``u8`` is the 8-bit picture, ``img`` the input (its
-    own units), ``bright`` the glint mask (uint8, 0/255)."""
+# --- Step 1: the pupil's working picture and the pixel noise --------------------------------
+
+
+@dataclass(frozen=True)
+class Refusal:
+    """A step's falsy failure (as scikit-image's ``EllipseModel`` returns one): ``reason`` names
+    the cause in words a user can act on."""
+
+    reason: str
+
+    def __bool__(self) -> bool:
+        return False
+
+
+@dataclass(frozen=True)
+class WorkPicture:
+    """The 8-bit picture the ladder runs on and what maps it back to the input's units.
+
+    ``u8`` (rows, cols) = clip(255 (I − lo) / (hi − lo)), lo the darkest valid pixel and hi the
+    ``scale_percentile`` (99th) of the valid pixels: saturated glints and stuck pixels, a small
+    share of any eye picture, are clipped instead of stretching the scale. Invalid pixels (NaN,
+    outside the valid-area mask) are set to 255 and listed in ``invalid`` (bool). ``noise`` is
+    the pixel noise σ in ``u8`` units (:func:`noise_sigma`), ≥ 0.5 (8-bit quantisation, 1/√12 ≈
+    0.29, with margin)."""
+
+    u8: np.ndarray
+    invalid: np.ndarray | None
+    lo: float
+    hi: float
+    noise: float
+
+    def to_input(self, v8: float) -> float:
+        """An 8-bit level in the input's units."""
+        return self.lo + v8 / 255.0 * (self.hi - self.lo)
+
+
+def noise_sigma(u8: np.ndarray) -> float:
+    """Pixel noise σ (same units) from the Laplacian-like mask of Immerkær (1996,
+    "Fast noise variance estimation", CVIU 64, 300–302), M = [[1, −2, 1], [−2, 4, −2], [1, −2,
+    1]]: M * I is blind to planes and its coefficients' norm is 6, so σ = 1.4826 median|M * I| /
+    6 (the median instead of Immerkær's mean: edges and glints, a small share of the pixels,
+    do not count)."""
     rows, cols = u8.shape
-    _, dark = cv2.threshold(u8, threshold8, 255, cv2.THRESH_BINARY_INV)
-    # Outer outlines of every dark blob (CCOMP: a blob inside another's hole is still top level);
-    # far cheaper than labelling every pixel. Pixel area ≈ polygon area + half the outline.
-    contours, hier = cv2.findContours(dark, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
-    min_area = params.pupil_min_area_px
-    max_area = params.pupil_max_area_frac * rows * cols
-    cands, biggest = [], 0.0
-    for c, h in zip(contours, hier[0] if hier is not None else [], strict=True):
-        if h[3] != -1 or 4 * len(c) ** 2 < min_area:
+    if rows < 3 or cols < 3:
+        return 0.0
+    k = _stride((rows - 2) * (cols - 2))
+    u = u8.astype(np.float32)
+
+    def at(dr: int, dc: int) -> np.ndarray:  # every k-th pixel's neighbour (dr, dc)
+        return u[1 + dr : rows - 1 + dr : k, 1 + dc : cols - 1 + dc : k]
+
+    r = (
+        4 * at(0, 0)
+        - 2 * (at(-1, 0) + at(1, 0) + at(0, -1) + at(0, 1))
+        + (at(-1, -1) + at(-1, 1) + at(1, -1) + at(1, 1))
+    )
+    return 1.4826 * float(np.median(np.abs(r))) / 6.0
+
+
+def _stride(n: int) -> int:
+    """Every k-th pixel in each direction keeps ~2 × 10⁴ of n: enough for a percentile or a
+    median to ~1 % (their standard error ∝ 1/√n), and the same pixels every time."""
+    return max(1, int(math.sqrt(n / 2e4)))
+
+
+def work_picture(
+    img: np.ndarray, invalid: np.ndarray | None, bright: np.ndarray | None, params
+) -> WorkPicture | Refusal:
+    """Step 1 (module doc): the 8-bit working picture, or a refusal for a featureless one.
+
+    Glint pixels (``bright``, uint8 0/255, grown by 2 px) take the darkest value within the
+    largest glint's radius + 2 px around them (a grey erosion): a glint inside the pupil would
+    otherwise punch a hole in the dark blob and move its centroid off it."""
+    step = _stride(img.size)
+    sub = img[::step, ::step]
+    vals = sub[~invalid[::step, ::step]] if invalid is not None else sub.ravel()
+    mask = None if invalid is None else (~invalid).astype(np.uint8)
+    lo, top, _, _ = cv2.minMaxLoc(img, mask)
+    hi = float(np.percentile(vals, params.scale_percentile)) if vals.size else top
+    if hi <= lo:
+        hi = top
+    if hi <= lo:
+        return Refusal(f"no pupil: the picture is uniform (every pixel {lo:.6g})")
+    u8 = cv2.convertScaleAbs(
+        img.astype(np.float32), alpha=255.0 / (hi - lo), beta=-255.0 * lo / (hi - lo)
+    )
+    if bright is not None and bright.any():
+        grown = _grown_glints(bright, params, extra=2)
+        r = int(math.ceil(_largest_radius(bright))) + 2
+        eroded = cv2.erode(u8, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1,) * 2))
+        np.copyto(u8, eroded, where=grown > 0)
+    if invalid is not None:
+        u8[invalid] = 255
+    return WorkPicture(u8, invalid, float(lo), float(hi), max(0.5, noise_sigma(u8)))
+
+
+# --- Step 2: the threshold ladder ------------------------------------------------------------
+
+
+@dataclass
+class Candidate:
+    """A dark blob at one ladder level: ``level`` (8-bit), ``area`` px, ``bbox`` (x, y, w, h) and
+    ``seed`` (x, y) a pixel inside it, all on the ladder's (reduced) grid; ``q`` its area's
+    relative change over the neighbouring levels, (A₊ − A₋) / A (MSER's stability)."""
+
+    level: float
+    area: int
+    bbox: tuple[int, int, int, int]
+    seed: tuple[int, int]
+    q: float = math.nan
+    index: int = 0
+
+
+def _level_candidates(lab, stats, cent, min_area, max_area, touch):
+    """Indices of compact, inner components of one level: within the area bounds, fill of their
+    box ≥ 0.5 (a tilted 2:1 ellipse fills 0.63), box aspect ≤ 3, not touching the picture's border
+    or the invalid area (``touch``: labels that do)."""
+    rows, cols = lab.shape
+    x, y, w, h, a = (stats[1:, i] for i in range(5))
+    ok = (a >= min_area) & (a <= max_area)
+    ok &= (x > 0) & (y > 0) & (x + w < cols) & (y + h < rows)
+    ok &= a >= 0.5 * w * h
+    ok &= np.maximum(w, h) <= 3 * np.minimum(w, h)
+    idx = np.nonzero(ok)[0] + 1
+    if touch is not None and len(idx):
+        idx = idx[~np.isin(idx, touch)]
+    out = []
+    for k in idx:
+        cx, cy = int(round(cent[k, 0])), int(round(cent[k, 1]))
+        if lab[cy, cx] != k:  # centroid outside: not convex enough to be a pupil
             continue
-        area = cv2.contourArea(c) + 0.5 * len(c) + 1.0
-        biggest = max(biggest, area)
-        if min_area <= area <= max_area:
-            x0, y0, w, hh = cv2.boundingRect(c)
-            touches = x0 == 0 or y0 == 0 or x0 + w == cols or y0 + hh == rows
-            cands.append((touches, -area, c))
-    if not cands:
-        return PupilFit(
-            None,
-            reason=f"no pupil: no dark blob of {min_area}–{int(max_area)} px "
-            f"(the largest dark blob has {int(biggest)} px)",
+        out.append(Candidate(0.0, int(a[k - 1]), tuple(int(v) for v in stats[k, :4]), (cx, cy)))
+    return out
+
+
+def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list[int]]:
+    """Step 2 (module doc): chains of nested compact dark blobs over a ladder of thresholds.
+
+    The picture is reduced by f = max(1, round(min(rows, cols) / ``ladder_rows``)) (area
+    average) and smoothed (Gaussian σ 1 px) — the ladder only needs the blob, the edge comes
+    later at full resolution — and thresholded at up to ``ladder_levels`` levels evenly spaced
+    from its 0.5th to its ``ladder_top_percentile``. At each level the compact inner blobs
+    (:func:`_level_candidates`) are kept; a blob holding an earlier chain's seed continues that
+    chain (blobs only grow up the ladder). Returns the chains (darkest level first), f and the
+    areas (full-resolution px) of blobs too small to be a pupil, for the refusal message."""
+    u8 = wp.u8
+    rows, cols = u8.shape
+    f = max(1, int(round(min(rows, cols) / params.ladder_rows)))
+    small = cv2.resize(u8, (cols // f, rows // f), interpolation=cv2.INTER_AREA) if f > 1 else u8
+    small = cv2.GaussianBlur(small, (5, 5), 1.0)
+    inv = None
+    if wp.invalid is not None and wp.invalid.any():
+        inv_u8 = wp.invalid.astype(np.uint8)
+        inv = cv2.resize(inv_u8, (small.shape[1], small.shape[0]), interpolation=cv2.INTER_AREA)
+        inv = cv2.dilate(inv, np.ones((3, 3), np.uint8)) > 0
+    lo = float(np.percentile(small, 0.5))
+    top = float(np.percentile(small, params.ladder_top_percentile))
+    step = max(1.0, (top - lo) / params.ladder_levels)
+    min_area = max(2, int(params.pupil_min_area_px / f**2))
+    tiny_area = max(2, int(params.pupil_tiny_area_px / f**2))
+    max_area = params.pupil_max_area_frac * small.size
+    chains: list[list[Candidate]] = []
+    tiny: list[int] = []
+    areas: list[tuple[np.ndarray, np.ndarray]] = []
+    n_levels = int((top - lo) / step + 1e-9)
+    for li in range(n_levels + 1):
+        t = lo + (li + 1) * step
+        _, dark = cv2.threshold(small, t, 255, cv2.THRESH_BINARY_INV)
+        _, lab, stats, cent = cv2.connectedComponentsWithStats(dark, connectivity=8)
+        areas.append((lab, stats[:, cv2.CC_STAT_AREA]))
+        touch = np.unique(lab[inv]) if inv is not None else None
+        for c in _level_candidates(lab, stats, cent, tiny_area, max_area, touch):
+            c.level, c.index = t, li
+            if c.area < min_area:
+                tiny.append(c.area * f * f)
+                continue
+            k = lab[c.seed[1], c.seed[0]]
+            owners = [ch for ch in chains if lab[ch[0].seed[1], ch[0].seed[0]] == k]
+            if owners:
+                owners[0].append(c)
+                for other in owners[1:]:  # two dark cores joined: one blob from here on
+                    chains.remove(other)
+            else:
+                chains.append([c])
+        for ch in chains:  # the previous level's blobs now have both neighbours
+            for c in ch[-2:]:
+                if c.index == li - 1:
+                    c.q = _growth(areas, c)
+        if _settled(chains, li, params):
+            break
+    for ch in chains:
+        if ch[-1].index == len(areas) - 1:
+            ch[-1].q = _growth(areas, ch[-1])
+    return chains, f, tiny
+
+
+def _growth(areas, c: Candidate) -> float:
+    """MSER's stability of a blob: (A₊ − A₋) / A over the neighbouring levels, ∞ at the top."""
+    a_hi = _area_at(areas, c.index + 1, c.seed)
+    return (a_hi - _area_at(areas, c.index - 1, c.seed)) / c.area if a_hi > 0 else math.inf
+
+
+def _pick(ch: list[Candidate], params) -> int | None:
+    """Index of a chain's stable blob (:func:`choose`), or None."""
+    i = next((i for i, c in enumerate(ch) if c.q <= params.ladder_max_growth), None)
+    if i is None:
+        return None
+    while i + 1 < len(ch) and ch[i + 1].q < ch[i].q:
+        i += 1
+    return i
+
+
+def _settled(chains: list[list[Candidate]], li: int, params) -> bool:
+    """Whether the ladder can stop after level ``li``: the darkest chain that is not dead
+    without a stable blob has its stable blob and the level after it measured (a brighter
+    chain can only rank after it)."""
+    for ch in chains:
+        i = _pick(ch, params)
+        dead = ch[-1].index < li
+        if i is None:
+            if dead:
+                continue
+            return False
+        return i + 1 < len(ch) and not math.isnan(ch[i + 1].q) or dead
+    return False
+
+
+def _area_at(areas, i: int, seed: tuple[int, int]) -> int:
+    if i < 0:
+        return 0
+    if i >= len(areas):
+        return 0
+    lab, a = areas[i]
+    k = lab[seed[1], seed[0]]
+    return int(a[k]) if k > 0 else 0
+
+
+# --- Step 3: choosing the pupil ----------------------------------------------------------------
+
+
+def choose(chains: list[list[Candidate]], f: int, tiny: list[int], wp: WorkPicture, params):
+    """Step 3 (module doc): the darkest chain's first stable blob, or a refusal naming why none.
+
+    A chain's blob is stable at the first level where q ≤ ``ladder_max_growth`` and q is a local
+    minimum (the area holds while the threshold crosses the pupil's edge band). The chains are
+    tried darkest first (the level at which they first appear); returns the candidates in that
+    order (the caller fits them in turn) or a :class:`Refusal`."""
+    picks = []
+    unstable = 0
+    for ch in sorted(chains, key=lambda ch: ch[0].level):
+        i = _pick(ch, params)
+        if i is None:
+            unstable += 1
+        else:
+            picks.append(ch[i])
+    if picks:
+        return picks
+    if unstable:
+        return Refusal(
+            f"pupil merged with iris: {unstable} compact dark blob(s) but none keeps its size "
+            "over neighbouring threshold levels (no pupil–iris step in the grey levels)"
         )
-    cands.sort(key=lambda t: (t[0], t[1]))
-    reasons = []
-    for _, neg_area, c in cands[:5]:
-        fit = _fit_component(img, dark, c, -neg_area, bright, value_range, params)
-        if fit.ellipse is not None:
-            return fit
-        reasons.append(fit.reason)
-    return PupilFit(None, reason=reasons[0])
+    if tiny:
+        return Refusal(
+            f"pupil too small: {max(tiny)} px (a pupil needs ≥ {params.pupil_min_area_px} px)"
+        )
+    hint = _bright_pupil_hint(wp, f, params)
+    if hint:
+        return Refusal(f"no dark pupil: bright-pupil image? ({hint})")
+    return Refusal("no pupil: no compact dark blob off the picture's border stands out")
 
 
-def _fit_component(img, dark, contour0, area, bright, value_range, params) -> PupilFit:
-    rows, cols = dark.shape
-    span = value_range[1] - value_range[0]
-    diam = math.sqrt(4.0 * area / math.pi)
-    k = params.closing_kernel_px or _odd(params.closing_kernel_frac * diam)
-    ring_in = max(2, int(round(0.05 * diam)))
-    ring_out = ring_in + max(2, int(round(0.05 * diam)))
-    m = k + ring_out + 2
-    bx, by, bw, bh = cv2.boundingRect(contour0)
+def _bright_pupil_hint(wp: WorkPicture, f: int, params) -> str:
+    """A compact bright blob of a pupil's size (far bigger than a glint) off the border, if any:
+    the picture may be a bright-pupil one (on-axis illumination)."""
+    u8 = wp.u8 if wp.invalid is None else np.where(wp.invalid, 0, wp.u8).astype(np.uint8)
+    rows, cols = u8.shape
+    thr = float(np.percentile(u8, 97))
+    if thr >= 254:
+        return ""
+    _, bright = cv2.threshold(u8, thr, 255, cv2.THRESH_BINARY)
+    _, lab, stats, cent = cv2.connectedComponentsWithStats(bright, connectivity=8)
+    min_area = max(params.pupil_min_area_px, 4 * params.glint_max_area_frac * rows * cols)
+    for c in _level_candidates(lab, stats, cent, min_area, 0.1 * rows * cols, None):
+        return f"a compact bright blob of {c.area} px at ({c.seed[0]}, {c.seed[1]})"
+    return ""
+
+
+# --- Steps 4–7: the blob at full resolution, closing, outline, edge, fit, support -------------
+
+
+@dataclass(frozen=True)
+class Blob:
+    """The chosen blob at full resolution in a window (x0, y0) of the picture: ``mask`` (uint8
+    0/255, the closed blob with the glints touching it), ``raw`` the thresholded blob alone,
+    ``near_glint`` the glint mask grown by the glint margin, ``area`` (px) and ``diam`` (px) its
+    equivalent diameter, ``level`` the threshold (8-bit)."""
+
+    x0: int
+    y0: int
+    mask: np.ndarray
+    raw: np.ndarray
+    near_glint: np.ndarray
+    contour: np.ndarray
+    area: float
+    diam: float
+    level: float
+
+
+def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, params):
+    """Step 4 (module doc): the candidate's blob at full resolution — the smoothed picture (σ 1
+    px) thresholded at its level in a window around it, the component under its seed, glints
+    touching it joined, closed — or a refusal (not compact)."""
+    rows, cols = wp.u8.shape
+    bx, by, bw, bh = (v * f for v in cand.bbox)
+    diam0 = math.sqrt(4.0 * cand.area * f * f / math.pi)
+    k = params.closing_kernel_px or _odd(params.closing_kernel_frac * diam0)
+    m = k + int(math.ceil(0.15 * diam0)) + 2 * f + 4
     x0, y0 = max(0, bx - m), max(0, by - m)
     x1, y1 = min(cols, bx + bw + m), min(rows, by + bh + m)
-    comp = np.zeros((y1 - y0, x1 - x0), np.uint8)
-    cv2.drawContours(comp, [contour0], 0, 255, thickness=-1, offset=(-x0, -y0))
-    # Glints touching the blob (with their skirts: the bright mask grown by the glint margin)
-    # join it, so a glint over the pupil's edge leaves no notch however small the closing.
-    g = int(math.ceil(params.glint_margin_px))
-    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2)
-    near_glint = cv2.dilate(bright[y0:y1, x0:x1], disc)
+    roi = cv2.GaussianBlur(wp.u8[y0:y1, x0:x1], (5, 5), 1.0)
+    _, dark = cv2.threshold(roi, cand.level, 255, cv2.THRESH_BINARY_INV)
+    _, lab, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=8)
+    sx, sy = cand.seed[0] * f + f // 2 - x0, cand.seed[1] * f + f // 2 - y0
+    lab_seed = lab[min(sy, lab.shape[0] - 1), min(sx, lab.shape[1] - 1)]
+    if lab_seed == 0:
+        if len(stats) < 2:
+            return Refusal("no pupil: the dark blob vanishes at full resolution")
+        lab_seed = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    raw = np.where(lab == lab_seed, 255, 0).astype(np.uint8)
+    comp = raw.copy()
+    near_glint = _grown_glints(bright[y0:y1, x0:x1], params)
     if near_glint.any():
-        _, lab = cv2.connectedComponents(near_glint, connectivity=8)
-        touch = np.unique(lab[(cv2.dilate(comp, np.ones((3, 3), np.uint8)) > 0) & (lab > 0)])
-        if len(touch):
-            comp[np.isin(lab, touch)] = 255
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-    closed = cv2.morphologyEx(comp, cv2.MORPH_CLOSE, kernel)
+        # Glints touching the blob (with their skirts) join it: no notch however small the
+        # closing.
+        n_glab, glab = cv2.connectedComponents(near_glint, connectivity=8)
+        joined = np.zeros(n_glab, bool)
+        joined[glab[(cv2.dilate(comp, np.ones((3, 3), np.uint8)) > 0) & (glab > 0)]] = True
+        if joined.any():
+            comp[joined[glab]] = 255
+    closed = cv2.morphologyEx(
+        comp, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+    )
     contours, _ = cv2.findContours(closed, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea)
     c_area = cv2.contourArea(contour)
     hull_area = cv2.contourArea(cv2.convexHull(contour))
+    area = float(cv2.countNonZero(closed))
     solidity = c_area / hull_area if hull_area > 0 else 0.0
     if solidity < params.pupil_min_solidity:
-        return PupilFit(
-            None,
-            reason=f"no pupil: the darkest blob ({int(area)} px) is not compact "
-            f"(solidity {solidity:.2f} < {params.pupil_min_solidity:.2f})",
+        return Refusal(
+            f"no pupil: the darkest blob ({int(area)} px) is not compact "
+            f"(solidity {solidity:.2f} < {params.pupil_min_solidity:.2f})"
         )
-    blob_area = cv2.countNonZero(closed)
+    diam = math.sqrt(4.0 * area / math.pi)
+    return Blob(x0, y0, closed, raw, near_glint, contour, area, diam, cand.level)
 
-    sub = img[y0:y1, x0:x1]
-    glint_roi = bright[y0:y1, x0:x1] > 0
-    inside = (comp > 0) & (dark[y0:y1, x0:x1] > 0) & (near_glint == 0)
+
+def _grown_glints(bright: np.ndarray, params, extra: int = 0) -> np.ndarray:
+    """The glint mask grown by max(``glint_margin_px``, r) px, r the equivalent radius of the
+    largest glint in it: the mask holds a glint's core (above half its peak), and its skirt,
+    which brightens the pupil's edge under it, reaches about as far again."""
+    if not bright.any():
+        return bright.copy()
+    g = int(math.ceil(max(params.glint_margin_px, _largest_radius(bright)))) + extra
+    return cv2.dilate(bright, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2))
+
+
+def _largest_radius(bright: np.ndarray) -> float:
+    """Equivalent radius (px) of the largest blob of a 0/255 mask (0 when empty)."""
+    contours, _ = cv2.findContours(bright, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    if not contours:
+        return 0.0
+    return math.sqrt(
+        max(cv2.contourArea(c) + 0.5 * cv2.arcLength(c, True) for c in contours) / math.pi
+    )
+
+
+def blob_contrast(img: np.ndarray, wp: WorkPicture, blob: Blob, params):
+    """Step 5a (module doc): the pupil's level (median inside, off glints) and its surround's (a
+    ring 0.05–0.1 × the diameter outside, ≥ 2 px each, off glints and invalid pixels), input
+    units; a refusal when the step is under ``pupil_min_contrast_sigma`` × the pixel noise or
+    ``pupil_min_contrast`` of the picture's (robust) range."""
+    h, w = blob.mask.shape
+    sub = img[blob.y0 : blob.y0 + h, blob.x0 : blob.x0 + w]
+    usable = blob.near_glint == 0
+    if wp.invalid is not None:
+        usable &= ~wp.invalid[blob.y0 : blob.y0 + h, blob.x0 : blob.x0 + w]
+    inside = (blob.raw > 0) & usable
+    if not inside.any():
+        return Refusal("no pupil: the dark blob is all glint")
     pupil_level = float(np.median(sub[inside]))
-    outside = cv2.distanceTransform(cv2.bitwise_not(closed), cv2.DIST_L2, 3)
-    ring = (outside > ring_in) & (outside <= ring_out) & ~glint_roi
+    ring_in = max(2, int(round(0.05 * blob.diam)))
+    ring_out = ring_in + max(2, int(round(0.05 * blob.diam)))
+    outside = cv2.distanceTransform(cv2.bitwise_not(blob.mask), cv2.DIST_L2, 3)
+    ring = (outside > ring_in) & (outside <= ring_out) & usable
     if not ring.any():
-        return PupilFit(None, reason="no pupil: the dark blob has no surround to compare with")
+        return Refusal("no pupil: the dark blob has no surround to compare with")
     surround = float(np.median(sub[ring]))
-    contrast = (surround - pupil_level) / span
-    if contrast < params.pupil_min_contrast:
-        return PupilFit(
-            None,
-            reason=f"no pupil: the darkest blob is only {100 * contrast:.0f} % of the image's "
-            f"range darker than its surround (need {100 * params.pupil_min_contrast:.0f} %)",
+    span = wp.hi - wp.lo
+    step = surround - pupil_level
+    noise = wp.noise * span / 255.0
+    if step < params.pupil_min_contrast_sigma * noise or step < params.pupil_min_contrast * span:
+        return Refusal(
+            f"pupil merged with iris: the darkest compact blob ({int(blob.area)} px) is only "
+            f"{step / noise:.1f} σ of the pixel noise ({100 * step / span:.0f} % of the range) "
+            f"darker than its surround (need {params.pupil_min_contrast_sigma:.0f} σ and "
+            f"{100 * params.pupil_min_contrast:.0f} %)"
         )
-    level = 0.5 * (pupil_level + surround)
+    return pupil_level, surround
 
-    pts = contour[:, 0, :].astype(np.float64)
-    n_all = len(pts)
-    x, y = pts[:, 0] + x0, pts[:, 1] + y0
+
+def edge_points(blob: Blob, shape: tuple[int, int], invalid, params):
+    """Step 5b (module doc): the closed blob's outline points (x, y) in the picture, less those
+    on glints, on the image border or next to invalid pixels; with the drop counts."""
+    rows, cols = shape
+    pts = blob.contour[:, 0, :].astype(np.float64)
+    x, y = pts[:, 0] + blob.x0, pts[:, 1] + blob.y0
     b = params.border_margin_px
     on_border = (x < b) | (y < b) | (x > cols - 1 - b) | (y > rows - 1 - b)
-    on_glint = near_glint[pts[:, 1].astype(int), pts[:, 0].astype(int)] > 0
+    if invalid is not None:
+        near_inv = cv2.dilate(invalid.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+        on_border |= near_inv[y.astype(int), x.astype(int)]
+    on_glint = blob.near_glint[pts[:, 1].astype(int), pts[:, 0].astype(int)] > 0
     keep = ~on_border & ~on_glint
     dropped = {
         "border": int(on_border.sum()),
@@ -408,44 +701,126 @@ def _fit_component(img, dark, contour0, area, bright, value_range, params) -> Pu
         "no_edge": 0,
         "outlier": 0,
     }
-    x, y = x[keep], y[keep]
-    if len(x) < params.min_edge_points:
-        return PupilFit(
-            None,
-            reason=f"no pupil: only {len(x)} of the dark blob's {n_all} outline points are "
-            "off the image border and glints",
-            dropped=dropped,
-        )
-    e = _fit(x, y, diam)
+    if keep.sum() < params.min_edge_points:
+        return Refusal(
+            f"no pupil: only {int(keep.sum())} of the dark blob's {len(pts)} outline points are "
+            "off the image border and glints"
+        ), dropped
+    return (x[keep], y[keep]), dropped
+
+
+def _refine_smoothed(img, bright, e: Ellipse, x, y, pupil_level: float, reach: float, params):
+    """Step 5c: :func:`_refine_edge` on the picture smoothed by a Gaussian of
+    ``refine_smooth_px`` (σ, px) in a window around the points. A symmetric blur moves no
+    iso-line's centre (module doc, step 5) but averages the pixel noise along the normal, so a
+    real, noisy edge has one crossing instead of several. The blur is a normalised convolution
+    that leaves out the glints (``bright`` grown by ``glint_margin_px``), G * (w I) / G * w with
+    w = 0 on them, lest it spread their light over the edge next to them."""
+    rows, cols = img.shape
+    m = int(math.ceil(reach + 3 * params.refine_smooth_px + 3))
+    x0, y0 = max(0, int(x.min()) - m), max(0, int(y.min()) - m)
+    x1, y1 = min(cols, int(x.max()) + m + 1), min(rows, int(y.max()) + m + 1)
+    sub = img[y0:y1, x0:x1].astype(np.float32)
+    if params.refine_smooth_px > 0:
+        glints = bright[y0:y1, x0:x1]
+        sig = params.refine_smooth_px
+        if glints.any():
+            g = int(math.ceil(params.glint_margin_px))
+            disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2)
+            w = (cv2.dilate(glints, disc) == 0).astype(np.float32)
+            num = cv2.GaussianBlur(sub * w, (0, 0), sig)
+            den = cv2.GaussianBlur(w, (0, 0), sig)
+            sub = np.where(den > 1e-3, num / np.maximum(den, 1e-3), sub)
+        else:
+            sub = cv2.GaussianBlur(sub, (0, 0), sig)
+    ex = Ellipse(e.cx - x0, e.cy - y0, e.a, e.b, e.theta)
+    xr, yr, ok = _refine_edge(
+        sub, ex, x - x0, y - y0, pupil_level, reach, params.edge_fraction, params.refine_tangential_px
+    )
+    return xr + x0, yr + y0, ok
+
+
+def support_of(e: Ellipse, x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """Step 7 (module doc): over equal eccentric-anomaly bins (≈ 2 px of arc, 12–180) of the
+    ellipse, the fraction holding at least one of the points and the longest run of empty bins
+    (circular), as a fraction of the outline. A lid or the picture's border hides one long arc;
+    a ragged real edge leaves many short gaps."""
+    s, q = e.local(x, y)
+    anomaly = np.arctan2(q / e.b, s / e.a)
+    n_bins = int(np.clip(round(e.perimeter / 2.0), 12, 180))
+    occ = np.zeros(n_bins, bool)
+    occ[((anomaly + math.pi) / (2 * math.pi) * n_bins).astype(int) % n_bins] = True
+    if not occ.any():
+        return 0.0, 1.0
+    run, longest = 0, 0
+    for v in np.roll(occ, -int(np.argmax(occ))):
+        run = 0 if v else run + 1
+        longest = max(longest, run)
+    return float(occ.mean()), longest / n_bins
+
+
+def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, params) -> PupilFit:
+    """Steps 5–7 for one blob: contrast, outline, sub-pixel edge, robust fit, support."""
+    levels = blob_contrast(img, wp, blob, params)
+    if not levels:
+        return PupilFit(None, reason=levels.reason)
+    pupil_level, surround = levels
+    pts, dropped = edge_points(blob, img.shape, wp.invalid, params)
+    if not pts:
+        return PupilFit(None, reason=pts.reason, dropped=dropped)
+    x, y = pts
+    e = _fit(x, y, blob.diam)
     if e is None:
         return PupilFit(None, reason="no pupil: the dark blob's outline fits no ellipse")
-    reach = max(params.refine_reach_px, params.refine_reach_frac * diam)
-    xr, yr, ok = _refine_edge(img, e, x, y, pupil_level, reach, params.edge_fraction)
+    reach = max(params.refine_reach_px, params.refine_reach_frac * blob.diam)
+    xr, yr, ok = _refine_smoothed(img, bright, e, x, y, pupil_level, reach, params)
     dropped["no_edge"] = int((~ok).sum())
     xr, yr = xr[ok], yr[ok]
     if len(xr) < params.min_edge_points:
         return PupilFit(None, reason="no pupil: the dark blob has no sharp edge", dropped=dropped)
-
-    e, inl, sigma = _robust_fit(xr, yr, diam, params)
+    e, inl, sigma = _robust_fit(xr, yr, blob.diam, params)
     if e is None:
         return PupilFit(None, reason="no pupil: the dark blob's outline fits no ellipse")
     d = sampson_distance(e, xr[inl], yr[inl])
-    residual = float(np.sqrt(np.mean(d * d)))
     dropped["outlier"] = int((~inl).sum())
-
-    s, q = e.local(xr[inl], yr[inl])
-    anomaly = np.arctan2(q / e.b, s / e.a)
-    n_bins = int(np.clip(round(e.perimeter / 2.0), 12, 180))
-    occupied = np.unique(((anomaly + math.pi) / (2 * math.pi) * n_bins).astype(int) % n_bins)
-    support = len(occupied) / n_bins
+    span = wp.hi - wp.lo
+    support, gap = support_of(e, xr[inl], yr[inl])
     return PupilFit(
         e,
-        area_px=float(blob_area),
-        support=float(support),
-        residual_px=residual,
+        area_px=blob.area,
+        support=support,
+        gap=gap,
+        residual_px=float(np.sqrt(np.mean(d * d))),
         edge_noise_px=float(sigma),
-        edge_level=level,
-        contrast=float(contrast),
+        edge_level=0.5 * (pupil_level + surround),
+        contrast=float((surround - pupil_level) / span),
         n_points=int(inl.sum()),
         dropped=dropped,
+        threshold=wp.to_input(blob.level),
     )
+
+
+def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit:
+    """Find and fit the pupil (module doc, steps 1–7). ``img`` (rows, cols) float32/float64 or
+    integer, the input's own units, with invalid pixels (``invalid``, bool or None) holding any
+    finite value; ``bright`` the glint mask (uint8, 0/255). The first of the chosen candidates
+    (darkest first, at most ``max_candidates``) whose fit succeeds is returned; otherwise a
+    :class:`PupilFit` with ``ellipse`` None and the first candidate's refusal."""
+    wp = work_picture(img, invalid, bright, params)
+    if not wp:
+        return PupilFit(None, reason=wp.reason)
+    chains, f, tiny = ladder(wp, params)
+    picks = choose(chains, f, tiny, wp, params)
+    if not picks:
+        return PupilFit(None, reason=picks.reason)
+    reasons = []
+    for cand in picks[: params.max_candidates]:
+        blob = full_res_blob(wp, cand, f, bright, params)
+        if not blob:
+            reasons.append(blob.reason)
+            continue
+        fit = fit_blob(img, wp, blob, bright, params)
+        if fit.ellipse is not None:
+            return fit
+        reasons.append(fit.reason)
+    return PupilFit(None, reason=reasons[0])
