@@ -87,20 +87,25 @@ class DetectParams:
 
     Pupil
     -----
-    hist_sigma_bins : Gaussian σ (8-bit bins) smoothing the histogram before finding its modes;
-        2 bins removes the counting noise of a small picture (87 × 65) without merging modes.
-    mode_significance : a histogram mode counts when its prominence is ≥ this many σ of the
-        counting noise of a smoothed bin of its height, σ = √(h / (2√π σ_bins)) (4: ripples of
-        noise seldom reach it; a 16 px pupil's mode, its valley half-filled by the blurred
-        edge, clears it). A threshold relative to the highest mode would lose a small pupil
-        beside a big skin mode.
+    scale_percentile : the pupil's 8-bit picture runs from the darkest valid pixel to this
+        percentile (99): glints and stuck pixels, ≪ 1 % of an eye picture, are clipped.
+    ladder_rows, ladder_levels, ladder_top_percentile : the ladder runs on the picture reduced
+        by round(min(rows, cols) / 80) (a pupil of ≥ 16 px stays ≥ 3 px across; the cost is
+        one labelling per level), at up to 32 levels from its 0.5th to its 60th percentile (the
+        pupil is ≪ 40 % of an eye picture).
+    ladder_max_growth : largest MSER stability q = (A₊ − A₋) / A of the pupil's blob over the
+        neighbouring levels (1: at 32 levels the pupil's blurred edge band is crossed in one or
+        two steps; a merge with the iris multiplies the area).
+    max_candidates : stable blobs fitted in turn, darkest first, before giving up (3).
     pupil_min_area_px, pupil_max_area_frac : area bounds of the dark blob (px; fraction of the
         picture, 10 %: an iris seen without a pupil is larger at the framing of an eye tracker).
+    pupil_tiny_area_px : compact dark blobs from this up to the minimum area are reported as
+        "pupil too small" when nothing larger is found.
     pupil_min_solidity : area / convex-hull area of the closed blob (0.8); an ellipse, even cut
         by an eyelid, is convex (1); lashes and shadows are not.
-    pupil_min_contrast : surround − pupil median, as a fraction of the picture's range (5 %:
-        saturated glints set the range, and the pupil–iris step is only ~13 % of it in
-        paper2005's pictures).
+    pupil_min_contrast_sigma, pupil_min_contrast : the surround's median must exceed the
+        pupil's by 5 σ of the pixel noise (a 5 σ step is not noise) and by 3 % of the robust
+        range (a guess at the smallest step a camera's shading and vignetting do not make).
     closing_kernel_px : the closing's elliptical element, px (odd); ``None`` = odd ≥ 3 near
         ``closing_kernel_frac`` (0.15) × the blob's equivalent diameter: 5 px for the 16 px
         pupil of an 87 × 65 picture, 17 px for a 110 px one. A glint is ≲ 0.25 of the pupil
@@ -110,17 +115,24 @@ class DetectParams:
     glint_margin_px : outline points within this of a bright (glint) pixel are dropped.
     edge_fraction : the sub-pixel edge is where the image crosses this fraction of the way from
         the pupil's level to the iris's (¼; :mod:`.pupil` step 5 for why not ½).
-    refine_reach_px, refine_reach_frac : the sub-pixel edge search runs ± max(3 px, 0.06 ×
-        the blob's diameter) along the normal: farther than the threshold's crossing can be
-        from the mid-level's on a blurred edge (≈ 2σ_blur; 3 px covers σ ≤ 1.5 px, the
-        fraction the wide soft edges of large pupils).
-    inlier_tol_px : edge points farther than max(this, 3σ) from the ellipse are outliers, σ
-        the measured edge noise (1 px: ~5σ at the tests' default noise).
+    refine_reach_px, refine_reach_frac : the sub-pixel edge search runs ± max(3 px, 0.1 ×
+        the blob's diameter) along the normal: farther than the blob's outline can be from the
+        edge's ¼ level (the ladder's level can be near the iris's, ≈ 2σ_blur away; real pupils'
+        soft edges are a few px wide).
+    refine_smooth_px : optional Gaussian σ (px) of a glint-masked blur before the edge is read
+        (0: on eyelume's 87 × 65 renders any blur moved the centre by ~0.3 px, as the pupil's
+        surround is not symmetric).
+    refine_tangential_px : the edge profile is the mean of 2 k + 1 parallel profiles 1 px
+        apart along the tangent (k = 1): the noise averages along the edge without moving it.
+    inlier_tol_px, inlier_tol_frac : edge points farther than max(1 px, 3σ, 0.03 × the pupil's
+        diameter) from the ellipse are outliers, σ the measured edge noise (real pupils are a
+        little out of round; 1 px is ~5σ at the tests' default noise).
     fit_iterations : robust refits; outlier_trim_points : inliers this close (in outline
         points) to an outlier are left out; min_edge_points : fewest edge points for a fit.
-    min_boundary_support : fewest fraction of the ellipse's outline backed by inliers (0.6: in
-        the tests a lid over the top quarter of the pupil passes, with the centre within
-        0.25 px; over a third of it does not).
+    min_boundary_support, max_boundary_gap : fewest fraction of the ellipse's outline backed
+        by inliers (0.45) and longest unbacked arc (0.4 of it): a lid over the top quarter of
+        the pupil leaves an arc of ~25 % and passes, with the centre within 0.25 px; over half
+        of it does not; a ragged real edge leaves many short gaps.
     max_fit_residual_px, max_fit_residual_frac : largest RMS distance of the inliers to the
         ellipse: max(0.5 px, 3 % of the semi-minor axis) — a ragged outline (a noisy or
         non-elliptic blob) whose centre would be uncertain.
@@ -135,6 +147,9 @@ class DetectParams:
     glint_min_area_px, glint_max_area_frac : blob area bounds (px; fraction of the picture):
         ≥ 2 px, as the optics spread a glint over several pixels while a hot pixel or a noise
         spike is one; ≤ 0.5 % of the picture.
+    glint_min_snr : a glint's peak stands ≥ this many σ of the pixel noise (Immerkær's
+        estimate) above its local background (8: a Gaussian noise speck of 2–4 px is beyond
+        8 σ with probability ≪ 10⁻⁹ per pixel); a noise speck is never a glint.
     glint_search_radius : glints farther than this × the pupil's major axis from its centre are
         not the cornea's (2).
     glint_edge_margin_px : a glint whose centroid is within its equivalent radius + this of the
@@ -179,6 +194,7 @@ class DetectParams:
     glint_min_contrast: float = 0.15
     glint_close_px: int | None = None
     glint_min_area_px: int = 2
+    glint_min_snr: float = 8.0
     glint_max_area_frac: float = 0.005
     glint_search_radius: float = 2.0
     glint_edge_margin_px: float = 1.0

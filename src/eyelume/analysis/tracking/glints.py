@@ -38,6 +38,8 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from eyelume.analysis.tracking.pupil import noise_sigma
+
 __all__ = ["find_glints", "glint_blobs", "glint_threshold", "match_leds", "default_max_angle"]
 
 
@@ -63,12 +65,14 @@ def find_glints(u8: np.ndarray, img: np.ndarray, invalid, value_range, params):
     if tg8 is None:
         return [], np.zeros_like(u8), None
     lo, hi = value_range
-    blobs, bright = glint_blobs(u8, img, tg8, params)
+    noise = noise_sigma(img if invalid is None else np.where(invalid, lo, img))
+    floor = 0.5 if img.dtype.kind in "iu" else 1e-6 * (hi - lo)
+    blobs, bright = glint_blobs(u8, img, tg8, params, noise=max(noise, floor))
     return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
 
 
 def glint_blobs(
-    u8: np.ndarray, img: np.ndarray, floor8: int, params
+    u8: np.ndarray, img: np.ndarray, floor8: int, params, noise: float = 0.0
 ) -> tuple[list[dict], np.ndarray]:
     """Bright blobs as dicts (centre_px, area_px, peak) and the (closed) bright mask (0/255).
 
@@ -128,6 +132,9 @@ def glint_blobs(
         else:
             background = d_own > m
         base = float(np.median(win[background])) if background.any() else float(win.min())
+        peak = float(win[own > 0].max())
+        if peak - base < params.glint_min_snr * noise:
+            continue  # a noise speck, not a glint
         wgt = np.where(region, np.maximum(win - base, 0.0), 0.0)
         tot = float(wgt.sum())
         if tot <= 0:
@@ -141,7 +148,7 @@ def glint_blobs(
                     float((wgt.sum(axis=1) * ys).sum() / tot),
                 ),
                 "area_px": float(area),
-                "peak": float(win[own > 0].max()),
+                "peak": peak,
             }
         )
     return blobs, bright

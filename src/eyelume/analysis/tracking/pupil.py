@@ -735,7 +735,14 @@ def _refine_smoothed(img, bright, e: Ellipse, x, y, pupil_level: float, reach: f
             sub = cv2.GaussianBlur(sub, (0, 0), sig)
     ex = Ellipse(e.cx - x0, e.cy - y0, e.a, e.b, e.theta)
     xr, yr, ok = _refine_edge(
-        sub, ex, x - x0, y - y0, pupil_level, reach, params.edge_fraction, params.refine_tangential_px
+        sub,
+        ex,
+        x - x0,
+        y - y0,
+        pupil_level,
+        reach,
+        params.edge_fraction,
+        params.refine_tangential_px,
     )
     return xr + x0, yr + y0, ok
 
