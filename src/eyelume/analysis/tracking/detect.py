@@ -248,6 +248,22 @@ class Detection:
     glint_threshold: float | None = None
 
 
+def _missing(img: np.ndarray, valid: np.ndarray | None) -> np.ndarray | None:
+    """The missing pixels (bool): non-finite ones of a float picture and those outside
+    ``valid``; None when there are none."""
+    invalid = None
+    if img.dtype.kind == "f":
+        bad = ~np.isfinite(img)
+        if bad.any():
+            invalid = bad
+    if valid is not None:
+        valid = np.asarray(valid, bool)
+        if valid.shape != img.shape:
+            raise ValueError(f"valid-area mask has shape {valid.shape}, the picture {img.shape}")
+        invalid = ~valid if invalid is None else invalid | ~valid
+    return invalid
+
+
 def _prepare(image: np.ndarray, valid: np.ndarray | None):
     """Step 1: the picture as a contiguous array (uint8/uint16/int16/float32 kept, other reals
     converted), its invalid pixels (non-finite, or outside ``valid``; ``None`` when none) set to
@@ -260,16 +276,7 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None):
         raise ValueError(f"detect needs a non-empty picture, got shape {img.shape}")
     if img.dtype == bool or img.dtype not in (np.uint8, np.uint16, np.int16, np.float32):
         img = img.astype(np.float64 if img.dtype.kind == "f" else np.float32)
-    invalid = None
-    if img.dtype.kind == "f":
-        bad = ~np.isfinite(img)
-        if bad.any():
-            invalid = bad
-    if valid is not None:
-        valid = np.asarray(valid, bool)
-        if valid.shape != img.shape:
-            raise ValueError(f"valid-area mask has shape {valid.shape}, the picture {img.shape}")
-        invalid = ~valid if invalid is None else invalid | ~valid
+    invalid = _missing(img, valid)
     img = np.array(img, order="C", copy=invalid is not None)
     if invalid is not None:
         if invalid.all():

@@ -83,6 +83,26 @@ def glint_blobs(
     spot's centroid is as smooth in its position as an unsaturated one's.
     """
     rows, cols = u8.shape
+    above, bright = _bright_mask(u8, floor8, params)
+    contours, hier = cv2.findContours(bright, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    if hier is None:
+        return [], bright
+    max_area = max(params.glint_min_area_px, params.glint_max_area_frac * rows * cols)
+    tops = [c for c, h in zip(contours, hier[0], strict=True) if h[3] == -1]
+    blobs = []
+    for c in tops:
+        approx_area = cv2.contourArea(c) + 0.5 * len(c) + 1.0
+        if params.glint_min_area_px <= approx_area <= 1.5 * max_area + 4:
+            b = _blob(c, approx_area, above, bright, img, max_area, noise, params)
+            if b is not None:
+                blobs.append(b)
+    return blobs, bright
+
+
+def _bright_mask(u8: np.ndarray, floor8: int, params) -> tuple[np.ndarray, np.ndarray]:
+    """Glint pixels (above the floor and ``glint_level`` of the way from the local mean to 255)
+    and the same mask closed by ``glint_close_px`` (uint8 0/255 both)."""
+    rows, cols = u8.shape
     w = params.glint_window_px
     if w is None:
         w = max(5, int(round(min(rows, cols) / 16.0)))
@@ -92,66 +112,51 @@ def glint_blobs(
     above = cv2.bitwise_and(
         cv2.compare(u8, local, cv2.CMP_GE), cv2.threshold(u8, floor8, 255, cv2.THRESH_BINARY)[1]
     )
-    bright = above
     k = params.glint_close_px
     if k is None:
         k = int(round(min(rows, cols) / 160.0))
         k = k if k % 2 else k + 1
-    if k > 1:
-        bright = cv2.morphologyEx(
-            bright, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-        )
-    contours, hier = cv2.findContours(bright, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
-    if hier is None:
-        return [], bright
-    max_area = max(params.glint_min_area_px, params.glint_max_area_frac * rows * cols)
-    tops = [c for c, h in zip(contours, hier[0], strict=True) if h[3] == -1]
-    blobs = []
-    for c in tops:
-        approx_area = cv2.contourArea(c) + 0.5 * len(c) + 1.0
-        if approx_area < params.glint_min_area_px or approx_area > 1.5 * max_area + 4:
-            continue
-        m = max(2, int(math.ceil(math.sqrt(approx_area / math.pi))))
-        bx, by, bw, bh = cv2.boundingRect(c)
-        x0, y0 = max(0, bx - m - 2), max(0, by - m - 2)
-        x1, y1 = min(cols, bx + bw + m + 2), min(rows, by + bh + m + 2)
-        shape = (y1 - y0, x1 - x0)
-        own = np.zeros(shape, np.uint8)
-        cv2.drawContours(own, [c], 0, 255, thickness=-1, offset=(-x0, -y0))
-        area = int(np.count_nonzero((above[y0:y1, x0:x1] > 0) & (own > 0)))
-        if area < params.glint_min_area_px or area > max_area:
-            continue
-        win = img[y0:y1, x0:x1].astype(np.float64)
-        others = (bright[y0:y1, x0:x1] > 0) & (own == 0)
-        d_own = cv2.distanceTransform(cv2.bitwise_not(own), cv2.DIST_L2, 3)
-        region = d_own <= m
-        if others.any():
-            d_oth = cv2.distanceTransform((~others).astype(np.uint8) * 255, cv2.DIST_L2, 3)
-            region &= d_own <= d_oth
-            background = (d_own > m) & (d_oth > m)
-        else:
-            background = d_own > m
-        base = float(np.median(win[background])) if background.any() else float(win.min())
-        peak = float(win[own > 0].max())
-        if peak - base < params.glint_min_snr * noise:
-            continue  # a noise speck, not a glint
-        wgt = np.where(region, np.maximum(win - base, 0.0), 0.0)
-        tot = float(wgt.sum())
-        if tot <= 0:
-            continue
-        xs = np.arange(x0, x1, dtype=np.float64)
-        ys = np.arange(y0, y1, dtype=np.float64)
-        blobs.append(
-            {
-                "centre_px": (
-                    float((wgt.sum(axis=0) * xs).sum() / tot),
-                    float((wgt.sum(axis=1) * ys).sum() / tot),
-                ),
-                "area_px": float(area),
-                "peak": peak,
-            }
-        )
-    return blobs, bright
+    if k <= 1:
+        return above, above
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+    return above, cv2.morphologyEx(above, cv2.MORPH_CLOSE, disc)
+
+
+def _blob(c, approx_area, above, bright, img, max_area, noise, params) -> dict | None:
+    """One glint from its outline ``c``: area, peak and skirt-weighted centroid (module doc), or
+    None when its area is out of bounds or it does not stand ``glint_min_snr`` × ``noise``
+    above its local background (a noise speck)."""
+    rows, cols = img.shape
+    m = max(2, int(math.ceil(math.sqrt(approx_area / math.pi))))
+    bx, by, bw, bh = cv2.boundingRect(c)
+    x0, y0 = max(0, bx - m - 2), max(0, by - m - 2)
+    x1, y1 = min(cols, bx + bw + m + 2), min(rows, by + bh + m + 2)
+    own = np.zeros((y1 - y0, x1 - x0), np.uint8)
+    cv2.drawContours(own, [c], 0, 255, thickness=-1, offset=(-x0, -y0))
+    area = int(np.count_nonzero((above[y0:y1, x0:x1] > 0) & (own > 0)))
+    if area < params.glint_min_area_px or area > max_area:
+        return None
+    win = img[y0:y1, x0:x1].astype(np.float64)
+    others = (bright[y0:y1, x0:x1] > 0) & (own == 0)
+    d_own = cv2.distanceTransform(cv2.bitwise_not(own), cv2.DIST_L2, 3)
+    region = d_own <= m
+    background = d_own > m
+    if others.any():
+        d_oth = cv2.distanceTransform((~others).astype(np.uint8) * 255, cv2.DIST_L2, 3)
+        region &= d_own <= d_oth
+        background &= d_oth > m
+    base = float(np.median(win[background])) if background.any() else float(win.min())
+    peak = float(win[own > 0].max())
+    if peak - base < params.glint_min_snr * noise:
+        return None  # a noise speck, not a glint
+    wgt = np.where(region, np.maximum(win - base, 0.0), 0.0)
+    tot = float(wgt.sum())
+    if tot <= 0:
+        return None
+    xs = np.arange(x0, x1, dtype=np.float64)
+    ys = np.arange(y0, y1, dtype=np.float64)
+    centre = (float((wgt.sum(axis=0) * xs).sum() / tot), float((wgt.sum(axis=1) * ys).sum() / tot))
+    return {"centre_px": centre, "area_px": float(area), "peak": peak}
 
 
 def default_max_angle(led_azimuths_deg: Sequence[float]) -> float:

@@ -209,6 +209,41 @@ def _fit(x: np.ndarray, y: np.ndarray, diam: float) -> Ellipse | None:
     return e if ok and max(e.a, e.b) < 5.0 * diam else None
 
 
+def _best_run(x, y, e: Ellipse, d: np.ndarray, diam: float, params):
+    """The hypothesis with the most inliers among the fit to all points and fits to contiguous
+    runs of 50 % and 30 % of the outline from 12 starts each (:func:`_robust_fit`); returns it,
+    its distances and σ, the smallest spread of a run about its own fit."""
+    n = len(x)
+    hyps = [(e, d, 1.4826 * float(np.median(d)))]
+    for frac in (0.5, 0.3):
+        m = max(params.min_edge_points, int(frac * n))
+        for s0 in range(0, n, max(1, n // 12)):
+            idx = (s0 + np.arange(m)) % n
+            h = _fit(x[idx], y[idx], diam)
+            if h is not None:
+                dh = np.abs(sampson_distance(h, x, y))
+                hyps.append((h, dh, 1.4826 * float(np.median(dh[idx]))))
+    sigma = min(h[2] for h in hyps)
+    tol = max(params.inlier_tol_px, 3.0 * sigma, params.inlier_tol_frac * diam)
+    e, d, _ = max(hyps, key=lambda h: int((h[1] <= tol).sum()))
+    return e, d, sigma
+
+
+def _trim_near_outliers(x, y, e: Ellipse, inl: np.ndarray, diam: float, params):
+    """Leave out inliers within ``outlier_trim_points`` (along the outline) of an outlier — the
+    occluder's blur bends the edge next to it — and refit; unchanged if too few remain."""
+    n = len(x)
+    trim = params.outlier_trim_points
+    if trim > 0 and 0 < (~inl).sum() < n:
+        near = np.convolve(np.r_[~inl[-trim:], ~inl, ~inl[:trim]], np.ones(2 * trim + 1), "valid")
+        trimmed = inl & (near == 0)
+        if trimmed.sum() >= params.min_edge_points:
+            e_new = _fit(x[trimmed], y[trimmed], diam)
+            if e_new is not None:
+                return e_new, trimmed
+    return e, inl
+
+
 def _robust_fit(x: np.ndarray, y: np.ndarray, diam: float, params):
     """Ellipse fit that ignores a contiguous stretch of non-pupil outline (an eyelid's edge).
 
@@ -237,18 +272,8 @@ def _robust_fit(x: np.ndarray, y: np.ndarray, diam: float, params):
     if (d <= tol).mean() >= 0.95:
         sigma = max(sigma, 1.4826 * float(np.median(d)))
     else:
-        hyps = [(e, d, 1.4826 * float(np.median(d)))]
-        for frac in (0.5, 0.3):
-            m = max(params.min_edge_points, int(frac * n))
-            for s0 in range(0, n, max(1, n // 12)):
-                idx = (s0 + np.arange(m)) % n
-                h = _fit(x[idx], y[idx], diam)
-                if h is not None:
-                    dh = np.abs(sampson_distance(h, x, y))
-                    hyps.append((h, dh, 1.4826 * float(np.median(dh[idx]))))
-        sigma = min(h[2] for h in hyps)
+        e, d, sigma = _best_run(x, y, e, d, diam, params)
         tol = max(params.inlier_tol_px, 3.0 * sigma, params.inlier_tol_frac * diam)
-        e, d, _ = max(hyps, key=lambda h: int((h[1] <= tol).sum()))
     inl = d <= tol
     for _ in range(params.fit_iterations):
         e_new = _fit(x[inl], y[inl], diam)
@@ -259,14 +284,7 @@ def _robust_fit(x: np.ndarray, y: np.ndarray, diam: float, params):
         if np.array_equal(new, inl) or new.sum() < params.min_edge_points:
             break
         inl = new
-    trim = params.outlier_trim_points
-    if trim > 0 and 0 < (~inl).sum() < n:
-        near = np.convolve(np.r_[~inl[-trim:], ~inl, ~inl[:trim]], np.ones(2 * trim + 1), "valid")
-        trimmed = inl & (near == 0)
-        if trimmed.sum() >= params.min_edge_points:
-            e_new = _fit(x[trimmed], y[trimmed], diam)
-            if e_new is not None:
-                e, inl = e_new, trimmed
+    e, inl = _trim_near_outliers(x, y, e, inl, diam, params)
     return e, inl, sigma
 
 
@@ -415,16 +433,7 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list[in
     (:func:`_level_candidates`) are kept; a blob holding an earlier chain's seed continues that
     chain (blobs only grow up the ladder). Returns the chains (darkest level first), f and the
     areas (full-resolution px) of blobs too small to be a pupil, for the refusal message."""
-    u8 = wp.u8
-    rows, cols = u8.shape
-    f = max(1, int(round(min(rows, cols) / params.ladder_rows)))
-    small = cv2.resize(u8, (cols // f, rows // f), interpolation=cv2.INTER_AREA) if f > 1 else u8
-    small = cv2.GaussianBlur(small, (5, 5), 1.0)
-    inv = None
-    if wp.invalid is not None and wp.invalid.any():
-        inv_u8 = wp.invalid.astype(np.uint8)
-        inv = cv2.resize(inv_u8, (small.shape[1], small.shape[0]), interpolation=cv2.INTER_AREA)
-        inv = cv2.dilate(inv, np.ones((3, 3), np.uint8)) > 0
+    small, inv, f = _reduced(wp, params)
     lo = float(np.percentile(small, 0.5))
     top = float(np.percentile(small, params.ladder_top_percentile))
     step = max(1.0, (top - lo) / params.ladder_levels)
@@ -445,15 +454,8 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list[in
             c.level, c.index = t, li
             if c.area < min_area:
                 tiny.append(c.area * f * f)
-                continue
-            k = lab[c.seed[1], c.seed[0]]
-            owners = [ch for ch in chains if lab[ch[0].seed[1], ch[0].seed[0]] == k]
-            if owners:
-                owners[0].append(c)
-                for other in owners[1:]:  # two dark cores joined: one blob from here on
-                    chains.remove(other)
             else:
-                chains.append([c])
+                _extend_chains(chains, c, lab)
         for ch in chains:  # the previous level's blobs now have both neighbours
             for c in ch[-2:]:
                 if c.index == li - 1:
@@ -464,6 +466,34 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list[in
         if ch[-1].index == len(areas) - 1:
             ch[-1].q = _growth(areas, ch[-1])
     return chains, f, tiny
+
+
+def _reduced(wp: WorkPicture, params) -> tuple[np.ndarray, np.ndarray | None, int]:
+    """The ladder's picture: ``wp.u8`` reduced by f (area average) and smoothed (σ 1 px), its
+    missing pixels (grown by 1, or None) and f."""
+    rows, cols = wp.u8.shape
+    f = max(1, int(round(min(rows, cols) / params.ladder_rows)))
+    size = (cols // f, rows // f)
+    small = cv2.resize(wp.u8, size, interpolation=cv2.INTER_AREA) if f > 1 else wp.u8
+    small = cv2.GaussianBlur(small, (5, 5), 1.0)
+    inv = None
+    if wp.invalid is not None and wp.invalid.any():
+        inv = cv2.resize(wp.invalid.astype(np.uint8), size, interpolation=cv2.INTER_AREA)
+        inv = cv2.dilate(inv, np.ones((3, 3), np.uint8)) > 0
+    return small, inv, f
+
+
+def _extend_chains(chains: list[list[Candidate]], c: Candidate, lab: np.ndarray) -> None:
+    """Add blob ``c`` to the chain whose first seed it holds (blobs only grow up the ladder);
+    chains whose seeds it all holds become one (two dark cores joined); else a new chain."""
+    k = lab[c.seed[1], c.seed[0]]
+    owners = [ch for ch in chains if lab[ch[0].seed[1], ch[0].seed[0]] == k]
+    if not owners:
+        chains.append([c])
+        return
+    owners[0].append(c)
+    for other in owners[1:]:
+        chains.remove(other)
 
 
 def _growth(areas, c: Candidate) -> float:
