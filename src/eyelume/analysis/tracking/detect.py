@@ -150,6 +150,16 @@ class DetectParams:
     glint_min_snr : a glint's peak stands ≥ this many σ of the pixel noise (Immerkær's
         estimate) above its local background (8: a Gaussian noise speck of 2–4 px is beyond
         8 σ with probability ≪ 10⁻⁹ per pixel); a noise speck is never a glint.
+    glint_smooth_px : Gaussian σ (px) of the picture the bright mask is taken from (``None`` =
+        min(rows, cols) / 480, none below 0.5: 1 px at 640 × 480, where a Monte Carlo render's
+        or a noisy camera's glint is then one blob, not a scatter of specks; a glint's size in
+        px scales with the picture, and at 87 × 65 it is ~1.5 px across). The centroid weighs
+        the unsmoothed picture.
+    glint_min_flux_frac : a bright blob with less than this share (10 %) of the brightest one's
+        light above background is a speck, not an LED's glint (the LEDs of one ring differ by
+        far less at the cornea; specks are fragments, stray reflections or hot pixels).
+    glint_max_fragment_frac : a matched glint with more than this share (5 %) of its own light
+        in specks around it is broken up and its centre uncertain (an error).
     glint_search_radius : glints farther than this × the pupil's major axis from its centre are
         not the cornea's (2).
     glint_edge_margin_px : a glint whose centroid is within its equivalent radius + this of the
@@ -195,6 +205,9 @@ class DetectParams:
     glint_close_px: int | None = None
     glint_min_area_px: int = 2
     glint_min_snr: float = 8.0
+    glint_smooth_px: float | None = None
+    glint_min_flux_frac: float = 0.1
+    glint_max_fragment_frac: float = 0.05
     glint_max_area_frac: float = 0.005
     glint_search_radius: float = 2.0
     glint_edge_margin_px: float = 1.0
@@ -225,12 +238,14 @@ class Pupil:
 @dataclass
 class Glint:
     """A glint: ``centre_px`` (x, y) intensity-weighted centroid, ``area_px`` pixels above the
-    glint threshold, ``peak`` its brightest pixel (input units), ``led`` its LED index or None."""
+    glint threshold, ``peak`` its brightest pixel (input units), ``led`` its LED index or None,
+    ``flux`` its light above the local background (input units × px)."""
 
     centre_px: tuple[float, float]
     area_px: float
     peak: float
     led: int | None = None
+    flux: float = 0.0
 
 
 @dataclass
@@ -325,6 +340,40 @@ def _pupil_result(fit, params) -> tuple[Pupil | None, list[str]]:
     return pupil, errors
 
 
+def _split_specks(blobs: list[dict], params) -> tuple[list[Glint], list[Glint]]:
+    """Step 5a: the glints, and the specks — blobs with less than ``glint_min_flux_frac`` of the
+    brightest blob's light (above its background), which no LED's corneal reflection is."""
+    every = [Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"]) for b in blobs]
+    top = max((g.flux for g in every), default=0.0)
+    glints = [g for g in every if g.flux >= params.glint_min_flux_frac * top]
+    specks = [g for g in every if g.flux < params.glint_min_flux_frac * top]
+    return glints, specks
+
+
+def _broken_glints(glints: list[Glint], specks: list[Glint], params) -> list[str]:
+    """Step 5c: a matched glint with more than ``glint_max_fragment_frac`` of its light in specks
+    within 2 r + 4 px of it (r its equivalent radius) is broken up — the sparse samples of a
+    noisy picture (a Monte Carlo render with few samples, a short exposure) — and its centroid
+    is uncertain by more than the detector's precision: an error, not a number to trust."""
+    out = []
+    for i, g in enumerate(glints):
+        if g.led is None or g.flux <= 0:
+            continue
+        reach = 2.0 * math.sqrt(g.area_px / math.pi) + 4.0
+        near = sum(
+            s.flux
+            for s in specks
+            if math.hypot(s.centre_px[0] - g.centre_px[0], s.centre_px[1] - g.centre_px[1]) <= reach
+        )
+        if near > params.glint_max_fragment_frac * g.flux:
+            out.append(
+                f"glint {i} (LED {g.led}) is broken up: {100 * near / g.flux:.0f} % of its light "
+                "is in specks around it (a noisy picture: more samples or a longer exposure); "
+                "its centre is uncertain"
+            )
+    return out
+
+
 def _match_glints(glints: list[Glint], led_azimuths_deg, params) -> list[str]:
     """Step 5b: each glint's LED (in place); the error for LEDs left without a glint."""
     n_led = len(led_azimuths_deg)
@@ -415,10 +464,11 @@ def detect(
         blobs = [
             b for b in blobs if math.hypot(b["centre_px"][0] - cx, b["centre_px"][1] - cy) <= r_max
         ]
-    glints = [Glint(b["centre_px"], b["area_px"], b["peak"]) for b in blobs]
+    glints, specks = _split_specks(blobs, params)
     if led_azimuths_deg is not None and len(led_azimuths_deg) > 0:
         errors += _match_glints(glints, led_azimuths_deg, params)
     glints.sort(key=lambda g: (g.led is None, g.led if g.led is not None else 0, -g.peak))
+    errors += _broken_glints(glints, specks, params)
     warnings = _glint_warnings(glints, fit, led_azimuths_deg, params)
     t4 = time.perf_counter()
     timings["match"] = 1e3 * (t4 - t3)

@@ -60,13 +60,22 @@ def find_glints(u8: np.ndarray, img: np.ndarray, invalid, value_range, params):
     """Step 2 of :func:`~eyelume.analysis.tracking.detect.detect`: the glint blobs (dicts), the
     bright mask (uint8 0/255) and the glint floor in the input's units (``None`` when nothing
     stands out). ``u8`` is the picture scaled by its own range, ``img`` the input."""
+    sig = params.glint_smooth_px
+    if sig is None:
+        sig = min(img.shape) / 480.0
+    lo, hi = value_range
+    if sig >= 0.5:
+        # Sparse bright samples (a Monte Carlo render's glint, shot noise) make one blob per
+        # glint, not a scatter of specks; centroids still weigh the unsmoothed picture.
+        smooth = cv2.GaussianBlur(img.astype(np.float32), (0, 0), sig)
+        u8 = cv2.normalize(smooth, None, 0, 255, cv2.NORM_MINMAX, dtype=cv2.CV_8U)
+        lo, hi = (float(v) for v in cv2.minMaxLoc(smooth)[:2])
     hist = cv2.calcHist([u8], [0], None, [256], [0, 256]).ravel()
     tg8 = glint_threshold(hist, params.glint_percentile, params.glint_min_contrast)
     if tg8 is None:
         return [], np.zeros_like(u8), None
-    lo, hi = value_range
-    noise = noise_sigma(img if invalid is None else np.where(invalid, lo, img))
-    floor = 0.5 if img.dtype.kind in "iu" else 1e-6 * (hi - lo)
+    noise = noise_sigma(img if invalid is None else np.where(invalid, value_range[0], img))
+    floor = 0.5 if img.dtype.kind in "iu" else 1e-6 * (value_range[1] - value_range[0])
     blobs, bright = glint_blobs(u8, img, tg8, params, noise=max(noise, floor))
     return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
 
@@ -100,8 +109,9 @@ def glint_blobs(
 
 
 def _bright_mask(u8: np.ndarray, floor8: int, params) -> tuple[np.ndarray, np.ndarray]:
-    """Glint pixels (above the floor and ``glint_level`` of the way from the local mean to 255)
-    and the same mask closed by ``glint_close_px`` (uint8 0/255 both)."""
+    """Glint pixels of the picture smoothed by ``glint_smooth_px`` (above the floor and
+    ``glint_level`` of the way from the local mean to 255) and the same mask closed by
+    ``glint_close_px`` (uint8 0/255 both)."""
     rows, cols = u8.shape
     w = params.glint_window_px
     if w is None:
@@ -156,7 +166,7 @@ def _blob(c, approx_area, above, bright, img, max_area, noise, params) -> dict |
     xs = np.arange(x0, x1, dtype=np.float64)
     ys = np.arange(y0, y1, dtype=np.float64)
     centre = (float((wgt.sum(axis=0) * xs).sum() / tot), float((wgt.sum(axis=1) * ys).sum() / tot))
-    return {"centre_px": centre, "area_px": float(area), "peak": peak}
+    return {"centre_px": centre, "area_px": float(area), "peak": peak, "flux": tot}
 
 
 def default_max_angle(led_azimuths_deg: Sequence[float]) -> float:
