@@ -556,47 +556,100 @@ def reproduce(
     )
 
 
-@app.command()
-def track(
-    image: Annotated[Path, typer.Argument(help="A grey eye image: .png, .jpg, .tif or .npy.")],
-    leds: Annotated[
-        str | None,
-        typer.Option(help="LED azimuths in degrees (0 = picture +x, 90 = up), e.g. 0,90,180,270."),
-    ] = None,
-) -> None:
-    """The paper's detection pipeline on any grey eye image: pupil ellipse and centre, glints
-    with sub-pixel centroids matched to LEDs; prints JSON, and one line per failure."""
+def _read_picture(image: Path):
+    """A grey picture from a file a camera or eyelume writes: 8/16-bit PNG, TIFF, JPEG (OpenCV,
+    unchanged depth) or .npy (any real dtype; NaN = missing pixels). Colour becomes luminance
+    (Rec. 601 weights, OpenCV's) with a note. Bad files raise InputFileError (one line)."""
     import numpy as np
 
-    from eyelume.analysis.tracking.detect import detect, detection_to_dict
+    from eyelume.errors import InputFileError
 
-    if not image.exists():
-        _fail(f"IMAGE {image}: no such file")
+    if not image.is_file():
+        raise InputFileError("no such file", file=image)
     try:
         if image.suffix.lower() == ".npy":
-            data = np.load(image)
+            data = np.load(image, allow_pickle=False)
+            order = "RGB"
         else:
             import cv2
 
             data = cv2.imread(str(image), cv2.IMREAD_UNCHANGED)
             if data is None:
-                raise ValueError("not an image OpenCV can read")
-            if data.ndim == 3:
-                data = cv2.cvtColor(data, cv2.COLOR_BGR2GRAY)
+                raise ValueError("not a picture OpenCV can read")
+            order = "BGR"
     except (ValueError, OSError) as exc:
-        _fail(f"IMAGE {image}: {exc}")
-    if data.ndim != 2 or not np.issubdtype(data.dtype, np.number):
-        _fail(f"IMAGE {image}: expected a 2D grey image, got shape {data.shape} {data.dtype}")
-    azimuths = None
-    if leds:
-        try:
-            azimuths = [float(v) for v in leds.split(",") if v.strip()]
-        except ValueError:
-            _fail(f"--leds {leds!r}: expected comma-separated degrees, e.g. 0,90,180,270")
-    result = detect(data, led_azimuths_deg=azimuths)
+        raise InputFileError(str(exc), file=image) from None
+    if not isinstance(data, np.ndarray) or data.dtype.kind not in "biuf":
+        raise InputFileError(
+            f"not a numeric picture ({getattr(data, 'dtype', type(data))})", file=image
+        )
+    if data.size == 0:
+        raise InputFileError(f"the picture is empty (shape {data.shape})", file=image)
+    if data.ndim == 3 and data.shape[2] == 1:
+        data = data[:, :, 0]
+    if data.ndim == 3 and data.shape[2] in (3, 4):
+        w = np.array([0.299, 0.587, 0.114])
+        rgb = data[:, :, :3].astype(np.float64)
+        data = rgb @ (w if order == "RGB" else w[::-1])
+        err.print(f"note: {image} is a colour picture; using its luminance (Rec. 601 weights)")
+    if data.ndim != 2:
+        raise InputFileError(f"expected a 2-D grey picture, got shape {data.shape}", file=image)
+    return data
+
+
+def _parse_leds(leds: str | None) -> list[float] | None:
+    """LED azimuths from '0,90,180,270' (degrees, finite); None when not given."""
+    import math
+
+    if leds is None:
+        return None
+    try:
+        az = [float(v) for v in leds.split(",") if v.strip()]
+    except ValueError:
+        az = []
+    if not az or not all(math.isfinite(v) for v in az):
+        raise OptionError(
+            f"--leds {leds!r}: expected comma-separated finite degrees, e.g. 0,90,180,270"
+        )
+    return az
+
+
+@app.command()
+def track(
+    image: Annotated[
+        Path, typer.Argument(help="A grey eye picture: 8/16-bit .png, .tif, .jpg or .npy.")
+    ],
+    leds: Annotated[
+        str | None,
+        typer.Option(help="LED azimuths in degrees (0 = picture +x, 90 = up), e.g. 0,90,180,270."),
+    ] = None,
+    valid: Annotated[
+        Path | None,
+        typer.Option(help="Optional mask picture: non-zero where the picture shows the eye."),
+    ] = None,
+) -> None:
+    """The detection pipeline on any grey eye picture: pupil ellipse and centre, glints with
+    sub-pixel centroids matched to LEDs; prints JSON, and one line per failure. Non-finite
+    pixels of a float .npy are missing pixels; a colour picture is read as its luminance."""
+    from eyelume.analysis.tracking.detect import detect, detection_to_dict
+    from eyelume.errors import InputFileError
+
+    azimuths = _parse_leds(leds)
+    data = _read_picture(image)
+    mask = None
+    if valid is not None:
+        mask = _read_picture(valid) != 0
+        if mask.shape != data.shape:
+            raise InputFileError(
+                f"mask shape {mask.shape} differs from the picture's {data.shape}", file=valid
+            )
+    try:
+        result = detect(data, led_azimuths_deg=azimuths, valid=mask)
+    except ValueError as exc:
+        raise InputFileError(str(exc), file=image) from None
     sys.stdout.write(json.dumps(detection_to_dict(result), indent=2) + "\n")
     for reason in result.failures:
-        err.print(f"[yellow]{reason}[/]", highlight=False)
+        err.print(f"[yellow]{escape(reason)}[/]", highlight=False)
 
 
 @app.command("evaluate-tracking")

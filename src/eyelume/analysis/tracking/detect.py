@@ -71,7 +71,7 @@ import cv2
 import numpy as np
 
 from eyelume.analysis.tracking.glints import default_max_angle, find_glints, match_leds
-from eyelume.analysis.tracking.pupil import find_pupil, sampson_distance
+from eyelume.analysis.tracking.pupil import find_pupil, noise_sigma, sampson_distance
 
 __all__ = ["DetectParams", "Detection", "Glint", "Pupil", "detect", "detection_to_dict"]
 
@@ -91,8 +91,8 @@ class DetectParams:
         percentile (99): glints and stuck pixels, ≪ 1 % of an eye picture, are clipped.
     ladder_rows, ladder_levels, ladder_top_percentile : the ladder runs on the picture reduced
         by round(min(rows, cols) / 80) (a pupil of ≥ 16 px stays ≥ 3 px across; the cost is
-        one labelling per level), at up to 32 levels from its 0.5th to its 60th percentile (the
-        pupil is ≪ 40 % of an eye picture).
+        one labelling per level), at levels spaced (P60 − P0.5) / 32 from its darkest pixel
+        to its 60th percentile (the pupil is ≪ 40 % of an eye picture).
     ladder_max_growth : largest MSER stability q = (A₊ − A₋) / A of the pupil's blob over the
         neighbouring levels (1: at 32 levels the pupil's blurred edge band is crossed in one or
         two steps; a merge with the iris multiplies the area).
@@ -279,6 +279,31 @@ def _missing(img: np.ndarray, valid: np.ndarray | None) -> np.ndarray | None:
     return invalid
 
 
+def _mend_hot_pixels(img: np.ndarray, noise: float) -> int:
+    """Isolated hot pixels (stuck or defective: above the 99.9th percentile and 8 σ of the pixel
+    noise above all 8 neighbours, which are flat within 8 σ) take the median of those
+    neighbours, in place; returns how many. A glint, spread by the optics, lights some of its
+    neighbours more than others; a hot pixel alone would set the picture's range and hide the
+    glints."""
+    rows, cols = img.shape
+    if rows < 3 or cols < 3:
+        return 0
+    step = max(1, int(math.sqrt(img.size / 2e4)))
+    thr = np.percentile(img[::step, ::step], 99.9)
+    ys, xs = np.nonzero(img[1:-1, 1:-1] > thr)
+    if len(ys) == 0 or len(ys) > 0.01 * img.size:
+        return 0
+    ys, xs = ys + 1, xs + 1
+    nb = np.stack([img[ys + dy, xs + dx] for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx])
+    nb = nb.astype(np.float64)
+    k_sigma = 8.0 * noise
+    top, bottom = nb.max(axis=0), nb.min(axis=0)
+    alone = (img[ys, xs] - top > k_sigma) & (top - bottom <= k_sigma)
+    if alone.any():
+        img[ys[alone], xs[alone]] = np.median(nb[:, alone], axis=0).astype(img.dtype)
+    return int(alone.sum())
+
+
 def _prepare(image: np.ndarray, valid: np.ndarray | None):
     """Step 1: the picture as a contiguous array (uint8/uint16/int16/float32 kept, other reals
     converted), its invalid pixels (non-finite, or outside ``valid``; ``None`` when none) set to
@@ -292,16 +317,18 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None):
     if img.dtype == bool or img.dtype not in (np.uint8, np.uint16, np.int16, np.float32):
         img = img.astype(np.float64 if img.dtype.kind == "f" else np.float32)
     invalid = _missing(img, valid)
-    img = np.array(img, order="C", copy=invalid is not None)
+    img = np.array(img, order="C", copy=True)
     if invalid is not None:
         if invalid.all():
             raise ValueError("the picture has no valid pixel (all NaN/inf or masked out)")
         img[invalid] = img[~invalid].min()
+    noise = max(noise_sigma(img), 0.5 if img.dtype.kind in "iu" else 0.0)
+    n_hot = _mend_hot_pixels(img, noise)
     lo, hi, _, _ = cv2.minMaxLoc(img)
     if hi <= lo:
-        return img, invalid, np.zeros(img.shape, np.uint8), float(lo), float(hi)
+        return img, invalid, np.zeros(img.shape, np.uint8), float(lo), float(hi), (n_hot, noise)
     u8 = cv2.normalize(img, None, 0, 255, cv2.NORM_MINMAX, dtype=cv2.CV_8U)
-    return img, invalid, u8, float(lo), float(hi)
+    return img, invalid, u8, float(lo), float(hi), (n_hot, noise)
 
 
 def _pupil_result(fit, params) -> tuple[Pupil | None, list[str]]:
@@ -443,7 +470,7 @@ def detect(
         raise ValueError(f"LED azimuths must be finite degrees, got {list(led_azimuths_deg)}")
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    img, invalid, u8, lo, hi = _prepare(image, valid)
+    img, invalid, u8, lo, hi, (n_hot, noise) = _prepare(image, valid)
     if hi <= lo:
         timings["total"] = 1e3 * (time.perf_counter() - t_start)
         return Detection(
@@ -451,7 +478,7 @@ def detect(
         )
     t1 = time.perf_counter()
     timings["normalise"] = 1e3 * (t1 - t_start)
-    blobs, bright, tg_value = find_glints(u8, img, invalid, (lo, hi), params)
+    blobs, bright, tg_value = find_glints(u8, img, (lo, hi), noise, params)
     t2 = time.perf_counter()
     timings["glints"] = 1e3 * (t2 - t1)
     fit = find_pupil(img, invalid, bright, params)
@@ -470,6 +497,8 @@ def detect(
     glints.sort(key=lambda g: (g.led is None, g.led if g.led is not None else 0, -g.peak))
     errors += _broken_glints(glints, specks, params)
     warnings = _glint_warnings(glints, fit, led_azimuths_deg, params)
+    if n_hot:
+        warnings.append(f"warning: {n_hot} isolated hot pixel(s) replaced by their neighbours")
     t4 = time.perf_counter()
     timings["match"] = 1e3 * (t4 - t3)
     timings["total"] = 1e3 * (t4 - t_start)

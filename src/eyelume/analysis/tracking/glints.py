@@ -38,28 +38,29 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from eyelume.analysis.tracking.pupil import noise_sigma
-
 __all__ = ["find_glints", "glint_blobs", "glint_threshold", "match_leds", "default_max_angle"]
 
 
 def glint_threshold(hist: np.ndarray, percentile: float, min_contrast: float) -> int | None:
     """8-bit floor of glint pixels (they are brighter than it): the ``percentile`` of the
-    picture, or ``None`` when the maximum is not ``min_contrast`` × 255 above it."""
-    cum = np.cumsum(hist)
-    if cum[-1] == 0:
+    picture's unsaturated pixels (those below its top level: big saturated glints in a
+    close-up can be over 1 % of it), or ``None`` when the maximum is not ``min_contrast`` × 255
+    above it."""
+    top = int(np.nonzero(hist)[0][-1]) if hist.any() else 0
+    cum = np.cumsum(hist[:top])
+    if top == 0 or cum[-1] == 0:
         return None
     base = int(np.searchsorted(cum, percentile / 100.0 * cum[-1]))
-    top = int(np.nonzero(hist)[0][-1])
     if top - base < min_contrast * 255.0:
         return None
     return base
 
 
-def find_glints(u8: np.ndarray, img: np.ndarray, invalid, value_range, params):
+def find_glints(u8: np.ndarray, img: np.ndarray, value_range, noise: float, params):
     """Step 2 of :func:`~eyelume.analysis.tracking.detect.detect`: the glint blobs (dicts), the
     bright mask (uint8 0/255) and the glint floor in the input's units (``None`` when nothing
-    stands out). ``u8`` is the picture scaled by its own range, ``img`` the input."""
+    stands out). ``u8`` is the picture scaled by its own range, ``img`` the input (missing
+    pixels filled), ``noise`` its pixel noise σ (input units)."""
     sig = params.glint_smooth_px
     if sig is None:
         sig = min(img.shape) / 480.0
@@ -74,8 +75,7 @@ def find_glints(u8: np.ndarray, img: np.ndarray, invalid, value_range, params):
     tg8 = glint_threshold(hist, params.glint_percentile, params.glint_min_contrast)
     if tg8 is None:
         return [], np.zeros_like(u8), None
-    noise = noise_sigma(img if invalid is None else np.where(invalid, value_range[0], img))
-    floor = 0.5 if img.dtype.kind in "iu" else 1e-6 * (value_range[1] - value_range[0])
+    floor = 1e-6 * (value_range[1] - value_range[0])
     blobs, bright = glint_blobs(u8, img, tg8, params, noise=max(noise, floor))
     return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
 

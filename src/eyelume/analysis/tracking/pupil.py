@@ -12,15 +12,15 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    (a glint inside the pupil would punch a hole in it); invalid pixels (NaN, outside the
    valid-area mask) are bright. The pixel noise σ (:func:`noise_sigma`, Immerkær 1996).
 2. **Threshold ladder** (:func:`ladder`): the picture reduced to ~80 rows and thresholded at
-   up to 32 levels from its darkest to its 60th percentile; at each level the compact dark
-   blobs off the picture's border and the invalid area are kept (box fill ≥ 0.5, aspect ≤ 3,
-   centroid inside), nested blobs of successive levels form a chain, and each blob's stability
-   is MSER's q = (A₊ − A₋) / A over the neighbouring levels (Matas et al. 2002). The ladder
-   stops once the darkest chain has settled.
+   levels (P60 − P0.5) / 32 apart from its darkest pixel to its 60th percentile; at each
+   level the compact dark blobs off the picture's border and the invalid area are kept (box
+   fill ≥ 0.5, aspect ≤ 3, centroid inside), nested blobs of successive levels form a chain,
+   and each blob's stability is MSER's q = (A₊ − A₋) / A over the neighbouring levels (Matas
+   et al. 2002). The ladder stops once the darkest chain has settled.
 3. **Choice** (:func:`choose`): chains darkest first; a chain's blob is its first level with
    q ≤ 1 walked on to the local minimum of q — the pupil's area holds while the threshold
-   crosses its edge band, then jumps when it merges with the iris. Refusals: "pupil merged with
-   iris" (compact dark blobs, none stable), "pupil too small: N px", "no dark pupil:
+   crosses its edge band, then jumps when it merges with the iris. Refusals: "no pupil (merged
+   with the iris?)" (compact dark blobs, none stable), "pupil too small: N px", "no dark pupil:
    bright-pupil image?" (no dark blob but a compact bright one of a pupil's size).
 4. **Full-resolution blob** (:func:`full_res_blob`): the picture (σ 1 px Gaussian) thresholded
    at the chosen level around the blob; glints touching it joined; a closing with an
@@ -334,10 +334,9 @@ def noise_sigma(u8: np.ndarray) -> float:
     if rows < 3 or cols < 3:
         return 0.0
     k = _stride((rows - 2) * (cols - 2))
-    u = u8.astype(np.float32)
 
     def at(dr: int, dc: int) -> np.ndarray:  # every k-th pixel's neighbour (dr, dc)
-        return u[1 + dr : rows - 1 + dr : k, 1 + dc : cols - 1 + dc : k]
+        return u8[1 + dr : rows - 1 + dr : k, 1 + dc : cols - 1 + dc : k].astype(np.float32)
 
     r = (
         4 * at(0, 0)
@@ -423,25 +422,25 @@ def _level_candidates(lab, stats, cent, min_area, max_area, touch):
     return out
 
 
-def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list[int]]:
+def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list]:
     """Step 2 (module doc): chains of nested compact dark blobs over a ladder of thresholds.
 
     The picture is reduced by f = max(1, round(min(rows, cols) / ``ladder_rows``)) (area
     average) and smoothed (Gaussian σ 1 px) — the ladder only needs the blob, the edge comes
     later at full resolution — and thresholded at up to ``ladder_levels`` levels evenly spaced
-    from its 0.5th to its ``ladder_top_percentile``. At each level the compact inner blobs
+    from its darkest pixel to its ``ladder_top_percentile``. At each level the compact inner blobs
     (:func:`_level_candidates`) are kept; a blob holding an earlier chain's seed continues that
     chain (blobs only grow up the ladder). Returns the chains (darkest level first), f and the
-    areas (full-resolution px) of blobs too small to be a pupil, for the refusal message."""
+    (level, area in full-resolution px) of blobs too small to be a pupil, for the refusal."""
     small, inv, f = _reduced(wp, params)
-    lo = float(np.percentile(small, 0.5))
-    top = float(np.percentile(small, params.ladder_top_percentile))
-    step = max(1.0, (top - lo) / params.ladder_levels)
+    p_lo, top = (float(v) for v in np.percentile(small, [0.5, params.ladder_top_percentile]))
+    step = max(1.0, (top - p_lo) / params.ladder_levels)
+    lo = p_lo - step * math.ceil((p_lo - float(small.min())) / step)  # down to the darkest
     min_area = max(2, int(params.pupil_min_area_px / f**2))
     tiny_area = max(2, int(params.pupil_tiny_area_px / f**2))
     max_area = params.pupil_max_area_frac * small.size
     chains: list[list[Candidate]] = []
-    tiny: list[int] = []
+    tiny: list[tuple[float, int]] = []
     areas: list[tuple[np.ndarray, np.ndarray]] = []
     n_levels = int((top - lo) / step + 1e-9)
     for li in range(n_levels + 1):
@@ -453,7 +452,7 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list[in
         for c in _level_candidates(lab, stats, cent, tiny_area, max_area, touch):
             c.level, c.index = t, li
             if c.area < min_area:
-                tiny.append(c.area * f * f)
+                tiny.append((c.level, c.area * f * f))
             else:
                 _extend_chains(chains, c, lab)
         for ch in chains:  # the previous level's blobs now have both neighbours
@@ -540,7 +539,7 @@ def _area_at(areas, i: int, seed: tuple[int, int]) -> int:
 # --- Step 3: choosing the pupil ----------------------------------------------------------------
 
 
-def choose(chains: list[list[Candidate]], f: int, tiny: list[int], wp: WorkPicture, params):
+def choose(chains: list[list[Candidate]], f: int, tiny: list, wp: WorkPicture, params):
     """Step 3 (module doc): the darkest chain's first stable blob, or a refusal naming why none.
 
     A chain's blob is stable at the first level where q ≤ ``ladder_max_growth`` and q is a local
@@ -548,27 +547,35 @@ def choose(chains: list[list[Candidate]], f: int, tiny: list[int], wp: WorkPictu
     tried darkest first (the level at which they first appear); returns the candidates in that
     order (the caller fits them in turn) or a :class:`Refusal`."""
     picks = []
-    unstable = 0
+    unstable = []
+    # A chain that never settles counts as a pupil merged with the iris only when it starts
+    # well below the picture's typical level (5 σ of the noise under the median); dark noise
+    # blobs of a featureless picture do not.
+    deep = float(np.median(wp.u8[:: _stride(wp.u8.size), :: _stride(wp.u8.size)]))
+    deep -= params.pupil_min_contrast_sigma * wp.noise
     for ch in sorted(chains, key=lambda ch: ch[0].level):
         i = _pick(ch, params)
-        if i is None:
-            unstable += 1
-        else:
+        if i is not None:
             picks.append(ch[i])
+        elif ch[0].level <= deep:
+            unstable.append(ch[0].level)
     if picks:
         return picks
-    if unstable:
+    if tiny and (not unstable or min(tiny)[0] < min(unstable)):
+        area = min(tiny)[1]
         return Refusal(
-            f"pupil merged with iris: {unstable} compact dark blob(s) but none keeps its size "
-            "over neighbouring threshold levels (no pupil–iris step in the grey levels)"
-        )
-    if tiny:
-        return Refusal(
-            f"pupil too small: {max(tiny)} px (a pupil needs ≥ {params.pupil_min_area_px} px)"
+            f"pupil too small: {area} px, the darkest compact blob (a pupil needs ≥ "
+            f"{params.pupil_min_area_px} px)"
         )
     hint = _bright_pupil_hint(wp, f, params)
     if hint:
         return Refusal(f"no dark pupil: bright-pupil image? ({hint})")
+    if unstable:
+        return Refusal(
+            f"no pupil (merged with the iris?): {len(unstable)} compact dark blob(s) but none "
+            "keeps its size over neighbouring threshold levels (no pupil–iris step in the grey "
+            "levels)"
+        )
     return Refusal("no pupil: no compact dark blob off the picture's border stands out")
 
 

@@ -1,0 +1,261 @@
+"""The kinds of eye picture issue 13 found the histogram front end failing on, made up here.
+
+:func:`closeup` draws a near-eye infrared close-up like the real ones (160 × 160, 8-bit): skin,
+an iris disc, an elliptical pupil, a Gaussian optical blur and Gaussian pixel noise, drawn at
+4× and averaged down so edges are anti-aliased and the truth is the drawn geometry. Each test
+changes one thing and asserts the right answer (the pupil within a tolerance derived from the
+picture's noise) or the refusal that names the cause.
+
+Tolerance: an edge step ΔI blurred by σ_b has slope ≈ ΔI · 0.8 / (√(2π) σ_b) where the detector
+reads it (¼ of the way up); with pixel noise σ_n each edge point is off by σ_e ≈ σ_n / slope
+and the centre of N points by σ_e √(2/N). For the default picture (ΔI = 60, σ_b = 1.2, σ_n =
+2, N ≈ 120) that is σ_e ≈ 0.13 px and ≈ 0.02 px on the centre; the darkest case here (ΔI = 18)
+gives ≈ 0.06 px. The 0.25 px asserted is > 4 σ of the worst case, and far below the 5 px by
+which the iris or a border taken for the pupil would miss.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from eyelume.analysis.tracking import detect
+
+SIZE = 160
+CENTRE = (80.4, 78.7)
+
+
+DEFAULTS = {
+    "skin": 150.0,
+    "iris": 70.0,
+    "pupil": 10.0,
+    "pupil_axes": (36.0, 33.0),
+    "angle": 25.0,
+    "centre": CENTRE,
+    "iris_radius": 45.0,
+    "glints": (),
+    "glint_sigma": 2.0,
+    "glint_peak": 800.0,
+    "blur": 1.2,
+    "noise": 2.0,
+    "seed": 0,
+}
+
+
+def closeup(**kw) -> np.ndarray:
+    """A float close-up (grey levels of an 8-bit camera before clipping and rounding); keyword
+    arguments change :data:`DEFAULTS` (levels, pupil full axes px and angle °, glints (x, y)
+    with σ and peak, blur σ px, noise σ, seed)."""
+    unknown = set(kw) - set(DEFAULTS)
+    assert not unknown, unknown
+    p = {**DEFAULTS, **kw}
+    skin, iris, pupil, centre = p["skin"], p["iris"], p["pupil"], p["centre"]
+    pupil_axes, angle, blur, noise = p["pupil_axes"], p["angle"], p["blur"], p["noise"]
+    glint_sigma, glint_peak = p["glint_sigma"], p["glint_peak"]
+    s, shift = 4, 8
+    canvas = np.full((SIZE * s, SIZE * s), skin, np.float32)
+
+    def fine(v):
+        return int(round((s * v + (s - 1) / 2) * 2**shift))
+
+    def size(v):
+        return int(round(s * v * 2**shift))
+
+    c = (fine(centre[0]), fine(centre[1]))
+    cv2.circle(canvas, c, size(p["iris_radius"]), iris, -1, cv2.LINE_8, shift)
+    axes = (size(pupil_axes[0] / 2), size(pupil_axes[1] / 2))
+    cv2.ellipse(canvas, c, axes, angle, 0, 360, pupil, -1, cv2.LINE_8, shift)
+    img = cv2.resize(canvas, (SIZE, SIZE), interpolation=cv2.INTER_AREA).astype(np.float64)
+    img = cv2.GaussianBlur(img, (0, 0), blur) if blur else img
+    yy, xx = np.mgrid[:SIZE, :SIZE]
+    for gx, gy in p["glints"]:
+        img += glint_peak * np.exp(-((xx - gx) ** 2 + (yy - gy) ** 2) / (2 * glint_sigma**2))
+    if noise:
+        img += np.random.default_rng(p["seed"]).normal(0.0, noise, img.shape)
+    return img
+
+
+def u8(img: np.ndarray) -> np.ndarray:
+    return np.clip(np.rint(img), 0, 255).astype(np.uint8)
+
+
+def err(d, centre=CENTRE) -> float:
+    return math.hypot(d.pupil.centre_px[0] - centre[0], d.pupil.centre_px[1] - centre[1])
+
+
+def assert_pupil(d, tol=0.25, centre=CENTRE):
+    assert d.ok, d.failures
+    assert err(d, centre) < tol, (d.pupil, centre)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_dark_iris_close_to_the_pupil(seed):
+    """Pupil 12, iris 30 (18 levels apart), skin 150: pupil and iris make one histogram mode;
+    the old valley threshold landed between iris and skin and answered nothing or the iris."""
+    d = detect(u8(closeup(iris=30.0, pupil=12.0, seed=seed)))
+    assert_pupil(d)
+    assert d.pupil.axes_px[0] < 40  # the pupil, not the 90 px iris
+
+
+def test_saturated_glints_do_not_set_the_scale():
+    """Three glints far above full scale, one over the pupil's edge: clipped at 255 they make
+    the image's range; the pupil is judged against its own surround and still found."""
+    glints = [(76.0, 76.0), (104.0, 59.0), (80.4 + 17.0, 78.7)]  # in the pupil, iris, on its edge
+    img = u8(closeup(glints=glints, glint_peak=2000.0, glint_sigma=2.5))
+    d = detect(img)
+    assert_pupil(d)
+    found = [g.centre_px for g in d.glints]
+    # The glint on the edge has its skirt half over the pupil, half over the iris: its
+    # background-subtracted centroid leans to the brighter side (and is flagged).
+    for (gx, gy), tol in zip(glints, (0.5, 0.5, 1.0), strict=True):
+        assert min(math.hypot(gx - x, gy - y) for x, y in found) < tol
+    assert any("on the pupil edge" in f for f in d.failures)
+
+
+def test_black_border_is_not_the_pupil():
+    """A crop that runs off the sensor (black rows below) and black corners (outside a
+    headset's lens): darker than the pupil and far larger; never taken for it."""
+    img = u8(closeup(pupil=25.0))
+    img[135:, :] = 0
+    yy, xx = np.mgrid[:SIZE, :SIZE]
+    img[np.hypot(xx - 80, yy - 80) > 105] = 0
+    d = detect(img)
+    assert_pupil(d)
+
+
+def test_small_pupil_is_measured_not_the_iris():
+    """A 2 mm pupil (12 px across at this framing, ~110 px of area) in a 90 px iris."""
+    d = detect(u8(closeup(pupil_axes=(12.5, 11.5), iris=60.0)))
+    assert_pupil(d, tol=0.3)
+    assert d.pupil.axes_px[0] < 15
+
+
+def test_pupil_too_small_is_refused_by_name():
+    """A 2.5 px pupil (a 3 px one is still measured, within 0.1 px)."""
+    d = detect(u8(closeup(pupil_axes=(2.5, 2.5), blur=0.8)))
+    assert not d.ok and d.pupil is None
+    assert d.failures[0].startswith("pupil too small: "), d.failures
+
+
+def test_bright_pupil_is_refused_by_name():
+    """On-axis illumination: the retina lights the pupil, brighter than the iris and skin."""
+    d = detect(u8(closeup(pupil=230.0, iris=60.0, skin=120.0)))
+    assert not d.ok and d.pupil is None
+    assert d.failures[0].startswith("no dark pupil: bright-pupil image?"), d.failures
+
+
+def test_stuck_pixels_do_not_set_the_scale():
+    """A hot pixel 64 × full scale (a 16-bit stuck pixel in a 10-bit picture) and a dead one:
+    the pupil and the glints are still found; a single hot pixel is not a glint."""
+    glints = [(72.0, 74.0), (90.0, 84.0)]
+    img = closeup(glints=glints, glint_peak=400.0) * 4.0  # 10-bit levels
+    img = np.clip(img, 0, 1023)
+    img[20, 140] = 65535.0
+    img[30, 25] = 0.0
+    d = detect(np.rint(img).astype(np.uint16))
+    assert_pupil(d)
+    assert len(d.glints) == 2
+    for g in d.glints:
+        assert min(math.hypot(g.centre_px[0] - x, g.centre_px[1] - y) for x, y in glints) < 0.5
+
+
+def test_lashes_are_neither_pupil_nor_glints():
+    """Dark lashes over a bright sclera above the iris: thin and dark (not a compact blob), and
+    the bright gaps between them stand out of their neighbourhood but are no glints."""
+    img = closeup(skin=200.0, glints=[(86.0, 84.0)], glint_peak=600.0)
+    for k in range(14):
+        x0 = 35 + 7 * k
+        cv2.line(img, (x0, 8), (x0 + 6, 34), 5.0, 2)
+    d = detect(u8(img))
+    assert_pupil(d)
+    assert len(d.glints) == 1
+    assert math.hypot(d.glints[0].centre_px[0] - 86.0, d.glints[0].centre_px[1] - 84.0) < 0.5
+
+
+def test_nan_pixels_through_the_pupil():
+    """A float picture with a NaN column through the pupil and a NaN patch: missing pixels;
+    the outline next to them is left out and the rest gives the centre."""
+    img = closeup(seed=3)
+    img[:, 60] = np.nan
+    img[70:74, 90:94] = np.nan
+    d = detect(img)
+    assert_pupil(d)
+
+
+def test_a_noise_speck_is_never_a_glint():
+    """Specks of 2–4 px a few σ of the noise above their background (Gaussian noise σ 2 and a
+    few 3 σ clusters): no glint is reported; a real glint beside them is."""
+    img = closeup(glints=[(88.0, 70.0)], glint_peak=300.0)
+    for x, y in [(40, 40), (120, 130), (100, 30), (30, 120)]:
+        img[y : y + 2, x : x + 2] += 6.0  # 3 σ of the noise
+    d = detect(u8(img), led_azimuths_deg=[0.0])
+    assert d.ok, d.failures
+    assert [g.led for g in d.glints] == [0]
+    assert math.hypot(d.glints[0].centre_px[0] - 88.0, d.glints[0].centre_px[1] - 70.0) < 0.5
+
+
+# --- eyelume track: any grey picture a camera writes; bad input is one line and exit 2 -------
+
+
+def _track(*args):
+    from typer.testing import CliRunner
+
+    from eyelume.cli import app
+
+    return CliRunner().invoke(app, ["track", *map(str, args)])
+
+
+def _ok_centre(res):
+    import json
+
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    assert data["ok"], data["failures"]
+    return data["pupil"]["centre_px"]
+
+
+def test_track_reads_8_and_16_bit_png_tiff_float_npy_and_colour(tmp_path):
+    img = closeup(seed=4)
+    files = {
+        "a.png": u8(img),
+        "b.png": np.clip(np.rint(img * 256), 0, 65535).astype(np.uint16),
+        "c.tif": np.clip(np.rint(img * 16), 0, 65535).astype(np.uint16),
+        "e.png": np.dstack([u8(img)] * 3),  # colour: B = G = R
+    }
+    for name, arr in files.items():
+        assert cv2.imwrite(str(tmp_path / name), arr)
+    np.save(tmp_path / "d.npy", img.astype(np.float32))
+    for name in [*files, "d.npy"]:
+        res = _track(tmp_path / name)
+        x, y = _ok_centre(res)
+        assert math.hypot(x - CENTRE[0], y - CENTRE[1]) < 0.25, name
+    assert "luminance" in _track(tmp_path / "e.png").stderr
+
+
+def test_track_nan_pixels_are_missing_and_bad_inputs_are_one_line(tmp_path):
+    img = closeup(seed=5)
+    img[10:20, :] = np.nan
+    np.save(tmp_path / "nan.npy", img)
+    x, y = _ok_centre(_track(tmp_path / "nan.npy"))
+    assert math.hypot(x - CENTRE[0], y - CENTRE[1]) < 0.25
+    np.save(tmp_path / "allnan.npy", np.full((20, 20), np.nan))
+    np.save(tmp_path / "empty.npy", np.zeros((0,)))
+    np.save(tmp_path / "text.npy", np.array(["a", "b"]))
+    (tmp_path / "junk.png").write_bytes(b"not a picture")
+    cases = [
+        (["allnan.npy"], "no valid pixel"),
+        (["empty.npy"], "empty"),
+        (["text.npy"], "numeric"),
+        (["junk.png"], "junk.png"),
+        (["nan.npy", "--leds", "nan,90"], "--leds"),
+        (["nan.npy", "--leds", ","], "--leds"),
+    ]
+    for args, word in cases:
+        res = _track(*(tmp_path / args[0], *args[1:]))
+        assert res.exit_code == 2, (args, res.output)
+        lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+        assert len(lines) == 1 and word in lines[0], (args, res.stderr)
+        assert "Traceback" not in res.output
