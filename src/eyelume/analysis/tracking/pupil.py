@@ -39,6 +39,7 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    a low fraction reads the edge on the quiet dark side, where the iris's shading and texture
    and the glints' skirts weigh least. The axes are those of that iso-line: narrower than the
    sharp pupil's by 2 × 0.674 σ for a Gaussian blur of σ (Φ⁻¹(¾) = 0.674).
+   A pupil under 30 px across is refined a second time from the first fit.
 6. **Robust fit** (:func:`_robust_fit`): ``cv2.fitEllipse`` on the edge points; when more than
    5 % lie off it, the best of fits to contiguous runs of the outline, so an eyelid's edge or a
    lash drops out. The inlier tolerance scales with the pupil: max(1 px, 3σ_edge, 0.03 ×
@@ -784,6 +785,18 @@ def _refine_smoothed(img, bright, e: Ellipse, x, y, pupil_level: float, reach: f
     return xr + x0, yr + y0, ok
 
 
+def _on_mask(mask: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Whether points (x, y) fall on a non-zero pixel of ``mask`` (False outside it or not
+    finite): a refined edge point that moved onto a glint's skirt is no pupil edge."""
+    ok = np.isfinite(x) & np.isfinite(y)
+    c = np.rint(np.where(ok, x, -1)).astype(np.intp)
+    r = np.rint(np.where(ok, y, -1)).astype(np.intp)
+    inside = (c >= 0) & (r >= 0) & (c < mask.shape[1]) & (r < mask.shape[0])
+    out = np.zeros(len(x), bool)
+    out[inside] = mask[r[inside], c[inside]] > 0
+    return out
+
+
 def support_of(e: Ellipse, x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     """Step 7 (module doc): over equal eccentric-anomaly bins (≈ 2 px of arc, 12–180) of the
     ellipse, the fraction holding at least one of the points and the longest run of empty bins
@@ -819,12 +832,28 @@ def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, p
     reach = max(params.refine_reach_px, params.refine_reach_frac * blob.diam)
     xr, yr, ok = _refine_smoothed(img, bright, e, x, y, pupil_level, reach, params)
     dropped["no_edge"] = int((~ok).sum())
+    on_glint = _on_mask(blob.near_glint, xr - blob.x0, yr - blob.y0) & ok
+    dropped["glint"] += int(on_glint.sum())
+    ok &= ~on_glint
     xr, yr = xr[ok], yr[ok]
     if len(xr) < params.min_edge_points:
         return PupilFit(None, reason="no pupil: the dark blob has no sharp edge", dropped=dropped)
     e, inl, sigma = _robust_fit(xr, yr, blob.diam, params)
     if e is None:
         return PupilFit(None, reason="no pupil: the dark blob's outline fits no ellipse")
+    passes = params.refine_passes if blob.diam < params.refine_again_below_px else 1
+    for _ in range(passes - 1):
+        # Again from the fitted ellipse (its normals, the inliers as starts): each point now
+        # starts at the edge, so the nearest crossing is the pupil's, not a skirt's or the
+        # iris's texture next to where the blob's outline happened to be.
+        x2, y2, ok2 = _refine_smoothed(img, bright, e, xr[inl], yr[inl], pupil_level, reach, params)
+        ok2 &= ~_on_mask(blob.near_glint, x2 - blob.x0, y2 - blob.y0)
+        if ok2.sum() < params.min_edge_points:
+            break
+        e2, inl2, sigma2 = _robust_fit(x2[ok2], y2[ok2], blob.diam, params)
+        if e2 is None:
+            break
+        e, inl, sigma, xr, yr = e2, inl2, sigma2, x2[ok2], y2[ok2]
     d = sampson_distance(e, xr[inl], yr[inl])
     dropped["outlier"] = int((~inl).sum())
     span = wp.hi - wp.lo
