@@ -43,11 +43,14 @@ __all__ = ["find_glints", "glint_blobs", "glint_threshold", "match_leds", "defau
 
 def glint_threshold(hist: np.ndarray, percentile: float, min_contrast: float) -> int | None:
     """8-bit floor of glint pixels (they are brighter than it): the ``percentile`` of the
-    picture's unsaturated pixels (those below its top level: big saturated glints in a
-    close-up can be over 1 % of it), or ``None`` when the maximum is not ``min_contrast`` × 255
-    above it."""
+    picture's unsaturated pixels (those below its top level, when that level holds ≤ 5 % of
+    them: big saturated glints in a close-up can be over 1 % of it), or ``None`` when the
+    maximum is not ``min_contrast`` × 255 above it."""
     top = int(np.nonzero(hist)[0][-1]) if hist.any() else 0
-    cum = np.cumsum(hist[:top])
+    # Leave the top level out when it is a few pixels (saturated glints), not when it is a
+    # large part of the picture (an over-exposed face, a flat bright background).
+    few = hist[top] <= 0.05 * hist.sum()
+    cum = np.cumsum(hist[:top] if few else hist)
     if top == 0 or cum[-1] == 0:
         return None
     base = int(np.searchsorted(cum, percentile / 100.0 * cum[-1]))
