@@ -81,6 +81,7 @@ def _check(d, frame, k=1) -> bool:
     return True
 
 
+@pytest.mark.slow
 def test_small_renders_ok_only_when_right(small_frames, tmp_path):
     oks = []
     for f in small_frames:
@@ -93,6 +94,7 @@ def test_small_renders_ok_only_when_right(small_frames, tmp_path):
     assert sum(oks) >= 2
 
 
+@pytest.mark.slow
 def test_big_render_ok_only_when_right(big_frame, tmp_path):
     f = big_frame
     assert _check(detect(f["counts"], led_azimuths_deg=f["leds"]), f)
