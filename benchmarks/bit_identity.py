@@ -4,7 +4,8 @@
 
 Renders ``eyelume.render(load_scene("paper2005"), seed=1)`` and compares the SHA-256 of its
 ``eye_image``, ``eye_image_variance`` and ``eye_plane`` (float64, C order) with
-``results/bit_identity.json``, recorded at commit 3b58b61 on this project's 2-vCPU machine.
+``results/bit_identity.json``, recorded on this project's 2-vCPU machine by the commit that added
+the iris root (issue 12; a deliberate change of the render), before it at commit 3b58b61.
 Prints MATCH or DIFFER per array and exits 1 on any difference. (The test suite's
 ``tests/test_bit_identity.py`` checks the same arrays to 1e-9 relative, portable across CPUs.)
 """

@@ -1,7 +1,9 @@
 """The default render is the same, sample for sample, across refactors (issue 10).
 
 ``tests/reference/default_render_seed1.npz`` holds ``eyelume.render(load_scene("paper2005"),
-seed=1)`` as rendered at commit 3b58b61, before the kernels took named tables. On that machine the
+seed=1)`` as rendered by the commit that closed the eye with the iris root (issue 12: a deliberate
+physics change, 357 of the 5655 eye-image pixels moved, the eye plane unchanged); the record
+before it was made at commit 3b58b61, before the kernels took named tables. On that machine the
 arrays are bit-identical (their SHA-256 are in ``benchmarks/results/bit_identity.json``, checked
 exactly by ``python benchmarks/bit_identity.py``); here the comparison allows 1e-9 relative so a
 CPU whose libm rounds a last bit differently still passes, while any change of a sample, a stream

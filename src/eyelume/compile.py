@@ -20,7 +20,7 @@ from eyelume.errors import GeometryError, GlassError, SceneError
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
 from eyelume.kernels.sampling import cos_power_tables, profile_tables
-from eyelume.scene.eye import eye_indices, limbus_geometry
+from eyelume.scene.eye import eye_indices, iris_root_radius, limbus_geometry
 from eyelume.scene.glass import Glass, load_catalog
 from eyelume.scene.model import Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
@@ -405,6 +405,22 @@ def compile_scene(scene: Scene) -> CompiledScene:
         clip_r=(eye.pupil_diameter_mm / 2, eye.iris_outer_diameter_mm / 2),
         rho_a=eye.iris_reflectance,
     )
+    # iris root: the iris's periphery, its outer edge to the eyeball wall in the same plane,
+    # with the iris's reflectance; it closes the eye, so light enters only through the pupil
+    try:
+        r_root = iris_root_radius(eye)
+    except ValueError as exc:
+        raise GeometryError(str(exc)) from None
+    if r_root > eye.iris_outer_diameter_mm / 2:
+        t.add(
+            "iris root",
+            G.SHAPE_CONIC,
+            iris_o,
+            eye_rot,
+            (iris_o, r_root * 1.000001),
+            clip_r=(eye.iris_outer_diameter_mm / 2, r_root),
+            rho_a=eye.iris_reflectance,
+        )
     # retina: the prescription's last surface (a cap), seen from the vitreous (side A)
     ret = eye.surfaces[-1]
     c_r = curvature(ret.radius_mm)

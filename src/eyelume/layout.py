@@ -34,7 +34,7 @@ def _category(name: str, action: int) -> str:
         return "led"
     if action == G.ACT_LENS:
         return "lens"
-    if action == G.ACT_REFRACT or name in ("iris", "retina", "sclera"):
+    if action == G.ACT_REFRACT or name in ("iris", "iris root", "retina", "sclera"):
         return "eye"
     return "tissue"
 

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy import ndimage
 from scipy.optimize import brentq
 
 import eyelume
@@ -17,10 +18,10 @@ from eyelume.analysis.masks import (
     glints_off,
     ideal_mask,
     mask_from_regions,
-    pupil_region,
 )
 from eyelume.analysis.regions import region_masks
 from eyelume.compile import compile_scene, eye_paraxial, lens_paraxial
+from eyelume.estimators.fast_run import primary_surface_map
 from eyelume.scene.eye import eye_indices
 from eyelume.scene.optics import ParaxialSystem
 
@@ -118,7 +119,7 @@ def test_pupil_area_matches_projection(fine):
     px = (sn.width_mm / sn.cols) * (sn.height_mm / sn.rows)
     image, weights = ideal_mask(cs)
     n_mask = int(((image == 0) & (weights > 0)).sum())
-    assert n_mask == int(pupil_region(regions).sum())
+    assert n_mask == int(regions["pupil"].sum())
     expected = math.pi * proj["real_cornea"] ** 2 / px
     # mask 3392 px against 3393 (real refraction at the cornea, paraxial camera)
     assert n_mask == pytest.approx(expected, rel=0.02)
@@ -132,17 +133,23 @@ def test_pupil_area_matches_projection(fine):
     assert (proj["d_cam"] / (proj["d_cam"] + proj["z_ep"])) ** 2 < 0.97
 
 
-def test_pupil_region_drops_the_gap_outside_the_iris(paper_compiled):
+def test_pupil_is_one_disc_and_the_limbus_ring_is_iris(paper_compiled):
+    """The iris root closes the ring between the iris (r 5.5 mm) and the sclera (r 7.4 mm in
+    the iris plane): chief rays through the corneal edge meet it, so the pupil region is the
+    iris's opening alone (one disc about the image centre) and the ring is iris (issue 12)."""
     regions = region_masks(paper_compiled)
-    proper = pupil_region(regions)
-    gap = regions["pupil"] & ~proper
-    assert proper.sum() > 150 and gap.sum() > 0
-    rows, cols = np.nonzero(proper)
-    centre = np.array(proper.shape) / 2
-    # the proper pupil is one disc about the image centre; the gap pixels lie outside the iris
+    pupil = regions["pupil"]
+    labels, n = ndimage.label(pupil)
+    assert n == 1 and pupil.sum() > 150
+    rows, cols = np.nonzero(pupil)
+    centre = np.array(pupil.shape) / 2
+    # apparent pupil radius: 3.5 mm × ~1.13 (cornea) × 1.144 (lens) / 0.529 mm per pixel ≈ 8.6
     assert np.hypot(rows - centre[0] + 0.5, cols - centre[1] + 0.5).max() < 10
-    gr, gc = np.nonzero(gap)
-    assert np.hypot(gr - centre[0] + 0.5, gc - centre[1] + 0.5).min() > 9
+    # the ring: the iris root's surface is what the chief rays beyond the iris edge meet
+    names = paper_compiled.surface_names
+    labels_map, _ = primary_surface_map(paper_compiled)
+    root = labels_map == names.index("iris root")
+    assert root.sum() > 0 and not (root & ~regions["iris"]).any()
 
 
 def test_mask_levels_and_weights(paper_compiled, paper_scene):

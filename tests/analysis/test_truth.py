@@ -10,7 +10,6 @@ import pytest
 from scipy import ndimage
 
 import eyelume
-from eyelume.analysis.masks import pupil_region
 from eyelume.analysis.regions import region_masks
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import compile_scene
@@ -35,7 +34,7 @@ def test_pupil_truth_matches_the_labelled_pupil(gaze):
     )
     cs = compile_scene(scene)
     truth = eye_truth(cs)
-    pupil = pupil_region(region_masks(cs))
+    pupil = region_masks(cs)["pupil"]
     cy, cx = ndimage.center_of_mass(pupil)
     px, py = polygon_centroid(np.array(truth["pupil"]["edge_px"]))
     # the area centroid of the projected edge polygon vs the labelled pixels' centroid;

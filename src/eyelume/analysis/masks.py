@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from scipy import ndimage
 
 from eyelume.analysis.regions import region_masks
 from eyelume.compile import CompiledScene, compile_scene
@@ -33,7 +32,6 @@ __all__ = [
     "glints_off",
     "ideal_mask",
     "mask_from_regions",
-    "pupil_region",
 ]
 
 _REGIONS = ("pupil", "iris", "sclera", "skin")
@@ -70,8 +68,7 @@ class MaskWeights:
 
     The paper's mask "considered only the pupil boundary and the skin area uniformity"
     (Section 4.2.2): the pupil and iris (the boundary's two sides) and the skin count, the sclera
-    does not unless asked. Pixels of no region (the LED bodies, the gap between the iris and the
-    sclera, glints, nothing) always weigh 0.
+    does not unless asked. Pixels of no region (the LED bodies, glints, nothing) always weigh 0.
     """
 
     pupil: float = 1.0
@@ -89,23 +86,6 @@ class IdealMask(NamedTuple):
     weights: np.ndarray
 
 
-def pupil_region(regions: dict[str, np.ndarray]) -> np.ndarray:
-    """The pupil proper: the pixels of ``regions["pupil"]`` that are the iris's opening.
-
-    ``region_masks`` labels as pupil every chief ray that reaches the crystalline lens or the
-    retina, which includes the ring between the iris's outer edge and the sclera, where one sees
-    past the iris into the eye. Those pixels form pupil components that touch the sclera (the
-    iris separates the true pupil from it); they are dropped here.
-    """
-    pupil = regions["pupil"]
-    labels, n = ndimage.label(pupil)
-    if n == 0:
-        return pupil.copy()
-    near_sclera = ndimage.binary_dilation(regions["sclera"], structure=np.ones((3, 3), bool))
-    touching = np.unique(labels[near_sclera & pupil])
-    return pupil & ~np.isin(labels, touching[touching > 0])
-
-
 def mask_from_regions(
     regions: dict[str, np.ndarray],
     levels: MaskLevels = MaskLevels(),  # noqa: B008 - frozen, immutable default
@@ -113,15 +93,15 @@ def mask_from_regions(
 ) -> IdealMask:
     """The ideal image and weights from region masks (e.g. ``RenderResult.regions``).
 
-    Only the regions ``pupil`` (its proper part, :func:`pupil_region`), ``iris``, ``sclera`` and
-    ``skin`` are used; glint regions, if present, were already removed from them and weigh 0.
+    Only the regions ``pupil`` (the iris's opening: the iris root closes the eye around the
+    iris, see compile.py), ``iris`` (its root included), ``sclera`` and ``skin`` are used; glint
+    regions, if present, were already removed from them and weigh 0.
     """
     shape = regions["skin"].shape
     image = np.zeros(shape)
     w = np.zeros(shape)
-    parts = dict(regions, pupil=pupil_region(regions))
     for name in _REGIONS:
-        m = parts[name]
+        m = regions[name]
         image[m] = getattr(levels, name)
         w[m] = getattr(weights, name)
     return IdealMask(image, w)

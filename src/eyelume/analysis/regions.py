@@ -2,9 +2,10 @@
 
 The regions come from the scene's own geometry seen through the camera: each pixel takes the
 surface its chief ray meets first after refraction (never reflection) — through the cornea, the
-iris or, through the pupil, the crystalline lens and fundus. A glint's region is the set of pixels
-where the light that met only the cornea (no Lambertian face) from that LED reaches at least 5 %
-of that glint's peak; glint pixels belong to no other region.
+iris (its root, out to the eyeball wall, included) or, through the pupil, the crystalline lens
+and fundus. A glint's region is the set of pixels where the light that met only the cornea (no
+Lambertian face) from that LED reaches at least 5 % of that glint's peak; glint pixels belong to
+no other region.
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ def region_masks(
 
     masks = {
         "pupil": of(lambda n, b: n in pupil_names or (n == "sclera" and not b)),
-        "iris": of(lambda n, b: n == "iris"),
+        "iris": of(lambda n, b: n in ("iris", "iris root")),
         "sclera": of(lambda n, b: n == "sclera" and b),
         "skin": of(lambda n, b: n in tissues),
     }

@@ -10,8 +10,8 @@ Three things, all in world millimetres, computed once per compiled scene:
   paraxial exit pupil), with the Jacobian |∂(stop point)/∂(crossing)| that turns a uniform
   density over the stop into a density over directions at the sensor. Camera paths sample the
   stop uniformly, so no sample is wasted on a ray the stop would block;
-* the surfaces (the iris) whose light from the LEDs comes through the cornea, reached from the
-  camera side by a specular connection (:mod:`.cornea_nee`);
+* the surfaces (the iris and its root) whose light from the LEDs comes through the cornea,
+  reached from the camera side by a specular connection (:mod:`.cornea_nee`);
 * the *aim table*: for each Lambertian face of the scene, a disk whose line through a scatter
   point leaves toward the camera — the entrance pupil for faces in air, its paraxial image
   through the cornea for the iris — and the probability of aiming at it (0: cosine sampling
@@ -45,6 +45,9 @@ __all__ = [
 #: estimator unbiased where refraction bends an aimed ray away from the lens).
 AIM_PROBABILITY = 0.8
 _PUPIL_MARGIN = 1.15  # real pupils of off-axis points are larger and shifted: aim a bit wider
+
+#: The surfaces lit and seen through the cornea: the iris and its root (compile.py).
+_IRIS = ("iris", "iris root")
 
 # aim table columns: disk centre xyz (its normal is world +z), radius, probability
 A_X, A_Y, A_Z, A_R, A_P = range(5)
@@ -205,14 +208,14 @@ def camera_tables(cs: CompiledScene) -> CameraTables:
     k_stop = cs.lf.shape[0] - 1 - cs.stop_index
     aim = np.zeros((cs.sf.shape[0], 2, N_AIM))
     iris_z, iris_r = _cornea_image(cs, ep_z, ep_r)
-    through = np.array([name == "iris" for name in cs.surface_names], dtype=np.int64)
+    through = np.array([name in _IRIS for name in cs.surface_names], dtype=np.int64)
     for s, name in enumerate(cs.surface_names):
         if cs.si[s, G.ACTION] != G.ACT_OPAQUE:
             continue
         for side, rho_col in ((0, G.RHO_A), (1, G.RHO_B)):
             if cs.sf[s, rho_col] <= 0.0:
                 continue
-            if name == "iris":
+            if name in _IRIS:
                 aim[s, side] = (0.0, 0.0, iris_z, iris_r, AIM_PROBABILITY)
             elif name == "retina" or (name == "sclera" and side == 0):
                 continue  # inside the eye behind the crystalline lens: cosine sampling

@@ -7,7 +7,15 @@ import math
 from eyelume.scene.model import Eye
 from eyelume.scene.optics import curvature, sag
 
-__all__ = ["LAMBDA_C", "LAMBDA_D", "LAMBDA_F", "eye_index", "eye_indices", "limbus_geometry"]
+__all__ = [
+    "LAMBDA_C",
+    "LAMBDA_D",
+    "LAMBDA_F",
+    "eye_index",
+    "eye_indices",
+    "iris_root_radius",
+    "limbus_geometry",
+]
 
 LAMBDA_D = 587.5618  # nm, helium d line
 LAMBDA_F = 486.1327  # nm, hydrogen F line
@@ -59,3 +67,46 @@ def limbus_geometry(eye: Eye) -> tuple[float, float, float]:
             f"eye.surfaces.0.semi_diameter_mm = {r_l} exceeds the extent of the corneal conicoid"
         )
     return r_l, z_l, z_l + math.sqrt(eye.sclera_radius_mm**2 - r_l**2)
+
+
+def iris_root_radius(eye: Eye) -> float:
+    """Outer radius (mm) of the iris root: where the iris's plane meets the eyeball wall.
+
+    The iris lies in the vertex plane of surface ``iris_surface`` at depth z_i behind the
+    corneal vertex (eye frame). Between its outer edge (``iris_outer_diameter_mm`` / 2) and the
+    sclera sphere (radius R about the eyeball centre at depth z_c, :func:`limbus_geometry`) a real
+    eye has the iris root, the iris's thin periphery inserting into the ciliary body; the scene
+    closes that ring with an opaque annulus out to
+
+        r_root = √(R² − (z_c − z_i)²),
+
+    so that light enters the eye only through the pupil. Paper eye: z_i = 3.6 mm, R = 12 mm,
+    z_c = 13.04 mm → r_root = 7.41 mm (the iris edge is at 5.5 mm).
+
+    Raises
+    ------
+    ValueError
+        One line naming the field, if the iris plane lies in front of the limbus (the root
+        would have to meet the cornea, which the model does not describe) or outside the
+        eyeball, or if the iris's outer edge reaches beyond the eyeball wall.
+    """
+    r_l, z_l, z_c = limbus_geometry(eye)
+    z_i = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
+    if z_i < z_l:
+        raise ValueError(
+            f"eye.iris_surface = {eye.iris_surface}: the iris plane (depth {z_i:.3f} mm) lies in "
+            f"front of the limbus (depth {z_l:.3f} mm), so the iris root cannot reach the sclera"
+        )
+    h2 = eye.sclera_radius_mm**2 - (z_c - z_i) ** 2
+    if h2 <= 0.0:
+        raise ValueError(
+            f"eye.iris_surface = {eye.iris_surface}: the iris plane (depth {z_i:.3f} mm) lies "
+            f"outside the eyeball (sclera_radius_mm = {eye.sclera_radius_mm})"
+        )
+    r_root = math.sqrt(h2)
+    if eye.iris_outer_diameter_mm / 2 > r_root:
+        raise ValueError(
+            f"eye.iris_outer_diameter_mm = {eye.iris_outer_diameter_mm}: the iris reaches beyond "
+            f"the eyeball wall, {2 * r_root:.3f} mm across in the iris plane"
+        )
+    return r_root

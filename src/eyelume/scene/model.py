@@ -135,7 +135,9 @@ class Eye(_Model):
     cornea. The iris is a Lambertian annulus in the vertex plane of surface ``iris_surface`` (the
     anterior lens, where the Arizona eye has its pupil); the sclera a
     Lambertian sphere of ``sclera_radius_mm`` through the corneal limbus (the edge of the anterior
-    cornea's clear aperture); its inner face and the retina reflect ``retina_reflectance``.
+    cornea's clear aperture); its inner face and the retina reflect ``retina_reflectance``. The
+    iris root, an annulus from the iris's outer edge to the sclera in the iris's plane with the
+    iris's reflectance, closes the eye: light enters it only through the pupil.
 
     Gaze: the eye turns about its centre of rotation, ``rotation_centre_mm`` behind the anterior
     corneal vertex of primary gaze, first by ``gaze_vertical_deg`` about the x axis (positive:
