@@ -7,7 +7,7 @@ import math
 import pytest
 
 import eyelume
-from eyelume.analysis.safety import eye_safety, retinal_thermal_limit
+from eyelume.analysis.safety import burn_hazard_weight, eye_safety, retinal_thermal_limit
 
 
 def one_led(**over):
@@ -25,11 +25,16 @@ def one_led(**over):
 
 def test_one_led_on_axis_at_50_mm():
     """E = I/d² = 0.02 W/sr / (0.05 m)² = 8 W/m²; L = I/(π r²) = 0.02 / (π · 0.0005²)
-    = 25 465 W/(m²·sr); α = 1 mm / 50 mm = 0.02 rad, limit 6000/0.02 = 300 000."""
+    = 25 464.79 W/(m²·sr), weighted by R(850 nm) = 10^(−150/500) = 0.501187 (IEC 62471 Table
+    4.2): L_IR = 12 762.6 W/(m²·sr); α = 1 mm / 50 mm = 0.02 rad, limit 6000/0.02 = 300 000,
+    margin 23.506 (11.78 without the weighting)."""
     s = eye_safety(one_led())
     assert s["corneal_irradiance_w_m2"] == pytest.approx(8.0, rel=1e-6)
     assert s["corneal_margin"] == pytest.approx(100.0 / 8.0, rel=1e-6)
-    assert s["retinal_radiance_w_m2_sr"] == pytest.approx(0.02 / (math.pi * 0.0005**2), rel=1e-9)
+    assert s["source_radiance_w_m2_sr"] == pytest.approx(25_464.79, rel=1e-6)
+    assert s["burn_hazard_weight"] == pytest.approx(0.501187, rel=1e-6)
+    assert s["retinal_radiance_w_m2_sr"] == pytest.approx(12_762.6, rel=1e-5)
+    assert s["retinal_margin"] == pytest.approx(23.506, rel=1e-4)
     assert s["angular_subtense_rad"] == pytest.approx(0.02, rel=1e-6)
     assert s["retinal_limit_w_m2_sr"] == pytest.approx(300_000.0, rel=1e-6)
     assert s["within_exempt_group"]
@@ -55,3 +60,26 @@ def test_default_scene_margin_and_summary():
     assert s["within_exempt_group"]
     summary = eyelume.render(scene, samples_per_pixel=8, seed=1).summary()
     assert summary["safety"]["corneal_margin"] == pytest.approx(s["corneal_margin"])
+
+
+def test_burn_hazard_weight_follows_iec_62471_table_4_2():
+    # 10^((700 − λ)/500) from 700 to 1050 nm, then 0.2, 0.2·10^(0.02(1150 − λ)), 0.02
+    assert burn_hazard_weight(700.0) == pytest.approx(1.0)
+    assert burn_hazard_weight(850.0) == pytest.approx(0.501187, rel=1e-6)
+    assert burn_hazard_weight(1000.0) == pytest.approx(10**-0.6, rel=1e-12)
+    assert burn_hazard_weight(1050.0) == pytest.approx(10**-0.7, rel=1e-12)  # 0.1995 ≈ 0.2
+    assert burn_hazard_weight(1100.0) == 0.2
+    assert burn_hazard_weight(1175.0) == pytest.approx(0.2 * 10**-0.5, rel=1e-12)
+    assert burn_hazard_weight(1200.0) == pytest.approx(0.02, rel=1e-12)
+    assert burn_hazard_weight(1300.0) == 0.02
+    assert burn_hazard_weight(1500.0) == 0.0  # no retinal hazard beyond 1400 nm
+    assert burn_hazard_weight(550.0) == 10.0  # the table's maximum: an upper bound
+
+
+def test_weighting_follows_the_scene_wavelength():
+    """At 940 nm R = 10^(−240/500) = 0.331131; beyond 1400 nm there is no retinal thermal
+    hazard: the margin is infinite (null in JSON) and the LED within the exempt group."""
+    s = eye_safety(one_led(wavelength_nm=940.0))
+    assert s["retinal_radiance_w_m2_sr"] == pytest.approx(25_464.79 * 0.331131, rel=1e-5)
+    far = eye_safety(one_led(wavelength_nm=1550.0))
+    assert far["retinal_radiance_w_m2_sr"] == 0.0 and far["retinal_margin"] == math.inf

@@ -5,15 +5,20 @@ exposure 1000 s; the same values as ANSI/IESNA RP-27.3):
 
 * **infrared radiation hazard for the eye** (cornea and lens, 780–3000 nm): the irradiance at the
   eye E_IR ≤ 100 W/m²;
-* **retinal thermal hazard, weak visual stimulus** (780–1400 nm): the source's radiance
-  L_IR ≤ 6000 / α W/(m²·sr), α the source's angular subtense in rad, taken within
-  [0.011, 0.1] rad as the standard prescribes.
+* **retinal thermal hazard, weak visual stimulus** (780–1400 nm): the source's burn-hazard
+  weighted radiance L_IR = Σ L_λ R(λ) Δλ ≤ 6000 / α W/(m²·sr), α the source's angular subtense
+  in rad, taken within [0.011, 0.1] rad as the standard prescribes.
 
 Here E_IR is the irradiance at the corneal vertex from all LEDs together, each on a surface
 facing it (the standard's worst case: the sum of the LEDs' normal irradiances
 I(α_k) / d_k², d_k the distance from LED k's emission point). L_IR is one LED's mean radiance
-over its apparent emitting disc, I₀ / (π (D/2)²), D = ``leds.emitter_diameter_mm``, and
-α = D / d at the nearest LED's distance. A margin is limit / value (> 1: within the exempt group).
+over its apparent emitting disc, I₀ / (π (D/2)²), D = ``leds.emitter_diameter_mm``, weighted by
+the burn-hazard function R(λ) at the scene's wavelength (:func:`burn_hazard_weight`; 0.501 at
+850 nm), and α = D / d at the nearest LED's distance. The LEDs are taken as monochromatic at the
+scene wavelength: for a real LED's spectrum of σ nm about it (Gaussian), the exponential R(λ)
+averages to R(λ₀) · exp((σ ln 10 / 500)² / 2), +0.3 % for a 40 nm wide (FWHM) 850 nm LED.
+A margin is limit / value (> 1: within the exempt group; ∞ where the value is 0, written as
+``null`` in JSON files).
 """
 
 from __future__ import annotations
@@ -25,11 +30,61 @@ import numpy as np
 from eyelume.scene.model import Scene
 from eyelume.scene.sources import led_poses, relative_intensity
 
-__all__ = ["E_IR_LIMIT_W_M2", "EXPOSURE_S", "eye_safety", "retinal_thermal_limit"]
+__all__ = [
+    "E_IR_LIMIT_W_M2",
+    "EXPOSURE_S",
+    "R_UPPER_BOUND_BELOW_700",
+    "burn_hazard_weight",
+    "eye_safety",
+    "retinal_thermal_limit",
+]
 
 E_IR_LIMIT_W_M2 = 100.0
 EXPOSURE_S = 1000.0
-SOURCE = "IEC 62471:2006 Table 6, exempt group (continuous wave, 1000 s)"
+SOURCE = (
+    "IEC 62471:2006 Table 6, exempt group (continuous wave, 1000 s); retinal radiance weighted "
+    "by the burn-hazard function R(λ) of Table 4.2"
+)
+
+
+#: R(λ) used below 700 nm: the maximum of IEC 62471:2006 Table 4.2's R(λ) (10.0, at 435–440 nm),
+#: an upper bound (the table's visible values are not included here), so a visible source's
+#: retinal margin is understated, never overstated.
+R_UPPER_BOUND_BELOW_700 = 10.0
+
+
+def burn_hazard_weight(wavelength_nm: float) -> float:
+    """The burn-hazard weighting function R(λ) of IEC 62471:2006, Table 4.2 (dimensionless).
+
+    For 700–1400 nm, the range of the standard's infrared retinal thermal hazard:
+
+    * 700 < λ ≤ 1050 nm: R(λ) = 10^((700 − λ)/500)  (0.501 at 850 nm; 1 at 700 nm);
+    * 1050 < λ ≤ 1150 nm: R(λ) = 0.2;
+    * 1150 < λ ≤ 1200 nm: R(λ) = 0.2 · 10^(0.02 (1150 − λ));
+    * 1200 < λ ≤ 1400 nm: R(λ) = 0.02.
+
+    Beyond 1400 nm the ocular media absorb before the retina and the standard defines no
+    retinal thermal hazard: 0. Below 700 nm: :data:`R_UPPER_BOUND_BELOW_700`, an upper bound.
+
+    Examples
+    --------
+    >>> round(burn_hazard_weight(850.0), 4)
+    0.5012
+    """
+    lam = float(wavelength_nm)
+    if not (math.isfinite(lam) and lam > 0):
+        raise ValueError(f"wavelength_nm = {wavelength_nm!r} must be a positive number")
+    if lam < 700.0:
+        return R_UPPER_BOUND_BELOW_700
+    if lam <= 1050.0:
+        return 10.0 ** ((700.0 - lam) / 500.0)
+    if lam <= 1150.0:
+        return 0.2
+    if lam <= 1200.0:
+        return 0.2 * 10.0 ** (0.02 * (1150.0 - lam))
+    if lam <= 1400.0:
+        return 0.02
+    return 0.0
 
 
 def retinal_thermal_limit(alpha_rad: float) -> float:
@@ -57,7 +112,9 @@ def eye_safety(scene: Scene) -> dict:
             )
     nearest = float(np.min(np.linalg.norm(emit - eye, axis=1)))
     r_m = leds.emitter_diameter_mm / 2 * 1e-3
-    radiance = leds.radiant_intensity_w_sr / (math.pi * r_m * r_m)
+    source_radiance = leds.radiant_intensity_w_sr / (math.pi * r_m * r_m)
+    weight = burn_hazard_weight(scene.wavelength_nm)
+    radiance = source_radiance * weight
     alpha = leds.emitter_diameter_mm / nearest
     l_limit = retinal_thermal_limit(alpha)
     return {
@@ -66,9 +123,11 @@ def eye_safety(scene: Scene) -> dict:
         "corneal_irradiance_w_m2": irr,
         "corneal_limit_w_m2": E_IR_LIMIT_W_M2,
         "corneal_margin": E_IR_LIMIT_W_M2 / irr if irr > 0 else math.inf,
+        "source_radiance_w_m2_sr": source_radiance,
+        "burn_hazard_weight": weight,
         "retinal_radiance_w_m2_sr": radiance,
         "angular_subtense_rad": alpha,
         "retinal_limit_w_m2_sr": l_limit,
-        "retinal_margin": l_limit / radiance,
+        "retinal_margin": l_limit / radiance if radiance > 0 else math.inf,
         "within_exempt_group": irr <= E_IR_LIMIT_W_M2 and radiance <= l_limit,
     }
