@@ -15,10 +15,12 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = SRC / "eyelume"
 
 #: Rank of each layer (ARCHITECTURE.md §1); a module may import ranks ≤ its own. ``errors`` is
-#: the error root every layer raises; ``kernels`` import nothing from eyelume, so the compiled
-#: scene (which packs arrays in the kernels' layout) may import their layout constants.
+#: the error root every layer raises, ``json_files`` the strict JSON every layer writes;
+#: ``kernels`` import nothing from eyelume, so the compiled scene (which packs arrays in the
+#: kernels' layout) may import their layout constants.
 LAYERS = {
     "errors": 0,
+    "json_files": 0,
     "scene": 1,
     "kernels": 1,
     "compile": 2,

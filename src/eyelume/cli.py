@@ -647,7 +647,9 @@ def track(
         result = detect(data, led_azimuths_deg=azimuths, valid=mask)
     except ValueError as exc:
         raise InputFileError(str(exc), file=image) from None
-    sys.stdout.write(json.dumps(detection_to_dict(result), indent=2) + "\n")
+    from eyelume.json_files import dumps
+
+    sys.stdout.write(dumps(detection_to_dict(result)) + "\n")
     for reason in result.failures:
         err.print(f"[yellow]{escape(reason)}[/]", highlight=False)
 
@@ -882,7 +884,9 @@ def info(
 
     sc = _load(scene, set_)
     data = scene_info(sc)
+    from eyelume.json_files import dumps
+
     if as_json:
-        sys.stdout.write(json.dumps(data, indent=2) + "\n")
+        sys.stdout.write(dumps(data) + "\n")
         return
-    Console().print_json(data=data)
+    Console().print_json(dumps(data))

@@ -17,11 +17,12 @@ measured.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
+
+from eyelume.json_files import write_json
 
 __all__ = ["BEST_RUN_FILES", "MERITS", "best_runs", "save_best_run"]
 
@@ -88,5 +89,5 @@ def save_best_run(folder: str | Path, scene: str) -> Path | None:
         "tracking_rows": tracking,
     }
     path = folder / BEST_RUN_FILES[1]
-    path.write_text(json.dumps(meta, indent=2) + "\n", encoding="utf-8")
+    write_json(path, meta)
     return path

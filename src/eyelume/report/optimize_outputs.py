@@ -4,12 +4,12 @@ comparison with the paper."""
 from __future__ import annotations
 
 import csv
-import json
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+from eyelume.json_files import dumps, write_json
 from eyelume.report.optimize_plots import (
     save_delta_gallery,
     save_merit_vs_delta,
@@ -49,7 +49,7 @@ def write_sweep_outputs(sweep, target: np.ndarray, refined, delta, plane_extent,
     best["refined"] = dict(
         zip(("height_mm", "distance_mm", "pitch_deg", "merit"), refined, strict=True)
     )
-    written[1].write_text(json.dumps(best, indent=2) + "\n", encoding="utf-8")
+    write_json(written[1], best)
     name = "user target" if delta is None else f"δ = {delta:g}"
     save_sweep_heatmaps(
         np.asarray(sweep.heights, dtype=float),
@@ -154,9 +154,7 @@ def write_delta_study_outputs(
         if direct is None
         else {k: v for k, v in vars(direct).items() if k != "history"},
     }
-    path("delta_study.json").write_text(
-        json.dumps(summary, indent=2, default=float) + "\n", encoding="utf-8"
-    )
+    path("delta_study.json").write_text(dumps(summary, default=float) + "\n", encoding="utf-8")
     path("comparison.md").write_text(
         comparison_markdown(rows, direct, paper_merits, paper_choice, meta), encoding="utf-8"
     )

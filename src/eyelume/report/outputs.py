@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from eyelume.detectors.sensor import camera_summary, digitize
+from eyelume.json_files import write_json
 from eyelume.report.plots import SectionCurve, save_grey_png, save_irradiance_plot, save_layout
 
 if TYPE_CHECKING:  # annotations only: report/ never imports what traces rays
@@ -79,6 +79,6 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
     )
     summary = result.summary()
     summary["camera"] = camera_summary(sc.sensor, sc.wavelength_nm, digital)
-    path("summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-    path("truth.json").write_text(json.dumps(extras.truth, indent=2) + "\n", encoding="utf-8")
+    write_json(path("summary.json"), summary)
+    write_json(path("truth.json"), extras.truth)
     return written

@@ -4,13 +4,13 @@ maps over the gaze grid."""
 from __future__ import annotations
 
 import csv
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
 from eyelume.analysis.tracking.evaluate import error_map_rows
+from eyelume.json_files import write_json
 from eyelume.report.plots import agg_figure
 
 __all__ = ["save_error_maps", "write_population_outputs", "write_tracking_outputs"]
@@ -86,7 +86,7 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
                 ]
             )  # fmt: skip
     summary = {"meta": meta, **report.summary}
-    written[1].write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    write_json(written[1], summary)
     save_error_maps(error_map_rows(report.frames), written[2])
     return written
 
@@ -102,5 +102,5 @@ def write_population_outputs(members: dict, scene_name: str, out) -> list[Path]:
         written += write_tracking_outputs(rep, {"scene": scene_name, "member": name}, folder)
         table[name] = {k: v for k, v in rep.summary.items() if k != "failures"}
     out.mkdir(parents=True, exist_ok=True)
-    (out / "population.json").write_text(json.dumps(table, indent=2) + "\n", "utf-8")
+    write_json(out / "population.json", table)
     return [*written, out / "population.json"]
