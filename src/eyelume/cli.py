@@ -12,6 +12,7 @@ import json
 import math
 import sys
 import time
+import warnings
 from pathlib import Path
 from typing import Annotated, NoReturn
 
@@ -22,7 +23,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from typer.core import TyperGroup
 
-from eyelume.errors import EyelumeError, OptionError
+from eyelume.errors import EyelumeError, EyelumeWarning, OptionError
 from eyelume.scene.io import load_scene
 from eyelume.scene.model import Run
 
@@ -38,14 +39,31 @@ class _OneLineErrors(TyperGroup):
     """The command group; its :meth:`invoke` is the one place that reports an EyelumeError."""
 
     def invoke(self, ctx: click.Context):
-        try:
-            return super().invoke(ctx)
-        except EyelumeError as exc:
-            err.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
-            raise typer.Exit(2) from None
-        except KeyboardInterrupt:  # Ctrl-C or SIGTERM where a command keeps nothing partial
-            err.print("interrupted")
-            _exit_interrupted()
+        with warnings.catch_warnings():
+            warnings.simplefilter("default", EyelumeWarning)
+            warnings.showwarning = _show_warning
+            try:
+                return super().invoke(ctx)
+            except EyelumeError as exc:
+                err.print(
+                    f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True
+                )
+                raise typer.Exit(2) from None
+            except KeyboardInterrupt:  # Ctrl-C or SIGTERM where a command keeps nothing partial
+                err.print("interrupted")
+                _exit_interrupted()
+
+
+_show_default = warnings.showwarning
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """An EyelumeWarning as one line ``warning: …`` on stderr; other warnings as Python shows
+    them."""
+    if issubclass(category, EyelumeWarning):
+        err.print(f"[yellow]warning:[/] {escape(str(message))}", highlight=False, soft_wrap=True)
+    else:
+        _show_default(message, category, filename, lineno, file, line)
 
 
 app = typer.Typer(

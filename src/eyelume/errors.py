@@ -37,6 +37,7 @@ from typing import Any
 __all__ = [
     "BudgetError",
     "EyelumeError",
+    "EyelumeWarning",
     "GeometryError",
     "GlassError",
     "InputFileError",
@@ -135,3 +136,10 @@ class StoreError(EyelumeError, ValueError):
 
 class OptionError(EyelumeError, ValueError):
     """A command-line option whose value cannot be used (``--samples 0``, ``--set x``)."""
+
+
+class EyelumeWarning(UserWarning):
+    """An input that is used but deserves a look (a glass whose formula misses its own nd, a
+    profile table that ends above zero, a sensor far from focus). Its message is one line
+    naming the file or field and the value; the command line prints it as ``warning: …``
+    (once per distinct message) and goes on."""

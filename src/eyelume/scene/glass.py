@@ -23,13 +23,14 @@ from __future__ import annotations
 
 import math
 import numbers
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from eyelume.errors import GlassError
+from eyelume.errors import EyelumeWarning, GlassError
 
 __all__ = [
     "FORMULAS",
@@ -37,6 +38,7 @@ __all__ = [
     "Glass",
     "GlassCatalog",
     "GlassError",
+    "GlassWarning",
     "conrady",
     "extended",
     "extended2",
@@ -57,6 +59,21 @@ SHIPPED_CATALOG = Path(__file__).resolve().parent / "presets" / "glass" / "eyelu
 """Path of the catalog that :func:`load_catalog` reads when given no file."""
 
 _MAX_NAMES_IN_MESSAGE = 12
+
+
+class GlassWarning(EyelumeWarning):
+    """A catalog that loads but deserves a look: a glass named twice (the first kept), or a
+    formula that misses the glass's own nd at the d line by more than :data:`ND_TOLERANCE`.
+    The message is one line naming the file, the line and the glass."""
+
+
+ND_TOLERANCE = 1e-4
+"""Largest accepted |n_formula(587.5618 nm) − nd|. Vendors give nd to 5-6 decimals and fit
+their formulas to better than 1e-5 at the d line, so a larger gap means the coefficients were
+misread (a CD record cut short, a wrong formula number) or belong to another glass."""
+
+LAMBDA_D_NM = 587.5618
+"""The helium d line (nm), where catalogs state nd."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -372,8 +389,9 @@ class Glass:
         Catalog index at the d line, 587.5618 nm (``NM`` line), air-relative.
     vd : float
         Catalog Abbe number (nd − 1)/(nF − nC) (``NM`` line).
-    wavelength_range_nm : tuple of float
-        ``(lo, hi)`` in nm over which the catalog states the formula is valid (``LD`` line).
+    wavelength_range_nm : tuple of float or None
+        ``(lo, hi)`` in nm over which the catalog states the formula is valid (``LD`` line);
+        None when the catalog states none (``LD 0 0``, or no ``LD`` record).
     source : str
         The ``GC`` comment: where the coefficients came from.
     catalog : str
@@ -385,7 +403,7 @@ class Glass:
     coefficients: tuple[float, ...]
     nd: float
     vd: float
-    wavelength_range_nm: tuple[float, float]
+    wavelength_range_nm: tuple[float, float] | None
     source: str
     catalog: str
 
@@ -431,8 +449,9 @@ class Glass:
             )
         return n
 
-    def in_range(self, wavelength_nm: float) -> bool:
-        """Whether a wavelength (nm) lies inside the catalog's stated range (ends included).
+    def in_range(self, wavelength_nm: float) -> bool | None:
+        """Whether a wavelength (nm) lies inside the catalog's stated range (ends included);
+        None when the catalog states no range.
 
         Raises
         ------
@@ -440,6 +459,8 @@ class Glass:
             If the wavelength is not a finite positive number.
         """
         lam_nm = _checked_wavelength(wavelength_nm, self.name)
+        if self.wavelength_range_nm is None:
+            return None
         lo, hi = self.wavelength_range_nm
         return bool(lo <= lam_nm <= hi)
 
@@ -516,8 +537,16 @@ def load_catalog(*paths: str | Path) -> GlassCatalog:
     Parameters
     ----------
     *paths : str or Path
-        AGF files (UTF-8 or UTF-16, as Zemax writes them). None: the shipped ``eyelume.agf``
-        (:data:`SHIPPED_CATALOG`). Several: merged, the first file that names a glass wins.
+        AGF files: UTF-16 (little- or big-endian, with or without a byte-order mark, as Zemax
+        and vendors write them), UTF-8 or a legacy 8-bit code page. None: the shipped
+        ``eyelume.agf`` (:data:`SHIPPED_CATALOG`). Several: merged, the first file that names a
+        glass wins.
+
+    Vendors' files are read as Zemax reads them: a ``CD`` record may continue on the next lines
+    (lines that start with a number), ``LD 0 0`` or no ``LD`` means no stated range, a glass
+    named twice in one file keeps its first definition (with a :class:`GlassWarning`), and a
+    glass whose formula misses its own nd at the d line by more than :data:`ND_TOLERANCE`
+    loads with a :class:`GlassWarning` naming both values.
 
     Returns
     -------
@@ -526,8 +555,8 @@ def load_catalog(*paths: str | Path) -> GlassCatalog:
     Raises
     ------
     GlassError
-        A file is missing or unreadable, or malformed (the message names the file, the line
-        number and the bad value).
+        A file is missing or unreadable, holds no glass record ("not an AGF catalog"), or is
+        malformed (the message names the file, the line number and the bad value).
 
     Examples
     --------
@@ -555,22 +584,39 @@ def _read_text(path: Path) -> str:
         raise GlassError(f"glass catalog file not found: {path}") from None
     except OSError as exc:
         raise GlassError(f"glass catalog file {path} cannot be read: {exc.strerror}") from None
+    return decode_text(raw, path, GlassError)
+
+
+def decode_text(raw: bytes, path: Path, error: type[Exception]) -> str:
+    """Text of a data file whose encoding is not declared: UTF-16 with a byte-order mark,
+    UTF-16 LE or BE without one (mostly ASCII text: the NUL bytes of one parity give it away),
+    UTF-8 (with or without a BOM), else Windows-1252 (a spreadsheet's or a vendor's legacy
+    text; every byte decodes, the five it leaves undefined as Latin-1 does). ``error`` (an
+    exception class taking one message) is raised, naming the file, for UTF-16 that does not
+    decode."""
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
         try:
             return raw.decode("utf-16")
         except UnicodeDecodeError as exc:
-            raise GlassError(f"{path}: not valid UTF-16 despite its BOM ({exc.reason})") from None
-    if len(raw) >= 4 and raw[1] == 0 and raw[3] == 0 and raw[0] != 0:
-        # UTF-16 LE without a BOM: every ASCII character followed by a NUL byte
-        try:
-            return raw.decode("utf-16-le")
-        except UnicodeDecodeError:
-            pass
+            raise error(f"{path}: not valid UTF-16 despite its BOM ({exc.reason})") from None
+    head = raw[:4096]
+    pairs = len(head) // 2
+    if pairs:
+        even_nul = head[0 : 2 * pairs : 2].count(0) / pairs
+        odd_nul = head[1 : 2 * pairs : 2].count(0) / pairs
+        for codec, nul, other in (
+            ("utf-16-le", odd_nul, even_nul),
+            ("utf-16-be", even_nul, odd_nul),
+        ):
+            if nul > 0.6 and other < 0.1:
+                try:
+                    return raw.decode(codec)
+                except UnicodeDecodeError as exc:
+                    raise error(f"{path}: looks like {codec.upper()} but {exc.reason}") from None
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError:
-        # Vendor comments in legacy code pages; every field eyelume reads is ASCII
-        return raw.decode("latin-1")
+        return raw.decode("cp1252", errors="replace")
 
 
 @dataclass
@@ -584,6 +630,7 @@ class _Block:
     line: int
     coefficients: tuple[float, ...] | None = None
     range_um: tuple[float, float] | None = None
+    has_range: bool = False
     source: str = ""
 
 
@@ -610,12 +657,26 @@ def _parse_agf(path: Path) -> list[Glass]:
             raise bad(lineno, f"{record} record before any NM (glass name) record")
         return blocks[-1]
 
+    last_record = ""
+    skipping = False  # inside a glass named a second time: its records are ignored
     for lineno, raw_line in enumerate(text.splitlines(), start=1):
         line = raw_line.strip().lstrip("\ufeff")
         if not line:
             continue
         tokens = line.split()
         record = tokens[0].upper()
+        if _is_number(tokens[0]):
+            # a continuation line: Zemax reads a CD record's coefficients on as many lines as
+            # the vendor wrote them; other records' continuations hold nothing eyelume reads
+            if last_record == "CD" and not skipping:
+                block = blocks[-1]
+                block.coefficients = block.coefficients + tuple(
+                    number(t, lineno, f"CD coefficient of glass {block.name!r}") for t in tokens
+                )
+            continue
+        last_record = record
+        if record != "NM" and skipping:
+            continue
         if record == "NM":
             if len(tokens) < 6:
                 raise bad(lineno, f"NM record needs 'NM name formula MIL nd vd ...', got {line!r}")
@@ -626,8 +687,15 @@ def _parse_agf(path: Path) -> list[Glass]:
             if nd <= 0.0:
                 raise bad(lineno, f"nd of glass {name!r} is {tokens[4]!r}, must be > 0")
             key = name.upper()
-            if key in seen:
-                raise bad(lineno, f"glass {name!r} already defined on line {seen[key]}")
+            skipping = key in seen
+            if skipping:
+                warnings.warn(
+                    f"{path}: line {lineno}: glass {name!r} already defined on line "
+                    f"{seen[key]}: the first definition is used",
+                    GlassWarning,
+                    stacklevel=4,
+                )
+                continue
             seen[key] = lineno
             blocks.append(_Block(name, formula_number, nd, vd, lineno))
         elif record == "CD":
@@ -643,6 +711,9 @@ def _parse_agf(path: Path) -> list[Glass]:
                 raise bad(lineno, f"LD record needs 'LD min_um max_um', got {line!r}")
             lo = number(tokens[1], lineno, f"LD minimum wavelength of glass {block.name!r}")
             hi = number(tokens[2], lineno, f"LD maximum wavelength of glass {block.name!r}")
+            block.has_range = True
+            if lo == 0.0 and hi == 0.0:
+                continue  # "LD 0 0": the vendor states no range
             if not 0.0 < lo < hi:
                 raise bad(
                     lineno,
@@ -656,26 +727,55 @@ def _parse_agf(path: Path) -> list[Glass]:
             block.source = f"{block.source} {comment}".strip() if block.source else comment
         # TD, OD, ED, IT, CC, BD and any other record: not needed for the index
 
+    if not blocks:
+        raise GlassError(
+            f"{path}: not an AGF catalog (no NM glass record in {len(text.splitlines())} lines)"
+        )
     glasses = []
     for b in blocks:
         if b.coefficients is None:
             raise bad(b.line, f"glass {b.name!r} has no CD (dispersion coefficients) record")
-        if b.range_um is None:
-            raise bad(b.line, f"glass {b.name!r} has no LD (wavelength range) record")
-        lo_nm, hi_nm = (round(x * 1000.0, 6) for x in b.range_um)
-        glasses.append(
-            Glass(
-                name=b.name,
-                formula_number=b.formula_number,
-                coefficients=b.coefficients,
-                nd=b.nd,
-                vd=b.vd,
-                wavelength_range_nm=(lo_nm, hi_nm),
-                source=b.source,
-                catalog=path.name,
-            )
+        rng = None
+        if b.range_um is not None:
+            rng = tuple(round(x * 1000.0, 6) for x in b.range_um)
+        g = Glass(
+            name=b.name,
+            formula_number=b.formula_number,
+            coefficients=b.coefficients,
+            nd=b.nd,
+            vd=b.vd,
+            wavelength_range_nm=rng,
+            source=b.source,
+            catalog=path.name,
         )
+        _check_nd(g, path, b.line)
+        glasses.append(g)
     return glasses
+
+
+def _check_nd(g: Glass, path: Path, line: int) -> None:
+    """Warn (GlassWarning) when the formula misses the glass's own nd at the d line."""
+    try:
+        n = g.index(LAMBDA_D_NM)
+    except GlassError:
+        n = math.nan
+    if not abs(n - g.nd) <= ND_TOLERANCE:
+        got = "no real index" if math.isnan(n) else f"n = {n:.6f}"
+        warnings.warn(
+            f"{path}: line {line}: glass {g.name!r}: its formula gives {got} at the d line "
+            f"({LAMBDA_D_NM} nm) but its nd is {g.nd} (difference above {ND_TOLERANCE:g}): "
+            "check its CD coefficients and formula number",
+            GlassWarning,
+            stacklevel=4,
+        )
+
+
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
 
 
 def _formula_number(tok: str, bad: Callable[[int, str], GlassError], lineno: int, name: str) -> int:
