@@ -157,7 +157,7 @@ def test_bad_overrides_one_line_exit_2(tmp_path, args, words):
 @pytest.mark.parametrize(
     ("csv", "words"),
     [
-        ("angle,rel\n0,1\n20,oops\n", ["table_csv", "row 3"]),
+        ("angle,rel\n0,1\n20,oops\n", ["table_csv", "led.csv", "row 3"]),
         ("0,1\n50,0.5\n30,0.2\n", ["table_csv", "increase"]),
         ("0,1\n20,nan\n", ["table_csv", "nan"]),
     ],

@@ -39,7 +39,7 @@ from numba import njit, prange
 
 from eyelume.errors import GeometryError
 from eyelume.scene.model import EyePlane, LedArray, LedProfile, Scene
-from eyelume.scene.sources import _read_table, cos_power_exponent
+from eyelume.scene.sources import cos_power_exponent, read_profile_table
 
 __all__ = [
     "AUTO_RTOL",
@@ -175,7 +175,7 @@ def _profile_args(profile: LedProfile) -> tuple[int, float, np.ndarray, np.ndarr
     if profile.kind == "cos_power":
         m = cos_power_exponent(profile.half_intensity_angle_deg)
         return _KIND_COS_POWER, m, np.zeros(2), np.zeros(2)
-    alpha_t, value_t = _read_table(profile.table_csv)  # the same table the tracers use
+    alpha_t, value_t = read_profile_table(profile.table_csv)  # the tracers' table
     return _KIND_TABLE, 0.0, np.ascontiguousarray(alpha_t), np.ascontiguousarray(value_t)
 
 

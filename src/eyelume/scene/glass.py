@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from eyelume.errors import EyelumeWarning, GlassError
+from eyelume.scene.textfile import decode_text
 
 __all__ = [
     "FORMULAS",
@@ -585,38 +586,6 @@ def _read_text(path: Path) -> str:
     except OSError as exc:
         raise GlassError(f"glass catalog file {path} cannot be read: {exc.strerror}") from None
     return decode_text(raw, path, GlassError)
-
-
-def decode_text(raw: bytes, path: Path, error: type[Exception]) -> str:
-    """Text of a data file whose encoding is not declared: UTF-16 with a byte-order mark,
-    UTF-16 LE or BE without one (mostly ASCII text: the NUL bytes of one parity give it away),
-    UTF-8 (with or without a BOM), else Windows-1252 (a spreadsheet's or a vendor's legacy
-    text; every byte decodes, the five it leaves undefined as Latin-1 does). ``error`` (an
-    exception class taking one message) is raised, naming the file, for UTF-16 that does not
-    decode."""
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
-        try:
-            return raw.decode("utf-16")
-        except UnicodeDecodeError as exc:
-            raise error(f"{path}: not valid UTF-16 despite its BOM ({exc.reason})") from None
-    head = raw[:4096]
-    pairs = len(head) // 2
-    if pairs:
-        even_nul = head[0 : 2 * pairs : 2].count(0) / pairs
-        odd_nul = head[1 : 2 * pairs : 2].count(0) / pairs
-        for codec, nul, other in (
-            ("utf-16-le", odd_nul, even_nul),
-            ("utf-16-be", even_nul, odd_nul),
-        ):
-            if nul > 0.6 and other < 0.1:
-                try:
-                    return raw.decode(codec)
-                except UnicodeDecodeError as exc:
-                    raise error(f"{path}: looks like {codec.upper()} but {exc.reason}") from None
-    try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        return raw.decode("cp1252", errors="replace")
 
 
 @dataclass

@@ -3,15 +3,24 @@
 from __future__ import annotations
 
 import csv
+import io
 import math
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
+from eyelume.errors import InputFileError
 from eyelume.scene.model import LedArray, LedProfile
+from eyelume.scene.textfile import read_text_file
 
-__all__ = ["cos_power_exponent", "led_poses", "relative_intensity"]
+__all__ = [
+    "TABLE_END_FRACTION",
+    "cos_power_exponent",
+    "led_poses",
+    "read_profile_table",
+    "relative_intensity",
+]
 
 
 def cos_power_exponent(half_intensity_angle_deg: float) -> float:
@@ -25,13 +34,46 @@ def cos_power_exponent(half_intensity_angle_deg: float) -> float:
     return math.log(0.5) / math.log(math.cos(math.radians(half_intensity_angle_deg)))
 
 
-def _read_table(path: str) -> tuple[np.ndarray, np.ndarray]:
-    where = f"leds.profile.table_csv = '{path}'"
+_FIELD = "leds.profile.table_csv"
+
+#: A table may end before 90° only where its intensity is at most this share of the on-axis
+#: value: beyond its last row the LED is taken to emit nothing, which then misses at most
+#: about this share of the power per steradian at those angles.
+TABLE_END_FRACTION = 0.01
+
+
+def read_profile_table(path: str) -> tuple[np.ndarray, np.ndarray]:
+    """An LED profile table: (angles in rad from 0, intensity relative to the on-axis value).
+
+    The file (CSV as datasheets and spreadsheets export it: UTF-8 with or without a byte-order
+    mark, UTF-16, or Windows-1252; see :func:`eyelume.scene.textfile.decode_text`) holds two
+    columns, angle in degrees and relative intensity in any unit, one row per angle; an optional
+    first header row and lines starting with ``#`` are skipped. Angles start at 0, increase
+    and end at or below 90°; intensities are finite and ≥ 0, the on-axis one > 0.
+
+    The table must reach the intensity's end: where it stops before 90° with the intensity above
+    :data:`TABLE_END_FRACTION` of the on-axis value it is refused, because the power beyond is
+    unknown (a curve that ends at 30° at 28 % leaves a quarter of a typical LED's power
+    unaccounted for). To say that nothing is emitted beyond, end the table with a zero row.
+
+    Raises
+    ------
+    InputFileError
+        One line naming the file (and the row) and the value.
+    """
+    where = Path(path)
     try:
-        with Path(path).open(newline="", encoding="utf-8") as fh:
-            rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
-    except OSError as exc:
-        raise ValueError(f"{where}: cannot read ({exc.strerror})") from None
+        text = read_text_file(where, InputFileError)
+    except InputFileError as exc:
+        raise InputFileError(exc.message, field=_FIELD) from None
+    try:
+        rows = [
+            r
+            for r in csv.reader(io.StringIO(text.lstrip("\ufeff")))
+            if r and "".join(r).strip() and not r[0].lstrip().startswith("#")
+        ]
+    except csv.Error as exc:
+        raise InputFileError(f"not a CSV table ({exc})", file=where, field=_FIELD) from None
     angles, values = [], []
     for n, row in enumerate(rows, 1):
         try:
@@ -39,20 +81,41 @@ def _read_table(path: str) -> tuple[np.ndarray, np.ndarray]:
         except (ValueError, IndexError):
             if n == 1:
                 continue  # a header line
-            raise ValueError(
-                f"{where}: row {n} {row!r} is not 'angle_deg, relative_intensity'"
+            raise InputFileError(
+                f"row {n} {row!r} is not 'angle_deg, relative_intensity'", file=where, field=_FIELD
             ) from None
         if not (math.isfinite(a) and math.isfinite(v)) or v < 0:
-            raise ValueError(f"{where}: row {n} has a bad value {row!r}")
+            raise InputFileError(
+                f"row {n} {row!r}: angle and intensity must be finite, intensity >= 0",
+                file=where,
+                field=_FIELD,
+            )
         angles.append(a)
         values.append(v)
     a = np.asarray(angles)
     v = np.asarray(values)
     if len(a) < 2 or a[0] != 0 or np.any(np.diff(a) <= 0) or a[-1] > 90:
-        raise ValueError(f"{where}: angles must start at 0, increase, and end at or below 90 deg")
+        raise InputFileError(
+            f"{len(a)} rows of angles {a[:6].tolist()}{' ...' if len(a) > 6 else ''}: "
+            "angles must start at 0, increase, and end at or below 90 deg",
+            file=where,
+            field=_FIELD,
+        )
     if v[0] <= 0:
-        raise ValueError(f"{where}: the on-axis relative intensity must be > 0")
-    return np.radians(a), v / v[0]
+        raise InputFileError(
+            f"the on-axis (0 deg) intensity is {v[0]!r}, must be > 0", file=where, field=_FIELD
+        )
+    rel = v / v[0]
+    if a[-1] < 90 and rel[-1] > TABLE_END_FRACTION:
+        raise InputFileError(
+            f"the table ends at {a[-1]:g} deg with the intensity still at {rel[-1]:.0%} of the "
+            "on-axis value: the power beyond is unknown. Extend it to where the intensity "
+            f"reaches 0, or add a row '{np.nextafter(a[-1], 90.0):.6g}, 0' to state that the "
+            "LED emits nothing beyond",
+            file=where,
+            field=_FIELD,
+        )
+    return np.radians(a), rel
 
 
 def relative_intensity(profile: LedProfile) -> Callable[[np.ndarray], np.ndarray]:
@@ -60,7 +123,7 @@ def relative_intensity(profile: LedProfile) -> Callable[[np.ndarray], np.ndarray
     if profile.kind == "cos_power":
         m = cos_power_exponent(profile.half_intensity_angle_deg)
         return lambda alpha: np.cos(alpha) ** m
-    alpha_t, value_t = _read_table(profile.table_csv)
+    alpha_t, value_t = read_profile_table(profile.table_csv)
     return lambda alpha: np.interp(alpha, alpha_t, value_t, right=0.0)
 
 
