@@ -21,6 +21,7 @@ from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
 from eyelume.kernels.sampling import cos_power_tables, profile_tables
 from eyelume.scene.eye import eye_indices, iris_root_radius, limbus_geometry
+from eyelume.scene.focus import check_focus
 from eyelume.scene.glass import Glass, load_catalog
 from eyelume.scene.model import Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
@@ -341,6 +342,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
     if not par.power > 0:
         raise SceneError(f"lens: the prescription has no positive power (EFL {par.efl:.3g} mm)")
     stop_sd = par.stop_semi_diameter_for_epd(stop, par.efl / scene.lens.f_number)
+    check_focus(scene, par, stop, stop_sd)  # a real image of the eye plane, near the sensor
     semi, rim_fraction = _auto_semi_diameters(scene, idx, par, stop, stop_sd)
     lf, image_z = _lens_table(scene, idx, semi)
     _check_lens_geometry(lf)

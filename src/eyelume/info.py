@@ -5,6 +5,7 @@ from __future__ import annotations
 from eyelume.compile import compile_scene, eye_paraxial, lens_indices, lens_paraxial
 from eyelume.kernels import sequential as Q
 from eyelume.scene.eye import LAMBDA_D, eye_indices
+from eyelume.scene.focus import focus
 from eyelume.scene.model import Scene
 from eyelume.scene.sources import cos_power_exponent
 
@@ -18,6 +19,7 @@ def scene_info(scene: Scene) -> dict:
     par = lens_paraxial(scene, cs.lens_indices)
     s_obj = lens.object_distance_mm
     stop_sd = float(cs.lf[cs.stop_index, Q.L_SD])
+    foc = focus(scene, par, cs.stop_index, stop_sd)
     _, used = lens_indices(scene)
     glasses = {}
     for j, s in enumerate(lens.surfaces):
@@ -52,6 +54,8 @@ def scene_info(scene: Scene) -> dict:
             "working_f_number": par.working_f_number(s_obj, cs.stop_index, stop_sd),
             "semi_diameters_mm": [float(v) for v in cs.lf[:, Q.L_SD]],
             "image_plane_z_mm": cs.image_z,
+            "sensor_defocus_mm": foc.defocus_mm,
+            "depth_of_focus_mm": foc.depth_of_focus_mm,
         },
         "eye": {
             "model": scene.eye.model,
