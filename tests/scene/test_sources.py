@@ -76,6 +76,7 @@ def test_a_table_ending_near_zero_or_at_90_is_accepted(tmp_path):
         (b"0,1\n45,inf\n90,0\n", "row 2"),
         (b"angle,rel\n0,1\n45\n", "row 3"),
         (b"\x00\x01\x02\xff" * 10, "led.csv"),
+        (b"0,1e-320\n45,1e300\n90,0\n", "overflow"),
     ],
 )
 def test_bad_tables_name_the_file(tmp_path, content, fragment):

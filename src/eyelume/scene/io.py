@@ -18,6 +18,7 @@ from pydantic import ValidationError
 
 from eyelume.errors import SceneError
 from eyelume.scene.model import Scene
+from eyelume.scene.textfile import decode_text
 
 __all__ = ["SceneError", "apply_overrides", "load_scene", "preset_names", "save_scene"]
 
@@ -31,10 +32,13 @@ def preset_names() -> list[str]:
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
+    """The scene file's TOML. TOML is UTF-8 (with or without a BOM); a file an editor saved as
+    UTF-16 or Windows-1252 is read too (:func:`~eyelume.scene.textfile.decode_text`)."""
     try:
-        text = path.read_text(encoding="utf-8")
+        raw = path.read_bytes()
     except OSError as exc:
         raise SceneError(f"cannot read scene file '{path}': {exc.strerror}") from None
+    text = decode_text(raw, path, SceneError).lstrip("\ufeff")
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -43,14 +47,24 @@ def _read_toml(path: Path) -> dict[str, Any]:
 
 def _resolve_paths(data: dict[str, Any], base: Path) -> None:
     """Make file references in the scene absolute, relative to the scene file's folder."""
-    profile = data.get("leds", {}).get("profile", {})
+    leds = data.get("leds")
+    profile = leds.get("profile") if isinstance(leds, dict) else None
     if isinstance(profile, dict) and isinstance(profile.get("table_csv"), str):
-        profile["table_csv"] = str((base / profile["table_csv"]).resolve())
-    lens = data.get("lens", {})
+        profile["table_csv"] = _resolved(base, profile["table_csv"], "leds.profile.table_csv")
+    lens = data.get("lens")
     if isinstance(lens, dict) and isinstance(lens.get("glass_catalogs"), list):
         lens["glass_catalogs"] = [
-            str((base / p).resolve()) if isinstance(p, str) else p for p in lens["glass_catalogs"]
+            _resolved(base, p, f"lens.glass_catalogs.{i}") if isinstance(p, str) else p
+            for i, p in enumerate(lens["glass_catalogs"])
         ]
+
+
+def _resolved(base: Path, name: str, field: str) -> str:
+    """``name`` relative to ``base``, absolute; SceneError naming ``field`` if it is no path."""
+    try:
+        return str((base / name).resolve())
+    except (OSError, ValueError) as exc:
+        raise SceneError(f"not a usable file path ({exc})", field=field, value=name) from None
 
 
 def _format_loc(loc: tuple[Any, ...]) -> str:

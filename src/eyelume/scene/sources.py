@@ -74,6 +74,41 @@ def read_profile_table(path: str) -> tuple[np.ndarray, np.ndarray]:
         ]
     except csv.Error as exc:
         raise InputFileError(f"not a CSV table ({exc})", file=where, field=_FIELD) from None
+    a, v = _numbers(rows, where)
+    if len(a) < 2 or a[0] != 0 or np.any(np.diff(a) <= 0) or a[-1] > 90:
+        raise InputFileError(
+            f"{len(a)} rows of angles {a[:6].tolist()}{' ...' if len(a) > 6 else ''}: "
+            "angles must start at 0, increase, and end at or below 90 deg",
+            file=where,
+            field=_FIELD,
+        )
+    if v[0] <= 0:
+        raise InputFileError(
+            f"the on-axis (0 deg) intensity is {v[0]!r}, must be > 0", file=where, field=_FIELD
+        )
+    with np.errstate(over="ignore"):
+        rel = v / v[0]
+    if not np.all(np.isfinite(rel)):
+        raise InputFileError(
+            f"the intensities relative to the on-axis value {v[0]!r} overflow (up to "
+            f"{v.max()!r}): not a usable profile",
+            file=where,
+            field=_FIELD,
+        )
+    if a[-1] < 90 and rel[-1] > TABLE_END_FRACTION:
+        raise InputFileError(
+            f"the table ends at {a[-1]:g} deg with the intensity still at {rel[-1]:.0%} of the "
+            "on-axis value: the power beyond is unknown. Extend it to where the intensity "
+            f"reaches 0, or add a row '{np.nextafter(a[-1], 90.0):.6g}, 0' to state that the "
+            "LED emits nothing beyond",
+            file=where,
+            field=_FIELD,
+        )
+    return np.radians(a), rel
+
+
+def _numbers(rows: list[list[str]], where: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(angles, intensities) of the table's rows; a first row that is not numbers is a header."""
     angles, values = [], []
     for n, row in enumerate(rows, 1):
         try:
@@ -92,30 +127,7 @@ def read_profile_table(path: str) -> tuple[np.ndarray, np.ndarray]:
             )
         angles.append(a)
         values.append(v)
-    a = np.asarray(angles)
-    v = np.asarray(values)
-    if len(a) < 2 or a[0] != 0 or np.any(np.diff(a) <= 0) or a[-1] > 90:
-        raise InputFileError(
-            f"{len(a)} rows of angles {a[:6].tolist()}{' ...' if len(a) > 6 else ''}: "
-            "angles must start at 0, increase, and end at or below 90 deg",
-            file=where,
-            field=_FIELD,
-        )
-    if v[0] <= 0:
-        raise InputFileError(
-            f"the on-axis (0 deg) intensity is {v[0]!r}, must be > 0", file=where, field=_FIELD
-        )
-    rel = v / v[0]
-    if a[-1] < 90 and rel[-1] > TABLE_END_FRACTION:
-        raise InputFileError(
-            f"the table ends at {a[-1]:g} deg with the intensity still at {rel[-1]:.0%} of the "
-            "on-axis value: the power beyond is unknown. Extend it to where the intensity "
-            f"reaches 0, or add a row '{np.nextafter(a[-1], 90.0):.6g}, 0' to state that the "
-            "LED emits nothing beyond",
-            file=where,
-            field=_FIELD,
-        )
-    return np.radians(a), rel
+    return np.asarray(angles), np.asarray(values)
 
 
 def relative_intensity(profile: LedProfile) -> Callable[[np.ndarray], np.ndarray]:

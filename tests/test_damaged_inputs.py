@@ -1,0 +1,240 @@
+"""Damaged input files through the real entry point, property-based (issue 12).
+
+Hypothesis makes scene TOML files, LED profile CSVs and AGF glass catalogs, damages them
+(truncation, wrong types, NaN and infinities, huge and tiny values, other encodings, stray
+bytes, renamed keys, glasses named twice) and runs ``eyelume info --scene FILE --json`` in
+process. Every case must end in one of two ways:
+
+* exit 0 with strict JSON on stdout whose numbers are all finite (null allowed), or
+* exit 2 with exactly one line on stderr, ``error: …``, naming a file or a field —
+
+never a traceback, another exit code, or a hang: each case runs under a 20 s alarm (a warm
+case takes ~0.2 s). The examples are derandomized (a fixed sequence: CI is deterministic) and
+their number keeps the module under a minute on a warm cache.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import re
+import signal
+import tempfile
+from pathlib import Path
+
+import pytest
+import tomli_w
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from typer.testing import CliRunner
+
+import eyelume
+from eyelume.cli import app
+
+CASE_SECONDS = 20
+SETTINGS = settings(
+    max_examples=40,
+    deadline=None,  # the alarm below bounds each case; the first one compiles the kernels
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+
+BASE = eyelume.load_scene("paper2005").model_dump(mode="python")
+
+
+def _toml(data: dict) -> str:
+    def ready(v):
+        if isinstance(v, dict):
+            return {k: ready(x) for k, x in v.items() if x is not None}
+        if isinstance(v, list | tuple):
+            return [ready(x) for x in v]
+        return v
+
+    return tomli_w.dumps(ready(data))
+
+
+@contextlib.contextmanager
+def _alarm(seconds: int):
+    def fire(signum, frame):
+        raise TimeoutError(f"a case ran over {seconds} s")
+
+    old = signal.signal(signal.SIGALRM, fire)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+
+
+def _finite_numbers(value) -> bool:
+    if isinstance(value, dict):
+        return all(_finite_numbers(v) for v in value.values())
+    if isinstance(value, list):
+        return all(_finite_numbers(v) for v in value)
+    if isinstance(value, float):
+        return math.isfinite(value)
+    return True
+
+
+def _strict(text: str):
+    def refuse(token):
+        raise ValueError(f"non-JSON token {token}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+_FIELD = re.compile(r"[a-z_]+\.[a-z0-9_]+")
+
+
+def run_info(folder: Path, scene_file: Path) -> None:
+    """``eyelume info --scene FILE --json`` and the two allowed outcomes (module docstring)."""
+    with _alarm(CASE_SECONDS):
+        res = CliRunner().invoke(app, ["info", "--scene", str(scene_file), "--json"])
+    assert "Traceback" not in res.output
+    if res.exception is not None and not isinstance(res.exception, SystemExit):
+        raise AssertionError(f"uncaught {type(res.exception).__name__}") from res.exception
+    if res.exit_code == 0:
+        data = _strict(res.stdout)
+        assert _finite_numbers(data)
+        return
+    assert res.exit_code == 2, (res.exit_code, res.output)
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    errors = [ln for ln in lines if ln.startswith("error:")]
+    assert len(errors) == 1 and lines[-1] == errors[0], res.stderr
+    msg = errors[0]
+    assert str(folder) in msg or "field" in msg or _FIELD.search(msg), msg
+
+
+# --- damage ------------------------------------------------------------------------------------
+
+BAD_VALUES = [
+    "nan", "inf", "-inf", "1e308", "-1e308", "1e999", "0", "-1", "1e-320", "0.0",
+    '"x"', "true", "[]", "{}", '"nan"', "12345678901234567890",
+]  # fmt: skip
+ENCODINGS = ["utf-8", "utf-8-sig", "utf-16", "utf-16-be", "utf-16-le", "cp1252"]
+NUMBER = re.compile(r"(?<![\w.\"'])-?\d+(\.\d+)?([eE][+-]?\d+)?(?![\w.])")
+
+
+@st.composite
+def damaged_text(draw, text: str) -> bytes:
+    """``text`` with 1-3 kinds of damage, as bytes in a drawn encoding."""
+    kinds = draw(st.lists(st.sampled_from(["value", "key", "truncate", "bytes"]), max_size=3))
+    for kind in kinds:
+        if kind == "value":
+            spots = list(NUMBER.finditer(text))
+            if spots:
+                m = spots[draw(st.integers(0, len(spots) - 1))]
+                text = text[: m.start()] + draw(st.sampled_from(BAD_VALUES)) + text[m.end() :]
+        elif kind == "key":
+            keys = list(re.finditer(r"^(\w+) =", text, flags=re.M))
+            if keys:
+                m = keys[draw(st.integers(0, len(keys) - 1))]
+                text = text[: m.start(1)] + m.group(1) + "x" + text[m.end(1) :]
+        elif kind == "truncate":
+            text = text[: draw(st.integers(0, len(text)))]
+    data = text.encode(draw(st.sampled_from(ENCODINGS)), errors="replace")
+    if "bytes" in kinds:
+        at = draw(st.integers(0, len(data)))
+        data = data[:at] + draw(st.binary(min_size=1, max_size=8)) + data[at:]
+    return data
+
+
+# --- scene files -------------------------------------------------------------------------------
+
+
+@SETTINGS
+@given(st.data())
+def test_damaged_scene_files(data):
+    text = "# a user's scene, 20 °C\n" + _toml(BASE)
+    raw = data.draw(damaged_text(text))
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        (folder / "scene.toml").write_bytes(raw)
+        run_info(folder, folder / "scene.toml")
+
+
+# --- LED profile tables ------------------------------------------------------------------------
+
+
+@st.composite
+def profile_csv(draw) -> str:
+    n = draw(st.integers(2, 12))
+    steps = draw(st.lists(st.floats(0.5, 20.0), min_size=n - 1, max_size=n - 1))
+    angles = [0.0]
+    for s in steps:
+        angles.append(min(angles[-1] + s, 90.0))
+    values = sorted(draw(st.lists(st.floats(0.0, 1.0), min_size=n, max_size=n)), reverse=True)
+    if draw(st.booleans()):
+        values[-1] = 0.0
+    rows = [f"{a:g},{v:g}" for a, v in zip(angles, values, strict=True)]
+    header = draw(st.sampled_from(["", "Angle (°),Relative intensity\n", "# datasheet\n"]))
+    return header + "\n".join(rows) + "\n"
+
+
+@SETTINGS
+@given(st.data())
+def test_damaged_led_profile_tables(data):
+    raw = data.draw(damaged_text(data.draw(profile_csv())))
+    scene = dict(BASE, leds=dict(BASE["leds"], profile={"kind": "table", "table_csv": "led.csv"}))
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        (folder / "led.csv").write_bytes(raw)
+        (folder / "scene.toml").write_text(_toml(scene), encoding="utf-8")
+        run_info(folder, folder / "scene.toml")
+
+
+# --- glass catalogs ----------------------------------------------------------------------------
+
+NBK7 = (1.03961212, 0.00600069867, 0.231792344, 0.0200179144, 1.01046945, 103.560653)
+
+
+@st.composite
+def agf_catalog(draw) -> tuple[str, str]:
+    """An AGF text of 1-3 glasses near N-BK7 (Sellmeier 1) and the name of its first."""
+    lines = ["CC generated catalog"]
+    names = []
+    for i in range(draw(st.integers(1, 3))):
+        name = draw(st.sampled_from([f"G{i}", "G0", "N-BK7"]))
+        names.append(name)
+        scale = draw(st.floats(0.5, 1.5))
+        cd = [c * scale if k % 2 == 0 else c for k, c in enumerate(NBK7)]
+        cd_text = " ".join(f"{c:.9g}" for c in cd)
+        if draw(st.booleans()):  # a vendor's continuation lines
+            cd_text = (
+                " ".join(f"{c:.9g}" for c in cd[:3]) + "\n  " + " ".join(f"{c:.9g}" for c in cd[3:])
+            )
+        nd = draw(st.sampled_from(["1.5168", "1.6", "1.4"]))
+        lines += [
+            f"NM {name} 2 517642.251 {nd} 64.17 0 1 0",
+            f"CD {cd_text} 0 0 0 0",
+            draw(st.sampled_from(["LD 0.3 2.5", "LD 0 0", "LD 2.5 0.3", ""])),
+        ]
+    return "\n".join(ln for ln in lines if ln) + "\n", names[0]
+
+
+@SETTINGS
+@given(st.data())
+def test_damaged_glass_catalogs(data):
+    text, first = data.draw(agf_catalog())
+    raw = data.draw(damaged_text(text))
+    lens = dict(BASE["lens"], glass_catalogs=["cat.agf"])
+    lens["surfaces"] = [dict(s) for s in lens["surfaces"]]
+    lens["surfaces"][0]["glass"] = first
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        (folder / "cat.agf").write_bytes(raw)
+        (folder / "scene.toml").write_text(_toml(dict(BASE, lens=lens)), encoding="utf-8")
+        run_info(folder, folder / "scene.toml")
+
+
+@pytest.mark.parametrize(
+    "raw",
+    [b"", b"\xff\xfe", b"\x00" * 64, 'name = "x"\n[eye]\n'.encode("utf-16")],
+    ids=["empty", "BOM only", "NULs", "UTF-16 without the required fields"],
+)
+def test_degenerate_scene_files(tmp_path, raw):
+    (tmp_path / "scene.toml").write_bytes(raw)
+    run_info(tmp_path, tmp_path / "scene.toml")
