@@ -105,6 +105,16 @@ def test_load_csv_and_npy_round_trip(tmp_path):
     assert load_target(tmp_path / "ints.npy", PLANE).dtype == np.float64
 
 
+@pytest.mark.parametrize("encoding", ["utf-8-sig", "utf-16", "utf-16-be", "cp1252"])
+def test_load_csv_as_spreadsheets_write_it(tmp_path, encoding):
+    """A BOM, UTF-16 or Windows-1252 (a degree sign in a comment) read as the numbers (issue 12)."""
+    p = _pattern()
+    text = "# target, 20 °C\n" + "\n".join(",".join(f"{v:.17g}" for v in row) for row in p)
+    csv = tmp_path / "target.csv"
+    csv.write_bytes(text.encode(encoding))
+    np.testing.assert_array_equal(load_target(csv, PLANE), p)
+
+
 def _write(tmp_path, name: str, data) -> str:
     path = tmp_path / name
     if name.endswith(".npy"):

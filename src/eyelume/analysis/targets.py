@@ -13,6 +13,7 @@ matters: the generator's merit (:mod:`eyelume.analysis.merit`) compares unit-mea
 
 from __future__ import annotations
 
+import io
 import math
 from pathlib import Path
 
@@ -20,6 +21,7 @@ import numpy as np
 
 from eyelume.errors import InputFileError
 from eyelume.scene.model import EyePlane
+from eyelume.scene.textfile import decode_text
 
 __all__ = ["bin_centres", "gaussian_sigmas", "gaussian_target", "gaussian_value", "load_target"]
 
@@ -119,6 +121,7 @@ def gaussian_target(
 
 def load_target(path: str | Path, plane: EyePlane) -> np.ndarray:
     """A user-defined target pattern from a ``.csv`` (numbers separated by commas, ``#`` comments)
+    (UTF-8 with or without a byte-order mark, UTF-16 or Windows-1252)
     or ``.npy`` file: a (rows, cols) array of the eye plane's bins, row 0 at +y, column 0 at −x.
 
     Raises InputFileError (a ValueError) naming the file and the problem: unreadable, wrong
@@ -133,8 +136,9 @@ def load_target(path: str | Path, plane: EyePlane) -> np.ndarray:
     try:
         if suffix == ".npy":
             data = np.load(path, allow_pickle=False)
-        else:
-            data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2, dtype=float)
+        else:  # any encoding a spreadsheet writes (a BOM, UTF-16, Windows-1252)
+            text = decode_text(path.read_bytes(), path, InputFileError).lstrip("\ufeff")
+            data = np.loadtxt(io.StringIO(text), delimiter=",", comments="#", ndmin=2, dtype=float)
     except OSError as exc:
         raise InputFileError(f"cannot read ({exc.strerror or exc})", file=where) from None
     except ValueError as exc:
