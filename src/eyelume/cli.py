@@ -40,8 +40,9 @@ class _OneLineErrors(TyperGroup):
 
     def invoke(self, ctx: click.Context):
         with warnings.catch_warnings():
-            warnings.simplefilter("default", EyelumeWarning)
+            warnings.simplefilter("always", EyelumeWarning)  # _show_warning says each once
             warnings.showwarning = _show_warning
+            _SHOWN.clear()
             try:
                 return super().invoke(ctx)
             except EyelumeError as exc:
@@ -55,13 +56,17 @@ class _OneLineErrors(TyperGroup):
 
 
 _show_default = warnings.showwarning
+_SHOWN: set[str] = set()
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    """An EyelumeWarning as one line ``warning: …`` on stderr; other warnings as Python shows
-    them."""
+    """An EyelumeWarning as one line ``warning: …`` on stderr, each distinct message once per
+    command (a catalog read twice warns once); other warnings as Python shows them."""
     if issubclass(category, EyelumeWarning):
-        err.print(f"[yellow]warning:[/] {escape(str(message))}", highlight=False, soft_wrap=True)
+        text = str(message)
+        if text not in _SHOWN:
+            _SHOWN.add(text)
+            err.print(f"[yellow]warning:[/] {escape(text)}", highlight=False, soft_wrap=True)
     else:
         _show_default(message, category, filename, lineno, file, line)
 

@@ -1,0 +1,34 @@
+"""Warnings on the command line: one line each, once per command (issue 12)."""
+
+from __future__ import annotations
+
+from typer.testing import CliRunner
+
+import eyelume
+from eyelume.cli import app
+from eyelume.scene.glass import SHIPPED_CATALOG
+
+runner = CliRunner()
+
+
+def test_catalog_warning_is_one_line_and_the_command_goes_on(tmp_path):
+    """A glass named twice in a user's catalog: one 'warning:' line naming file and line, the
+    first definition used, exit 0."""
+    cat = tmp_path / "mine.agf"
+    nbk7 = (
+        "NM N-BK7 2 517642.251 1.5168 64.17 0 1 0\n"
+        "CD 1.03961212 0.00600069867 0.231792344 0.0200179144 1.01046945 103.560653\n"
+        "LD 0.3 2.5\n"
+    )
+    cat.write_text(nbk7 + nbk7.replace("1.03961212", "1.2"), encoding="utf-8")
+    scene = eyelume.load_scene(
+        "paper2005", {"lens.glass_catalogs": [str(cat), str(SHIPPED_CATALOG)]}
+    )
+    path = tmp_path / "scene.toml"
+    eyelume.save_scene(scene, path)
+    res = runner.invoke(app, ["info", "--scene", str(path), "--json"])
+    assert res.exit_code == 0, res.output
+    warnings = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert len(warnings) == 1, res.stderr
+    assert warnings[0].startswith("warning:") and "mine.agf: line 4" in warnings[0]
+    assert "'N-BK7' already defined on line 1" in warnings[0]
