@@ -174,6 +174,7 @@ def profile_csv(draw) -> str:
     return header + "\n".join(rows) + "\n"
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(st.data())
 def test_damaged_led_profile_tables(data):

@@ -50,6 +50,7 @@ def test_write_json_is_strict(tmp_path):
     assert "Infinity" not in p.read_text() and strict_loads(p.read_text()) == {"v": None}
 
 
+@pytest.mark.slow
 def test_render_summary_with_an_infinite_margin_is_strict_json(tmp_path):
     """LEDs pitched 80° away from the eye send it nothing: the corneal margin is infinite,
     written as null; summary.json and truth.json parse with a strict parser."""
