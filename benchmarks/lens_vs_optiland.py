@@ -32,12 +32,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _common as C  # noqa: E402
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
+from lens_block import trace_lens_block  # noqa: E402
 from numba import njit, prange  # noqa: E402
 
 import eyelume  # noqa: E402
 from eyelume.compile import compile_scene, lens_paraxial  # noqa: E402
 from eyelume.kernels import sequential as Q  # noqa: E402
-from eyelume.kernels.sequential import LENS_PASSED, trace_lens, trace_lens_block  # noqa: E402
+from eyelume.kernels.sequential import LENS_PASSED, trace_lens  # noqa: E402
 
 # Reference figures for this machine (from the brief, not measured here).
 REF_OPTILAND_RAYS_S = 0.34e6

@@ -111,15 +111,6 @@ def conic_normal(c, k, x, y, z):
 
 
 @njit(cache=True, inline="always")
-def conic_sag(c, k, r):
-    """Sag z(r) = c r² / (1 + √(1 − (1+k) c² r²)) in mm; NaN beyond the conicoid's extent."""
-    arg = 1.0 - (1.0 + k) * c * c * r * r
-    if arg < 0.0:
-        return math.nan
-    return c * r * r / (1.0 + math.sqrt(arg))
-
-
-@njit(cache=True, inline="always")
 def _valid(sf, s, shape, x, y, z):
     r2 = x * x + y * y
     if r2 < sf[s, RMIN2] or r2 > sf[s, RMAX2] or z < sf[s, ZLO] or z > sf[s, ZHI]:
