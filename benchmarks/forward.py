@@ -169,10 +169,10 @@ def _anatomy_kernels():
     from eyelume.kernels.sampling import profile_polar_angle
 
     @njit
-    def emission_rays(n, seed, leds, alpha_grid, cdf_grid, out):
+    def emission_rays(n, seed, leds, out):
         # the first segment of every ray, drawn by the forward estimator's own emission kernel
         for i in range(n):
-            _, x, y, z, dx, dy, dz = emit_ray(i, seed, leds, alpha_grid, cdf_grid)
+            _, x, y, z, dx, dy, dz = emit_ray(i, seed, leds)
             out[i, 0], out[i, 1], out[i, 2] = x, y, z
             out[i, 3], out[i, 4], out[i, 5] = dx, dy, dz
 
@@ -212,11 +212,11 @@ def worker_anatomy(a: argparse.Namespace) -> dict:
         cs = compile_scene(eyelume.load_scene(SCENE, _overrides(face)))
         n = a.rays
         uu = np.random.default_rng(a.seed).random(n)
-        polar_only(uu[:1000], cs.alpha_grid, cs.cdf_grid)
+        polar_only(uu[:1000], cs.led.alpha_grid, cs.led.cdf_grid)
         t_polar = []
         rays = np.empty((n, 6))
         hits = np.empty(n, dtype=np.int64)
-        emission_rays(1000, a.seed, cs.leds, cs.alpha_grid, cs.cdf_grid, rays)
+        emission_rays(1000, a.seed, cs.led, rays)
         search_all(cs.sf, cs.si, rays[:1000], hits[:1000])
         eyelume.render(cs, rays=min(n, cs.scene.run.batch_size), seed=a.seed)
         # interleaved, so the three costs see the same machine conditions
@@ -225,13 +225,13 @@ def worker_anatomy(a: argparse.Namespace) -> dict:
             res = eyelume.render(cs, rays=n, seed=a.seed)
             t_render.append(res.wall_time_s)
             t0 = time.perf_counter()
-            emission_rays(n, a.seed, cs.leds, cs.alpha_grid, cs.cdf_grid, rays)
+            emission_rays(n, a.seed, cs.led, rays)
             t_emit.append(time.perf_counter() - t0)
             t0 = time.perf_counter()
             search_all(cs.sf, cs.si, rays, hits)
             t_search.append(time.perf_counter() - t0)
             t0 = time.perf_counter()
-            polar_only(uu, cs.alpha_grid, cs.cdf_grid)
+            polar_only(uu, cs.led.alpha_grid, cs.led.cdf_grid)
             t_polar.append(time.perf_counter() - t0)
         counts = np.bincount(hits + 1, minlength=cs.sf.shape[0] + 1)
         first = {"(escape)": int(counts[0])}
@@ -256,7 +256,7 @@ def worker_anatomy(a: argparse.Namespace) -> dict:
             "ns_per_emission": 1e9 * min(t_emit) / n,
             "ns_per_search": 1e9 * min(t_search) / n,
             "ns_per_polar_search": 1e9 * min(t_polar) / n,
-            "cdf_grid_size": int(cs.cdf_grid.shape[0]),
+            "cdf_grid_size": int(cs.led.cdf_grid.shape[0]),
             "spread_pct": {
                 "render": spread(t_render),
                 "emission": spread(t_emit),

@@ -1,12 +1,21 @@
 """Scene → packed arrays for the kernels: the one place that knows both the scene and the kernels.
 
-The compiled scene holds, at the scene's wavelength:
+The compiled scene holds, at the scene's wavelength, the named tables of
+:mod:`eyelume.kernels.tables`, each built once here by one function per scene part:
 
-* ``sf``, ``si``: the non-sequential surface table (eye, iris, sclera, retina, face tissues, LED
-  bodies and the imaging lens's entrance), columns in :mod:`eyelume.kernels.geometry`;
-* ``lf``: the sequential lens table, columns in :mod:`eyelume.kernels.sequential`;
-* the LED emission points, axes and the angular-profile sampling tables;
-* the sensor and eye-plane binning, the power per LED, and the names of the ledger's entries.
+* ``surfaces`` (:class:`SurfaceTable` ``sf``, ``si``): the non-sequential surfaces (eye, iris,
+  sclera, retina, face tissues, LED bodies and the imaging lens's entrance), columns in
+  :mod:`eyelume.kernels.geometry` — :func:`_add_eye`, :func:`_add_face`, :func:`_add_led_bodies`,
+  :func:`_add_lens_entrance`;
+* ``lens`` (:class:`LensTable`): the sequential lens table, columns in
+  :mod:`eyelume.kernels.sequential` — :func:`_compile_lens`;
+* ``led`` (:class:`LedTable`): the LED emission points, axes, I₀ and angular-profile tables —
+  :func:`_led_table`;
+* ``picture``, ``eye_plane`` (:class:`~eyelume.kernels.bins.PlaneGrid`): the sensor's pixels and
+  the eye-plane receiver's bins — :func:`_grids`;
+* ``camera`` (:class:`CameraTables`): the lens traced backwards, its pupils and the aim table of
+  the camera-side estimator — :func:`_camera_tables`;
+* the power per LED and the names of the surfaces and of the ledger's entries.
 """
 
 from __future__ import annotations
@@ -19,7 +28,16 @@ import numpy as np
 from eyelume.errors import GeometryError, GlassError, SceneError
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
+from eyelume.kernels.bins import PlaneGrid, eye_plane_grid, picture_grid
 from eyelume.kernels.sampling import cos_power_tables, profile_tables
+from eyelume.kernels.tables import (
+    N_AIM,
+    CameraTables,
+    LedTable,
+    LensTable,
+    SceneTables,
+    SurfaceTable,
+)
 from eyelume.scene.eye import eye_indices, iris_root_radius, limbus_geometry
 from eyelume.scene.focus import check_focus
 from eyelume.scene.glass import Glass, load_catalog
@@ -68,41 +86,56 @@ def gaze_rotation(eye, share_vertical: float = 1.0, share_horizontal: float = 1.
 
 @dataclass
 class CompiledScene:
-    """Flat arrays of a scene for the kernels (see module docstring)."""
+    """A scene compiled for the kernels (see module docstring): ``tables`` is what a forward
+    trace reads, ``camera`` what the camera-side estimator adds."""
 
     scene: Scene
-    sf: np.ndarray
-    si: np.ndarray
+    tables: SceneTables
+    camera: CameraTables
     surface_names: list[str]
-    lf: np.ndarray
     lens_indices: list[float]
     stop_index: int
-    image_z: float
-    leds: np.ndarray  # (N, 6): emission point xyz, unit axis xyz
-    led_centres: np.ndarray
-    alpha_grid: np.ndarray  # rad, uniform on [0, π/2]
-    cdf_grid: np.ndarray
-    intensity_grid: np.ndarray  # I(α)/I₀ on alpha_grid
+    led_centres: np.ndarray  # (N, 3) LED body centres, world mm
     omega_eff: float  # sr: Φ_LED = I₀ · omega_eff
-    sensor: np.ndarray  # width, height, cols, rows
-    plane: np.ndarray  # width, height, cols, rows
     tallies: list[str]
 
-    def kernel_arrays(self) -> tuple:
-        """What the forward kernels read, as one tuple: (sf, si, lf, image_z, leds, alpha_grid,
-        cdf_grid, sensor, plane, max_events)."""
-        return (
-            self.sf,
-            self.si,
-            self.lf,
-            self.image_z,
-            self.leds,
-            self.alpha_grid,
-            self.cdf_grid,
-            self.sensor,
-            self.plane,
-            self.scene.run.max_events,
-        )
+    @property
+    def surfaces(self) -> SurfaceTable:
+        return self.tables.surfaces
+
+    @property
+    def lens(self) -> LensTable:
+        return self.tables.lens
+
+    @property
+    def led(self) -> LedTable:
+        return self.tables.leds
+
+    @property
+    def picture(self) -> PlaneGrid:
+        """The picture's pixels on the sensor (:func:`eyelume.kernels.bins.picture_grid`)."""
+        return self.tables.picture
+
+    @property
+    def eye_plane(self) -> PlaneGrid:
+        """The eye-plane receiver's bins (:func:`eyelume.kernels.bins.eye_plane_grid`)."""
+        return self.tables.eye_plane
+
+    @property
+    def sf(self) -> np.ndarray:
+        return self.tables.surfaces.sf
+
+    @property
+    def si(self) -> np.ndarray:
+        return self.tables.surfaces.si
+
+    @property
+    def lf(self) -> np.ndarray:
+        return self.tables.lens.lf
+
+    @property
+    def image_z(self) -> float:
+        return self.tables.lens.image_z
 
     @property
     def led_power_w(self) -> float:
@@ -112,7 +145,50 @@ class CompiledScene:
     @property
     def emitted_w(self) -> float:
         """Radiant power of all LEDs (W)."""
-        return self.led_power_w * self.leds.shape[0]
+        return self.led_power_w * self.tables.leds.points.shape[0]
+
+
+@dataclass
+class SurfaceSpec:
+    """One non-sequential surface before packing into a row of the surface table (columns in
+    :mod:`eyelume.kernels.geometry`): shape, placement (``origin``, world → local ``rot``), its
+    bounding sphere (centre, radius), conic data, clips, what it does to light, and the ledger
+    entries of its two sides (default: its name)."""
+
+    name: str
+    shape: int
+    origin: np.ndarray
+    rot: np.ndarray
+    bound: tuple[np.ndarray, float]
+    curv: float = 0.0
+    conic: float = 0.0
+    radius: float = 0.0
+    clip_r: tuple[float, float] = (0.0, math.inf)
+    clip_z: tuple[float, float] = (-math.inf, math.inf)
+    action: int = G.ACT_OPAQUE
+    n_a: float = 1.0
+    n_b: float = 1.0
+    refl: float = 0.0
+    absorb: float = 0.0
+    fresnel: bool = False
+    rho_a: float = 0.0
+    rho_b: float = 0.0
+    tally_a: str = ""
+    tally_b: str = ""
+
+    def float_row(self) -> np.ndarray:
+        f = np.zeros(G.N_FLOAT)
+        f[G.OX : G.OZ + 1] = self.origin
+        f[G.R00 : G.R22 + 1] = np.asarray(self.rot, dtype=float).ravel()
+        f[G.CURV], f[G.CONIC], f[G.RADIUS] = self.curv, self.conic, self.radius
+        f[G.RMIN2], f[G.RMAX2] = self.clip_r[0] ** 2, self.clip_r[1] ** 2
+        f[G.ZLO], f[G.ZHI] = self.clip_z
+        f[G.BX : G.BZ + 1] = self.bound[0]
+        f[G.BR] = self.bound[1]
+        f[G.N_A], f[G.N_B] = self.n_a, self.n_b
+        f[G.REFL], f[G.ABSORB] = self.refl, self.absorb
+        f[G.RHO_A], f[G.RHO_B] = self.rho_a, self.rho_b
+        return f
 
 
 class _Table:
@@ -129,46 +205,14 @@ class _Table:
             self.tallies.append(name)
         return self.tallies.index(name)
 
-    def add(
-        self,
-        name: str,
-        shape: int,
-        origin,
-        rot: np.ndarray,
-        bound: tuple[np.ndarray, float],
-        *,
-        curv: float = 0.0,
-        conic: float = 0.0,
-        radius: float = 0.0,
-        clip_r: tuple[float, float] = (0.0, math.inf),
-        clip_z: tuple[float, float] = (-math.inf, math.inf),
-        action: int = G.ACT_OPAQUE,
-        n_a: float = 1.0,
-        n_b: float = 1.0,
-        refl: float = 0.0,
-        absorb: float = 0.0,
-        fresnel: bool = False,
-        rho_a: float = 0.0,
-        rho_b: float = 0.0,
-        tally_a: str = "",
-        tally_b: str = "",
-    ) -> None:
-        f = np.zeros(G.N_FLOAT)
-        f[G.OX : G.OZ + 1] = origin
-        f[G.R00 : G.R22 + 1] = np.asarray(rot, dtype=float).ravel()
-        f[G.CURV], f[G.CONIC], f[G.RADIUS] = curv, conic, radius
-        f[G.RMIN2], f[G.RMAX2] = clip_r[0] ** 2, clip_r[1] ** 2
-        f[G.ZLO], f[G.ZHI] = clip_z
-        f[G.BX : G.BZ + 1] = bound[0]
-        f[G.BR] = bound[1]
-        f[G.N_A], f[G.N_B] = n_a, n_b
-        f[G.REFL], f[G.ABSORB] = refl, absorb
-        f[G.RHO_A], f[G.RHO_B] = rho_a, rho_b
+    def add(self, name: str, shape: int, origin, rot, bound, **options) -> None:
+        """Append a surface: the arguments of :class:`SurfaceSpec`."""
+        spec = SurfaceSpec(name, shape, origin, rot, bound, **options)
         i = np.zeros(G.N_INT, dtype=np.int64)
-        i[G.SHAPE], i[G.ACTION], i[G.FRESNEL] = shape, action, int(fresnel)
-        i[G.TALLY_A] = self.tally(tally_a or name)
-        i[G.TALLY_B] = self.tally(tally_b or name)
-        self.rows_f.append(f)
+        i[G.SHAPE], i[G.ACTION], i[G.FRESNEL] = spec.shape, spec.action, int(spec.fresnel)
+        i[G.TALLY_A] = self.tally(spec.tally_a or name)
+        i[G.TALLY_B] = self.tally(spec.tally_b or name)
+        self.rows_f.append(spec.float_row())
         self.rows_i.append(i)
         self.names.append(name)
 
@@ -328,14 +372,10 @@ def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray) -> None:
                 )
 
 
-def compile_scene(scene: Scene) -> CompiledScene:
-    """Turn a validated scene into the arrays the kernels read. Raises SceneError on geometry
-    that cannot exist (crossing lens surfaces, LEDs inside the lens, a missing glass)."""
-    wl = scene.wavelength_nm
-    t = _Table()
-    eye = scene.eye
-
-    # --- imaging lens (sequential) -------------------------------------------------------------
+def _compile_lens(scene: Scene) -> tuple[LensTable, list[float], int]:
+    """The imaging lens (sequential): its table with clear semi-diameters from a real-ray trace
+    of the eye-plane field, its indices and the stop's row. Raises SceneError for a lens with no
+    positive power, crossing surfaces or one that blocks the field."""
     idx, _ = lens_indices(scene)
     stop = next(j for j, s in enumerate(scene.lens.surfaces) if s.stop)
     par = lens_paraxial(scene, idx)
@@ -351,15 +391,24 @@ def compile_scene(scene: Scene) -> CompiledScene:
             f"lens: only {rim_fraction:.0%} of the rim rays of the eye-plane field pass the lens "
             "(total internal reflection or a surface missed): check the prescription"
         )
+    return LensTable(lf, float(image_z)), idx, stop
 
-    # --- eye (eye frame: z' = −z) --------------------------------------------------------------
-    for j, s in enumerate(eye.surfaces):
+
+def _check_eye_apertures(scene: Scene) -> None:
+    for j, s in enumerate(scene.eye.surfaces):
         if math.isnan(float(sag(curvature(s.radius_mm), s.conic, s.semi_diameter_mm))):
             raise SceneError(
                 f"eye.surfaces.{j}.semi_diameter_mm = {s.semi_diameter_mm} exceeds the extent of "
                 f"the '{s.name}' conicoid (radius {s.radius_mm} mm, conic {s.conic})"
             )
-    n_eye = eye_indices(eye, wl)
+
+
+def _add_eye(t: _Table, scene: Scene) -> None:
+    """The eye's refracting surfaces, iris, retina and sclera (eye frame: z' = −z), placed by
+    the gaze rotation and the head offset."""
+    eye = scene.eye
+    _check_eye_apertures(scene)
+    n_eye = eye_indices(eye, scene.wavelength_nm)
     r_l, z_l, z_c = limbus_geometry(eye)
     zprime = 0.0
     surf_z: list[float] = []
@@ -453,37 +502,43 @@ def compile_scene(scene: Scene) -> CompiledScene:
         tally_a="fundus (inside of the sclera)",
     )
 
-    # --- face -----------------------------------------------------------------------------------
-    if scene.face.enabled:
-        for tis in scene.face.tissues:
-            rho = scene.face.skin_reflectance if tis.reflectance is None else tis.reflectance
-            # a lid takes its share of the eye's vertical rotation, about the same centre
-            turn, _ = gaze_rotation(eye, share_vertical=tis.follows_gaze, share_horizontal=0.0)
-            rot = _frame(turn @ np.asarray(tis.axis, dtype=float))
-            o = head + centre_rot + turn @ (np.asarray(tis.center_mm, dtype=float) - centre_rot)
-            zlo, zhi = tis.clip_z_mm
-            if tis.shape == "sphere":
-                shape, bound = G.SHAPE_SPHERE, (o, tis.radius_mm * 1.000001)
-            elif tis.shape == "cylinder":
-                half = max(abs(zlo), abs(zhi))
-                shape, bound = G.SHAPE_CYLINDER, (o, math.hypot(tis.radius_mm, half) * 1.000001)
-            else:
-                shape, bound = G.SHAPE_CONIC, (o, tis.clip_r_mm[1] * 1.000001)
-            t.add(
-                tis.name,
-                shape,
-                o,
-                rot,
-                bound,
-                radius=tis.radius_mm,
-                clip_r=tis.clip_r_mm,
-                clip_z=(zlo, zhi),
-                rho_b=rho,
-            )
 
-    # --- LEDs -------------------------------------------------------------------------------------
-    centres, axes = led_poses(scene.leds)
-    _check_leds(scene, centres, lf)
+def _add_face(t: _Table, scene: Scene) -> None:
+    """The face's tissues (Lambertian on their outside); a lid follows its share of the gaze."""
+    if not scene.face.enabled:
+        return
+    eye = scene.eye
+    _, centre_rot = gaze_rotation(eye)
+    head = np.asarray(scene.head_offset_mm, dtype=float)
+    for tis in scene.face.tissues:
+        rho = scene.face.skin_reflectance if tis.reflectance is None else tis.reflectance
+        # a lid takes its share of the eye's vertical rotation, about the same centre
+        turn, _ = gaze_rotation(eye, share_vertical=tis.follows_gaze, share_horizontal=0.0)
+        rot = _frame(turn @ np.asarray(tis.axis, dtype=float))
+        o = head + centre_rot + turn @ (np.asarray(tis.center_mm, dtype=float) - centre_rot)
+        zlo, zhi = tis.clip_z_mm
+        if tis.shape == "sphere":
+            shape, bound = G.SHAPE_SPHERE, (o, tis.radius_mm * 1.000001)
+        elif tis.shape == "cylinder":
+            half = max(abs(zlo), abs(zhi))
+            shape, bound = G.SHAPE_CYLINDER, (o, math.hypot(tis.radius_mm, half) * 1.000001)
+        else:
+            shape, bound = G.SHAPE_CONIC, (o, tis.clip_r_mm[1] * 1.000001)
+        t.add(
+            tis.name,
+            shape,
+            o,
+            rot,
+            bound,
+            radius=tis.radius_mm,
+            clip_r=tis.clip_r_mm,
+            clip_z=(zlo, zhi),
+            rho_b=rho,
+        )
+
+
+def _add_led_bodies(t: _Table, scene: Scene, centres: np.ndarray, axes: np.ndarray) -> None:
+    """Each LED's body: an absorbing sphere (the ledger's "LED bodies")."""
     rb = scene.leds.body_diameter_mm / 2
     for i, c in enumerate(centres):
         t.add(
@@ -496,6 +551,12 @@ def compile_scene(scene: Scene) -> CompiledScene:
             tally_a="LED bodies",
             tally_b="LED bodies",
         )
+
+
+def _led_table(scene: Scene, centres: np.ndarray, axes: np.ndarray) -> tuple[LedTable, float]:
+    """The LEDs as point sources on the front of their bodies, with the profile's sampling and
+    evaluation tables; and Ω_eff (sr). Raises SceneError for a profile that cannot be used."""
+    rb = scene.leds.body_diameter_mm / 2
     emit = centres + axes * rb * (1.0 + 1e-9)
     profile = scene.leds.profile
     try:
@@ -509,8 +570,20 @@ def compile_scene(scene: Scene) -> CompiledScene:
             intensity_grid = np.asarray(shape(alpha_grid), dtype=float)
     except ValueError as exc:
         raise SceneError(str(exc)) from None
+    table = LedTable(
+        np.ascontiguousarray(emit),
+        np.ascontiguousarray(axes, dtype=float),
+        float(scene.leds.radiant_intensity_w_sr),
+        np.ascontiguousarray(alpha_grid),
+        np.ascontiguousarray(cdf_grid),
+        np.ascontiguousarray(intensity_grid),
+    )
+    return table, omega
 
-    # --- the lens entrance: hands rays to the sequential trace ----------------------------
+
+def _add_lens_entrance(t: _Table, lf: np.ndarray) -> None:
+    """The lens's first surface in the non-sequential table: it hands rays to the sequential
+    trace (its back and mount count as vignetting)."""
     o = np.array([0.0, 0.0, lf[0, Q.L_Z]])
     t.add(
         "imaging lens",
@@ -526,34 +599,122 @@ def compile_scene(scene: Scene) -> CompiledScene:
         tally_b="lens mount (vignetted)",
     )
 
-    cs = CompiledScene(
+
+def _grids(scene: Scene) -> tuple[PlaneGrid, PlaneGrid]:
+    """The picture's pixels on the sensor and the eye-plane receiver's bins."""
+    sn, ep = scene.sensor, scene.eye_plane
+    return (
+        picture_grid(sn.width_mm, sn.height_mm, sn.cols, sn.rows),
+        eye_plane_grid(ep.width_mm, ep.height_mm, ep.cols, ep.rows),
+    )
+
+
+#: Share of scatter directions aimed at the pupil (the rest cosine-sampled, which keeps the
+#: estimator unbiased where refraction bends an aimed ray away from the lens).
+AIM_PROBABILITY = 0.8
+_PUPIL_MARGIN = 1.15  # real pupils of off-axis points are larger and shifted: aim a bit wider
+
+#: The surfaces lit and seen through the cornea: the iris and its root (_add_eye).
+_IRIS = ("iris", "iris root")
+
+
+def _mirrored_lens(lf: np.ndarray) -> np.ndarray:
+    rev = lf[::-1].copy()
+    rev[:, Q.L_Z] = -rev[:, Q.L_Z]
+    rev[:, Q.L_CURV] = -rev[:, Q.L_CURV]
+    rev[:, Q.L_N0], rev[:, Q.L_N1] = lf[::-1, Q.L_N1].copy(), lf[::-1, Q.L_N0].copy()
+    return np.ascontiguousarray(rev)
+
+
+def _exit_pupil(scene: Scene, idx: list[float], stop: int, lf: np.ndarray) -> tuple[float, float]:
+    """World z and signed magnification of the paraxial exit pupil (the stop imaged by the
+    surfaces after it)."""
+    par = lens_paraxial(scene, idx)
+    rear = ParaxialSystem(par.curvatures[stop + 1 :], par.gaps[stop + 1 :], par.indices[stop + 1 :])
+    xp_z = float(lf[-1, Q.L_Z] + rear.image_distance(par.gaps[stop]))
+    return xp_z, float(rear.magnification(par.gaps[stop]))
+
+
+def _cornea_image(scene: Scene, pupil_z: float, pupil_r: float) -> tuple[float, float]:
+    """World z and radius of the entrance pupil's paraxial image through the cornea."""
+    eye = eye_paraxial(scene)
+    cornea = ParaxialSystem(eye.curvatures[:2], eye.gaps[:1], eye.indices[:3])
+    image = cornea.image_distance(pupil_z)  # beyond the posterior cornea, eye frame
+    mag = cornea.magnification(pupil_z)
+    z_eye = scene.eye.surfaces[0].thickness_mm + image
+    return -z_eye, abs(mag) * pupil_r
+
+
+def _camera_tables(
+    scene: Scene, surfaces: SurfaceTable, names: list[str], lens: LensTable, idx, stop: int
+) -> CameraTables:
+    """The camera as the camera-side estimator sees it (:class:`CameraTables`; the physics in
+    :mod:`eyelume.estimators.camera`)."""
+    lf = lens.lf
+    par = lens_paraxial(scene, idx)
+    ep_z = scene.lens.object_distance_mm + par.entrance_pupil_position(stop)
+    ep_r = par.efl / scene.lens.f_number / 2.0 * _PUPIL_MARGIN
+    lf_rev = _mirrored_lens(lf)
+    lf_open = lf_rev.copy()
+    lf_open[:, Q.L_SD] = np.inf
+    xp_z, xp_m = _exit_pupil(scene, idx, stop, lf)
+    aim = np.zeros((surfaces.sf.shape[0], 2, N_AIM))
+    iris_z, iris_r = _cornea_image(scene, ep_z, ep_r)
+    through = np.array([name in _IRIS for name in names], dtype=np.int64)
+    for s, name in enumerate(names):
+        if surfaces.si[s, G.ACTION] != G.ACT_OPAQUE:
+            continue
+        for side, rho_col in ((0, G.RHO_A), (1, G.RHO_B)):
+            if surfaces.sf[s, rho_col] <= 0.0:
+                continue
+            if name in _IRIS:
+                aim[s, side] = (0.0, 0.0, iris_z, iris_r, AIM_PROBABILITY)
+            elif name == "retina" or (name == "sclera" and side == 0):
+                continue  # inside the eye behind the crystalline lens: cosine sampling
+            else:
+                aim[s, side] = (0.0, 0.0, ep_z, ep_r, AIM_PROBABILITY)
+    return CameraTables(
+        lf_rev,
+        np.ascontiguousarray(lf_open),
+        int(lf.shape[0] - 1 - stop),
+        float(lf[stop, Q.L_SD]),
+        float(lens.image_z),
+        float(lf[-1, Q.L_Z]),
+        xp_z,
+        xp_m,
+        float(ep_z),
+        aim,
+        through,
+        names.index(scene.eye.surfaces[0].name),
+    )
+
+
+def compile_scene(scene: Scene) -> CompiledScene:
+    """Turn a validated scene into the tables the kernels read, one scene part at a time.
+    Raises SceneError on geometry that cannot exist (crossing lens surfaces, LEDs inside the
+    lens, a missing glass)."""
+    t = _Table()
+    lens, idx, stop = _compile_lens(scene)
+    _add_eye(t, scene)
+    _add_face(t, scene)
+    centres, axes = led_poses(scene.leds)
+    _check_leds(scene, centres, lens.lf)
+    _add_led_bodies(t, scene, centres, axes)
+    led, omega = _led_table(scene, centres, axes)
+    _add_lens_entrance(t, lens.lf)
+    surfaces = SurfaceTable(
+        np.ascontiguousarray(np.stack(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))
+    )
+    picture, eye_plane = _grids(scene)
+    tables = SceneTables(surfaces, lens, led, picture, eye_plane, int(scene.run.max_events))
+    return CompiledScene(
         scene=scene,
-        sf=np.ascontiguousarray(np.stack(t.rows_f)),
-        si=np.ascontiguousarray(np.stack(t.rows_i)),
+        tables=tables,
+        camera=_camera_tables(scene, surfaces, t.names, lens, idx, stop),
         surface_names=t.names,
-        lf=lf,
         lens_indices=idx,
         stop_index=stop,
-        image_z=image_z,
-        leds=np.ascontiguousarray(np.hstack([emit, axes])),
         led_centres=centres,
-        alpha_grid=alpha_grid,
-        cdf_grid=cdf_grid,
-        intensity_grid=np.ascontiguousarray(intensity_grid),
         omega_eff=omega,
-        sensor=np.array(
-            [scene.sensor.width_mm, scene.sensor.height_mm, scene.sensor.cols, scene.sensor.rows],
-            float,
-        ),
-        plane=np.array(
-            [
-                scene.eye_plane.width_mm,
-                scene.eye_plane.height_mm,
-                scene.eye_plane.cols,
-                scene.eye_plane.rows,
-            ],
-            float,
-        ),
         tallies=t.tallies,
     )
-    return cs

@@ -128,8 +128,8 @@ def system_sections(cs: CompiledScene, extent: float = 60.0) -> list[Section]:
         r = np.linspace(-sd, sd, 201)
         z = cs.lf[j, Q.L_Z] + sag(c, k, np.abs(r))
         out.append(Section(f"lens S{j + 1}", "lens", z, r))
-    half = cs.sensor[1] / 2
+    half = cs.picture.height_mm / 2
     out.append(Section("sensor", "sensor", np.full(2, cs.image_z), np.array([-half, half])))
-    half = cs.plane[1] / 2
+    half = cs.eye_plane.height_mm / 2
     out.append(Section("eye plane", "receiver", np.zeros(2), np.array([-half, half])))
     return out

@@ -23,6 +23,7 @@ from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import CompiledScene, compile_scene
+from eyelume.detectors.receivers import BinnedPlane
 from eyelume.estimators.fast_run import RunControl, direct_eye_plane, trace_fast, warm_up
 from eyelume.estimators.forward import trace_forward, trace_paths
 from eyelume.layout import Section, system_sections
@@ -87,8 +88,7 @@ class RenderResult:
 
     @property
     def pixel_area_mm2(self) -> float:
-        sn = self.scene.sensor
-        return (sn.width_mm / sn.cols) * (sn.height_mm / sn.rows)
+        return BinnedPlane.picture(self.scene.sensor).bin_area_mm2
 
     def region_stats(self) -> dict[str, dict]:
         """Mean, median pixel and their relative standard errors per region."""
@@ -153,13 +153,9 @@ def warm_up_forward(cs: CompiledScene) -> float | None:
         return 0.0
     t0 = time.perf_counter()
     z = np.zeros
-    kernel(0, 0, 0, cs.kernel_arrays(), z((1, 1, 1), np.int64), z((1, 1, 1), np.int64),
+    kernel(0, 0, 0, cs.tables, z((1, 1, 1), np.int64), z((1, 1, 1), np.int64),
            z((1, len(cs.tallies)), np.int64), z(1, np.int64))  # fmt: skip
     return time.perf_counter() - t0
-
-
-def _extent(width: float, height: float) -> tuple[float, float, float, float]:
-    return (-width / 2, width / 2, -height / 2, height / 2)
 
 
 def render(
@@ -203,11 +199,9 @@ def render(
     sc = cs.scene
     seed = sc.run.seed if seed is None else int(seed)
     estimator = estimator or ("forward" if rays is not None else sc.run.estimator)
-    extents = {
-        "picture_extent_mm": _extent(sc.sensor.width_mm, sc.sensor.height_mm),
-        "plane_extent_mm": _extent(sc.eye_plane.width_mm, sc.eye_plane.height_mm),
-    }
-    px_area = (sc.sensor.width_mm / sc.sensor.cols) * (sc.sensor.height_mm / sc.sensor.rows)
+    picture, eye_plane = BinnedPlane(cs.picture), BinnedPlane(cs.eye_plane)
+    extents = {"picture_extent_mm": picture.extent_mm, "plane_extent_mm": eye_plane.extent_mm}
+    px_area = picture.bin_area_mm2
     if estimator == "fast":
         kernel_s = warm_up(cs) or None
         t0 = time.perf_counter()
@@ -255,9 +249,7 @@ def render(
     fc = trace_forward(cs, rays, seed, batch_size, progress)
     wall = time.perf_counter() - t0
     w = cs.emitted_w / fc.rays
-    pl_area = (sc.eye_plane.width_mm / sc.eye_plane.cols) * (
-        sc.eye_plane.height_mm / sc.eye_plane.rows
-    )
+    pl_area = eye_plane.bin_area_mm2
     return RenderResult(
         scene=sc,
         estimator="forward",

@@ -21,14 +21,15 @@ from eyelume.estimators.camera import (
     A_R,
     A_Z,
     N_AIM,
+    Mat2,
     aim_at_stop,
     aim_chief,
-    camera_tables,
     into_scene,
 )
 from eyelume.kernels import geometry as G
 from eyelume.kernels.rng import stream_start
 from eyelume.kernels.sampling import cos_power_tables
+from eyelume.kernels.tables import Facet, LedTable, SurfaceTable
 from eyelume.scene.sources import cos_power_exponent
 
 SMALL = {"sensor.cols": 29, "sensor.rows": 22}  # 1.6 mm pixels: quick renders
@@ -36,23 +37,14 @@ SMALL = {"sensor.cols": 29, "sensor.rows": 22}  # 1.6 mm pixels: quick renders
 
 @pytest.fixture(scope="module")
 def cam(paper_compiled):
-    return camera_tables(paper_compiled)
+    return paper_compiled.camera
 
 
 def aimed_values(cs, cam, xs, ys, n, seed):
     """A_stop cos²θ / (d² |det J|) for n uniform stop points seen from sensor point (xs, ys):
     each an unbiased estimate of ∫ cos θ dω over the directions that pass the lens."""
     rng = np.random.default_rng(seed)
-    found, qcx, qcy, a11, a12, a21, a22 = aim_chief(
-        cam.lf_open,
-        cam.k_stop,
-        cs.image_z,
-        cam.rear_z,
-        cam.exit_pupil_z,
-        cam.exit_pupil_magnification,
-        xs,
-        ys,
-    )
+    found, qcx, qcy, (a11, a12, a21, a22) = aim_chief(cam, xs, ys)
     assert found
     det_c = a11 * a22 - a12 * a21
     r = cam.stop_radius * np.sqrt(rng.random(n))
@@ -60,23 +52,17 @@ def aimed_values(cs, cam, xs, ys, n, seed):
     out = np.empty(n)
     for i, (tx, ty) in enumerate(zip(r * np.cos(phi), r * np.sin(phi), strict=True)):
         ok, qx, qy, det = aim_at_stop(
-            cam.lf_open,
-            cam.k_stop,
-            cs.image_z,
-            cam.rear_z,
+            cam,
             xs,
             ys,
             tx,
             ty,
             qcx + (a22 * tx - a12 * ty) / det_c,
             qcy + (-a21 * tx + a11 * ty) / det_c,
-            a11,
-            a12,
-            a21,
-            a22,
+            Mat2(a11, a12, a21, a22),
         )
         assert ok
-        passed, *_, g = into_scene(cam.lf_rev, cs.image_z, xs, ys, qx, qy, cam.rear_z)
+        passed, *_, g = into_scene(cam, xs, ys, qx, qy)
         out[i] = math.pi * cam.stop_radius**2 * g / det if passed else 0.0
     return out
 
@@ -89,33 +75,18 @@ def test_stop_aiming_gives_the_image_space_cone_on_axis(paper_compiled, cam):
     rim = aimed_values(cs, cam, 0.0, 0.0, 1, 2)  # just to exercise the path at one point
     assert rim.shape == (1,)
     # the rim ray: aim at the stop's edge, then its direction at the sensor gives θ′
-    found, qcx, qcy, a11, a12, a21, a22 = aim_chief(
-        cam.lf_open,
-        cam.k_stop,
-        cs.image_z,
-        cam.rear_z,
-        cam.exit_pupil_z,
-        cam.exit_pupil_magnification,
-        0.0,
-        0.0,
-    )
+    found, qcx, qcy, (a11, a12, a21, a22) = aim_chief(cam, 0.0, 0.0)
     det_c = a11 * a22 - a12 * a21
     t = cam.stop_radius * (1 - 1e-9)
     ok, qx, qy, _ = aim_at_stop(
-        cam.lf_open,
-        cam.k_stop,
-        cs.image_z,
-        cam.rear_z,
+        cam,
         0.0,
         0.0,
         t,
         0.0,
         qcx + a22 * t / det_c,
         qcy - a21 * t / det_c,
-        a11,
-        a12,
-        a21,
-        a22,
+        Mat2(a11, a12, a21, a22),
     )
     assert ok
     sin2 = (qx**2 + qy**2) / (qx**2 + qy**2 + (cs.image_z - cam.rear_z) ** 2)
@@ -129,7 +100,7 @@ def test_stop_aiming_agrees_with_hit_or_miss_off_axis(paper_compiled, cam):
     the hit-or-miss one (uniform points of a disk twice the paraxial pupil's size, kept when
     the lens passes them) within 4σ."""
     cs = paper_compiled
-    xs, ys = 0.45 * cs.sensor[0], 0.45 * cs.sensor[1]
+    xs, ys = 0.45 * cs.picture.width_mm, 0.45 * cs.picture.height_mm
     aimed = aimed_values(cs, cam, xs, ys, 2000, 3)
     s = (cs.image_z - cam.rear_z) / (cs.image_z - cam.exit_pupil_z)
     cx, cy = xs * (1 - s), ys * (1 - s)
@@ -141,13 +112,7 @@ def test_stop_aiming_agrees_with_hit_or_miss_off_axis(paper_compiled, cam):
     hits = np.empty(n)
     for i in range(n):
         passed, *_, g = into_scene(
-            cam.lf_rev,
-            cs.image_z,
-            xs,
-            ys,
-            cx + r[i] * math.cos(phi[i]),
-            cy + r[i] * math.sin(phi[i]),
-            cam.rear_z,
+            cam, xs, ys, cx + r[i] * math.cos(phi[i]), cy + r[i] * math.sin(phi[i])
         )
         hits[i] = math.pi * rad**2 * g if passed else 0.0
     assert 0.1 < (hits > 0).mean() < 0.5  # the wide disk holds the whole passing pupil
@@ -159,24 +124,23 @@ def test_stop_aiming_agrees_with_hit_or_miss_off_axis(paper_compiled, cam):
 def test_direct_irradiance_is_inverse_square_with_both_cosines():
     """E = I₀ cosᵐα cos θ / d² from one LED in empty space."""
     m = cos_power_exponent(22.5)
-    ag, _, _ = cos_power_tables(m)
+    ag, cdf, _ = cos_power_tables(m)
     ig = np.cos(ag) ** m
     axis = np.array([0.3, -0.2, -1.0])
     axis /= np.linalg.norm(axis)
-    leds = np.array([[5.0, 8.0, 60.0, *axis]])
-    sf = np.zeros((0, G.N_FLOAT))
-    si = np.zeros((0, G.N_INT), dtype=np.int64)
+    leds = LedTable(np.array([[5.0, 8.0, 60.0]]), np.array([axis]), 0.015, ag, cdf, ig)
+    surfaces = SurfaceTable(np.zeros((0, G.N_FLOAT)), np.zeros((0, G.N_INT), dtype=np.int64))
     rng = np.random.default_rng(5)
     for _ in range(20):
         p = np.array([*rng.uniform(-15, 15, 2), rng.uniform(-5, 5)])
         n = np.array([*rng.uniform(-0.4, 0.4, 2), 1.0])
         n /= np.linalg.norm(n)
-        v = leds[0, :3] - p
+        v = leds.points[0] - p
         d = np.linalg.norm(v)
         cos_a = -(v / d) @ axis
         cos_t = (v / d) @ n
         expected = 0.015 * cos_a**m * cos_t / d**2 if cos_t > 0 and cos_a > 0 else 0.0
-        got = F.direct_irradiance(sf, si, leds, 0.015, ag, ig, *p, *n)
+        got = F.direct_irradiance(surfaces, leds, Facet(*p, *n))
         assert got == pytest.approx(expected, rel=1e-6, abs=1e-15)
 
 
@@ -277,6 +241,6 @@ def test_fast_eye_plane_is_the_direct_irradiance(paper_compiled):
 
 def test_camera_tables_reject_nothing_on_the_default_scene(paper_compiled):
     cs = compile_scene(eyelume.load_scene("paper2005", SMALL))
-    t = camera_tables(cs)
+    t = cs.camera
     assert 0 < t.stop_radius < cs.lf[:, 3].max()
     assert t.k_stop == cs.lf.shape[0] - 1 - cs.stop_index

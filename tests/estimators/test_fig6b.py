@@ -57,7 +57,7 @@ def predicted_glints(cs):
     radius = sc.eye.surfaces[0].radius_mm
     centre = np.array([0.0, 0.0, -radius])
     out = []
-    for src in cs.leds[:, :3]:
+    for src in cs.led.points:
         u = (src - centre) / np.linalg.norm(src - centre)
         d_obj = np.linalg.norm(src - centre) - radius
         d_img = 1.0 / (-2.0 / radius - 1.0 / d_obj)  # negative: behind the surface

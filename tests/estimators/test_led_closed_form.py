@@ -26,7 +26,7 @@ def closed_form_eye_plane(cs) -> np.ndarray:
     sc = cs.scene
     f = relative_intensity(sc.leds.profile)
     i0 = sc.leds.radiant_intensity_w_sr
-    src, axis = cs.leds[0, :3], cs.leds[0, 3:]
+    src, axis = cs.led.points[0], cs.led.axes[0]
     w, h, nc, nr = (
         sc.eye_plane.width_mm,
         sc.eye_plane.height_mm,

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import importlib.util
+import importlib
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -24,12 +25,12 @@ from eyelume.kernels.sequential import (
 
 
 def _benchmark_module(name: str):
-    """A module of ``benchmarks/`` (not a package), loaded from its file."""
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    """A module of ``benchmarks/`` (not a package), imported by name with that folder on the path
+    as the benchmarks import it (Numba's cache re-imports a kernel's module by its name)."""
+    folder = str(Path(__file__).resolve().parents[2] / "benchmarks")
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
+    return importlib.import_module(name)
 
 
 def _lens(*surfaces):

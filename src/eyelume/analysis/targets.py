@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from eyelume.detectors.receivers import BinnedPlane
 from eyelume.errors import InputFileError
 from eyelume.scene.model import EyePlane
 from eyelume.scene.textfile import decode_text
@@ -32,10 +33,7 @@ def _plane(plane) -> EyePlane:
 
 def bin_centres(plane: EyePlane) -> tuple[np.ndarray, np.ndarray]:
     """Bin-centre coordinates (mm) of the eye plane: x (cols,) from −x, y (rows,) from +y."""
-    p = _plane(plane)
-    x = -p.width_mm / 2 + (np.arange(p.cols) + 0.5) * p.width_mm / p.cols
-    y = p.height_mm / 2 - (np.arange(p.rows) + 0.5) * p.height_mm / p.rows
-    return x, y
+    return BinnedPlane.eye_plane(_plane(plane)).centres()
 
 
 def _check_delta(delta: float) -> float:

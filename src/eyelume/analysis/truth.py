@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from eyelume.compile import CompiledScene, gaze_rotation
-from eyelume.estimators.camera import CameraTables, aim_chief, camera_tables, into_scene
+from eyelume.detectors.receivers import BinnedPlane
+from eyelume.estimators.camera import CameraTables, aim_chief, into_scene
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import reflect, refract
 from eyelume.kernels.sampling import orthonormal_basis
@@ -36,24 +37,15 @@ _EDGE_POINTS = 72
 
 def sensor_to_pixel(cs: CompiledScene, xs: float, ys: float) -> tuple[float, float]:
     """Sensor-plane point (mm) → picture pixel coordinates (OpenCV convention, module doc)."""
-    sw, sh, cols, rows = cs.sensor
-    return (0.5 * sw - xs) / sw * cols - 0.5, (ys + 0.5 * sh) / sh * rows - 0.5
+    c, r = BinnedPlane(cs.picture).to_pixel(xs, ys)
+    return float(c), float(r)
 
 
 def _chief_ray(cs: CompiledScene, cam: CameraTables, xs: float, ys: float):
-    found, qx, qy, *_ = aim_chief(
-        cam.lf_open,
-        cam.k_stop,
-        cs.image_z,
-        cam.rear_z,
-        cam.exit_pupil_z,
-        cam.exit_pupil_magnification,
-        xs,
-        ys,
-    )
-    if not found:
+    chief = aim_chief(cam, xs, ys)
+    if not chief.found:
         return None
-    ok, x, y, z, dx, dy, dz, _ = into_scene(cam.lf_rev, cs.image_z, xs, ys, qx, qy, cam.rear_z)
+    ok, x, y, z, dx, dy, dz, _ = into_scene(cam, xs, ys, chief.qx, chief.qy)
     return (np.array([x, y, z]), np.array([dx, dy, dz])) if ok else None
 
 
@@ -249,7 +241,7 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     its apparent centre in pixels, the pixel positions of 72 points of its edge, the share of
     them visible (not under a lid); per LED its glint's pixel position, or why there is none.
     """
-    v = _view(cs, cam or camera_tables(cs))
+    v = _view(cs, cam or cs.camera)
     eye = cs.scene.eye
     depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
     return {
@@ -261,5 +253,5 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
         "pixel_convention": "OpenCV: pixel (column c, row r) centred at (x, y) = (c, r); row 0 "
         "at the top of the upright picture",
         "pupil": _pupil_truth(v, v.turned(np.array([0.0, 0.0, -depth]))),
-        "glints": [_glint_truth(v, k, led) for k, led in enumerate(cs.leds[:, :3])],
+        "glints": [_glint_truth(v, k, led) for k, led in enumerate(cs.led.points)],
     }

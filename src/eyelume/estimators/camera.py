@@ -1,6 +1,7 @@
 """The camera as the fast estimator sees it: the lens traced backwards and the pupils to aim at.
 
-Three things, all in world millimetres, computed once per compiled scene:
+The kernels here read the compiled scene's :class:`~eyelume.kernels.tables.CameraTables`
+(``cs.camera``, built once by :func:`eyelume.compile._camera_tables`), all in world millimetres:
 
 * ``lf_rev``: the lens table mirrored through z = 0 and reversed, so the forward sequential
   kernel traces a ray from the sensor back out into the scene (mirror z → −z on the way in and
@@ -22,87 +23,109 @@ Three things, all in world millimetres, computed once per compiled scene:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
-import numpy as np
 from numba import njit
 
-from eyelume.compile import CompiledScene, eye_paraxial, lens_paraxial
-from eyelume.kernels import geometry as G
+from eyelume.compile import AIM_PROBABILITY
 from eyelume.kernels import sequential as Q
-from eyelume.scene.optics import ParaxialSystem
+from eyelume.kernels.tables import A_P, A_R, A_X, A_Y, A_Z, N_AIM, CameraTables
 
 __all__ = [
     "CameraTables",
-    "camera_tables",
     "into_scene",
     "aim_at_stop",
     "aim_chief",
     "AIM_PROBABILITY",
+    "A_X",
+    "A_Y",
+    "A_Z",
+    "A_R",
+    "A_P",
+    "N_AIM",
+    "Mat2",
+    "SceneRay",
+    "StopAim",
+    "ChiefRay",
 ]
 
-#: Share of scatter directions aimed at the pupil (the rest cosine-sampled, which keeps the
-#: estimator unbiased where refraction bends an aimed ray away from the lens).
-AIM_PROBABILITY = 0.8
-_PUPIL_MARGIN = 1.15  # real pupils of off-axis points are larger and shifted: aim a bit wider
 
-#: The surfaces lit and seen through the cornea: the iris and its root (compile.py).
-_IRIS = ("iris", "iris root")
+class Mat2(NamedTuple):
+    """A 2 × 2 matrix [[a11, a12], [a21, a22]] (a Jacobian ∂(stop point)/∂(q))."""
 
-# aim table columns: disk centre xyz (its normal is world +z), radius, probability
-A_X, A_Y, A_Z, A_R, A_P = range(5)
-N_AIM = 5
+    a11: float
+    a12: float
+    a21: float
+    a22: float
 
 
-@dataclass
-class CameraTables:
-    """See the module docstring. ``aim[s, side]`` with side 0 = A, 1 = B."""
+class SceneRay(NamedTuple):
+    """A ray traced from the sensor out of the lens: ``passed`` the lens, its origin on the
+    lens's first surface and unit direction into the scene (world mm), and ``g`` = cos²θ / d²
+    (θ its angle with the axis at the sensor, d the sensor-to-last-vertex-plane distance)."""
 
-    lf_rev: np.ndarray
-    lf_open: np.ndarray  # lf_rev with open apertures (for aiming)
-    k_stop: int  # the stop's row in lf_rev
-    stop_radius: float
-    rear_z: float
-    exit_pupil_z: float
-    exit_pupil_magnification: float
-    entrance_pupil_z: float
-    entrance_pupil_radius: float
-    aim: np.ndarray  # (n_surfaces, 2, N_AIM)
-    through_cornea: np.ndarray  # (n_surfaces,) 1 where NEE goes through the cornea (the iris)
+    passed: bool
+    x: float
+    y: float
+    z: float
+    dx: float
+    dy: float
+    dz: float
+    g: float
 
 
-def _mirrored_lens(lf: np.ndarray) -> np.ndarray:
-    rev = lf[::-1].copy()
-    rev[:, Q.L_Z] = -rev[:, Q.L_Z]
-    rev[:, Q.L_CURV] = -rev[:, Q.L_CURV]
-    rev[:, Q.L_N0], rev[:, Q.L_N1] = lf[::-1, Q.L_N1].copy(), lf[::-1, Q.L_N0].copy()
-    return np.ascontiguousarray(rev)
+class StopAim(NamedTuple):
+    """The ray from a sensor point through a stop point: ``found``, its crossing (qx, qy) of the
+    last vertex plane and |det ∂(stop point)/∂(q)| there."""
+
+    found: bool
+    qx: float
+    qy: float
+    det: float
+
+
+class ChiefRay(NamedTuple):
+    """The chief ray of a sensor point (through the stop's centre): ``found``, its crossing
+    (qx, qy) of the last vertex plane and the Jacobian J = ∂(stop point)/∂(q) there."""
+
+    found: bool
+    qx: float
+    qy: float
+    jac: Mat2
 
 
 @njit(cache=True, inline="always")
-def into_scene(lf_rev, image_z, xs, ys, qx, qy, rear_z):
+def into_scene(cam, xs, ys, qx, qy):
     """Trace the ray from sensor point (xs, ys) toward point (qx, qy) of the last vertex plane
-    back out of the lens. Returns (passed, x, y, z, dx, dy, dz, cos²θ / d²) with the ray leaving
-    the lens's first surface into the scene, θ its angle with the axis at the sensor and d the
-    sensor-to-plane distance along it."""
-    dx, dy, dz = qx - xs, qy - ys, rear_z - image_z
+    back out of the lens (``cam.lf_rev``: mirror z → −z on the way in and out). Returns a
+    :class:`SceneRay`."""
+    dx, dy, dz = qx - xs, qy - ys, cam.rear_z - cam.image_z
     d2 = dx * dx + dy * dy + dz * dz
     d = math.sqrt(d2)
     dx, dy, dz = dx / d, dy / d, dz / d
     status, x, y, z, ex, ey, ez, _, _ = Q.trace_lens(
-        lf_rev, xs, ys, -image_z, dx, dy, -dz, None, 0, False
+        cam.lf_rev, xs, ys, -cam.image_z, dx, dy, -dz, None, 0, False
     )
-    return status == Q.LENS_PASSED, x, y, -z, ex, ey, -ez, dz * dz / d2
+    return SceneRay(status == Q.LENS_PASSED, x, y, -z, ex, ey, -ez, dz * dz / d2)
 
 
 @njit(cache=True)
-def _stop_crossing(lf_open, k_stop, image_z, xs, ys, qx, qy, rear_z):
+def _stop_crossing(cam, xs, ys, qx, qy):
     """Where the ray from sensor point (xs, ys) toward (qx, qy, rear_z) meets the stop (surface
     ``k_stop`` of the reversed lens, apertures open); NaN if it fails before."""
-    dx, dy, dz = qx - xs, qy - ys, rear_z - image_z
+    dx, dy, dz = qx - xs, qy - ys, cam.rear_z - cam.image_z
     inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
     status, x, y, _, _, _, _, _, _ = Q.trace_lens(
-        lf_open[: k_stop + 1], xs, ys, -image_z, dx * inv, dy * inv, -dz * inv, None, 0, False
+        cam.lf_open[: cam.k_stop + 1],
+        xs,
+        ys,
+        -cam.image_z,
+        dx * inv,
+        dy * inv,
+        -dz * inv,
+        None,
+        0,
+        False,
     )
     if status != Q.LENS_PASSED:
         return math.nan, math.nan
@@ -110,127 +133,64 @@ def _stop_crossing(lf_open, k_stop, image_z, xs, ys, qx, qy, rear_z):
 
 
 @njit(cache=True, inline="always")
-def paraxial_crossing(image_z, rear_z, xp_z, xp_m, xs, ys, tx, ty):
+def paraxial_crossing(cam, xs, ys, tx, ty):
     """First-order guess of the last-vertex-plane crossing of the ray from sensor point (xs, ys)
-    through stop point (tx, ty): toward the stop point's image in the paraxial exit pupil (z
-    ``xp_z``, magnification ``xp_m``)."""
-    s = (image_z - rear_z) / (image_z - xp_z)
-    return xs * (1.0 - s) + s * xp_m * tx, ys * (1.0 - s) + s * xp_m * ty
+    through stop point (tx, ty): toward the stop point's image in the paraxial exit pupil."""
+    s = (cam.image_z - cam.rear_z) / (cam.image_z - cam.exit_pupil_z)
+    m = cam.exit_pupil_magnification
+    return xs * (1.0 - s) + s * m * tx, ys * (1.0 - s) + s * m * ty
 
 
 @njit(cache=True)
-def stop_jacobian(lf_open, k_stop, image_z, rear_z, xs, ys, qx, qy):
+def stop_jacobian(cam, xs, ys, qx, qy):
     """Stop point (sx, sy) of the ray toward (qx, qy) and the Jacobian ∂(s)/∂(q) by forward
-    differences (step 1e-4 mm). Returns (sx, sy, j11, j12, j21, j22); NaN if the ray fails."""
+    differences (step 1e-4 mm). Returns (sx, sy, Mat2); NaN if the ray fails."""
     h = 1e-4
-    sx, sy = _stop_crossing(lf_open, k_stop, image_z, xs, ys, qx, qy, rear_z)
-    s1x, s1y = _stop_crossing(lf_open, k_stop, image_z, xs, ys, qx + h, qy, rear_z)
-    s2x, s2y = _stop_crossing(lf_open, k_stop, image_z, xs, ys, qx, qy + h, rear_z)
-    return sx, sy, (s1x - sx) / h, (s2x - sx) / h, (s1y - sy) / h, (s2y - sy) / h
+    sx, sy = _stop_crossing(cam, xs, ys, qx, qy)
+    s1x, s1y = _stop_crossing(cam, xs, ys, qx + h, qy)
+    s2x, s2y = _stop_crossing(cam, xs, ys, qx, qy + h)
+    return sx, sy, Mat2((s1x - sx) / h, (s2x - sx) / h, (s1y - sy) / h, (s2y - sy) / h)
 
 
 @njit(cache=True)
-def aim_at_stop(lf_open, k_stop, image_z, rear_z, xs, ys, tx, ty, qx, qy, a11, a12, a21, a22):
+def aim_at_stop(cam, xs, ys, tx, ty, qx, qy, a):
     """Crossing (qx, qy) of the last vertex plane by the ray from sensor point (xs, ys) through
     stop point (tx, ty), from the guess (qx, qy), and the Jacobian ∂(stop point)/∂(q) there.
 
-    Chord iterations with the approximate Jacobian (a11 … a22) until the stop point is met
-    within 1e-4 mm (a shift of the sampled stop point that changes its density by ~1e-5), then
-    the Jacobian by forward differences at the solution.
-    Returns (found, qx, qy, |det ∂(stop point)/∂(q)|).
+    Chord iterations with the approximate Jacobian ``a`` (a :class:`Mat2`) until the stop point
+    is met within 1e-4 mm (a shift of the sampled stop point that changes its density by
+    ~1e-5), then the Jacobian by forward differences at the solution. Returns a
+    :class:`StopAim`.
     """
-    det = a11 * a22 - a12 * a21
+    det = a.a11 * a.a22 - a.a12 * a.a21
     if det == 0.0 or math.isnan(det):
-        return False, qx, qy, 0.0
+        return StopAim(False, qx, qy, 0.0)
     for _ in range(20):
-        sx, sy = _stop_crossing(lf_open, k_stop, image_z, xs, ys, qx, qy, rear_z)
+        sx, sy = _stop_crossing(cam, xs, ys, qx, qy)
         if math.isnan(sx):
-            return False, qx, qy, 0.0
+            return StopAim(False, qx, qy, 0.0)
         ex, ey = sx - tx, sy - ty
         if ex * ex + ey * ey < 1e-8:
-            _, _, j11, j12, j21, j22 = stop_jacobian(
-                lf_open, k_stop, image_z, rear_z, xs, ys, qx, qy
-            )
-            d = abs(j11 * j22 - j12 * j21)
-            return not math.isnan(d) and d > 0.0, qx, qy, d
-        qx -= (a22 * ex - a12 * ey) / det
-        qy -= (-a21 * ex + a11 * ey) / det
-    return False, qx, qy, 0.0
+            _, _, j = stop_jacobian(cam, xs, ys, qx, qy)
+            d = abs(j.a11 * j.a22 - j.a12 * j.a21)
+            return StopAim(not math.isnan(d) and d > 0.0, qx, qy, d)
+        qx -= (a.a22 * ex - a.a12 * ey) / det
+        qy -= (-a.a21 * ex + a.a11 * ey) / det
+    return StopAim(False, qx, qy, 0.0)
 
 
 @njit(cache=True)
-def aim_chief(lf_open, k_stop, image_z, rear_z, xp_z, xp_m, xs, ys):
+def aim_chief(cam, xs, ys):
     """The chief ray of sensor point (xs, ys) — through the stop's centre — by Newton's method
-    from the paraxial guess. Returns (found, qx, qy, j11, j12, j21, j22), J = ∂(stop)/∂(q)."""
-    qx, qy = paraxial_crossing(image_z, rear_z, xp_z, xp_m, xs, ys, 0.0, 0.0)
+    from the paraxial guess. Returns a :class:`ChiefRay`."""
+    qx, qy = paraxial_crossing(cam, xs, ys, 0.0, 0.0)
     for _ in range(20):
-        sx, sy, j11, j12, j21, j22 = stop_jacobian(lf_open, k_stop, image_z, rear_z, xs, ys, qx, qy)
-        det = j11 * j22 - j12 * j21
+        sx, sy, j = stop_jacobian(cam, xs, ys, qx, qy)
+        det = j.a11 * j.a22 - j.a12 * j.a21
         if math.isnan(det) or det == 0.0:
             break
         if sx * sx + sy * sy < 1e-12:
-            return True, qx, qy, j11, j12, j21, j22
-        qx -= (j22 * sx - j12 * sy) / det
-        qy -= (-j21 * sx + j11 * sy) / det
-    return False, qx, qy, 0.0, 0.0, 0.0, 0.0
-
-
-def _exit_pupil(cs: CompiledScene) -> tuple[float, float]:
-    """World z and signed magnification of the paraxial exit pupil (the stop imaged by the
-    surfaces after it)."""
-    par = lens_paraxial(cs.scene, cs.lens_indices)
-    st = cs.stop_index
-    rear = ParaxialSystem(par.curvatures[st + 1 :], par.gaps[st + 1 :], par.indices[st + 1 :])
-    xp_z = float(cs.lf[-1, Q.L_Z] + rear.image_distance(par.gaps[st]))
-    return xp_z, float(rear.magnification(par.gaps[st]))
-
-
-def _cornea_image(cs: CompiledScene, pupil_z: float, pupil_r: float) -> tuple[float, float]:
-    """World z and radius of the entrance pupil's paraxial image through the cornea."""
-    eye = eye_paraxial(cs.scene)
-    cornea = ParaxialSystem(eye.curvatures[:2], eye.gaps[:1], eye.indices[:3])
-    image = cornea.image_distance(pupil_z)  # beyond the posterior cornea, eye frame
-    mag = cornea.magnification(pupil_z)
-    z_eye = cs.scene.eye.surfaces[0].thickness_mm + image
-    return -z_eye, abs(mag) * pupil_r
-
-
-def camera_tables(cs: CompiledScene) -> CameraTables:
-    """Build the camera tables of a compiled scene."""
-    sc = cs.scene
-    par = lens_paraxial(sc, cs.lens_indices)
-    ep_z = sc.lens.object_distance_mm + par.entrance_pupil_position(cs.stop_index)
-    ep_r = par.efl / sc.lens.f_number / 2.0 * _PUPIL_MARGIN
-    lf_rev = _mirrored_lens(cs.lf)
-    lf_open = lf_rev.copy()
-    lf_open[:, Q.L_SD] = np.inf
-    xp_z, xp_m = _exit_pupil(cs)
-    k_stop = cs.lf.shape[0] - 1 - cs.stop_index
-    aim = np.zeros((cs.sf.shape[0], 2, N_AIM))
-    iris_z, iris_r = _cornea_image(cs, ep_z, ep_r)
-    through = np.array([name in _IRIS for name in cs.surface_names], dtype=np.int64)
-    for s, name in enumerate(cs.surface_names):
-        if cs.si[s, G.ACTION] != G.ACT_OPAQUE:
-            continue
-        for side, rho_col in ((0, G.RHO_A), (1, G.RHO_B)):
-            if cs.sf[s, rho_col] <= 0.0:
-                continue
-            if name in _IRIS:
-                aim[s, side] = (0.0, 0.0, iris_z, iris_r, AIM_PROBABILITY)
-            elif name == "retina" or (name == "sclera" and side == 0):
-                continue  # inside the eye behind the crystalline lens: cosine sampling
-            else:
-                aim[s, side] = (0.0, 0.0, ep_z, ep_r, AIM_PROBABILITY)
-    return CameraTables(
-        lf_rev,
-        lf_open,
-        k_stop,
-        float(cs.lf[cs.stop_index, Q.L_SD]),
-        float(cs.lf[-1, Q.L_Z]),
-        xp_z,
-        xp_m,
-        ep_z,
-        ep_r,
-        aim,
-        through,
-    )
+            return ChiefRay(True, qx, qy, j)
+        qx -= (j.a22 * sx - j.a12 * sy) / det
+        qy -= (-j.a21 * sx + j.a11 * sy) / det
+    return ChiefRay(False, qx, qy, Mat2(0.0, 0.0, 0.0, 0.0))

@@ -33,11 +33,13 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
 from eyelume.errors import GeometryError
+from eyelume.kernels.bins import eye_plane_grid, from_grid
 from eyelume.scene.model import EyePlane, LedArray, LedProfile, Scene
 from eyelume.scene.sources import cos_power_exponent, read_profile_table
 
@@ -162,21 +164,49 @@ def led_emitters(
 
 
 def plane_edges(plane: EyePlane) -> tuple[np.ndarray, np.ndarray]:
-    """Bin edges of the eye plane (mm): x from −w/2 (column 0) and y from +h/2 (row 0)."""
-    x = np.linspace(-plane.width_mm / 2, plane.width_mm / 2, plane.cols + 1)
-    y = np.linspace(plane.height_mm / 2, -plane.height_mm / 2, plane.rows + 1)
+    """Bin edges of the eye plane (mm): x from −w/2 (column 0) and y from +h/2 (row 0), by the
+    one definition of its bins (:mod:`eyelume.kernels.bins`)."""
+    g = eye_plane_grid(plane.width_mm, plane.height_mm, plane.cols, plane.rows)
+    x, _ = from_grid.py_func(g, np.arange(plane.cols + 1.0), 0.0)
+    _, y = from_grid.py_func(g, 0.0, np.arange(plane.rows + 1.0))
     return x, y
 
 
 # --- the integral --------------------------------------------------------------------------------
 
 
-def _profile_args(profile: LedProfile) -> tuple[int, float, np.ndarray, np.ndarray]:
+class Profile(NamedTuple):
+    """An LED profile for the integral: ``kind`` (cos^m or table), m, and the table's angles
+    (rad) and relative intensities (unused for cos^m)."""
+
+    kind: int
+    m: float
+    alpha_t: np.ndarray
+    value_t: np.ndarray
+
+
+class Quadrature(NamedTuple):
+    """Gauss–Legendre nodes (bins, order) and weights of the x (columns) and y (rows) bins."""
+
+    xn: np.ndarray
+    xw: np.ndarray
+    yn: np.ndarray
+    yw: np.ndarray
+
+
+class Emitters(NamedTuple):
+    """Emission points and unit axes (configurations, LEDs, 3), world mm."""
+
+    emit: np.ndarray
+    axes: np.ndarray
+
+
+def _profile_args(profile: LedProfile) -> Profile:
     if profile.kind == "cos_power":
         m = cos_power_exponent(profile.half_intensity_angle_deg)
-        return _KIND_COS_POWER, m, np.zeros(2), np.zeros(2)
+        return Profile(_KIND_COS_POWER, m, np.zeros(2), np.zeros(2))
     alpha_t, value_t = read_profile_table(profile.table_csv)  # the tracers' table
-    return _KIND_TABLE, 0.0, np.ascontiguousarray(alpha_t), np.ascontiguousarray(value_t)
+    return Profile(_KIND_TABLE, 0.0, np.ascontiguousarray(alpha_t), np.ascontiguousarray(value_t))
 
 
 @functools.lru_cache(maxsize=16)
@@ -208,8 +238,11 @@ def _table_value(c: float, alpha_t: np.ndarray, value_t: np.ndarray) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def _row_means(c, r, xn, xw, yn, yw, emit, axes, kind, m, alpha_t, value_t, out):
+def _row_means(c, r, quad, emitters, profile, out):
     """out[c, r, :] = mean over each bin of row r of Σ_l f(α) cos β / r² (1/mm²), config c."""
+    xn, xw, yn, yw = quad
+    emit, axes = emitters
+    kind, m, alpha_t, value_t = profile
     cols = out.shape[2]
     nled = emit.shape[1]
     order_x = xn.shape[1]
@@ -244,19 +277,27 @@ def _row_means(c, r, xn, xw, yn, yw, emit, axes, kind, m, alpha_t, value_t, out)
 
 
 @njit(cache=True, parallel=True)
-def _bin_means_parallel(xn, xw, yn, yw, emit, axes, kind, m, alpha_t, value_t, out):
+def _bin_means_parallel(quad, emitters, profile, out):
     n, rows = out.shape[0], out.shape[1]
+    # parfors pass only arrays and scalars into a prange body (numba#10139): the structs are
+    # taken apart here and rebuilt inside it
+    (xn, xw, yn, yw), (emit, axes), (kind, m, alpha_t, value_t) = quad, emitters, profile
     for task in prange(n * rows):
         c = task // rows
-        _row_means(c, task - c * rows, xn, xw, yn, yw, emit, axes, kind, m, alpha_t, value_t, out)
+        q, e, p = (
+            Quadrature(xn, xw, yn, yw),
+            Emitters(emit, axes),
+            Profile(kind, m, alpha_t, value_t),
+        )
+        _row_means(c, task - c * rows, q, e, p, out)
 
 
 @njit(cache=True)
-def _bin_means_serial(xn, xw, yn, yw, emit, axes, kind, m, alpha_t, value_t, out):
+def _bin_means_serial(quad, emitters, profile, out):
     n, rows = out.shape[0], out.shape[1]
     for task in range(n * rows):
         c = task // rows
-        _row_means(c, task - c * rows, xn, xw, yn, yw, emit, axes, kind, m, alpha_t, value_t, out)
+        _row_means(c, task - c * rows, quad, emitters, profile, out)
 
 
 #: Below this many bin integrals (configurations × bins × LEDs × points) one thread is quicker
@@ -276,7 +317,7 @@ def _means(xe, ye, emit, axes, profile_args, order) -> np.ndarray:
     out = np.empty((emit.shape[0], yn.shape[0], xn.shape[0]))
     work = out.size * emit.shape[1] * order * order
     kernel = _bin_means_parallel if work >= _PARALLEL_MIN_WORK else _bin_means_serial
-    kernel(xn, xw, yn, yw, emit, axes, *profile_args, out)
+    kernel(Quadrature(xn, xw, yn, yw), Emitters(emit, axes), profile_args, out)
     return out
 
 

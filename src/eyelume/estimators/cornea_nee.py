@@ -21,12 +21,14 @@ its focus, maps directions to iris points one to one, so the root is unique.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 from numba import njit
 
 from eyelume.kernels import geometry as G
-from eyelume.kernels.interact import fresnel_reflectance, refract
-from eyelume.kernels.sampling import relative_intensity_at
+from eyelume.kernels.interact import interface_at, refract
+from eyelume.kernels.sampling import led_cos_alpha, radiant_intensity
+from eyelume.kernels.tables import Ray
 
 __all__ = ["irradiance_through_cornea"]
 
@@ -34,24 +36,52 @@ _H = 1e-4  # mm: forward-difference step on the eye plane
 _TOL2 = 1e-10  # mm²: converged when h(a) is within 1e-5 mm of x
 
 
+class Receiver(NamedTuple):
+    """A point x on a Lambertian face: position (mm), unit normal n toward the light and the
+    tangent basis e1, e2 in which the refracted ray's miss h(a) is measured."""
+
+    x: float
+    y: float
+    z: float
+    nx: float
+    ny: float
+    nz: float
+    e1: tuple
+    e2: tuple
+
+
+class CorneaHit(NamedTuple):
+    """The ray toward eye-plane point a through both cornea surfaces: ``ok``, its miss (u, v) in
+    the receiver's tangent plane, the transmittance T and the initial direction."""
+
+    ok: bool
+    u: float
+    v: float
+    trans: float
+    dx: float
+    dy: float
+    dz: float
+
+
 @njit(cache=True, inline="always")
-def _transmit(sf, si, s, x, y, z, dx, dy, dz):
-    """Refract at surface s (the ray arrives from side A). Returns (ok, dx, dy, dz, T)."""
-    nx, ny, nz = G.surface_normal(sf, si, s, x, y, z)
+def _transmit(surfaces, s, ray):
+    """Refract ``ray`` (its origin on surface s, arriving from side A). Returns (ok, dx, dy,
+    dz, T)."""
+    x, y, z, dx, dy, dz = ray
+    nx, ny, nz = G.surface_normal(surfaces.sf, surfaces.si, s, x, y, z)
     cos_d = dx * nx + dy * ny + dz * nz
     if cos_d <= 0.0:
         return False, dx, dy, dz, 0.0
-    n1, n2 = sf[s, G.N_A], sf[s, G.N_B]
-    ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
-    r = fresnel_reflectance(cos_d, n1, n2) if si[s, G.FRESNEL] else sf[s, G.REFL]
-    return ok, tx, ty, tz, 1.0 - r - sf[s, G.ABSORB]
+    f = interface_at(surfaces.sf, surfaces.si, s, cos_d)
+    ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
+    return ok, tx, ty, tz, 1.0 - f.reflectance - f.absorptance
 
 
 @njit(cache=True)
-def _through(sf, si, cornea, px, py, pz, ax, ay, x, y, z, nx, ny, nz, e1, e2):
-    """The ray from (px, py, pz) toward (ax, ay, 0) through both cornea surfaces, met with the
-    plane through (x, y, z) of normal n. Returns (ok, u, v, T, dx, dy, dz) with (u, v) the hit
-    in the plane's basis (e1, e2) from (x, y, z) and (dx, dy, dz) the initial direction."""
+def _through(surfaces, cornea, led, ax, ay, rc):
+    """The ray from LED point ``led`` (px, py, pz) toward (ax, ay, 0) through both cornea
+    surfaces, met with the receiver's tangent plane. Returns a :class:`CorneaHit`."""
+    px, py, pz = led
     dx, dy, dz = ax - px, ay - py, -pz
     inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
     dx, dy, dz = dx * inv, dy * inv, dz * inv
@@ -59,90 +89,87 @@ def _through(sf, si, cornea, px, py, pz, ax, ay, x, y, z, nx, ny, nz, e1, e2):
     rx, ry, rz = dx, dy, dz
     trans = 1.0
     for s in (cornea, cornea + 1):
-        t = G.intersect_surface(sf, si, s, ox, oy, oz, rx, ry, rz, math.inf)
+        t = G.intersect_surface(surfaces.sf, surfaces.si, s, ox, oy, oz, rx, ry, rz, math.inf)
         if t < 0.0:
-            return False, 0.0, 0.0, 0.0, dx, dy, dz
+            return CorneaHit(False, 0.0, 0.0, 0.0, dx, dy, dz)
         ox, oy, oz = ox + t * rx, oy + t * ry, oz + t * rz
-        ok, rx, ry, rz, tr = _transmit(sf, si, s, ox, oy, oz, rx, ry, rz)
+        ok, rx, ry, rz, tr = _transmit(surfaces, s, Ray(ox, oy, oz, rx, ry, rz))
         if not ok:
-            return False, 0.0, 0.0, 0.0, dx, dy, dz
+            return CorneaHit(False, 0.0, 0.0, 0.0, dx, dy, dz)
         trans *= tr
-    den = rx * nx + ry * ny + rz * nz
+    den = rx * rc.nx + ry * rc.ny + rz * rc.nz
     if den >= 0.0:  # must arrive on the lit side, against n
-        return False, 0.0, 0.0, 0.0, dx, dy, dz
-    t = ((x - ox) * nx + (y - oy) * ny + (z - oz) * nz) / den
-    hx, hy, hz = ox + t * rx - x, oy + t * ry - y, oz + t * rz - z
-    u = hx * e1[0] + hy * e1[1] + hz * e1[2]
-    v = hx * e2[0] + hy * e2[1] + hz * e2[2]
-    return t > 0.0, u, v, trans, dx, dy, dz
+        return CorneaHit(False, 0.0, 0.0, 0.0, dx, dy, dz)
+    t = ((rc.x - ox) * rc.nx + (rc.y - oy) * rc.ny + (rc.z - oz) * rc.nz) / den
+    hx, hy, hz = ox + t * rx - rc.x, oy + t * ry - rc.y, oz + t * rz - rc.z
+    u = hx * rc.e1[0] + hy * rc.e1[1] + hz * rc.e1[2]
+    v = hx * rc.e2[0] + hy * rc.e2[1] + hz * rc.e2[2]
+    return CorneaHit(t > 0.0, u, v, trans, dx, dy, dz)
 
 
 @njit(cache=True)
-def _path_is_clear(sf, si, cornea, target, px, py, pz, dx, dy, dz, x, y, z):
-    """Whether the refracted path from the LED meets, in turn, the anterior cornea, the
-    posterior cornea and surface ``target`` at (x, y, z) with nothing else in between."""
-    ox, oy, oz = px, py, pz
+def _path_is_clear(surfaces, cornea, target, ray, rc):
+    """Whether the refracted path from the LED (``ray``) meets, in turn, the anterior cornea,
+    the posterior cornea and surface ``target`` at the receiver point with nothing else in
+    between."""
+    sf, si = surfaces.sf, surfaces.si
+    ox, oy, oz, dx, dy, dz = ray
     for s in (cornea, cornea + 1):
         hit, t = G.nearest_hit(sf, si, ox, oy, oz, dx, dy, dz)
         if hit != s:
             return False
         ox, oy, oz = ox + t * dx, oy + t * dy, oz + t * dz
-        ok, dx, dy, dz, _ = _transmit(sf, si, s, ox, oy, oz, dx, dy, dz)
+        ok, dx, dy, dz, _ = _transmit(surfaces, s, Ray(ox, oy, oz, dx, dy, dz))
         if not ok:
             return False
     hit, t = G.nearest_hit(sf, si, ox, oy, oz, dx, dy, dz)
     if hit != target:
         return False
-    ex, ey, ez = ox + t * dx - x, oy + t * dy - y, oz + t * dz - z
+    ex, ey, ez = ox + t * dx - rc.x, oy + t * dy - rc.y, oz + t * dz - rc.z
     return ex * ex + ey * ey + ez * ez < 1e-6
 
 
 @njit(cache=True)
-def irradiance_through_cornea(
-    sf, si, cornea, target, leds, i0, ag, ig, x, y, z, nx, ny, nz, e1, e2
-):
-    """Irradiance (W/mm²) at (x, y, z) on surface ``target`` (unit normal n toward the light,
-    tangent basis e1, e2) from every LED, along paths refracted by the anterior (surface
-    ``cornea``) and posterior (``cornea + 1``) cornea. See the module docstring."""
+def irradiance_through_cornea(surfaces, cornea, target, leds, rc):
+    """Irradiance (W/mm²) at receiver point ``rc`` (a :class:`Receiver`) on surface ``target``
+    from every LED (:class:`~eyelume.kernels.tables.LedTable`), along paths refracted by the
+    anterior (surface ``cornea``) and posterior (``cornea + 1``) cornea. See the module
+    docstring."""
+    x, y, z = rc.x, rc.y, rc.z
     e_total = 0.0
-    for k in range(leds.shape[0]):
-        px, py, pz = leds[k, 0], leds[k, 1], leds[k, 2]
+    for k in range(leds.points.shape[0]):
+        led = (leds.points[k, 0], leds.points[k, 1], leds.points[k, 2])
+        px, py, pz = led
         # straight-line guess: where the segment LED → x crosses the eye plane
         f = pz / (pz - z)
         ax, ay = px + (x - px) * f, py + (y - py) * f
         found = False
         for _ in range(30):
-            ok, u, v, trans, dx, dy, dz = _through(
-                sf, si, cornea, px, py, pz, ax, ay, x, y, z, nx, ny, nz, e1, e2
-            )
-            if not ok:
+            h = _through(surfaces, cornea, led, ax, ay, rc)
+            if not h.ok:
                 break
-            ok1, u1, v1, _, _, _, _ = _through(
-                sf, si, cornea, px, py, pz, ax + _H, ay, x, y, z, nx, ny, nz, e1, e2
-            )
-            ok2, u2, v2, _, _, _, _ = _through(
-                sf, si, cornea, px, py, pz, ax, ay + _H, x, y, z, nx, ny, nz, e1, e2
-            )
-            if not (ok1 and ok2):
+            h1 = _through(surfaces, cornea, led, ax + _H, ay, rc)
+            h2 = _through(surfaces, cornea, led, ax, ay + _H, rc)
+            if not (h1.ok and h2.ok):
                 break
-            j11, j21 = (u1 - u) / _H, (v1 - v) / _H
-            j12, j22 = (u2 - u) / _H, (v2 - v) / _H
+            j11, j21 = (h1.u - h.u) / _H, (h1.v - h.v) / _H
+            j12, j22 = (h2.u - h.u) / _H, (h2.v - h.v) / _H
             det = j11 * j22 - j12 * j21
             if det == 0.0 or math.isnan(det):
                 break
-            if u * u + v * v < _TOL2:
+            if h.u * h.u + h.v * h.v < _TOL2:
                 found = True
                 break
-            ax -= (j22 * u - j12 * v) / det
-            ay -= (-j21 * u + j11 * v) / det
+            ax -= (j22 * h.u - j12 * h.v) / det
+            ay -= (-j21 * h.u + j11 * h.v) / det
         if not found:
             continue
-        cos_a = dx * leds[k, 3] + dy * leds[k, 4] + dz * leds[k, 5]
-        if cos_a <= 0.0:
+        dx, dy, dz = h.dx, h.dy, h.dz
+        if led_cos_alpha(leds, k, dx, dy, dz) <= 0.0:
             continue
-        if not _path_is_clear(sf, si, cornea, target, px, py, pz, dx, dy, dz, x, y, z):
+        if not _path_is_clear(surfaces, cornea, target, Ray(px, py, pz, dx, dy, dz), rc):
             continue
         d2 = (ax - px) ** 2 + (ay - py) ** 2 + pz * pz
         dw_da = abs(dz) / d2  # solid angle per unit eye-plane area at a
-        e_total += i0 * relative_intensity_at(cos_a, ag, ig) * trans * dw_da / abs(det)
+        e_total += radiant_intensity(leds, k, dx, dy, dz) * h.trans * dw_da / abs(det)
     return e_total

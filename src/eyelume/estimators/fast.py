@@ -45,29 +45,46 @@ paths, seed) only.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
 from eyelume.kernels import geometry as G
-from eyelume.kernels.interact import fresnel_reflectance, reflect, refract
+from eyelume.kernels.bins import PlaneGrid, bin_of, from_grid
+from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.rng import mix64, next_uniform, stream_start
 from eyelume.kernels.sampling import (
     about_axis,
+    aimed_mixture,
+    aimed_mixture_pdf,
     cosine_hemisphere,
+    disk_stratum,
+    led_cos_alpha,
     orthonormal_basis,
-    relative_intensity_at,
+    radiant_intensity,
+    uniform_cone,
 )
 from eyelume.kernels.sequential import LENS_PASSED, trace_lens
+from eyelume.kernels.tables import (
+    CameraTables,
+    Facet,
+    LedTable,
+    LensTable,
+    Ray,
+    SceneTables,
+    SurfaceTable,
+)
 
-from .camera import A_P, A_R, A_X, A_Y, A_Z, aim_at_stop, aim_chief, into_scene
-from .cornea_nee import irradiance_through_cornea
+from .camera import aim_at_stop, aim_chief, into_scene
+from .cornea_nee import Receiver, irradiance_through_cornea
 
 __all__ = [
     "camera_pass",
     "light_pass",
     "direct_irradiance",
     "primary_surfaces",
+    "plane_direct",
 ]
 
 _INV_PI = 1.0 / math.pi
@@ -75,94 +92,117 @@ _LIGHT_TAG = 0x4C49474854  # separates the light paths' streams from the camera 
 _PLANE_TAG = 0x504C414E45  # … and the eye-plane points'
 
 
+class Branch(NamedTuple):
+    """The part of a camera path split off at the first refracting interface (the reflected
+    ray and its throughput); ``beta`` 0 when there is none."""
+
+    ray: Ray
+    beta: float
+
+
+class Vertex(NamedTuple):
+    """The first Lambertian vertex of a camera path: surface ``s`` (−1: none), the point, its
+    normal toward the arriving light and the throughput × ρ there."""
+
+    s: int
+    x: float
+    y: float
+    z: float
+    nx: float
+    ny: float
+    nz: float
+    beta: float
+
+
+class CameraPath(NamedTuple):
+    """What :func:`_camera_branch` hands back: the stream state, the radiance gathered, the
+    split-off branch (``has_branch``) and the first Lambertian vertex."""
+
+    state: np.uint64
+    radiance: float
+    has_branch: bool
+    branch: Branch
+    vertex: Vertex
+
+
+class Specular(NamedTuple):
+    """The analog choice at a refracting interface: stream state, whether the path goes on
+    (not absorbed), whether it was transmitted, and its new direction."""
+
+    state: np.uint64
+    alive: bool
+    transmitted: bool
+    dx: float
+    dy: float
+    dz: float
+
+
 @njit(cache=True)
-def led_irradiance(sf, si, leds, k, i0, alpha_grid, intensity_grid, x, y, z, nx, ny, nz):
-    """Irradiance (W/mm²) at world point (x, y, z) on a face with unit normal n (toward the
-    light's side) from LED k, if it sees the point along a straight unoccluded segment:
-    I₀ f(α) cos θ / d²."""
-    vx, vy, vz = leds[k, 0] - x, leds[k, 1] - y, leds[k, 2] - z
+def led_irradiance(surfaces, leds, k, facet):
+    """Irradiance (W/mm²) at a :class:`~eyelume.kernels.tables.Facet` (a world point on a face
+    and its unit normal toward the light's side) from LED k of ``leds``
+    (:class:`~eyelume.kernels.tables.LedTable`), if it sees the point along a straight
+    unoccluded segment: I(α) cos θ / d²."""
+    x, y, z, nx, ny, nz = facet
+    vx, vy, vz = leds.points[k, 0] - x, leds.points[k, 1] - y, leds.points[k, 2] - z
     d2 = vx * vx + vy * vy + vz * vz
     d = math.sqrt(d2)
     ux, uy, uz = vx / d, vy / d, vz / d
     cos_s = ux * nx + uy * ny + uz * nz
     if cos_s <= 0.0:
         return 0.0
-    cos_a = -(ux * leds[k, 3] + uy * leds[k, 4] + uz * leds[k, 5])
-    if cos_a <= 0.0:
+    if led_cos_alpha(leds, k, -ux, -uy, -uz) <= 0.0:
         return 0.0
-    s, t = G.nearest_hit(sf, si, x, y, z, ux, uy, uz)
+    s, t = G.nearest_hit(surfaces.sf, surfaces.si, x, y, z, ux, uy, uz)
     if s >= 0 and t < d * (1.0 - 1e-9) - 1e-6:
         return 0.0
-    return i0 * relative_intensity_at(cos_a, alpha_grid, intensity_grid) * cos_s / d2
+    return radiant_intensity(leds, k, -ux, -uy, -uz) * cos_s / d2
 
 
 @njit(cache=True)
-def direct_irradiance(sf, si, leds, i0, alpha_grid, intensity_grid, x, y, z, nx, ny, nz):
-    """Irradiance (W/mm²) at world point (x, y, z) on a face with unit normal n (toward the
-    light's side) from every LED that sees it along a straight unoccluded segment."""
+def direct_irradiance(surfaces, leds, facet):
+    """Irradiance (W/mm²) at a :class:`~eyelume.kernels.tables.Facet` from every LED that sees
+    it along a straight unoccluded segment."""
     e = 0.0
-    for k in range(leds.shape[0]):
-        e += led_irradiance(sf, si, leds, k, i0, alpha_grid, intensity_grid, x, y, z, nx, ny, nz)
+    for k in range(leds.points.shape[0]):
+        e += led_irradiance(surfaces, leds, k, facet)
     return e
 
 
 @njit(cache=True, inline="always")
-def _specular(state, sf, si, s, dx, dy, dz, nx, ny, nz, cos_d, from_b):
-    """Analog choice at a refracting interface, as in the forward tracer.
-
-    Returns (state, alive, transmitted, dx, dy, dz)."""
+def _specular(state, f, dx, dy, dz, nx, ny, nz):
+    """Analog choice at a refracting interface ``f`` (:func:`interface_at`), as in the forward
+    tracer: total internal reflection, else reflect (R), absorb (A) or transmit. Returns a
+    :class:`Specular`."""
     state, u = next_uniform(state)
-    n1 = sf[s, G.N_B] if from_b else sf[s, G.N_A]
-    n2 = sf[s, G.N_A] if from_b else sf[s, G.N_B]
-    ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
+    ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
     if not ok:
         rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
-        return state, True, False, rx, ry, rz
-    r = fresnel_reflectance(cos_d, n1, n2) if si[s, G.FRESNEL] else sf[s, G.REFL]
-    if u < r:
+        return Specular(state, True, False, rx, ry, rz)
+    if u < f.reflectance:
         rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
-        return state, True, False, rx, ry, rz
-    if u < r + sf[s, G.ABSORB]:
-        return state, False, False, dx, dy, dz
-    return state, True, True, tx, ty, tz
+        return Specular(state, True, False, rx, ry, rz)
+    if u < f.reflectance + f.absorptance:
+        return Specular(state, False, False, dx, dy, dz)
+    return Specular(state, True, True, tx, ty, tz)
 
 
 @njit(cache=True)
-def _camera_branch(
-    state,
-    sf,
-    si,
-    leds,
-    i0,
-    ag,
-    ig,
-    cornea,
-    through,
-    x,
-    y,
-    z,
-    dx,
-    dy,
-    dz,
-    beta,
-    split,
-    first_vertex,
-    max_events,
-):
-    """Follow one camera path from (x, y, z) along (dx, dy, dz) with throughput ``beta``.
+def _camera_branch(state, scene, cam, ray, beta, split, first_vertex):
+    """Follow one camera path along ``ray`` with throughput ``beta``.
 
     With ``split``, the first refracting interface met before any Lambertian vertex is not
     chosen between by chance: the path goes on transmitted (× T) and the reflected part (× R)
     is handed back to be followed next. With ``first_vertex`` the path stops after the NEE at
     its first Lambertian vertex and hands that vertex back for its continuation; otherwise
-    every vertex continues by Russian roulette. Returns (state, radiance, has_branch, branch
-    origin xyz, branch direction xyz, branch throughput, vertex surface (−1: none), vertex xyz,
-    its normal xyz, throughput × ρ there)."""
+    every vertex continues by Russian roulette. Returns a :class:`CameraPath`."""
+    sf, si = scene.surfaces.sf, scene.surfaces.si
+    leds = scene.leds
+    x, y, z, dx, dy, dz = ray
     radiance = 0.0
-    bx = by = bz = bdx = bdy = bdz = bbeta = 0.0
+    branch = Branch(Ray(0.0, 0.0, 0.0, 0.0, 0.0, 0.0), 0.0)
     has_branch = False
-    diffuse = 0
-    for _ in range(max_events):
+    for _ in range(scene.max_events):
         s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
         if s < 0:
             break
@@ -182,39 +222,21 @@ def _camera_branch(
             if not from_b:
                 nx, ny, nz = -nx, -ny, -nz
             if first_vertex:
-                e = direct_irradiance(sf, si, leds, i0, ag, ig, x, y, z, nx, ny, nz)
+                e = direct_irradiance(scene.surfaces, leds, Facet(x, y, z, nx, ny, nz))
             else:  # interreflections: one LED drawn at random, its light × the LED count
+                n_leds = leds.points.shape[0]
                 state, u = next_uniform(state)
-                k = min(int(u * leds.shape[0]), leds.shape[0] - 1)
-                e = leds.shape[0] * led_irradiance(sf, si, leds, k, i0, ag, ig, x, y, z, nx, ny, nz)
-            if through[s]:
+                k = min(int(u * n_leds), n_leds - 1)
+                e = n_leds * led_irradiance(scene.surfaces, leds, k, Facet(x, y, z, nx, ny, nz))
+            if cam.through_cornea[s]:
                 e1, e2 = orthonormal_basis(nx, ny, nz)
                 e += irradiance_through_cornea(
-                    sf, si, cornea, s, leds, i0, ag, ig, x, y, z, nx, ny, nz, e1, e2
+                    scene.surfaces, cam.cornea, s, leds, Receiver(x, y, z, nx, ny, nz, e1, e2)
                 )
             radiance += beta * rho * _INV_PI * e
-            diffuse += 1
             if first_vertex:
-                return (
-                    state,
-                    radiance,
-                    has_branch,
-                    bx,
-                    by,
-                    bz,
-                    bdx,
-                    bdy,
-                    bdz,
-                    bbeta,
-                    s,
-                    x,
-                    y,
-                    z,
-                    nx,
-                    ny,
-                    nz,
-                    beta * rho,
-                )
+                vertex = Vertex(s, x, y, z, nx, ny, nz, beta * rho)
+                return CameraPath(state, radiance, has_branch, branch, vertex)
             state, u = next_uniform(state)
             if u >= rho:
                 break
@@ -223,52 +245,31 @@ def _camera_branch(
             lx, ly, lz = cosine_hemisphere(u1, u2)
             dx, dy, dz = about_axis(lx, ly, lz, nx, ny, nz)
         else:
-            n1 = sf[s, G.N_B] if from_b else sf[s, G.N_A]
-            n2 = sf[s, G.N_A] if from_b else sf[s, G.N_B]
+            f = interface_at(sf, si, s, cos_d)
             if split and not has_branch:
-                ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
+                ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
                 rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
                 if not ok:  # total internal reflection: nothing to split
                     dx, dy, dz = rx, ry, rz
                 else:
-                    r = fresnel_reflectance(cos_d, n1, n2) if si[s, G.FRESNEL] else sf[s, G.REFL]
                     has_branch = True
-                    bx, by, bz, bdx, bdy, bdz, bbeta = x, y, z, rx, ry, rz, beta * r
+                    branch = Branch(Ray(x, y, z, rx, ry, rz), beta * f.reflectance)
                     # radiance / n² is what refraction conserves
-                    beta *= (1.0 - r - sf[s, G.ABSORB]) * (n1 / n2) ** 2
+                    beta *= (1.0 - f.reflectance - f.absorptance) * (f.n1 / f.n2) ** 2
                     dx, dy, dz = tx, ty, tz
             else:
-                state, alive, transmitted, dx, dy, dz = _specular(
-                    state, sf, si, s, dx, dy, dz, nx, ny, nz, cos_d, from_b
-                )
-                if not alive:
+                c = _specular(state, f, dx, dy, dz, nx, ny, nz)
+                state, dx, dy, dz = c.state, c.dx, c.dy, c.dz
+                if not c.alive:
                     break
-                if transmitted:
-                    beta *= (n1 / n2) ** 2
+                if c.transmitted:
+                    beta *= (f.n1 / f.n2) ** 2
         inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
         dx *= inv
         dy *= inv
         dz *= inv
-    return (
-        state,
-        radiance,
-        has_branch,
-        bx,
-        by,
-        bz,
-        bdx,
-        bdy,
-        bdz,
-        bbeta,
-        -1,
-        x,
-        y,
-        z,
-        0.0,
-        0.0,
-        1.0,
-        0.0,
-    )
+    vertex = Vertex(-1, x, y, z, 0.0, 0.0, 1.0, 0.0)
+    return CameraPath(state, radiance, has_branch, branch, vertex)
 
 
 #: Continuation rays from the first Lambertian vertex of a camera path: 1, or IRIS_SPLIT on
@@ -278,171 +279,51 @@ IRIS_SPLIT = 8
 
 
 @njit(cache=True)
-def _path_radiance(
-    state, sf, si, leds, i0, ag, ig, cornea, through, x, y, z, dx, dy, dz, beta, split, max_events
-):
-    """A camera path with its first Lambertian vertex's continuation(s); see _camera_branch."""
-    out = _camera_branch(
-        state,
-        sf,
-        si,
-        leds,
-        i0,
-        ag,
-        ig,
-        cornea,
-        through,
-        x,
-        y,
-        z,
-        dx,
-        dy,
-        dz,
-        beta,
-        split,
-        True,
-        max_events,
-    )
-    state, radiance = out[0], out[1]
-    s = out[10]
-    if s >= 0:
-        vx, vy, vz, nx, ny, nz, cbeta = (
-            out[11],
-            out[12],
-            out[13],
-            out[14],
-            out[15],
-            out[16],
-            out[17],
-        )
-        k = IRIS_SPLIT if through[s] else 1
+def _path_radiance(state, scene, cam, ray, beta, split):
+    """A camera path with its first Lambertian vertex's continuation(s); see _camera_branch.
+    Returns (state, radiance, has_branch, branch)."""
+    out = _camera_branch(state, scene, cam, ray, beta, split, True)
+    state, radiance = out.state, out.radiance
+    v = out.vertex
+    if v.s >= 0:
+        k = IRIS_SPLIT if cam.through_cornea[v.s] else 1
         for _ in range(k):
             state, u1 = next_uniform(state)
             state, u2 = next_uniform(state)
             lx, ly, lz = cosine_hemisphere(u1, u2)
-            ex, ey, ez = about_axis(lx, ly, lz, nx, ny, nz)
+            ex, ey, ez = about_axis(lx, ly, lz, v.nx, v.ny, v.nz)
             more = _camera_branch(
-                state,
-                sf,
-                si,
-                leds,
-                i0,
-                ag,
-                ig,
-                cornea,
-                through,
-                vx,
-                vy,
-                vz,
-                ex,
-                ey,
-                ez,
-                cbeta / k,
-                False,
-                False,
-                max_events,
+                state, scene, cam, Ray(v.x, v.y, v.z, ex, ey, ez), v.beta / k, False, False
             )
-            state = more[0]
-            radiance += more[1]
-    return state, radiance, out[2], out[3], out[4], out[5], out[6], out[7], out[8], out[9]
+            state = more.state
+            radiance += more.radiance
+    return state, radiance, out.has_branch, out.branch
 
 
 @njit(cache=True)
-def _camera_radiance(
-    state, sf, si, leds, i0, ag, ig, cornea, through, x, y, z, dx, dy, dz, max_events
-):
-    """Radiance (W/(mm²·sr)) arriving at the lens along −(dx, dy, dz) from (x, y, z).
+def _camera_radiance(state, scene, cam, ray):
+    """Radiance (W/(mm²·sr)) arriving at the lens along −d from the origin of ``ray``.
 
-    At a Lambertian vertex on a surface with ``through[s]`` (the iris), the light refracted by
-    the cornea (surfaces ``cornea``, ``cornea + 1``) is added by a specular connection
-    (:mod:`.cornea_nee`); the light paths skip exactly those paths. The camera path is split
-    at the first interface it meets (the cornea's 2.4 % reflection would otherwise be a rare,
-    bright event in every pupil and iris pixel)."""
-    state, radiance, has_branch, bx, by, bz, bdx, bdy, bdz, bbeta = _path_radiance(
-        state,
-        sf,
-        si,
-        leds,
-        i0,
-        ag,
-        ig,
-        cornea,
-        through,
-        x,
-        y,
-        z,
-        dx,
-        dy,
-        dz,
-        1.0,
-        True,
-        max_events,
-    )
-    if has_branch and bbeta > 0.0:
-        state, more, _, _, _, _, _, _, _, _ = _path_radiance(
-            state,
-            sf,
-            si,
-            leds,
-            i0,
-            ag,
-            ig,
-            cornea,
-            through,
-            bx,
-            by,
-            bz,
-            bdx,
-            bdy,
-            bdz,
-            bbeta,
-            False,
-            max_events,
-        )
+    At a Lambertian vertex on a surface with ``cam.through_cornea[s]`` (the iris), the light
+    refracted by the cornea (surfaces ``cam.cornea``, ``cam.cornea + 1``) is added by a
+    specular connection (:mod:`.cornea_nee`); the light paths skip exactly those paths. The
+    camera path is split at the first interface it meets (the cornea's 2.4 % reflection would
+    otherwise be a rare, bright event in every pupil and iris pixel)."""
+    state, radiance, has_branch, branch = _path_radiance(state, scene, cam, ray, 1.0, True)
+    if has_branch and branch.beta > 0.0:
+        state, more, _, _ = _path_radiance(state, scene, cam, branch.ray, branch.beta, False)
         radiance += more
     return state, radiance
 
 
-@njit(cache=True, inline="always")
-def _pixel_point(row, col, u1, u2, sensor):
-    """Sensor-plane point (x, y) of picture pixel (row, col) at fractions (u1, u2): the
-    picture is the sensor turned by 180° (see the forward tracer)."""
-    sw, sh, sc, sr = sensor[0], sensor[1], sensor[2], sensor[3]
-    return 0.5 * sw - (col + u1) * sw / sc, (row + u2) * sh / sr - 0.5 * sh
-
-
 @njit(cache=True, parallel=True)
-def camera_pass(
-    seed,
-    first_set,
-    n_sets,
-    sf,
-    si,
-    leds,
-    i0,
-    ag,
-    ig,
-    cornea,
-    through,
-    lf_rev,
-    lf_open,
-    k_stop,
-    stop_r,
-    image_z,
-    rear_z,
-    xp_z,
-    xp_m,
-    sensor,
-    max_events,
-    grid,
-    pixels,
-    out_sum,
-    out_sq,
-):
+def camera_pass(seed, first_set, n_sets, scene, cam, grid, sums):
     """Add stratified sample sets ``first_set`` … ``first_set + n_sets − 1`` of each pixel in
-    ``pixels`` (flat indices, row × cols + col): ``out_sum[i]`` += Σ m, ``out_sq[i]`` += Σ m²
-    over the sets, m the mean of a set's grid² samples. A pixel's samples depend on its index
-    and the seed only.
+    ``sums.pixels`` (a :class:`CameraSums`; flat indices, row × cols + col): ``sums.total[i]``
+    += Σ m, ``sums.squares[i]`` += Σ m² over the sets, m the mean of a set's grid² samples. A
+    pixel's samples depend on its index and the seed only. ``scene`` is the compiled scene's
+    :class:`~eyelume.kernels.tables.SceneTables`, ``cam`` its
+    :class:`~eyelume.kernels.tables.CameraTables`.
 
     A set stratifies the stop in ``grid`` equal-area rings × ``grid`` sectors and the pixel in a
     grid × grid array of cells, paired with the stop's strata by a random odd stride.
@@ -452,21 +333,38 @@ def camera_pass(
     lens receives along that ray, is an unbiased estimate of the pixel's mean irradiance
     (W/mm²); so is m, and the sets are independent, so their spread gives the variance.
     """
-    cols = int(sensor[2])
+    # parfors pass only arrays and scalars into a prange body (numba#10139): the tables are
+    # taken apart here and rebuilt inside it (no copy: the arrays are shared)
+    (sf, si), (lf, image_z), (pts, axes, i0, ag, cg, ig), pic_t, eye_t, n_ev = scene
+    pw, ph, pc, pr, psx, psy = pic_t
+    ew, eh, ec, er, esx, esy = eye_t
+    rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea = cam
+    pixels, out_sum, out_sq = sums
+    cols = pc
     area = math.pi * stop_r * stop_r
     for i in prange(pixels.shape[0]):
+        tables = SceneTables(
+            SurfaceTable(sf, si),
+            LensTable(lf, image_z),
+            LedTable(pts, axes, i0, ag, cg, ig),
+            PlaneGrid(pw, ph, pc, pr, psx, psy),
+            PlaneGrid(ew, eh, ec, er, esx, esy),
+            n_ev,
+        )
+        camera = CameraTables(
+            rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea
+        )
         p = pixels[i]
         row = p // cols
         col = p - row * cols
         # the chief ray of the pixel centre and its Jacobian seed every sample's aim
-        xc, yc = _pixel_point(row, col, 0.5, 0.5, sensor)
-        found, qcx, qcy, a11, a12, a21, a22 = aim_chief(
-            lf_open, k_stop, image_z, rear_z, xp_z, xp_m, xc, yc
-        )
-        if not found:
+        xc, yc = from_grid(tables.picture, col + 0.5, row + 0.5)
+        chief = aim_chief(camera, xc, yc)
+        if not chief.found:
             continue
-        adet = a11 * a22 - a12 * a21
-        shift = 1.0 - (image_z - rear_z) / (image_z - xp_z)
+        a = chief.jac
+        adet = a.a11 * a.a22 - a.a12 * a.a21
+        shift = 1.0 - (cam_z - rear_z) / (cam_z - xp_z)
         pseed = mix64(mix64(np.uint64(seed)) + np.uint64(p))
         for m in range(first_set, first_set + n_sets):
             state = stream_start(pseed, m)
@@ -482,52 +380,26 @@ def camera_pass(
                 state, u3 = next_uniform(state)
                 state, u4 = next_uniform(state)
                 cell = (k * stride + offset) % strata
-                xs, ys = _pixel_point(
-                    row, col, (cell % grid + u1) / grid, (cell // grid + u2) / grid, sensor
+                xs, ys = from_grid(
+                    tables.picture,
+                    col + (cell % grid + u1) / grid,
+                    row + (cell // grid + u2) / grid,
                 )
-                r = stop_r * math.sqrt((k // grid + u3) / grid)
-                phi = 2.0 * math.pi * (k % grid + u4) / grid
-                tx, ty = r * math.cos(phi), r * math.sin(phi)
-                found, qx, qy, det = aim_at_stop(
-                    lf_open,
-                    k_stop,
-                    image_z,
-                    rear_z,
-                    xs,
-                    ys,
-                    tx,
-                    ty,
-                    qcx + shift * (xs - xc) + (a22 * tx - a12 * ty) / adet,
-                    qcy + shift * (ys - yc) + (-a21 * tx + a11 * ty) / adet,
-                    a11,
-                    a12,
-                    a21,
-                    a22,
-                )
-                if not found:
+                tx, ty = disk_stratum(k, grid, u3, u4, stop_r)
+                # first guess: the chief ray's crossing, moved with the sensor point and the
+                # stop point to first order
+                gx = chief.qx + shift * (xs - xc) + (a.a22 * tx - a.a12 * ty) / adet
+                gy = chief.qy + shift * (ys - yc) + (-a.a21 * tx + a.a11 * ty) / adet
+                aim = aim_at_stop(camera, xs, ys, tx, ty, gx, gy, a)
+                if not aim.found:
                     continue
-                ok, x, y, z, dx, dy, dz, g = into_scene(lf_rev, image_z, xs, ys, qx, qy, rear_z)
-                if not ok:
+                r = into_scene(camera, xs, ys, aim.qx, aim.qy)
+                if not r.passed:
                     continue
                 state, radiance = _camera_radiance(
-                    state,
-                    sf,
-                    si,
-                    leds,
-                    i0,
-                    ag,
-                    ig,
-                    cornea,
-                    through,
-                    x,
-                    y,
-                    z,
-                    dx,
-                    dy,
-                    dz,
-                    max_events,
+                    state, tables, camera, Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz)
                 )
-                total += area * g / det * radiance
+                total += area * r.g / aim.det * radiance
             mean = total / strata
             # one addition per set, in set order: the sums do not depend on how the sets
             # were split into rounds
@@ -535,61 +407,60 @@ def camera_pass(
             out_sq[i] += mean * mean
 
 
-@njit(cache=True, inline="always")
-def _aim_pdf(aim_row, x, y, z, dx, dy, dz):
-    """Density per steradian of the aimed sampler at direction d from (x, y, z)."""
-    if aim_row[A_P] <= 0.0 or dz <= 0.0:
-        return 0.0
-    t = (aim_row[A_Z] - z) / dz
-    hx = x + t * dx - aim_row[A_X]
-    hy = y + t * dy - aim_row[A_Y]
-    rr = aim_row[A_R] * aim_row[A_R]
-    if hx * hx + hy * hy > rr:
-        return 0.0
-    return t * t / (math.pi * rr * dz)
-
-
 @njit(cache=True)
 def _scatter(state, aim_row, x, y, z, nx, ny, nz):
-    """A direction from the aim/cosine mixture about unit normal n.
+    """A direction from the aim/cosine mixture about unit normal n
+    (:func:`~eyelume.kernels.sampling.aimed_mixture`).
 
     Returns (state, dx, dy, dz, weight = (cos θ / π) / pdf_mix; 0 when below the face)."""
-    p = aim_row[A_P]
     state, u0 = next_uniform(state)
     state, u1 = next_uniform(state)
     state, u2 = next_uniform(state)
-    if u0 < p:
-        r = aim_row[A_R] * math.sqrt(u1)
-        phi = 2.0 * math.pi * u2
-        vx = aim_row[A_X] + r * math.cos(phi) - x
-        vy = aim_row[A_Y] + r * math.sin(phi) - y
-        vz = aim_row[A_Z] - z
-        inv = math.copysign(1.0, vz) / math.sqrt(vx * vx + vy * vy + vz * vz)
-        dx, dy, dz = vx * inv, vy * inv, vz * inv
-    else:
-        lx, ly, lz = cosine_hemisphere(u1, u2)
-        dx, dy, dz = about_axis(lx, ly, lz, nx, ny, nz)
+    dx, dy, dz = aimed_mixture(u0, u1, u2, aim_row, x, y, z, nx, ny, nz)
     cos_n = dx * nx + dy * ny + dz * nz
     if cos_n <= 0.0:
         return state, dx, dy, dz, 0.0
-    pdf = (1.0 - p) * cos_n * _INV_PI + p * _aim_pdf(aim_row, x, y, z, dx, dy, dz)
+    pdf = aimed_mixture_pdf(aim_row, x, y, z, nx, ny, nz, dx, dy, dz)
     return state, dx, dy, dz, cos_n * _INV_PI / pdf
 
 
 WEAK_SURVIVAL = 0.125
 
 
+class CameraSums(NamedTuple):
+    """Where :func:`camera_pass` adds: the flat pixel indices it samples and, per index, Σ m
+    and Σ m² over its sample sets (W/mm², (W/mm²)²)."""
+
+    pixels: np.ndarray
+    total: np.ndarray
+    squares: np.ndarray
+
+
+class Tally(NamedTuple):
+    """Where light paths deposit: fixed-point Σc, Σc² (units q, q2 of W/mm² per unit path) per
+    pixel and the glint part per LED (n_leds, rows, cols); :func:`light_pass` takes one with a
+    leading chunk axis on the arrays."""
+
+    img: np.ndarray
+    img2: np.ndarray
+    led: np.ndarray
+    q: float
+    q2: float
+
+
 @njit(cache=True)
-def _follow(state, w, x, y, z, dx, dy, dz, arrays, img, img2, glint, led, q, q2, chain):
+def _follow(state, w, ray, scene, cam, tally, glint, chain):
     """Carry a light path of weight ``w`` (W per unit path) until it ends; deposit at the
     sensor. ``glint`` ≥ 0 while the path has met no Lambertian face (LED index). ``chain`` is 1
     when the path has just been transmitted by the anterior cornea: if it is then transmitted by
-    the posterior cornea and meets a ``through`` surface, the camera paths' specular connection
-    has it, and it ends here; −1 when it has just been reflected by the cornea: at its first
-    Lambertian face it survives with probability WEAK_SURVIVAL (weight / WEAK_SURVIVAL)."""
-    sf, si, lf, image_z, sensor, aim, max_events, cornea, through = arrays
+    the posterior cornea and meets a ``cam.through_cornea`` surface, the camera paths' specular
+    connection has it, and it ends here; −1 when it has just been reflected by the cornea: at
+    its first Lambertian face it survives with probability WEAK_SURVIVAL (weight /
+    WEAK_SURVIVAL)."""
+    sf, si = scene.surfaces.sf, scene.surfaces.si
+    x, y, z, dx, dy, dz = ray
     first_diffuse = True
-    for _ in range(max_events):
+    for _ in range(scene.max_events):
         s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
         if s < 0:
             return state
@@ -598,21 +469,23 @@ def _follow(state, w, x, y, z, dx, dy, dz, arrays, img, img2, glint, led, q, q2,
             nx, ny, nz = G.surface_normal(sf, si, s, x + t * dx, y + t * dy, z + t * dz)
             if dx * nx + dy * ny + dz * nz < 0.0:
                 return state
-            status, x, y, z, dx, dy, dz, _, _ = trace_lens(lf, x, y, z, dx, dy, dz, None, 0, False)
+            status, x, y, z, dx, dy, dz, _, _ = trace_lens(
+                scene.lens.lf, x, y, z, dx, dy, dz, None, 0, False
+            )
             if status != LENS_PASSED:
                 return state
-            t = (image_z - z) / dz
+            t = (scene.lens.image_z - z) / dz
             x += t * dx
             y += t * dy
-            sw, sh, sc, sr = sensor[0], sensor[1], int(sensor[2]), int(sensor[3])
-            col = int(math.floor((0.5 * sw - x) / sw * sc))
-            row = int(math.floor((y + 0.5 * sh) / sh * sr))
-            if 0 <= col < sc and 0 <= row < sr:
-                c = w * sc * sr / (sw * sh)  # W per unit path → W/mm² in the pixel
-                img[row, col] += np.int64(c / q + 0.5)
-                img2[row, col] += np.int64(c * c / q2 + 0.5)
+            pic = scene.picture
+            col, row, inside = bin_of(pic, x, y)
+            if inside:
+                # W per unit path → W/mm² in the pixel
+                c = w * pic.cols * pic.rows / (pic.width_mm * pic.height_mm)
+                tally.img[row, col] += np.int64(c / tally.q + 0.5)
+                tally.img2[row, col] += np.int64(c * c / tally.q2 + 0.5)
                 if glint >= 0:
-                    led[glint, row, col] += np.int64(c / q + 0.5)
+                    tally.led[glint, row, col] += np.int64(c / tally.q + 0.5)
             return state
         x += t * dx
         y += t * dy
@@ -621,7 +494,7 @@ def _follow(state, w, x, y, z, dx, dy, dz, arrays, img, img2, glint, led, q, q2,
         cos_d = dx * nx + dy * ny + dz * nz
         from_b = cos_d < 0.0
         if action == G.ACT_OPAQUE:
-            if chain == 2 and through[s]:
+            if chain == 2 and cam.through_cornea[s]:
                 return state
             rho = sf[s, G.RHO_B] if from_b else sf[s, G.RHO_A]
             if rho <= 0.0:
@@ -643,17 +516,18 @@ def _follow(state, w, x, y, z, dx, dy, dz, arrays, img, img2, glint, led, q, q2,
                     return state
             if not from_b:
                 nx, ny, nz = -nx, -ny, -nz
-            state, dx, dy, dz, f = _scatter(state, aim[s, 1 if from_b else 0], x, y, z, nx, ny, nz)
+            aim_row = cam.aim[s, 1 if from_b else 0]
+            state, dx, dy, dz, f = _scatter(state, aim_row, x, y, z, nx, ny, nz)
             if f <= 0.0:
                 return state
             w *= f
         else:
-            state, alive, transmitted, dx, dy, dz = _specular(
-                state, sf, si, s, dx, dy, dz, nx, ny, nz, cos_d, from_b
-            )
-            if not alive:
+            c = _specular(state, interface_at(sf, si, s, cos_d), dx, dy, dz, nx, ny, nz)
+            state, dx, dy, dz = c.state, c.dx, c.dy, c.dz
+            if not c.alive:
                 return state
-            chain = 2 if chain == 1 and transmitted and s == cornea + 1 and not from_b else 0
+            through = c.transmitted and s == cam.cornea + 1 and not from_b
+            chain = 2 if chain == 1 and through else 0
         inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
         dx *= inv
         dy *= inv
@@ -662,27 +536,26 @@ def _follow(state, w, x, y, z, dx, dy, dz, arrays, img, img2, glint, led, q, q2,
 
 
 @njit(cache=True)
-def _light_path(i, seed, cornea, leds, i0, ag, ig, arrays, img, img2, led_img, q, q2):
+def _light_path(i, seed, scene, cam, tally):
     """Light path ``i``: LED i mod N toward the cornea, split there (see module docstring)."""
-    sf, si = arrays[0], arrays[1]
-    k = i % leds.shape[0]
+    sf, si = scene.surfaces.sf, scene.surfaces.si
+    leds = scene.leds
+    cornea = cam.cornea
+    n_leds = leds.points.shape[0]
+    k = i % n_leds
     state = stream_start(seed, i)
-    px, py, pz = leds[k, 0], leds[k, 1], leds[k, 2]
+    px, py, pz = leds.points[k, 0], leds.points[k, 1], leds.points[k, 2]
     wx, wy, wz = sf[cornea, G.BX] - px, sf[cornea, G.BY] - py, sf[cornea, G.BZ] - pz
     dist = math.sqrt(wx * wx + wy * wy + wz * wz)
     rb = sf[cornea, G.BR]
     cos_max = math.sqrt(1.0 - rb * rb / (dist * dist))
     state, u1 = next_uniform(state)
     state, u2 = next_uniform(state)
-    ct = 1.0 - u1 * (1.0 - cos_max)
-    st = math.sqrt(max(0.0, 1.0 - ct * ct))
-    phi = 2.0 * math.pi * u2
-    dx, dy, dz = about_axis(
-        st * math.cos(phi), st * math.sin(phi), ct, wx / dist, wy / dist, wz / dist
-    )
-    cos_a = dx * leds[k, 3] + dy * leds[k, 4] + dz * leds[k, 5]
-    # path i serves LED i mod N: a share 1/N of the paths estimates each LED's light
-    w = leds.shape[0] * i0 * relative_intensity_at(cos_a, ag, ig) * 2.0 * math.pi * (1.0 - cos_max)
+    lx, ly, lz = uniform_cone(u1, u2, cos_max)
+    dx, dy, dz = about_axis(lx, ly, lz, wx / dist, wy / dist, wz / dist)
+    # path i serves LED i mod N: a share 1/N of the paths estimates each LED's light;
+    # 2π (1 − cos_max) = 1 / uniform_cone_pdf
+    w = n_leds * radiant_intensity(leds, k, dx, dy, dz) * 2.0 * math.pi * (1.0 - cos_max)
     if w <= 0.0:
         return
     s, t = G.nearest_hit(sf, si, px, py, pz, dx, dy, dz)
@@ -693,50 +566,71 @@ def _light_path(i, seed, cornea, leds, i0, ag, ig, arrays, img, img2, led_img, q
     cos_d = dx * nx + dy * ny + dz * nz
     if cos_d <= 0.0:
         return
-    n1, n2 = sf[s, G.N_A], sf[s, G.N_B]
-    _, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
-    r = fresnel_reflectance(cos_d, n1, n2) if si[s, G.FRESNEL] else sf[s, G.REFL]
+    f = interface_at(sf, si, s, cos_d)
+    _, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
     rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
-    state = _follow(state, w * r, x, y, z, rx, ry, rz, arrays, img, img2, k, led_img, q, q2, -1)
-    tau = 1.0 - r - sf[s, G.ABSORB]
-    _follow(state, w * tau, x, y, z, tx, ty, tz, arrays, img, img2, k, led_img, q, q2, 1)
+    r = f.reflectance
+    state = _follow(state, w * r, Ray(x, y, z, rx, ry, rz), scene, cam, tally, k, -1)
+    tau = 1.0 - r - f.absorptance
+    _follow(state, w * tau, Ray(x, y, z, tx, ty, tz), scene, cam, tally, k, 1)
 
 
 @njit(cache=True, parallel=True)
-def light_pass(seed, first, count, cornea, leds, i0, ag, ig, arrays, img, img2, led_img, q, q2):
-    """Trace light paths ``first`` … ``first + count − 1``; chunk c adds to img[c], img2[c],
-    led_img[c] (fixed-point Σc and Σc² in units q and q2 of W/mm² per unit path)."""
+def light_pass(seed, first, count, scene, cam, sums):
+    """Trace light paths ``first`` … ``first + count − 1``; chunk c adds to ``sums``' (a
+    :class:`Tally` of (chunks, …) arrays) img[c], img2[c], led[c] (fixed-point Σc and Σc² in
+    units q and q2 of W/mm² per unit path)."""
+    img, img2, led_img, q, q2 = sums
     n_chunks = img.shape[0]
     lseed = mix64(np.uint64(seed) ^ np.uint64(_LIGHT_TAG))
+    # parfors pass only arrays and scalars into a prange body (numba#10139): the tables are
+    # taken apart here and rebuilt inside it (no copy: the arrays are shared)
+    (sf, si), (lf, image_z), (pts, axes, i0, ag, cg, ig), pic_t, eye_t, n_ev = scene
+    pw, ph, pc, pr, psx, psy = pic_t
+    ew, eh, ec, er, esx, esy = eye_t
+    rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea = cam
     for c in prange(n_chunks):
+        tables = SceneTables(
+            SurfaceTable(sf, si),
+            LensTable(lf, image_z),
+            LedTable(pts, axes, i0, ag, cg, ig),
+            PlaneGrid(pw, ph, pc, pr, psx, psy),
+            PlaneGrid(ew, eh, ec, er, esx, esy),
+            n_ev,
+        )
+        camera = CameraTables(
+            rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea
+        )
         lo = first + (count * c) // n_chunks
         hi = first + (count * (c + 1)) // n_chunks
+        tally = Tally(img[c], img2[c], led_img[c], q, q2)
         for i in range(lo, hi):
-            _light_path(
-                i, lseed, cornea, leds, i0, ag, ig, arrays, img[c], img2[c], led_img[c], q, q2
-            )
+            _light_path(i, lseed, tables, camera, tally)
 
 
 @njit(cache=True, parallel=True)
-def primary_surfaces(
-    sf, si, lf_rev, lf_open, k_stop, image_z, rear_z, xp_z, xp_m, sensor, row0, labels, sides
-):
+def primary_surfaces(scene, cam, row0, labels, sides):
     """The surface each pixel sees in the ideal (refraction-only) image: the chief ray from the
     pixel centre through the stop's centre, always refracting (never reflecting), to the first
     opaque surface (``labels``; −1: nothing, or no chief ray) and the side it meets (``sides``:
     1 = side B, the side the surface's normal points to). ``labels`` and ``sides`` hold the band
-    of sensor rows from ``row0`` (so a large sensor is mapped band by band)."""
+    of picture rows from ``row0`` (so a large sensor is mapped band by band)."""
+    (sf, si), (pw, ph, pc, pr, psx, psy) = scene.surfaces, scene.picture
+    rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea = cam
     rows, cols = labels.shape
     for p in prange(rows * cols):
+        camera = CameraTables(
+            rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea
+        )
         band_row = p // cols
         col = p - band_row * cols
         row = row0 + band_row
-        xs, ys = _pixel_point(row, col, 0.5, 0.5, sensor)
+        xs, ys = from_grid(PlaneGrid(pw, ph, pc, pr, psx, psy), col + 0.5, row + 0.5)
         labels[band_row, col] = -1
-        found, qx, qy, _, _, _, _ = aim_chief(lf_open, k_stop, image_z, rear_z, xp_z, xp_m, xs, ys)
-        if not found:
+        chief = aim_chief(camera, xs, ys)
+        if not chief.found:
             continue
-        ok, x, y, z, dx, dy, dz, _ = into_scene(lf_rev, image_z, xs, ys, qx, qy, rear_z)
+        ok, x, y, z, dx, dy, dz, _ = into_scene(camera, xs, ys, chief.qx, chief.qy)
         if not ok:
             continue
         for _ in range(32):
@@ -751,30 +645,30 @@ def primary_surfaces(
             y += t * dy
             z += t * dz
             nx, ny, nz = G.surface_normal(sf, si, s, x, y, z)
-            cos_d = dx * nx + dy * ny + dz * nz
-            n1 = sf[s, G.N_B] if cos_d < 0.0 else sf[s, G.N_A]
-            n2 = sf[s, G.N_A] if cos_d < 0.0 else sf[s, G.N_B]
-            ok, dx, dy, dz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
+            f = interface_at(sf, si, s, dx * nx + dy * ny + dz * nz)
+            ok, dx, dy, dz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
             if not ok:
                 break
 
 
 @njit(cache=True, parallel=True)
-def plane_direct(seed, sf, si, leds, i0, ag, ig, plane, n_sub, out):
+def plane_direct(seed, scene, n_sub, out):
     """Direct LED irradiance (W/mm²) toward the eye on the eye-plane bins (row 0 at +y): the
     mean over n_sub × n_sub jittered points per bin (one uniform point in each cell, so the
     mean is unbiased where an occluder's edge cuts the bin), each lit by the LEDs that see it."""
-    pw, ph, pc, pr = plane[0], plane[1], int(plane[2]), int(plane[3])
-    for p in prange(pr * pc):
-        row = p // pc
-        col = p - row * pc
+    (sf, si), (pts, axes, i0, ag, cg, ig) = scene.surfaces, scene.leds
+    ew, eh, ec, er, esx, esy = scene.eye_plane
+    for p in prange(er * ec):
+        surfaces, leds = SurfaceTable(sf, si), LedTable(pts, axes, i0, ag, cg, ig)
+        g = PlaneGrid(ew, eh, ec, er, esx, esy)
+        row = p // ec
+        col = p - row * ec
         state = stream_start(mix64(np.uint64(seed) ^ np.uint64(_PLANE_TAG)), p)
         acc = 0.0
         for a in range(n_sub):
             for b in range(n_sub):
                 state, u1 = next_uniform(state)
                 state, u2 = next_uniform(state)
-                x = (col + (a + u1) / n_sub) * pw / pc - 0.5 * pw
-                y = 0.5 * ph - (row + (b + u2) / n_sub) * ph / pr
-                acc += direct_irradiance(sf, si, leds, i0, ag, ig, x, y, 0.0, 0.0, 0.0, 1.0)
+                x, y = from_grid(g, col + (a + u1) / n_sub, row + (b + u2) / n_sub)
+                acc += direct_irradiance(surfaces, leds, Facet(x, y, 0.0, 0.0, 0.0, 1.0))
         out[row, col] = acc / (n_sub * n_sub)

@@ -13,9 +13,9 @@ import numpy as np
 from eyelume.compile import CompiledScene
 from eyelume.errors import BudgetError, GeometryError
 from eyelume.estimators import fast as F
-from eyelume.estimators.camera import CameraTables, camera_tables
 from eyelume.estimators.interrupt import interrupt_between_batches
 from eyelume.estimators.statistics import median_pixel_rel_error
+from eyelume.kernels import geometry as G
 
 __all__ = [
     "FastEstimate",
@@ -70,9 +70,9 @@ class _Run:
     """Σm, Σm² of the camera sets and fixed-point sums of the light paths' deposits, and the
     rounds that add to them."""
 
-    def __init__(self, cs: CompiledScene, cam: CameraTables, grid: int, seed: int) -> None:
-        rows, cols = int(cs.sensor[3]), int(cs.sensor[2])
-        nled = cs.leds.shape[0]
+    def __init__(self, cs: CompiledScene, grid: int, seed: int) -> None:
+        rows, cols = cs.picture.rows, cs.picture.cols
+        nled = cs.led.points.shape[0]
         chunks = numba.get_num_threads()
         self.grid = grid
         self.seed = seed
@@ -83,58 +83,23 @@ class _Run:
         self.led = np.zeros((chunks, nled, rows, cols), dtype=np.int64)
         self.sets = 0
         self.paths = 0
-        sf = cs.sf
-        self.cornea = cornea = cs.surface_names.index(cs.scene.eye.surfaces[0].name)
-        self.i0 = i0 = cs.scene.leds.radiant_intensity_w_sr
-        centre, rb = sf[cornea, 19:22], sf[cornea, 22]
-        dist = np.linalg.norm(cs.leds[:, :3] - centre, axis=1)
+        sf, cornea = cs.sf, cs.camera.cornea
+        i0 = cs.led.i0
+        centre, rb = sf[cornea, G.BX : G.BZ + 1], sf[cornea, G.BR]
+        dist = np.linalg.norm(cs.led.points - centre, axis=1)
         if np.any(dist <= rb):
             raise GeometryError("an LED lies inside the cornea's bounding sphere")
         cone = 2 * math.pi * (1 - np.sqrt(1 - (rb / dist) ** 2))
-        per_mm2 = cs.sensor[2] * cs.sensor[3] / (cs.sensor[0] * cs.sensor[1])
+        pic = cs.picture
+        per_mm2 = pic.cols * pic.rows / (pic.width_mm * pic.height_mm)
         c_typ = i0 * nled * float(cone.max()) * per_mm2
         self.q = c_typ * 2.0**-24
         self.q2 = c_typ * c_typ * 2.0**-20
         self.cs = cs
-        self.light_args = (
-            cornea,
-            cs.leds,
-            i0,
-            cs.alpha_grid,
-            cs.intensity_grid,
-            (
-                sf,
-                cs.si,
-                cs.lf,
-                cs.image_z,
-                cs.sensor,
-                cam.aim,
-                cs.scene.run.max_events,
-                cornea,
-                cam.through_cornea,
-            ),
-        )
-        self.cam_args = (
-            sf,
-            cs.si,
-            cs.leds,
-            i0,
-            cs.alpha_grid,
-            cs.intensity_grid,
-            cornea,
-            cam.through_cornea,
-            cam.lf_rev,
-            cam.lf_open,
-            cam.k_stop,
-            cam.stop_radius,
-            cs.image_z,
-            cam.rear_z,
-            cam.exit_pupil_z,
-            cam.exit_pupil_magnification,
-            cs.sensor,
-            cs.scene.run.max_events,
-            grid,
-        )
+
+    def tally(self) -> F.Tally:
+        """The light paths' sums as :func:`~eyelume.estimators.fast.light_pass` takes them."""
+        return F.Tally(self.light, self.light_sq, self.led, self.q, self.q2)
 
     @property
     def samples_per_pixel(self) -> int:
@@ -165,10 +130,9 @@ class _Run:
                 return False
             if stop is not None:
                 saved.append((a, flat_sum[a:b].copy(), flat_sq[a:b].copy()))
-            F.camera_pass(
-                self.seed, self.sets, n_sets, *self.cam_args, every[a:b], flat_sum[a:b],
-                flat_sq[a:b],
-            )  # fmt: skip
+            sums = F.CameraSums(every[a:b], flat_sum[a:b], flat_sq[a:b])
+            cs = self.cs
+            F.camera_pass(self.seed, self.sets, n_sets, cs.tables, cs.camera, self.grid, sums)
             if tick:
                 tick((b - a) * n_sets * self.grid * self.grid)
         del saved
@@ -176,17 +140,7 @@ class _Run:
         n_paths = int(round(paths_per_sample * self.samples_per_pixel)) - self.paths
         while n_paths > 0 and not (stop is not None and stop.requested):
             c = min(CHUNK_PATHS, n_paths)
-            F.light_pass(
-                self.seed,
-                self.paths,
-                c,
-                *self.light_args,
-                self.light,
-                self.light_sq,
-                self.led,
-                self.q,
-                self.q2,
-            )
+            F.light_pass(self.seed, self.paths, c, self.cs.tables, self.cs.camera, self.tally())
             self.paths += c
             n_paths -= c
             if tick:
@@ -231,9 +185,7 @@ _PILOT_ABOVE = 50_000
 _PILOT_PIXELS = 2048
 
 
-def _pilot(
-    cs: CompiledScene, cam: CameraTables, seed: int, target: np.ndarray, rel_error: float
-) -> tuple[int, int]:
+def _pilot(cs: CompiledScene, seed: int, target: np.ndarray, rel_error: float) -> tuple[int, int]:
     """(grid, sets) expected to reach ``rel_error`` in the median target pixel at the least
     cost, from 4 sets of 2 × 2 and 2 sets of 4 × 4 on up to 2048 target pixels (their own
     samples: a pixel's samples depend on its index and the seed only). The prediction aims at
@@ -244,8 +196,8 @@ def _pilot(
     best = (GRID_FINE, 2, math.inf)
     for grid, n in ((GRID_COARSE, 4), (GRID_FINE, 2)):
         s1, s2 = np.zeros(idx.size), np.zeros(idx.size)
-        run = _Run(cs, cam, grid, seed)
-        F.camera_pass(seed, 0, n, *run.cam_args, idx.astype(np.int64), s1, s2)
+        sums = F.CameraSums(idx.astype(np.int64), s1, s2)
+        F.camera_pass(seed, 0, n, cs.tables, cs.camera, grid, sums)
         mean = s1 / n
         var = np.maximum(s2 - n * mean**2, 0.0) / (n * (n - 1))
         err = median_pixel_rel_error(mean[mean > 0], var[mean > 0], n - 1)
@@ -273,9 +225,9 @@ def array_bytes(cs: CompiledScene) -> int:
     (and their undo copies for a round stopped by Ctrl-C), and each Numba thread's fixed-point
     light and per-LED glint sums — what grows with the picture (a 4096 × 4096 picture, 4 LEDs,
     2 threads: 2.4 GB)."""
-    pixels = int(cs.sensor[2] * cs.sensor[3])
+    pixels = cs.picture.cols * cs.picture.rows
     chunks = numba.get_num_threads()
-    return 8 * pixels * (4 + chunks * (2 + int(cs.leds.shape[0])))
+    return 8 * pixels * (4 + chunks * (2 + int(cs.led.points.shape[0])))
 
 
 def pilot_rates(
@@ -288,18 +240,17 @@ def pilot_rates(
     :func:`warm_up`, or it times the compilation."""
     import time
 
-    cam = camera_tables(cs)
-    total = int(cs.sensor[2] * cs.sensor[3])
+    total = cs.picture.cols * cs.picture.rows
     idx = np.unique(np.linspace(0, total - 1, min(pixels, total)).astype(np.int64))
     # pixel indices address the full sensor; the sums are throwaway arrays of idx's length
-    run = _Run(_tiny(cs), cam, grid, seed)  # its arguments without full-size arrays
-    c_args = (*run.cam_args[:-3], cs.sensor, *run.cam_args[-2:])
+    tiny = _tiny(cs)
+    run = _Run(tiny, grid, seed)  # its sums without full-size arrays
     s1, s2 = np.zeros(idx.size), np.zeros(idx.size)
     t0 = time.perf_counter()
-    F.camera_pass(seed, 0, 1, *c_args, idx, s1, s2)
+    F.camera_pass(seed, 0, 1, cs.tables, cs.camera, grid, F.CameraSums(idx, s1, s2))
     cam_rate = idx.size * grid * grid / max(time.perf_counter() - t0, 1e-9)
     t0 = time.perf_counter()
-    F.light_pass(seed, 0, paths, *run.light_args, run.light, run.light_sq, run.led, run.q, run.q2)
+    F.light_pass(seed, 0, paths, tiny.tables, tiny.camera, run.tally())
     return cam_rate, paths / max(time.perf_counter() - t0, 1e-9)
 
 
@@ -325,12 +276,11 @@ def warm_up(cs: CompiledScene) -> float:
     if all(d.signatures for d in (F.camera_pass, F.light_pass, F.plane_direct)):
         return 0.0
     t0 = time.perf_counter()
-    cam = camera_tables(cs)
     tiny = _tiny(cs)
-    run = _Run(tiny, cam, GRID_COARSE, 0)  # the kernels' arguments, 1 × 1 pixel arrays
-    none = np.zeros(0, dtype=np.int64)
-    F.camera_pass(0, 0, 1, *run.cam_args, none, np.zeros(0), np.zeros(0))
-    F.light_pass(0, 0, 0, *run.light_args, run.light, run.light_sq, run.led, run.q, run.q2)
+    run = _Run(tiny, GRID_COARSE, 0)  # the kernels' arguments, 1 × 1 pixel arrays
+    none = F.CameraSums(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0))
+    F.camera_pass(0, 0, 1, tiny.tables, tiny.camera, GRID_COARSE, none)
+    F.light_pass(0, 0, 0, tiny.tables, tiny.camera, run.tally())
     direct_eye_plane(tiny, 0, n_sub=1)
     return time.perf_counter() - t0
 
@@ -340,9 +290,10 @@ def _tiny(cs: CompiledScene) -> CompiledScene:
     types, so the same compiled code)."""
     import dataclasses
 
-    sensor, plane = np.array(cs.sensor, copy=True), np.array(cs.plane, copy=True)
-    sensor[2:4] = plane[2:4] = 1
-    return dataclasses.replace(cs, sensor=sensor, plane=plane)
+    t = cs.tables
+    one = {"cols": 1, "rows": 1}
+    tables = t._replace(picture=t.picture._replace(**one), eye_plane=t.eye_plane._replace(**one))
+    return dataclasses.replace(cs, tables=tables)
 
 
 #: The command line's default cap on the camera samples per pixel of a ``--rel-error`` render
@@ -395,10 +346,10 @@ def _over_cap(progress, rel_error: float, samples: float, cap: int) -> None:
 
 
 def _fixed_budget(args: tuple, stop, work: _Work, progress) -> _Run:
-    """Rounds of a fixed budget; ``args`` = (cs, cam, samples_per_pixel, ratio, seed)."""
-    cs, cam, samples_per_pixel, ratio, seed = args
+    """Rounds of a fixed budget; ``args`` = (cs, samples_per_pixel, ratio, seed)."""
+    cs, samples_per_pixel, ratio, seed = args
     grid, sets = planned_sets(samples_per_pixel)
-    run = _Run(cs, cam, grid, seed)
+    run = _Run(cs, grid, seed)
     work.plan(run, sets)
     step = max(1, math.ceil(sets / 8))
     while run.sets < sets and not stop.requested:
@@ -409,21 +360,21 @@ def _fixed_budget(args: tuple, stop, work: _Work, progress) -> _Run:
 
 def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, cap: int):
     """(run, error reached): rounds until ``target = (rel_error, pixels)`` or ``cap`` samples
-    per pixel; ``args`` = (cs, cam, samples_per_pixel, ratio, seed)."""
-    cs, cam, samples_per_pixel, ratio, seed = args
+    per pixel; ``args`` = (cs, samples_per_pixel, ratio, seed)."""
+    cs, samples_per_pixel, ratio, seed = args
     rel_error, target_pixels = target
     grid, sets = planned_sets(samples_per_pixel)[0], 0
     if (
-        int(cs.sensor[2] * cs.sensor[3]) > _PILOT_ABOVE
+        cs.picture.cols * cs.picture.rows > _PILOT_ABOVE
         and target_pixels is not None
         and (target_pixels.any())
     ):
-        grid, sets = _pilot(cs, cam, seed, target_pixels, rel_error)
+        grid, sets = _pilot(cs, seed, target_pixels, rel_error)
         if progress:
             progress(f"pilot: {grid}×{grid} sets, {sets * grid * grid} samples per pixel")
         _over_cap(progress, rel_error, sets * grid * grid, cap)
     max_sets = max(2, min(_MAX_SETS, cap // (grid * grid)))
-    run = _Run(cs, cam, grid, seed)
+    run = _Run(cs, grid, seed)
     first = max(2, min(sets, max_sets) or math.ceil(samples_per_pixel / grid**2))
     work.plan(run, first)
     err = math.inf
@@ -483,10 +434,9 @@ def trace_fast(
         raise BudgetError(f"rel_error = {rel_error}: must be in (0, 1)")
     if cap < 1:
         raise BudgetError(f"max_samples_per_pixel = {cap}: must be ≥ 1")
-    cam = camera_tables(cs)
     ratio = light_paths / samples_per_pixel  # light paths per camera sample
-    work = _Work(int(cs.sensor[2] * cs.sensor[3]), ratio, control.advance)
-    args = (cs, cam, samples_per_pixel, ratio, seed)
+    work = _Work(cs.picture.cols * cs.picture.rows, ratio, control.advance)
+    args = (cs, samples_per_pixel, ratio, seed)
     with interrupt_between_batches() as stop:
         if rel_error is None:
             run, err = _fixed_budget(args, stop, work, progress), math.inf
@@ -512,51 +462,24 @@ def estimate_median_rel_error(est: FastEstimate, pixels: np.ndarray | None = Non
     return median_pixel_rel_error(est.image[mask], est.variance[mask], est.variance_dof)
 
 
-def primary_surface_map(
-    cs: CompiledScene, cam: CameraTables | None = None
-) -> tuple[np.ndarray, np.ndarray]:
+def primary_surface_map(cs: CompiledScene) -> tuple[np.ndarray, np.ndarray]:
     """(rows, cols) index of the surface each pixel sees in the ideal image (−1: none), and
     the side it is seen from (1: side B, where the surface normal points). Mapped in bands of
     rows (about :data:`CHUNK_SAMPLES` × 4 pixels each), so Ctrl-C interrupts a large sensor's
     map between bands instead of minutes later."""
-    cam = cam or camera_tables(cs)
-    shape = (int(cs.sensor[3]), int(cs.sensor[2]))
+    shape = (cs.picture.rows, cs.picture.cols)
     labels = np.empty(shape, dtype=np.int64)
     sides = np.zeros(shape, dtype=np.int64)
     band = max(1, (4 * CHUNK_SAMPLES) // shape[1])
     for r0 in range(0, shape[0], band):
-        F.primary_surfaces(
-            cs.sf,
-            cs.si,
-            cam.lf_rev,
-            cam.lf_open,
-            cam.k_stop,
-            cs.image_z,
-            cam.rear_z,
-            cam.exit_pupil_z,
-            cam.exit_pupil_magnification,
-            cs.sensor,
-            r0,
-            labels[r0 : r0 + band],
-            sides[r0 : r0 + band],
-        )
+        band_labels, band_sides = labels[r0 : r0 + band], sides[r0 : r0 + band]
+        F.primary_surfaces(cs.tables, cs.camera, r0, band_labels, band_sides)
     return labels, sides
 
 
 def direct_eye_plane(cs: CompiledScene, seed: int, n_sub: int = 16) -> np.ndarray:
     """Direct LED irradiance (W/mm²) toward the eye over the eye-plane bins, row 0 at +y
     (n_sub² jittered points per bin, each with shadow rays to the LEDs)."""
-    out = np.empty((int(cs.plane[3]), int(cs.plane[2])))
-    F.plane_direct(
-        seed,
-        cs.sf,
-        cs.si,
-        cs.leds,
-        cs.scene.leds.radiant_intensity_w_sr,
-        cs.alpha_grid,
-        cs.intensity_grid,
-        cs.plane,
-        n_sub,
-        out,
-    )
+    out = np.empty((cs.eye_plane.rows, cs.eye_plane.cols))
+    F.plane_direct(seed, cs.tables, n_sub, out)
     return out

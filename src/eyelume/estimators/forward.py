@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -33,10 +34,12 @@ from eyelume.compile import (
 from eyelume.errors import BudgetError
 from eyelume.estimators.interrupt import interrupt_between_batches
 from eyelume.kernels import geometry as G
-from eyelume.kernels.interact import fresnel_reflectance, reflect, refract
+from eyelume.kernels.bins import PlaneGrid, bin_of
+from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.rng import next_uniform, stream_start
-from eyelume.kernels.sampling import about_axis, cosine_hemisphere, profile_polar_angle
+from eyelume.kernels.sampling import about_axis, cosine_hemisphere, led_direction
 from eyelume.kernels.sequential import LENS_PASSED, LENS_TIR, trace_lens
+from eyelume.kernels.tables import LedTable, LensTable, SceneTables, SurfaceTable
 
 __all__ = ["ForwardCounts", "trace_forward", "trace_paths"]
 
@@ -53,60 +56,71 @@ def _record(path, n, x, y, z, record):
     return n
 
 
+class Emission(NamedTuple):
+    """A ray's birth: its stream state, origin and unit direction (world mm)."""
+
+    state: np.uint64
+    x: float
+    y: float
+    z: float
+    dx: float
+    dy: float
+    dz: float
+
+
+class Traced(NamedTuple):
+    """How a traced ray ended: ledger entry, surface interactions, recorded path length."""
+
+    entry: int
+    interactions: int
+    npath: int
+
+
+class Counts(NamedTuple):
+    """Where a forward trace counts: rays per picture pixel, eye-plane crossings per bin, rays
+    per ledger entry (int64 arrays)."""
+
+    image: np.ndarray
+    plane: np.ndarray
+    tallies: np.ndarray
+
+
 @njit(cache=True)
-def emit_ray(i, seed, leds, alpha_grid, cdf_grid):
-    """Birth of ray ``i``: an LED drawn uniformly (equal powers), a direction from its angular
-    profile about its axis. Returns (stream state, x, y, z, dx, dy, dz) in world mm."""
+def emit_ray(i, seed, leds):
+    """Birth of ray ``i``: an LED of ``leds`` (:class:`~eyelume.kernels.tables.LedTable`) drawn
+    uniformly (equal powers), a direction from its angular profile about its axis
+    (:func:`~eyelume.kernels.sampling.led_direction`). Returns an :class:`Emission`."""
     state = stream_start(seed, i)
     state, u = next_uniform(state)
-    led = min(int(u * leds.shape[0]), leds.shape[0] - 1)
+    n = leds.points.shape[0]
+    led = min(int(u * n), n - 1)
     state, u1 = next_uniform(state)
     state, u2 = next_uniform(state)
-    alpha = profile_polar_angle(u1, alpha_grid, cdf_grid)
-    phi = 2.0 * math.pi * u2
-    sa = math.sin(alpha)
-    dx, dy, dz = about_axis(
-        sa * math.cos(phi),
-        sa * math.sin(phi),
-        math.cos(alpha),
-        leds[led, 3],
-        leds[led, 4],
-        leds[led, 5],
+    dx, dy, dz = led_direction(leds, led, u1, u2)
+    return Emission(
+        state, leds.points[led, 0], leds.points[led, 1], leds.points[led, 2], dx, dy, dz
     )
-    return state, leds[led, 0], leds[led, 1], leds[led, 2], dx, dy, dz
 
 
 @njit(cache=True)
-def trace_ray(
-    i,
-    seed,
-    arrays,
-    img_counts,
-    plane_counts,
-    tallies,
-    path,
-    record,
-):
-    """Trace ray ``i`` from birth to its end, adding to the count arrays.
-
-    ``arrays`` is :meth:`CompiledScene.kernel_arrays`.
-
-    Returns (ledger entry, surface interactions, recorded path length).
+def trace_ray(i, seed, scene, counts, path, record):
+    """Trace ray ``i`` of ``scene`` (the compiled scene's
+    :class:`~eyelume.kernels.tables.SceneTables`) from birth to its end, adding to ``counts``
+    (a :class:`Counts`); with ``record`` its vertices go to ``path``. Returns a :class:`Traced`.
     """
-    sf, si, lf, image_z, leds, alpha_grid, cdf_grid, sensor, plane, max_events = arrays
-    state, x, y, z, dx, dy, dz = emit_ray(i, seed, leds, alpha_grid, cdf_grid)
+    sf, si = scene.surfaces.sf, scene.surfaces.si
+    tallies = counts.tallies
+    state, x, y, z, dx, dy, dz = emit_ray(i, seed, scene.leds)
     npath = _record(path, 0, x, y, z, record)
-    pw, ph, pc, pr = plane[0], plane[1], int(plane[2]), int(plane[3])
     interactions = 0
-    for _ in range(max_events):
+    for _ in range(scene.max_events):
         s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
         if dz < 0.0 and z > 0.0:  # crosses the eye plane toward the eye before its next hit?
             t0 = -z / dz
             if t0 < t:
-                col = int(math.floor((x + t0 * dx + 0.5 * pw) / pw * pc))
-                row = int(math.floor((0.5 * ph - (y + t0 * dy)) / ph * pr))
-                if 0 <= col < pc and 0 <= row < pr:
-                    plane_counts[row, col] += 1
+                col, row, inside = bin_of(scene.eye_plane, x + t0 * dx, y + t0 * dy)
+                if inside:
+                    counts.plane[row, col] += 1
         if s < 0:
             tallies[TALLY_ESCAPED] += 1
             npath = _record(
@@ -117,38 +131,36 @@ def trace_ray(
                 z + _ESCAPE_DRAW_MM * dz,
                 record,
             )
-            return TALLY_ESCAPED, interactions, npath
+            return Traced(TALLY_ESCAPED, interactions, npath)
         action = si[s, G.ACTION]
         if action == G.ACT_LENS:
             nx, ny, nz = G.surface_normal(sf, si, s, x + t * dx, y + t * dy, z + t * dz)
             if dx * nx + dy * ny + dz * nz < 0.0:  # met from behind: the lens's back and mount
                 tallies[si[s, G.TALLY_B]] += 1
                 npath = _record(path, npath, x + t * dx, y + t * dy, z + t * dz, record)
-                return si[s, G.TALLY_B], interactions + 1, npath
+                return Traced(si[s, G.TALLY_B], interactions + 1, npath)
             status, x, y, z, dx, dy, dz, met, npath = trace_lens(
-                lf, x, y, z, dx, dy, dz, path, npath, record
+                scene.lens.lf, x, y, z, dx, dy, dz, path, npath, record
             )
             interactions += met
             if status != LENS_PASSED:
                 entry = TALLY_TIR if status == LENS_TIR else TALLY_VIGNETTED
                 tallies[entry] += 1
-                return entry, interactions, npath
-            t = (image_z - z) / dz
+                return Traced(entry, interactions, npath)
+            t = (scene.lens.image_z - z) / dz
             x += t * dx
             y += t * dy
-            z = image_z
+            z = scene.lens.image_z
             npath = _record(path, npath, x, y, z, record)
-            sw, sh, sc, sr = sensor[0], sensor[1], int(sensor[2]), int(sensor[3])
             # the picture is the sensor image turned by 180°, as a camera's readout shows it:
             # world +y at the top (row 0), world +x to the right (as seen from the camera)
-            col = int(math.floor((0.5 * sw - x) / sw * sc))
-            row = int(math.floor((y + 0.5 * sh) / sh * sr))
-            if 0 <= col < sc and 0 <= row < sr:
-                img_counts[row, col] += 1
+            col, row, inside = bin_of(scene.picture, x, y)
+            if inside:
+                counts.image[row, col] += 1
                 tallies[TALLY_SENSOR] += 1
-                return TALLY_SENSOR, interactions, npath
+                return Traced(TALLY_SENSOR, interactions, npath)
             tallies[TALLY_OFF_SENSOR] += 1
-            return TALLY_OFF_SENSOR, interactions, npath
+            return Traced(TALLY_OFF_SENSOR, interactions, npath)
 
         x += t * dx
         y += t * dy
@@ -164,7 +176,7 @@ def trace_ray(
             if u >= rho:
                 entry = si[s, G.TALLY_B] if from_b else si[s, G.TALLY_A]
                 tallies[entry] += 1
-                return entry, interactions, npath
+                return Traced(entry, interactions, npath)
             if not from_b:
                 nx, ny, nz = -nx, -ny, -nz
             state, u1 = next_uniform(state)
@@ -172,22 +184,17 @@ def trace_ray(
             lx, ly, lz = cosine_hemisphere(u1, u2)
             dx, dy, dz = about_axis(lx, ly, lz, nx, ny, nz)
         else:  # refracting interface with a partial reflection
-            n1 = sf[s, G.N_B] if from_b else sf[s, G.N_A]
-            n2 = sf[s, G.N_A] if from_b else sf[s, G.N_B]
-            ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, n1 / n2)
+            f = interface_at(sf, si, s, cos_d)
+            ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
             if not ok:  # total internal reflection: all of it, whatever R and A say
                 dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz)
             else:
-                if si[s, G.FRESNEL]:
-                    r = fresnel_reflectance(cos_d, n1, n2)
-                else:
-                    r = sf[s, G.REFL]
-                if u < r:
+                if u < f.reflectance:
                     dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz)
-                elif u < r + sf[s, G.ABSORB]:
+                elif u < f.reflectance + f.absorptance:
                     entry = si[s, G.TALLY_B] if from_b else si[s, G.TALLY_A]
                     tallies[entry] += 1
-                    return entry, interactions, npath
+                    return Traced(entry, interactions, npath)
                 else:
                     dx, dy, dz = tx, ty, tz
         norm = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
@@ -195,38 +202,33 @@ def trace_ray(
         dy *= norm
         dz *= norm
     tallies[TALLY_LIMIT] += 1
-    return TALLY_LIMIT, interactions, npath
+    return Traced(TALLY_LIMIT, interactions, npath)
 
 
 @njit(cache=True, parallel=True)
-def _trace_batch(
-    start,
-    count,
-    seed,
-    arrays,
-    img_counts,
-    plane_counts,
-    tallies,
-    interactions,
-):
+def _trace_batch(start, count, seed, scene, img_counts, plane_counts, tallies, interactions):
     n_chunks = img_counts.shape[0]
+    # parfors pass only arrays and scalars into a prange body (numba#10139): the tables are
+    # taken apart here and rebuilt inside it (no copy: the arrays are shared)
+    (sf, si), (lf, image_z), (pts, axes, i0, ag, cg, ig), pic_t, eye_t, n_ev = scene
+    pw, ph, pc, pr, psx, psy = pic_t
+    ew, eh, ec, er, esx, esy = eye_t
     for c in prange(n_chunks):
+        tables = SceneTables(
+            SurfaceTable(sf, si),
+            LensTable(lf, image_z),
+            LedTable(pts, axes, i0, ag, cg, ig),
+            PlaneGrid(pw, ph, pc, pr, psx, psy),
+            PlaneGrid(ew, eh, ec, er, esx, esy),
+            n_ev,
+        )
         lo = start + (count * c) // n_chunks
         hi = start + (count * (c + 1)) // n_chunks
         path = np.zeros((1, 3))
+        counts = Counts(img_counts[c], plane_counts[c], tallies[c])
         inter = 0
         for i in range(lo, hi):
-            _, k, _ = trace_ray(
-                i,
-                seed,
-                arrays,
-                img_counts[c],
-                plane_counts[c],
-                tallies[c],
-                path,
-                False,
-            )
-            inter += k
+            inter += trace_ray(i, seed, tables, counts, path, False).interactions
         interactions[c] += inter
 
 
@@ -263,27 +265,17 @@ def trace_forward(
         raise BudgetError(f"rays = {rays}: must be ≥ 1")
     batch = int(batch_size or cs.scene.run.batch_size)
     n_chunks = 4 * numba.get_num_threads()
-    rows, cols = int(cs.sensor[3]), int(cs.sensor[2])
-    prow, pcol = int(cs.plane[3]), int(cs.plane[2])
+    rows, cols = cs.picture.rows, cs.picture.cols
+    prow, pcol = cs.eye_plane.rows, cs.eye_plane.cols
     img = np.zeros((n_chunks, rows, cols), dtype=np.int64)
     pl = np.zeros((n_chunks, prow, pcol), dtype=np.int64)
     tal = np.zeros((n_chunks, len(cs.tallies)), dtype=np.int64)
     inter = np.zeros(n_chunks, dtype=np.int64)
-    arrays = cs.kernel_arrays()
     done = 0
     with interrupt_between_batches() as stop:
         while done < rays and not stop.requested:
             n = min(batch, rays - done)
-            _trace_batch(
-                done,
-                n,
-                seed,
-                arrays,
-                img,
-                pl,
-                tal,
-                inter,
-            )
+            _trace_batch(done, n, seed, cs.tables, img, pl, tal, inter)
             done += n
             if progress is not None:
                 progress(done, rays)
@@ -294,52 +286,46 @@ def trace_forward(
     )
 
 
+class PathSearch(NamedTuple):
+    """Which recorded rays :func:`_trace_paths` keeps: born within ``section_tol`` mm of the
+    y–z section, up to ``want_detected`` that reach the sensor and ``want_other`` that do not;
+    into ``out`` (k, max_len, 3) with ``lengths`` and ``kinds`` (1: detected)."""
+
+    section_tol: float
+    want_detected: int
+    want_other: int
+    out: np.ndarray
+    lengths: np.ndarray
+    kinds: np.ndarray
+
+
 @njit(cache=True)
-def _trace_paths(
-    start,
-    n,
-    seed,
-    arrays,
-    n_tallies,
-    section_tol,
-    want_detected,
-    want_other,
-    out,
-    lengths,
-    kinds,
-):
-    sensor, plane = arrays[7], arrays[8]
-    img = np.zeros((int(sensor[3]), int(sensor[2])), dtype=np.int64)
-    pl = np.zeros((int(plane[3]), int(plane[2])), dtype=np.int64)
-    tal = np.zeros(n_tallies, dtype=np.int64)
-    path = np.zeros((out.shape[1], 3))
+def _trace_paths(start, n, seed, scene, n_tallies, want):
+    pic, pl = scene.picture, scene.eye_plane
+    counts = Counts(
+        np.zeros((pic.rows, pic.cols), dtype=np.int64),
+        np.zeros((pl.rows, pl.cols), dtype=np.int64),
+        np.zeros(n_tallies, dtype=np.int64),
+    )
+    path = np.zeros((want.out.shape[1], 3))
     got_d = 0
     got_o = 0
     k = 0
     for i in range(start, start + n):
-        entry, _, npath = trace_ray(
-            i,
-            seed,
-            arrays,
-            img,
-            pl,
-            tal,
-            path,
-            True,
-        )
-        if abs(path[0, 0]) > section_tol:
+        entry, _, npath = trace_ray(i, seed, scene, counts, path, True)
+        if abs(path[0, 0]) > want.section_tol:
             continue  # born off the y–z section: its projection would mislead
         detected = entry == TALLY_SENSOR
-        if (detected and got_d < want_detected) or (not detected and got_o < want_other):
-            out[k, :npath] = path[:npath]
-            lengths[k] = npath
-            kinds[k] = 1 if detected else 0
+        if (detected and got_d < want.want_detected) or (not detected and got_o < want.want_other):
+            want.out[k, :npath] = path[:npath]
+            want.lengths[k] = npath
+            want.kinds[k] = 1 if detected else 0
             k += 1
             if detected:
                 got_d += 1
             else:
                 got_o += 1
-        if got_d >= want_detected and got_o >= want_other:
+        if got_d >= want.want_detected and got_o >= want.want_other:
             break
     return k
 
@@ -362,17 +348,6 @@ def trace_paths(
     out = np.zeros((detected + other, max_len, 3))
     lengths = np.zeros(detected + other, dtype=np.int64)
     kinds = np.zeros(detected + other, dtype=np.int64)
-    k = _trace_paths(
-        0,
-        search,
-        seed,
-        cs.kernel_arrays(),
-        len(cs.tallies),
-        section_tol,
-        detected,
-        other,
-        out,
-        lengths,
-        kinds,
-    )
+    want = PathSearch(float(section_tol), int(detected), int(other), out, lengths, kinds)
+    k = _trace_paths(0, search, seed, cs.tables, len(cs.tallies), want)
     return [(out[j, : lengths[j]].copy(), bool(kinds[j])) for j in range(k)]

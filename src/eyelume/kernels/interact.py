@@ -1,10 +1,15 @@
-"""Interactions at a surface: one physical law per function, unit vectors in, unit vectors out."""
+"""Interactions at a surface: one physical law per function, unit vectors in, unit vectors out;
+and :func:`interface_at`, the one place that reads a refracting interface of the surface table
+(which side the ray comes from, the indices either side, its reflectance and absorptance)."""
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 from numba import njit
+
+from eyelume.kernels import geometry as G
 
 
 @njit(cache=True, inline="always")
@@ -46,3 +51,26 @@ def fresnel_reflectance(cos_i, n1, n2):
     rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t)
     rp = (n1 * cos_t - n2 * cos_i) / (n1 * cos_t + n2 * cos_i)
     return 0.5 * (rs * rs + rp * rp)
+
+
+class Interface(NamedTuple):
+    """A refracting interface as a ray arriving at it sees it: indices n₁ (its side) and n₂ (the
+    far side), reflectance R (Fresnel or the surface's fixed value) and absorptance A; the rest,
+    T = 1 − R − A, is transmitted."""
+
+    n1: float
+    n2: float
+    reflectance: float
+    absorptance: float
+
+
+@njit(cache=True, inline="always")
+def interface_at(sf, si, s, cos_d):
+    """The interface of surface ``s`` for a ray with cos_d = d · n (n the normal toward side B):
+    it arrives from side B when cos_d < 0, else from side A. R is the unpolarised Fresnel
+    reflectance at |cos_d| when the surface's FRESNEL flag is set, else its fixed REFL."""
+    from_b = cos_d < 0.0
+    n1 = sf[s, G.N_B] if from_b else sf[s, G.N_A]
+    n2 = sf[s, G.N_A] if from_b else sf[s, G.N_B]
+    r = fresnel_reflectance(cos_d, n1, n2) if si[s, G.FRESNEL] else sf[s, G.REFL]
+    return Interface(n1, n2, r, sf[s, G.ABSORB])

@@ -1,4 +1,11 @@
-"""Direction samplers, each with its probability density (per steradian) for tests and weights."""
+"""Samplers, each with its probability density, and the one evaluator of an LED's I(α).
+
+Every sampler maps uniforms u ∈ [0, 1)ᵏ to a point or a direction and has a ``*_pdf`` beside it
+(per steradian for directions, per mm² for points), as Mitsuba's ``warp::square_to_X`` /
+``square_to_X_pdf`` pairs; ``tests/kernels/test_samplers.py`` checks every pair with the one χ²
+harness of ``tests/kernels/chi2.py``. The estimators draw the uniforms (:mod:`.rng`) and weight
+by the pdf.
+"""
 
 from __future__ import annotations
 
@@ -6,6 +13,10 @@ import math
 
 import numpy as np
 from numba import njit
+
+from eyelume.kernels.tables import A_P, A_R, A_X, A_Y, A_Z
+
+_INV_PI = 1.0 / math.pi
 
 
 @njit(cache=True, inline="always")
@@ -67,6 +78,123 @@ def profile_polar_angle(u, alpha_grid, cdf_grid):
 
 
 @njit(cache=True, inline="always")
+def uniform_cone(u1, u2, cos_max):
+    """Direction uniform in the cone of half-angle acos(cos_max) about +z (local):
+    pdf(ω) = 1 / (2π (1 − cos_max))."""
+    ct = 1.0 - u1 * (1.0 - cos_max)
+    st = math.sqrt(max(0.0, 1.0 - ct * ct))
+    phi = 2.0 * math.pi * u2
+    return st * math.cos(phi), st * math.sin(phi), ct
+
+
+@njit(cache=True, inline="always")
+def uniform_cone_pdf(cos_theta, cos_max):
+    """Density per steradian of :func:`uniform_cone` at polar cosine ``cos_theta``."""
+    return 1.0 / (2.0 * math.pi * (1.0 - cos_max)) if cos_theta >= cos_max else 0.0
+
+
+@njit(cache=True, inline="always")
+def uniform_disk(u1, u2, radius):
+    """Point uniform on the disk of ``radius`` about the origin (x, y): pdf = 1 / (π r²)."""
+    r = radius * math.sqrt(u1)
+    phi = 2.0 * math.pi * u2
+    return r * math.cos(phi), r * math.sin(phi)
+
+
+@njit(cache=True, inline="always")
+def uniform_disk_pdf(x, y, radius):
+    """Density per mm² of :func:`uniform_disk` (and of :func:`disk_stratum` over its strata)."""
+    return 1.0 / (math.pi * radius * radius) if x * x + y * y <= radius * radius else 0.0
+
+
+@njit(cache=True, inline="always")
+def disk_stratum(k, grid, u1, u2, radius):
+    """Point uniform in stratum ``k`` of the disk's ``grid`` equal-area rings × ``grid`` equal
+    sectors (k // grid the ring, k % grid the sector). Over k uniform in [0, grid²) its density
+    is :func:`uniform_disk_pdf`."""
+    r = radius * math.sqrt((k // grid + u1) / grid)
+    phi = 2.0 * math.pi * (k % grid + u2) / grid
+    return r * math.cos(phi), r * math.sin(phi)
+
+
+@njit(cache=True, inline="always")
+def aimed_disk_pdf(aim_row, x, y, z, dx, dy, dz):
+    """Density per steradian, at direction d from (x, y, z), of aiming at a uniform point of the
+    disk ``aim_row`` (centre A_X, A_Y, A_Z, radius A_R, normal world +z; columns in
+    :mod:`.tables`): dA cos / t² ⇒ p = t² / (π r² |d_z|). 0 off the disk or below it."""
+    if aim_row[A_P] <= 0.0 or dz <= 0.0:
+        return 0.0
+    t = (aim_row[A_Z] - z) / dz
+    hx = x + t * dx - aim_row[A_X]
+    hy = y + t * dy - aim_row[A_Y]
+    rr = aim_row[A_R] * aim_row[A_R]
+    if hx * hx + hy * hy > rr:
+        return 0.0
+    return t * t / (math.pi * rr * dz)
+
+
+@njit(cache=True, inline="always")
+def aimed_mixture(u0, u1, u2, aim_row, x, y, z, nx, ny, nz):
+    """Direction from (x, y, z) drawn from the defensive mixture: with probability p =
+    aim_row[A_P] toward a uniform point of the aim disk, else cosine-weighted about unit n.
+    Density :func:`aimed_mixture_pdf`."""
+    if u0 < aim_row[A_P]:
+        r = aim_row[A_R] * math.sqrt(u1)
+        phi = 2.0 * math.pi * u2
+        vx = aim_row[A_X] + r * math.cos(phi) - x
+        vy = aim_row[A_Y] + r * math.sin(phi) - y
+        vz = aim_row[A_Z] - z
+        inv = math.copysign(1.0, vz) / math.sqrt(vx * vx + vy * vy + vz * vz)
+        return vx * inv, vy * inv, vz * inv
+    lx, ly, lz = cosine_hemisphere(u1, u2)
+    return about_axis(lx, ly, lz, nx, ny, nz)
+
+
+@njit(cache=True, inline="always")
+def aimed_mixture_pdf(aim_row, x, y, z, nx, ny, nz, dx, dy, dz):
+    """Density per steradian of :func:`aimed_mixture`: (1 − p) cos θ/π + p · aimed_disk_pdf
+    (0 below the face, where the cosine part vanishes and the weight is 0 anyway)."""
+    cos_n = dx * nx + dy * ny + dz * nz
+    if cos_n <= 0.0:
+        return 0.0
+    p = aim_row[A_P]
+    return (1.0 - p) * cos_n * _INV_PI + p * aimed_disk_pdf(aim_row, x, y, z, dx, dy, dz)
+
+
+@njit(cache=True, inline="always")
+def led_direction(leds, k, u1, u2):
+    """Emission direction of LED ``k`` (an :class:`~.tables.LedTable`): polar angle from its
+    profile (:func:`profile_polar_angle`), azimuth uniform, about its axis. Density
+    :func:`led_direction_pdf`."""
+    alpha = profile_polar_angle(u1, leds.alpha_grid, leds.cdf_grid)
+    phi = 2.0 * math.pi * u2
+    sa = math.sin(alpha)
+    return about_axis(
+        sa * math.cos(phi),
+        sa * math.sin(phi),
+        math.cos(alpha),
+        leds.axes[k, 0],
+        leds.axes[k, 1],
+        leds.axes[k, 2],
+    )
+
+
+@njit(cache=True, inline="always")
+def led_cos_alpha(leds, k, dx, dy, dz):
+    """cos α of unit direction d (from LED ``k``) with the LED's axis."""
+    return dx * leds.axes[k, 0] + dy * leds.axes[k, 1] + dz * leds.axes[k, 2]
+
+
+@njit(cache=True, inline="always")
+def radiant_intensity(leds, k, dx, dy, dz):
+    """Radiant intensity I(α) = I₀ · I(α)/I₀ (W/sr) of LED ``k`` toward unit direction d (from
+    the LED): the one evaluator of the LEDs' angular profile in the kernels. 0 behind."""
+    return leds.i0 * relative_intensity_at(
+        led_cos_alpha(leds, k, dx, dy, dz), leds.alpha_grid, leds.intensity_grid
+    )
+
+
+@njit(cache=True, inline="always")
 def relative_intensity_at(cos_a, alpha_grid, intensity_grid):
     """I(α)/I₀ at cos α, linear in α on the uniform grid of the compiled scene; 0 behind."""
     if cos_a <= 0.0:
@@ -119,3 +247,11 @@ def cos_power_tables(m: float, n: int = 4097) -> tuple[np.ndarray, np.ndarray, f
 def profile_pdf(alpha, relative_intensity, omega_eff: float):
     """Density per steradian of directions drawn by the LED sampler: p(ω) = I(α)/I(0) / Ω_eff."""
     return np.asarray(relative_intensity(np.asarray(alpha)), dtype=float) / omega_eff
+
+
+@njit(cache=True, inline="always")
+def led_direction_pdf(leds, k, omega_eff, dx, dy, dz):
+    """Density per steradian of :func:`led_direction`: I(α)/I₀ / Ω_eff (Ω_eff in sr, the
+    compiled scene's ``omega_eff``), with I(α)/I₀ interpolated on the profile grid."""
+    cos_a = led_cos_alpha(leds, k, dx, dy, dz)
+    return relative_intensity_at(cos_a, leds.alpha_grid, leds.intensity_grid) / omega_eff

@@ -100,7 +100,7 @@ def evaluate_tracking(
                     f"gaze ({h:+.0f}°, {v:+.0f}°): "
                     + ("ok" if f.detection.ok else "; ".join(f.detection.failures))
                 )
-    leds = compile_scene(scene).leds[:, :3]
+    leds = compile_scene(scene).led.points
     return analyse_frames(scene, leds, frames, calib)
 
 

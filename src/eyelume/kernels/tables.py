@@ -1,0 +1,140 @@
+"""The named data the kernels read: NamedTuples of arrays and scalars, built once per scene by
+:mod:`eyelume.compile` and handed to a kernel as one argument each.
+
+Numba compiles a ``typing.NamedTuple`` of arrays and scalars as a struct (arguments and return
+values, under ``cache=True`` and ``prange``), so a kernel takes ``(surfaces, leds, camera, …)``
+instead of twenty positional arrays, and the call sites do not repeat the list. Arrays are
+C-contiguous float64 / int64; world millimetres throughout.
+
+* :class:`SurfaceTable` — the non-sequential surfaces (columns in :mod:`.geometry`);
+* :class:`LensTable` — the imaging lens, traced sequentially (columns in :mod:`.sequential`);
+* :class:`LedTable` — the LEDs' emission points, axes, I₀ and angular-profile tables;
+* :class:`CameraTables` — the lens seen backwards from the sensor, its pupils and the aim table
+  of the camera-side estimator;
+* :class:`eyelume.kernels.bins.PlaneGrid` — the picture and the eye-plane receiver's bins;
+* :class:`SceneTables` — all of the above that a forward trace reads, in one struct.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from eyelume.kernels.bins import PlaneGrid
+
+__all__ = [
+    "Ray",
+    "Facet",
+    "SurfaceTable",
+    "LensTable",
+    "LedTable",
+    "CameraTables",
+    "SceneTables",
+    "A_X",
+    "A_Y",
+    "A_Z",
+    "A_R",
+    "A_P",
+    "N_AIM",
+]
+
+# aim table columns: disk centre xyz (its normal is world +z), radius (mm), probability
+A_X, A_Y, A_Z, A_R, A_P = range(5)
+N_AIM = 5
+
+
+class Ray(NamedTuple):
+    """A ray: origin (x, y, z) and unit direction (dx, dy, dz), world mm."""
+
+    x: float
+    y: float
+    z: float
+    dx: float
+    dy: float
+    dz: float
+
+
+class Facet(NamedTuple):
+    """A point on a face (x, y, z) and its unit normal (nx, ny, nz) toward the light's side,
+    world mm."""
+
+    x: float
+    y: float
+    z: float
+    nx: float
+    ny: float
+    nz: float
+
+
+class SurfaceTable(NamedTuple):
+    """Non-sequential surfaces (eye, iris, sclera, retina, face tissues, LED bodies, the lens's
+    entrance): ``sf`` (n, N_FLOAT) float64 and ``si`` (n, N_INT) int64, columns in
+    :mod:`eyelume.kernels.geometry`."""
+
+    sf: np.ndarray
+    si: np.ndarray
+
+
+class LensTable(NamedTuple):
+    """The imaging lens: ``lf`` (n_lens, N_LENS_COL) float64, one row per surface in order
+    (columns in :mod:`eyelume.kernels.sequential`), and the world z (mm) of the image plane."""
+
+    lf: np.ndarray
+    image_z: float
+
+
+class LedTable(NamedTuple):
+    """The LEDs as point sources with one angular profile.
+
+    ``points`` (N, 3) emission points (world mm, on the body's front), ``axes`` (N, 3) unit
+    axes, ``i0`` the on-axis radiant intensity I₀ (W/sr), and the profile on a uniform grid
+    ``alpha_grid`` (rad, [0, π/2]): ``cdf_grid`` the normalised ∫₀^α I sin α' dα' (for
+    sampling), ``intensity_grid`` I(α)/I₀ (for evaluating,
+    :func:`eyelume.kernels.sampling.radiant_intensity`)."""
+
+    points: np.ndarray
+    axes: np.ndarray
+    i0: float
+    alpha_grid: np.ndarray
+    cdf_grid: np.ndarray
+    intensity_grid: np.ndarray
+
+
+class CameraTables(NamedTuple):
+    """The camera as the camera-side (fast) estimator sees it (:mod:`eyelume.estimators.camera`).
+
+    ``lf_rev``: the lens table mirrored through z = 0 and reversed (trace from the sensor out);
+    ``lf_open``: the same with open apertures (for aiming); ``k_stop``: the stop's row in
+    ``lf_rev``; ``stop_radius`` (mm); ``image_z``, ``rear_z`` (world z of the sensor and of the
+    last lens vertex); ``exit_pupil_z``, ``exit_pupil_magnification`` (paraxial exit pupil);
+    ``entrance_pupil_z``; ``aim`` (n_surfaces, 2, N_AIM): per Lambertian face and side (0 = A,
+    1 = B) the disk to aim scattered light at and the probability of aiming;
+    ``through_cornea`` (n_surfaces,) int64: 1 where next-event estimation goes through the
+    cornea (the iris); ``cornea``: the surface index of the anterior cornea (``cornea + 1`` is
+    the posterior one)."""
+
+    lf_rev: np.ndarray
+    lf_open: np.ndarray
+    k_stop: int
+    stop_radius: float
+    image_z: float
+    rear_z: float
+    exit_pupil_z: float
+    exit_pupil_magnification: float
+    entrance_pupil_z: float
+    aim: np.ndarray
+    through_cornea: np.ndarray
+    cornea: int
+
+
+class SceneTables(NamedTuple):
+    """What a forward trace reads: surfaces, lens, LEDs, the picture grid on the sensor, the
+    eye-plane receiver's grid and the per-ray event limit."""
+
+    surfaces: SurfaceTable
+    lens: LensTable
+    leds: LedTable
+    picture: PlaneGrid
+    eye_plane: PlaneGrid
+    max_events: int
