@@ -23,7 +23,7 @@ piecewise linear in α and a bin across one of its nodes converges only algebrai
 profiles use order :data:`TABLE_ORDER` = 16 (a few 1e-4 relative for a datasheet-like table; pass a
 higher ``order`` if that matters).
 
-Units and frame as everywhere (DESIGN.md §2): mm, W/sr, W/mm²; LED i at azimuth φ has its body
+Units and frame as everywhere (ARCHITECTURE.md §2): mm, W/sr, W/mm²; LED i at azimuth φ has its body
 centre at (Y cos φ, Y sin φ, Z) and its axis (−sin θ cos φ, −sin θ sin φ, −cos θ)
 (:func:`eyelume.scene.sources.led_poses`). Row 0 of a plane is at +y, column 0 at −x.
 """

@@ -1,7 +1,7 @@
 """The scene: plain validated data describing LEDs, eye, face, imaging lens, sensor and receivers.
 
 No physics happens here. Every length is in millimetres, every angle in degrees, wavelength in
-nanometres, radiant intensity in W/sr (DESIGN.md §2). The world frame has its origin at the
+nanometres, radiant intensity in W/sr (ARCHITECTURE.md §2). The world frame has its origin at the
 anterior corneal vertex of the eye in primary gaze, +z along the camera's optical axis from the eye
 toward the camera and LEDs, +y up; the eye's prescription is written in its own lens-design frame
 (z' into the eye, z' = −z in primary gaze).
@@ -142,7 +142,7 @@ class Eye(_Model):
     Gaze: the eye turns about its centre of rotation, ``rotation_centre_mm`` behind the anterior
     corneal vertex of primary gaze, first by ``gaze_vertical_deg`` about the x axis (positive:
     looking up, +y), then by ``gaze_horizontal_deg`` about the y axis (positive: looking toward
-    +x, the nose of a right eye). The world frame stays that of primary gaze (DESIGN.md).
+    +x, the nose of a right eye). The world frame stays that of primary gaze (ARCHITECTURE.md §2).
     """
 
     model: str = "arizona"

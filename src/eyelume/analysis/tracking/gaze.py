@@ -16,7 +16,7 @@ Two estimators, and the forward model that makes their test data:
 - :func:`simulate_eye_features` — the exact pupil and glint picture positions of that same eye
   model rotated to a given gaze (the test truth).
 
-Frames and units (DESIGN.md §2): world frame in mm, origin at the anterior corneal vertex in
+Frames and units (ARCHITECTURE.md §2): world frame in mm, origin at the anterior corneal vertex in
 primary gaze, +z from the eye toward the camera, +y up, +x toward the nose. Picture positions
 are (col, row) in pixels, continuous, pixel centres at integers, row 0 at the top of the upright
 picture. Gaze angles are in degrees:
