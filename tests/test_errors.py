@@ -99,3 +99,21 @@ def test_fail_raises_an_option_error():
     with pytest.raises(OptionError, match="--seed -1"):
         cli._fail("--seed -1: must be ≥ 0")
     assert not issubclass(OptionError, typer.Exit)
+
+
+def test_the_cli_catches_the_error_root_in_one_place():
+    """pbrt-v4's main: errors surface to the top; one handler prints them. No command catches
+    the root or one of its kinds itself (it may turn a foreign ValueError or OSError into one)."""
+    import ast
+    import inspect
+
+    ours = {*errors.__all__, "StoreBusy"}
+    tree = ast.parse(inspect.getsource(cli))
+    caught = [
+        ast.unparse(h.type)
+        for h in ast.walk(tree)
+        if isinstance(h, ast.ExceptHandler)
+        and h.type is not None
+        and any(isinstance(n, ast.Name) and n.id in ours for n in ast.walk(h.type))
+    ]
+    assert caught == ["EyelumeError"]
