@@ -156,6 +156,19 @@ def _refuse_gaze(sets: list[str] | None, command: str) -> None:
             )
 
 
+def _progress_bar(label: str, count: str) -> Progress:
+    """The one progress bar of every long command, on stderr: label, bar, count, elapsed, ETA."""
+    return Progress(
+        TextColumn(label),
+        BarColumn(),
+        TextColumn(count),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+        console=err,
+        transient=True,
+    )
+
+
 def _check_out(out: Path, option: str = "--out") -> None:
     """Refuse an output folder that cannot take the outputs, before any work: an existing file,
     a path under a file, a place where nothing can be written (probed with a temporary file in
@@ -271,15 +284,7 @@ def render(
         total = sc.run.rays if rays is None else rays
         t_load = _warm_up_forward(cs)
         err.print(f"tracing {total:,} rays of {sc.name} (Ctrl-C stops after the current batch)")
-        with Progress(
-            TextColumn("[bold]tracing"),
-            BarColumn(),
-            TextColumn("{task.completed:,}/{task.total:,} rays"),
-            TimeElapsedColumn(),
-            TimeRemainingColumn(),
-            console=err,
-            transient=True,
-        ) as bar:
+        with _progress_bar("[bold]tracing", "{task.completed:,}/{task.total:,} rays") as bar:
             task = bar.add_task("trace", total=total)
             result = render_scene(
                 cs,
@@ -368,15 +373,7 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
         goal = f"{spp} samples per pixel{note}"
         plan = projection(spp)
     err.print(f"rendering {sc.name} (fast estimator, {goal}); {plan}; Ctrl-C stops")
-    with Progress(
-        TextColumn("[bold]rendering[/] {task.description}"),
-        BarColumn(),
-        TextColumn("{task.percentage:>3.0f}%"),
-        TimeElapsedColumn(),
-        TimeRemainingColumn(),
-        console=err,
-        transient=True,
-    ) as bar:
+    with _progress_bar("[bold]rendering[/] {task.description}", "{task.percentage:>3.0f}%") as bar:
         task = bar.add_task("", total=None)
         try:
             result = render_scene(
@@ -820,15 +817,7 @@ def study(
     _check_out(out)
     total = len(plan_runs(st))
     err.print(f"study {st.name}: {total} runs into {out} (Ctrl-C, then --resume, loses nothing)")
-    with Progress(
-        TextColumn("[bold]runs"),
-        BarColumn(),
-        TextColumn("{task.completed}/{task.total}"),
-        TimeElapsedColumn(),
-        TimeRemainingColumn(),
-        console=err,
-        transient=True,
-    ) as bar:
+    with _progress_bar("[bold]runs", "{task.completed}/{task.total}") as bar:
         task = bar.add_task("study", total=total)
         try:
             rows = run_study(
