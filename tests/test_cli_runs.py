@@ -194,3 +194,38 @@ def test_kernel_loading_is_timed_apart_and_first_compilation_is_said(tmp_path):
     warm = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                           timeout=300)  # fmt: skip
     assert warm.stdout.strip() == "True", warm.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["render", "--samples", "64", "--rel-error", "0.01"], ["--samples 64", "--rel-error"]),
+        (["render", "--max-samples", "100"], ["--max-samples 100", "--rel-error"]),
+        (["render", "--samples", "8", "--max-samples", "100"], ["--max-samples 100"]),
+        (["sweep-leds", "--target", "T", "--delta", "0.5"], ["--delta 0.5", "--target"]),
+        (["reproduce", "paper2005", "--direct", "0", "--direct-leds", "6"], ["--direct-leds 6"]),
+        (["reproduce", "paper2005", "--direct", "0", "--vary-spread"], ["--vary-spread"]),
+        (["reproduce", "paper2005", "--direct", "0", "--vary-azimuths"], ["--vary-azimuths"]),
+        (["study", "STUDY", "--workers", "2", "--dask", "tcp://h:8786"], ["--workers 2", "--dask"]),
+    ],
+)
+def test_contradictory_options_are_refused_before_any_work(tmp_path, monkeypatch, args, words):
+    """Two options of which one would be silently ignored: one line naming them, exit 2, and
+    no work started."""
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY, encoding="utf-8")
+    target = tmp_path / "t.csv"
+    target.write_text("1,1\n1,1\n", encoding="utf-8")
+
+    def no_work(*a, **k):
+        raise AssertionError("work started before the options were checked")
+
+    for dotted in (*WORK.values(), "eyelume.compile.compile_scene"):
+        module, name = dotted.rsplit(".", 1)
+        monkeypatch.setattr(f"{module}.{name}", no_work)
+    args = [a.replace("STUDY", str(study)).replace("T", str(target)) if a in ("STUDY", "T")
+            else a for a in args]  # fmt: skip
+    line = _one_line_exit_2(runner.invoke(app, [*args, "--out", str(tmp_path / "o")]))
+    for w in words:
+        assert w in line, (w, line)
+    assert not (tmp_path / "o").exists()

@@ -254,13 +254,13 @@ def render(
         ),
     ] = None,
     max_samples: Annotated[
-        int,
+        int | None,
         typer.Option(
             "--max-samples",
             help="Fast, with --rel-error: stop at this many samples per pixel and say what was "
-            "reached if the target needs more.",
+            "reached if the target needs more (default 4096).",
         ),
-    ] = 4096,  # eyelume.estimators.fast_run.MAX_SAMPLES_REL_ERROR
+    ] = None,
     seed: Annotated[
         int | None, typer.Option(help="Random seed (default: the scene's run.seed).")
     ] = None,
@@ -277,6 +277,10 @@ def render(
     estimator = estimator or ("forward" if rays is not None else sc.run.estimator)
     _check_render_options(estimator, rays, samples, rel_error, max_samples, seed)
     _check_out(out)
+    if max_samples is None:
+        from eyelume.estimators.fast_run import MAX_SAMPLES_REL_ERROR
+
+        max_samples = MAX_SAMPLES_REL_ERROR
     cs = compile_scene(sc)
     if estimator == "fast":
         result = _render_fast(cs, samples, rel_error, max_samples, seed)
@@ -329,7 +333,14 @@ def _check_render_options(estimator, rays, samples, rel_error, max_samples, seed
         _fail(f"--samples {samples}: must be 1 to {cap:,}, with --estimator fast (forward: --rays)")
     if rel_error is not None and (not 0 < rel_error < 1 or estimator != "fast"):
         _fail(f"--rel-error {rel_error}: must be in (0, 1), with --estimator fast")
-    if not 1 <= max_samples <= cap:
+    if samples is not None and rel_error is not None:
+        _fail(
+            f"--samples {samples} with --rel-error {rel_error}: give one (a fixed count, or a "
+            "target the run adds samples to reach; --max-samples caps it)"
+        )
+    if max_samples is not None and rel_error is None:
+        _fail(f"--max-samples {max_samples}: caps a --rel-error run only (fixed: --samples)")
+    if max_samples is not None and not 1 <= max_samples <= cap:
         _fail(f"--max-samples {max_samples}: must be 1 to {cap:,}")
     if seed is not None and seed < 0:
         _fail(f"--seed {seed}: must be ≥ 0")
@@ -434,7 +445,14 @@ DeltaOpt = Annotated[
 def sweep_leds_cmd(
     out: Annotated[Path, typer.Option("--out", help="Folder for the outputs (created).")],
     scene: SceneOpt = "paper2005",
-    delta: DeltaOpt = 0.3,
+    delta: Annotated[
+        float | None,
+        typer.Option(
+            "--delta",
+            help="Target falloff δ at the eye plane's corner (0 ≤ δ < 1; default 0.3); not "
+            "with --target.",
+        ),
+    ] = None,
     target: Annotated[
         Path | None,
         typer.Option(help="A user target pattern (.csv or .npy, the eye plane's rows × cols)."),
@@ -451,6 +469,11 @@ def sweep_leds_cmd(
     from eyelume.optimize.sweep import refine, sweep_leds
     from eyelume.report.optimize_outputs import write_sweep_outputs
 
+    if target is not None and delta is not None:
+        _fail(f"--delta {delta} with --target {target}: give one (the target replaces δ's)")
+    if delta is not None and not 0 <= delta < 1:
+        _fail(f"--delta {delta}: must be in [0, 1)")
+    delta = 0.3 if delta is None else delta
     sc = _load(scene, set_)
     _check_out(out)
     try:
@@ -498,8 +521,9 @@ def reproduce(
         ),
     ] = 30,
     direct_leds: Annotated[
-        str, typer.Option(help="LED counts the direct optimisation tries, e.g. 4,6,8.")
-    ] = "4",
+        str | None,
+        typer.Option(help="LED counts the direct optimisation tries, e.g. 4,6,8 (default 4)."),
+    ] = None,
     vary_spread: Annotated[
         bool, typer.Option(help="Let the direct optimisation vary the LEDs' spread angle too.")
     ] = False,
@@ -532,6 +556,8 @@ def reproduce(
         _fail(f"--deltas {deltas!r}: each δ must be in [0, 1)")
     if samples < 1 or direct < 0 or seed < 0:
         _fail(f"--samples {samples}, --direct {direct}, --seed {seed}: must be ≥ 1, ≥ 0, ≥ 0")
+    _refuse_without_direct(direct, direct_leds, vary_spread, vary_azimuths)
+    direct_leds = "4" if direct_leds is None else direct_leds
     try:
         counts = [int(v) for v in direct_leds.split(",") if v.strip()]
     except ValueError:
@@ -574,6 +600,23 @@ def reproduce(
         f"best δ = {best.delta:g} (Y {best.height_mm:g}, Z {best.distance_mm:g}, "
         f"θ {best.pitch_deg:g}); {meta['wall_time_s']} s; wrote {len(written)} files to {out}"
     )
+
+
+def _refuse_without_direct(direct, direct_leds, vary_spread, vary_azimuths) -> None:
+    """--direct 0 skips the direct optimisation: its own options would be silently ignored."""
+    if direct:
+        return
+    given = [
+        name
+        for name, on in (
+            (f"--direct-leds {direct_leds}", direct_leds is not None),
+            ("--vary-spread", vary_spread),
+            ("--vary-azimuths", vary_azimuths),
+        )
+        if on
+    ]
+    if given:
+        _fail(f"{given[0]} with --direct 0: the direct optimisation is skipped; drop one")
 
 
 def _read_picture(image: Path):
@@ -812,6 +855,11 @@ def study(
     st = load_study(study_file)
     if workers is not None and workers < 1:
         _fail(f"--workers {workers}: must be ≥ 1")
+    if workers is not None and dask not in (None, "local"):
+        _fail(
+            f"--workers {workers} with --dask {dask}: a scheduler's cluster has its own workers "
+            "(--workers sizes --dask local or the process pool)"
+        )
     if not 0 <= lock_timeout <= 86400:
         _fail(f"--lock-timeout {lock_timeout}: must be 0 to 86400 s")
     _check_out(out)
