@@ -229,3 +229,29 @@ def test_contradictory_options_are_refused_before_any_work(tmp_path, monkeypatch
     for w in words:
         assert w in line, (w, line)
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    ("vary", "words"),
+    [
+        ("grid = [20.0, nan, 3]", ["vary.0.grid.1", "nan"]),
+        ("random = [20.0, inf]\nsamples = 3", ["vary.0.random.1", "inf"]),
+        ("values = [20.0, -5]", ["vary[0].values (leds.height_mm)", "-5"]),
+        ("grid = [-10.0, 30.0, 5]", ["vary[0].grid (leds.height_mm)", "-10.0"]),
+        ('values = [20.0, "tall"]', ["vary[0].values (leds.height_mm)", "'tall'"]),
+    ],
+)
+def test_a_bad_study_file_is_refused_before_the_store_is_touched(tmp_path, vary, words):
+    """Every value the study would run is checked first: one line naming the study file, the
+    field and the value, exit 2, and no folder or results.sqlite created."""
+    study = tmp_path / "bad_study.toml"
+    study.write_text(
+        f'name = "s"\nmetrics = ["safety"]\n[[vary]]\npath = "leds.height_mm"\n{vary}\n',
+        encoding="utf-8",
+    )
+    out = tmp_path / "o"
+    line = _one_line_exit_2(runner.invoke(app, ["study", str(study), "--out", str(out)]))
+    assert str(study) in line.replace("\n", "")
+    for w in words:
+        assert w in line, (w, line)
+    assert not out.exists()

@@ -48,9 +48,9 @@ METRICS = ("eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", 
 
 
 class Vary(BaseModel):
-    """One varied parameter: exactly one of grid, values, random, latin."""
+    """One varied parameter: exactly one of grid, values, random, latin (finite numbers)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     path: str
     grid: tuple[float, float, int] | None = None
@@ -74,7 +74,7 @@ class Vary(BaseModel):
 class Study(BaseModel):
     """A study file (module docstring)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     name: str
     scene: str = "paper2005"
@@ -103,17 +103,53 @@ def load_study(path: str | Path) -> Study:
         study = Study.model_validate(data)
     except ValueError as exc:
         first = exc.errors()[0] if hasattr(exc, "errors") else {"loc": (), "msg": str(exc)}
-        loc = ".".join(str(x) for x in first.get("loc", ()))
-        raise SceneError(f"study {p}: field '{loc}': {first.get('msg')}") from None
+        loc = ".".join(str(x) for x in first.get("loc", ())) or "(top level)"
+        value = first.get("input")
+        if first.get("type") in ("missing", "extra_forbidden") or isinstance(value, dict):
+            raise SceneError(f"study {p}: field '{loc}': {first.get('msg')}") from None
+        raise SceneError(str(first.get("msg")), file=f"study {p}", field=loc, value=value) from None
     if study.scene not in preset_names() and not Path(study.scene).is_absolute():
         # a scene file named by a relative path is the study file's neighbour, not the
         # current directory's
         study = study.model_copy(update={"scene": str((p.parent / study.scene).absolute())})
-    base = load_scene(study.scene)
-    for v in study.vary:  # every path must be a real scene field
-        probe = v.values[0] if v.values else (v.grid or v.random or v.latin)[0]
-        apply_overrides(base, {v.path: probe})
+    try:
+        base = load_scene(study.scene)
+    except SceneError as exc:
+        raise SceneError(f"study {p}: field 'scene': {exc}") from None
+    _check_runs(study, base, p)
     return study
+
+
+def _check_runs(study: Study, base: Scene, path: Path) -> None:
+    """Every value a study would run, checked before anything is written: each varied value
+    alone (the error names ``vary[i].<kind>`` and the value), then every planned run's
+    overrides together (a scene the values make only in combination). SceneError naming the
+    study file."""
+    runs = plan_runs(study)
+    for i, v in enumerate(study.vary):
+        kind = next(k for k in ("grid", "values", "random", "latin") if getattr(v, k) is not None)
+        if kind in ("random", "latin"):
+            probes = list(getattr(v, kind))  # both ends of the range
+        else:
+            probes = list(dict.fromkeys(r[v.path] for r in runs)) if runs else []
+        for value in probes:
+            try:
+                apply_overrides(base, {v.path: value})
+            except SceneError as exc:
+                raise SceneError(
+                    exc.message if exc.field else str(exc),
+                    file=f"study {path}",
+                    field=f"vary[{i}].{kind} ({v.path})",
+                    value=value,
+                ) from None
+    for n, r in enumerate(runs):
+        try:
+            apply_overrides(base, r)
+        except SceneError as exc:
+            raise SceneError(
+                f"run {n} ({', '.join(f'{k} = {x!r}' for k, x in r.items())}): {exc}",
+                file=f"study {path}",
+            ) from None
 
 
 def plan_runs(study: Study) -> list[dict]:
