@@ -892,6 +892,14 @@ def study(
             f"[bold red]warning:[/] {len(unsafe)} runs exceed an IEC 62471 exempt-group limit",
             highlight=False,
         )
+    flagged = [r for r in rows if r["metrics"].get("non_finite")]
+    if flagged:
+        err.print(
+            f"[yellow]warning:[/] {len(flagged)} runs have a metric that is not a finite number "
+            f"(e.g. run {flagged[0]['index']}: {', '.join(flagged[0]['metrics']['non_finite'])}); "
+            "stored as null, listed under non_finite",
+            highlight=False,
+        )
     err.print(f"{len(rows)}/{total} runs in {out / 'results.sqlite'}; table in {table}")
 
 

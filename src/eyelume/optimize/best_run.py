@@ -44,7 +44,8 @@ def best_runs(rows: list[dict], count: int = 5) -> tuple[str | None, list[dict]]
 
 
 def _is_number(v) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool)
+    """A finite number (a NaN merit must never rank first: it compares false with everything)."""
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
 
 
 def _stored_rows(folder: Path) -> list[dict]:

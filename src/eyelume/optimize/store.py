@@ -24,12 +24,16 @@ from __future__ import annotations
 
 import fcntl
 import json
+import math
 import os
 import sqlite3
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+
 from eyelume.errors import StoreError
+from eyelume.json_files import dumps, finite_or_null
 
 __all__ = ["LOCK_TIMEOUT_S", "ResultStore", "StoreBusy", "StoreLocked", "read_rows"]
 
@@ -54,18 +58,47 @@ def _damaged(path: Path, exc: sqlite3.Error) -> StoreError:
     )
 
 
+def _loads(text: str, flag: bool = False) -> dict:
+    """A stored dict; the non-JSON tokens NaN and ±Infinity (a store written before the store
+    refused them, or by another program) read as None (not a finite number) and, with
+    ``flag``, listed under ``"non_finite"`` as :meth:`ResultStore.put` lists them."""
+    value = json.loads(text)
+    bad = _non_finite(value)
+    if not bad:
+        return value
+    value = finite_or_null(value)
+    if flag and isinstance(value, dict):
+        value["non_finite"] = sorted({*value.get("non_finite", []), *bad})
+    return value
+
+
+def _finite(value):
+    return value if isinstance(value, int | float) and math.isfinite(value) else None
+
+
 def _as_rows(cursor) -> list[dict]:
     return [
         {
             "key": key,
             "index": idx,
             "study": study,
-            "overrides": json.loads(ov),
-            "metrics": json.loads(me),
-            "seconds": sec,
+            "overrides": _loads(ov),
+            "metrics": _loads(me, flag=True),
+            "seconds": _finite(sec),
         }
         for key, idx, study, ov, me, sec in cursor
     ]
+
+
+def _non_finite(value, name: str = "") -> list[str]:
+    """The dotted names of the non-finite floats (NaN, ±inf) inside ``value``."""
+    if isinstance(value, dict):
+        return [n for k, v in value.items() for n in _non_finite(v, f"{name}{k}.")]
+    if isinstance(value, list | tuple):
+        return [n for i, v in enumerate(value) for n in _non_finite(v, f"{name}{i}.")]
+    if isinstance(value, float | np.floating) and not math.isfinite(value):
+        return [name.rstrip(".")]
+    return []
 
 
 class ResultStore:
@@ -144,11 +177,27 @@ class ResultStore:
         self, key: str, idx: int, study: str, overrides: dict, metrics: dict, seconds: float
     ) -> None:
         """Commit one finished run (atomic, durable on return); StoreLocked when another
-        program holds the write lock too long."""
+        program holds the write lock too long.
+
+        The store holds strict JSON and finite numbers only: a non-finite override is refused
+        (StoreError: a run key must name real inputs), a non-finite metric is stored as null
+        and flagged — its name listed in the metrics' ``"non_finite"`` entry, so a reader tells
+        "not a finite number" from "not measured" — and non-finite seconds as NULL."""
+        bad = _non_finite(overrides)
+        if bad:
+            raise StoreError(
+                f"run {idx}: override {bad[0]!r} = {overrides.get(bad[0])!r} is not a finite "
+                "number; nothing stored",
+                file=self.path,
+            )
+        flagged = _non_finite(metrics)
+        if flagged:
+            metrics = {**metrics, "non_finite": flagged}
         self._write(
             "INSERT OR REPLACE INTO runs VALUES (?, ?, ?, ?, ?, ?)",
-            (key, idx, study, json.dumps(overrides), json.dumps(metrics), seconds),
-        )
+            (key, idx, study, dumps(overrides, indent=None), dumps(metrics, indent=None),
+             _finite(seconds)),
+        )  # fmt: skip
 
     def rows(self) -> list[dict]:
         """Every finished run, in plan order."""

@@ -102,6 +102,8 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
         figures += _best_images(folder)
 
     def cell(v) -> str:
+        if v is None:  # not measured, or not a finite number (flagged in "non_finite")
+            return "—"
         if isinstance(v, float):
             return f"{v:.5g}" if math.isfinite(v) else "—"
         return html.escape(str(v))
@@ -125,6 +127,11 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
         for t, d in figures
     )
     n_unsafe = sum(r["metrics"].get("within_exempt_group") is False for r in rows)
+    n_nonfinite = sum(
+        bool(r["metrics"].get("non_finite"))
+        or any(isinstance(v, float) and not math.isfinite(v) for v in r["metrics"].values())
+        for r in rows
+    )
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>eyelume study {html.escape(", ".join(studies))}
 </title><style>
@@ -136,6 +143,11 @@ tr.unsafe td {{ color: #b00; font-weight: bold; }} figure {{ display: inline-blo
 <h1>Study {html.escape(", ".join(studies))}</h1>
 <p>{len(rows)} runs committed; {n_unsafe} over an IEC 62471 exempt-group limit (red).</p>
 {f"<p>{html.escape(note)}</p>" if note else ""}
+{
+        f"<p>{n_nonfinite} runs have a metric that is not a finite number (shown —).</p>"
+        if n_nonfinite
+        else ""
+    }
 <h2>Merit landscapes</h2>{figs}
 <h2>Best runs{f" by {merit}" if merit else ""}</h2><ol>{best_html}</ol>
 <h2>All runs</h2><table><tr>{head}</tr>{"".join(body)}</table>
