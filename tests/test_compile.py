@@ -8,6 +8,7 @@ from numba import njit
 
 import eyelume
 from eyelume.compile import compile_scene
+from eyelume.errors import GeometryError
 from eyelume.kernels import sequential as Q
 from eyelume.kernels.sequential import trace_lens
 from eyelume.scene.io import SceneError
@@ -84,6 +85,6 @@ def test_impossible_lens_geometry_is_refused(overrides, words):
     ],
 )
 def test_eye_aperture_beyond_its_conicoid_is_refused(overrides, words):
-    with pytest.raises(SceneError) as info:
+    with pytest.raises(GeometryError) as info:  # on loading (scene.eye.check_eye_geometry)
         compile_scene(eyelume.load_scene("paper2005", overrides))
     assert all(w in str(info.value) for w in words), str(info.value)

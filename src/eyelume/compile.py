@@ -38,7 +38,12 @@ from eyelume.kernels.tables import (
     SceneTables,
     SurfaceTable,
 )
-from eyelume.scene.eye import eye_indices, iris_root_radius, limbus_geometry
+from eyelume.scene.eye import (
+    check_eye_geometry,
+    eye_indices,
+    iris_root_radius,
+    limbus_geometry,
+)
 from eyelume.scene.focus import check_focus
 from eyelume.scene.glass import Glass, load_catalog
 from eyelume.scene.model import Scene
@@ -395,12 +400,9 @@ def _compile_lens(scene: Scene) -> tuple[LensTable, list[float], int]:
 
 
 def _check_eye_apertures(scene: Scene) -> None:
-    for j, s in enumerate(scene.eye.surfaces):
-        if math.isnan(float(sag(curvature(s.radius_mm), s.conic, s.semi_diameter_mm))):
-            raise SceneError(
-                f"eye.surfaces.{j}.semi_diameter_mm = {s.semi_diameter_mm} exceeds the extent of "
-                f"the '{s.name}' conicoid (radius {s.radius_mm} mm, conic {s.conic})"
-            )
+    """An eye that can exist (a Scene built without :func:`eyelume.scene.io.validate_scene`,
+    e.g. by ``Scene.model_validate``, is checked here too)."""
+    check_eye_geometry(scene.eye)
 
 
 def _add_eye(t: _Table, scene: Scene) -> None:

@@ -39,6 +39,7 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from eyelume.errors import EyelumeError
 from eyelume.scene.io import SceneError, apply_overrides, load_scene, preset_names
 from eyelume.scene.model import Scene
 
@@ -114,7 +115,7 @@ def load_study(path: str | Path) -> Study:
         study = study.model_copy(update={"scene": str((p.parent / study.scene).absolute())})
     try:
         base = load_scene(study.scene)
-    except SceneError as exc:
+    except EyelumeError as exc:
         raise SceneError(f"study {p}: field 'scene': {exc}") from None
     _check_runs(study, base, p)
     return study
@@ -135,7 +136,7 @@ def _check_runs(study: Study, base: Scene, path: Path) -> None:
         for value in probes:
             try:
                 apply_overrides(base, {v.path: value})
-            except SceneError as exc:
+            except EyelumeError as exc:
                 raise SceneError(
                     exc.message if exc.field else str(exc),
                     file=f"study {path}",
@@ -145,7 +146,7 @@ def _check_runs(study: Study, base: Scene, path: Path) -> None:
     for n, r in enumerate(runs):
         try:
             apply_overrides(base, r)
-        except SceneError as exc:
+        except EyelumeError as exc:
             raise SceneError(
                 f"run {n} ({', '.join(f'{k} = {x!r}' for k, x in r.items())}): {exc}",
                 file=f"study {path}",

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
+from eyelume.errors import GeometryError
 from eyelume.scene.model import Eye
 from eyelume.scene.optics import curvature, sag
 
@@ -11,6 +14,7 @@ __all__ = [
     "LAMBDA_C",
     "LAMBDA_D",
     "LAMBDA_F",
+    "check_eye_geometry",
     "eye_index",
     "eye_indices",
     "iris_root_radius",
@@ -110,3 +114,144 @@ def iris_root_radius(eye: Eye) -> float:
             f"the eyeball wall, {2 * r_root:.3f} mm across in the iris plane"
         )
     return r_root
+
+
+#: Radii at which surfaces are compared for crossing, per unit of the common clear aperture.
+_PROBES = np.linspace(0.0, 1.0, 65)
+
+
+def _profile(eye: Eye, j: int, h: np.ndarray) -> np.ndarray:
+    """Depth z′(h) (mm behind the anterior corneal vertex, eye frame) of surface ``j``."""
+    s = eye.surfaces[j]
+    z0 = sum(t.thickness_mm for t in eye.surfaces[:j])
+    return z0 + sag(curvature(s.radius_mm), s.conic, h)
+
+
+def check_eye_geometry(eye: Eye) -> None:
+    """Refuse a schematic eye that cannot exist, before anything is traced.
+
+    Checked, in this order (eye frame: z′ mm behind the anterior corneal vertex, h the distance
+    from the axis):
+
+    1. every surface's conicoid reaches its clear aperture (1 − (1+k) c² h² ≥ 0 at
+       h = ``semi_diameter_mm``);
+    2. the anterior cornea is convex toward the world (``radius_mm`` > 0): its edge, the
+       limbus, lies behind its vertex, where the sclera meets it;
+    3. every refracting surface has a thickness (``thickness_mm`` > 0 to the next surface);
+    4. no two surfaces i < j cross inside their common clear aperture:
+       z′_j(h) > z′_i(h) for 0 ≤ h ≤ min(semi-diameters), probed at 65 radii;
+    5. the pupil fits the lens that carries it: ``pupil_diameter_mm`` ≤ 2 × that surface's
+       ``semi_diameter_mm`` (light through the pupil must meet the lens);
+    6. no surface cuts through the iris (the annulus from the pupil's to the iris's radius in
+       the vertex plane z′_i of ``iris_surface``): the surfaces before it lie in front of that
+       plane, the surface that carries it and those after lie behind it;
+    7. the surfaces from the iris back (the lens and the retina; the cornea bulges beyond the
+       sclera sphere, as a real one does) lie inside the eyeball, the sclera sphere of
+       :func:`limbus_geometry`, over their clear apertures.
+
+    Raises
+    ------
+    GeometryError
+        One line naming the field (``eye.surfaces.N.radius_mm``, ``.thickness_mm``,
+        ``eye.pupil_diameter_mm``, ``eye.sclera_radius_mm`` …), its value and what it breaks.
+    """
+    _check_shapes(eye)
+    _check_crossings(eye)
+    _check_iris(eye)
+    _check_eyeball(eye)
+
+
+def _check_shapes(eye: Eye) -> None:
+    """Items 1–3 of :func:`check_eye_geometry`."""
+    surf = eye.surfaces
+    for j, s in enumerate(surf):
+        if math.isnan(float(sag(curvature(s.radius_mm), s.conic, s.semi_diameter_mm))):
+            raise GeometryError(
+                f"exceeds the extent of the '{s.name}' conicoid (radius {s.radius_mm} mm, "
+                f"conic {s.conic})",
+                field=f"eye.surfaces.{j}.semi_diameter_mm",
+                value=s.semi_diameter_mm,
+            )
+    if not surf[0].radius_mm > 0:
+        raise GeometryError(
+            "the anterior cornea must be convex toward the world (radius > 0): a concave front "
+            "puts the limbus in front of the corneal vertex, which no eye has",
+            field="eye.surfaces.0.radius_mm",
+            value=surf[0].radius_mm,
+        )
+    for j, s in enumerate(surf[:-1]):
+        if not s.thickness_mm > 0:
+            raise GeometryError(
+                f"'{s.name}' and '{surf[j + 1].name}' touch on the axis: every refracting "
+                "surface needs a thickness > 0 to the next",
+                field=f"eye.surfaces.{j}.thickness_mm",
+                value=s.thickness_mm,
+            )
+
+
+def _check_crossings(eye: Eye) -> None:
+    """Item 4 of :func:`check_eye_geometry`."""
+    surf = eye.surfaces
+    for i in range(len(surf)):
+        for j in range(i + 1, len(surf)):
+            h = _PROBES * min(surf[i].semi_diameter_mm, surf[j].semi_diameter_mm)
+            gap = _profile(eye, j, h) - _profile(eye, i, h)
+            if np.any(gap <= 0.0):
+                at = float(h[np.argmax(gap <= 0.0)])
+                raise GeometryError(
+                    f"'{surf[i].name}' and '{surf[j].name}' cross {at:.3g} mm from the axis, "
+                    "inside their clear apertures: no eye has surfaces that cross; check the "
+                    f"radii and thicknesses of eye.surfaces.{i} to {j}",
+                    field=f"eye.surfaces.{j - 1}.thickness_mm",
+                    value=surf[j - 1].thickness_mm,
+                )
+
+
+def _check_iris(eye: Eye) -> None:
+    """Items 5–6 of :func:`check_eye_geometry`, after :func:`iris_root_radius`'s own checks
+    (the iris plane behind the limbus and inside the eyeball)."""
+    try:
+        iris_root_radius(eye)
+    except ValueError as exc:
+        raise GeometryError(str(exc)) from None
+    surf, k = eye.surfaces, eye.iris_surface
+    if eye.pupil_diameter_mm > 2 * surf[k].semi_diameter_mm:
+        raise GeometryError(
+            f"the pupil is wider than the '{surf[k].name}' it lies on (semi_diameter_mm "
+            f"{surf[k].semi_diameter_mm}): light through its edge would meet no lens",
+            field="eye.pupil_diameter_mm",
+            value=eye.pupil_diameter_mm,
+        )
+    z_i = sum(t.thickness_mm for t in surf[:k])
+    r_p, r_o = eye.pupil_diameter_mm / 2, eye.iris_outer_diameter_mm / 2
+    for j, s in enumerate(surf):
+        hi = min(r_o, s.semi_diameter_mm)
+        if hi < r_p:
+            continue
+        z = _profile(eye, j, np.linspace(r_p, hi, 33))
+        bad = np.any(z >= z_i) if j < k else np.any(z < z_i - 1e-12)
+        if bad:
+            raise GeometryError(
+                f"the '{s.name}' surface cuts through the iris (the plane {z_i:.3g} mm behind the "
+                f"corneal vertex, from the pupil's radius {r_p:g} mm to the iris's {r_o:g} mm)",
+                field=f"eye.surfaces.{j}.radius_mm",
+                value=s.radius_mm,
+            )
+
+
+def _check_eyeball(eye: Eye) -> None:
+    """Item 7 of :func:`check_eye_geometry`."""
+    surf, k = eye.surfaces, eye.iris_surface
+    _, _, z_c = limbus_geometry(eye)
+    big = eye.sclera_radius_mm * (1 + 1e-9)
+    for j, s in enumerate(surf[k:], start=k):
+        h = _PROBES * s.semi_diameter_mm
+        dist = np.hypot(h, _profile(eye, j, h) - z_c)
+        if np.any(dist > big):
+            raise GeometryError(
+                f"the '{s.name}' surface (eye.surfaces.{j}) reaches {float(dist.max()):.4g} mm "
+                "from the eyeball's centre, outside the eyeball (the sclera sphere through the "
+                "limbus)",
+                field="eye.sclera_radius_mm",
+                value=eye.sclera_radius_mm,
+            )

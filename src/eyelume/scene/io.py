@@ -16,7 +16,8 @@ from typing import Any
 import tomli_w
 from pydantic import ValidationError
 
-from eyelume.errors import SceneError
+from eyelume.errors import GeometryError, SceneError
+from eyelume.scene.eye import check_eye_geometry
 from eyelume.scene.model import Scene
 from eyelume.scene.textfile import decode_text
 
@@ -81,9 +82,11 @@ def _lookup(data: Any, loc: tuple[Any, ...]) -> Any:
 
 
 def validate_scene(data: dict[str, Any], origin: str = "scene") -> Scene:
-    """Build a :class:`Scene` from plain data, turning the first validation error into one line."""
+    """Build a :class:`Scene` from plain data, turning the first validation error into one line;
+    then refuse an eye that cannot exist (:func:`~eyelume.scene.eye.check_eye_geometry`,
+    GeometryError naming ``origin``, the field and the value)."""
     try:
-        return Scene.model_validate(data)
+        scene = Scene.model_validate(data)
     except ValidationError as exc:
         err = exc.errors()[0]
         loc = tuple(err["loc"])
@@ -97,6 +100,11 @@ def validate_scene(data: dict[str, Any], origin: str = "scene") -> Scene:
         if isinstance(value, dict):
             raise SceneError(f"{origin}: {field}: {msg}") from None
         raise SceneError(msg, file=origin, field=field, value=value) from None
+    try:
+        check_eye_geometry(scene.eye)
+    except GeometryError as exc:
+        raise GeometryError(exc.message, file=origin, field=exc.field, value=exc.value) from None
+    return scene
 
 
 def load_scene(source: str | Path = "paper2005", overrides: dict[str, Any] | None = None) -> Scene:
