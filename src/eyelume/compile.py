@@ -48,9 +48,17 @@ from eyelume.scene.focus import check_focus
 from eyelume.scene.glass import Glass, load_catalog
 from eyelume.scene.model import Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
+from eyelume.scene.pose import Frame, camera_frame
 from eyelume.scene.sources import cos_power_exponent, led_poses, relative_intensity
 
-__all__ = ["CompiledScene", "compile_scene", "gaze_rotation", "lens_paraxial", "lens_indices"]
+__all__ = [
+    "CompiledScene",
+    "compile_scene",
+    "scene_frame",
+    "gaze_rotation",
+    "lens_paraxial",
+    "lens_indices",
+]
 
 #: Fixed ledger entries; named surfaces follow.
 TALLY_SENSOR, TALLY_ESCAPED, TALLY_VIGNETTED, TALLY_TIR, TALLY_OFF_SENSOR, TALLY_LIMIT = range(6)
@@ -100,9 +108,10 @@ class CompiledScene:
     surface_names: list[str]
     lens_indices: list[float]
     stop_index: int
-    led_centres: np.ndarray  # (N, 3) LED body centres, world mm
+    led_centres: np.ndarray  # (N, 3) LED body centres, camera frame mm
     omega_eff: float  # sr: Φ_LED = I₀ · omega_eff
     tallies: list[str]
+    frame: Frame  # world → camera frame (eyelume.scene.pose); every table is in the camera frame
 
     @property
     def surfaces(self) -> SurfaceTable:
@@ -199,7 +208,8 @@ class SurfaceSpec:
 class _Table:
     """Collects non-sequential surfaces and ledger names."""
 
-    def __init__(self) -> None:
+    def __init__(self, frame: Frame) -> None:
+        self.frame = frame
         self.rows_f: list[np.ndarray] = []
         self.rows_i: list[np.ndarray] = []
         self.names: list[str] = []
@@ -210,8 +220,14 @@ class _Table:
             self.tallies.append(name)
         return self.tallies.index(name)
 
-    def add(self, name: str, shape: int, origin, rot, bound, **options) -> None:
-        """Append a surface: the arguments of :class:`SurfaceSpec`."""
+    def add(self, name: str, shape: int, origin, rot, bound, *, world=True, **options) -> None:
+        """Append a surface: the arguments of :class:`SurfaceSpec`, placed in the world frame
+        (``world``: moved into the camera frame here) or already in the camera frame."""
+        if world and not self.frame.is_identity:
+            f = self.frame
+            origin = f.point(origin)
+            rot = np.asarray(rot, dtype=float) @ f.rotation.T  # local = rot Rᵀ (p_c − o_c)
+            bound = (f.point(bound[0]), bound[1])
         spec = SurfaceSpec(name, shape, origin, rot, bound, **options)
         i = np.zeros(G.N_INT, dtype=np.int64)
         i[G.SHAPE], i[G.ACTION], i[G.FRESNEL] = spec.shape, spec.action, int(spec.fresnel)
@@ -353,7 +369,8 @@ def _check_lens_geometry(lf: np.ndarray) -> None:
             )
 
 
-def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray) -> None:
+def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame) -> None:
+    """LED bodies (world ``centres``) in front of the eye, apart, and clear of the lens."""
     rb = scene.leds.body_diameter_mm / 2
     for i, c in enumerate(centres):
         if c[2] - rb <= 0:
@@ -366,14 +383,16 @@ def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray) -> None:
                 raise SceneError(
                     f"leds: LED {i} and LED {j} bodies overlap (centres {c}, {centres[j]})"
                 )
-        # the body against the lens's first surface, within its clear aperture
-        r_c = math.hypot(c[0], c[1])
+        # the body against the lens's first surface, within its clear aperture (camera frame)
+        cc = frame.point(c)
+        r_c = math.hypot(cc[0], cc[1])
         for r in np.linspace(max(0.0, r_c - rb), min(r_c + rb, lf[0, Q.L_SD]), 32):
             half = math.sqrt(max(0.0, rb * rb - (r - r_c) ** 2))
-            if half > 0 and c[2] + half > _lens_surface_z(lf, 0, r):
+            if half > 0 and cc[2] + half > _lens_surface_z(lf, 0, r):
                 raise SceneError(
-                    f"leds: LED {i} body at (Y = {r_c:.1f}, Z = {c[2]:.1f}) mm overlaps the "
-                    f"imaging lens's first surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
+                    f"leds: LED {i} body (world centre {np.round(c, 1).tolist()} mm, "
+                    f"{r_c:.1f} mm from the camera's axis) overlaps the imaging lens's first "
+                    f"surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
                 )
 
 
@@ -599,6 +618,7 @@ def _add_lens_entrance(t: _Table, lf: np.ndarray) -> None:
         action=G.ACT_LENS,
         tally_a="lens mount (vignetted)",
         tally_b="lens mount (vignetted)",
+        world=False,
     )
 
 
@@ -695,13 +715,16 @@ def compile_scene(scene: Scene) -> CompiledScene:
     """Turn a validated scene into the tables the kernels read, one scene part at a time.
     Raises SceneError on geometry that cannot exist (crossing lens surfaces, LEDs inside the
     lens, a missing glass)."""
-    t = _Table()
+    frame = scene_frame(scene)
+    t = _Table(frame)
     lens, idx, stop = _compile_lens(scene)
     _add_eye(t, scene)
     _add_face(t, scene)
     centres, axes = led_poses(scene.leds)
-    _check_leds(scene, centres, lens.lf)
+    _check_leds(scene, centres, lens.lf, frame)
     _add_led_bodies(t, scene, centres, axes)
+    if not frame.is_identity:
+        centres, axes = frame.point(centres), frame.vector(axes)
     led, omega = _led_table(scene, centres, axes)
     _add_lens_entrance(t, lens.lf)
     surfaces = SurfaceTable(
@@ -719,4 +742,15 @@ def compile_scene(scene: Scene) -> CompiledScene:
         led_centres=centres,
         omega_eff=omega,
         tallies=t.tallies,
+        frame=frame,
     )
+
+
+def scene_frame(scene: Scene) -> Frame:
+    """The world → camera-frame transform of ``scene`` (:mod:`eyelume.scene.pose`). Raises
+    SceneError when the camera's view has no direction."""
+    try:
+        pos, view = scene.camera.pose(scene.lens.object_distance_mm)
+    except ValueError as exc:
+        raise SceneError(f"camera: {exc}") from None
+    return camera_frame(pos, view, scene.camera.roll_deg, scene.lens.object_distance_mm)

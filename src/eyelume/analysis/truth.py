@@ -139,8 +139,9 @@ class _View:
     par_m: float  # paraxial guess scale
 
     def turned(self, p: np.ndarray) -> np.ndarray:
-        """A primary-gaze eye point (world mm), turned with the gaze and moved with the head."""
-        return self.head + self.c0 + self.rot @ (p - self.c0)
+        """A primary-gaze eye point (world mm), turned with the gaze and moved with the head,
+        in the camera frame (where the compiled scene is traced)."""
+        return self.cs.frame.point(self.head + self.c0 + self.rot @ (p - self.c0))
 
     def image_of(self, point: np.ndarray):
         """The sensor point (mm) whose chief ray, refracted by the cornea, passes through
@@ -159,7 +160,7 @@ class _View:
 def _view(cs: CompiledScene, cam: CameraTables) -> _View:
     eye = cs.scene.eye
     rot, c0 = gaze_rotation(eye)
-    axis = rot @ np.array([0.0, 0.0, 1.0])  # the optical axis, out of the eye
+    axis = cs.frame.vector(rot @ np.array([0.0, 0.0, 1.0]))  # the optical axis, out of the eye
     e1, e2 = _basis(axis)
     return _View(
         cs=cs,
@@ -192,7 +193,7 @@ def _pupil_truth(v: _View, pupil_c: np.ndarray) -> dict:
         if ray is not None and _clear(cs, ray[0], ray[1], v.cornea):
             seen += 1
     return {
-        "centre_mm": pupil_c.tolist(),
+        "centre_mm": cs.frame.world_point(pupil_c).tolist(),
         "diameter_mm": eye.pupil_diameter_mm,
         "centre_px": None if sc is None else list(sensor_to_pixel(cs, *sc)),
         "edge_px": [list(p) for p in edge],
@@ -249,7 +250,7 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
             "horizontal": eye.gaze_horizontal_deg,
             "vertical": eye.gaze_vertical_deg,
         },
-        "optical_axis": v.axis.tolist(),
+        "optical_axis": cs.frame.world_vector(v.axis).tolist(),
         "pixel_convention": "OpenCV: pixel (column c, row r) centred at (x, y) = (c, r); row 0 "
         "at the top of the upright picture",
         "pupil": _pupil_truth(v, v.turned(np.array([0.0, 0.0, -depth]))),

@@ -15,6 +15,7 @@ from typing import Annotated, Literal
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validator
 
 __all__ = [
+    "Camera",
     "Eye",
     "EyePlane",
     "EyeSurface",
@@ -290,6 +291,50 @@ class ImagingLens(_Model):
         return self
 
 
+class Camera(_Model):
+    """Where the camera is and where it looks, in the world (headset) frame (mm, degrees).
+
+    ``position_mm``: the lens's position (the first vertex of the prescription); unset, the
+    camera sits on the world z axis at ``lens.object_distance_mm`` (the paper's rig).
+    The view: ``look_at_mm`` (a point the lens looks at) or ``direction`` (a vector from the
+    lens toward the scene); unset, the camera looks along −z. ``roll_deg`` turns the camera
+    about its viewing axis (right-handed about the axis from the scene to the camera: a positive
+    roll turns the camera's right axis toward its up axis). The transform and its conventions are in
+    :mod:`eyelume.scene.pose`: everything is traced in the camera's frame, whose z axis is the
+    lens axis.
+    """
+
+    position_mm: Vector3 | None = None
+    look_at_mm: Vector3 | None = None
+    direction: Vector3 | None = None
+    roll_deg: float = Field(0.0, ge=-180.0, le=180.0)
+
+    @model_validator(mode="after")
+    def _one_view(self) -> Camera:
+        if self.look_at_mm is not None and self.direction is not None:
+            raise ValueError("give look_at_mm or direction, not both")
+        if self.direction is not None and not any(self.direction):
+            raise ValueError("direction = (0, 0, 0) has no direction")
+        if self.look_at_mm is not None and self.position_mm is not None:
+            if tuple(self.look_at_mm) == tuple(self.position_mm):
+                raise ValueError(
+                    f"look_at_mm = {list(self.look_at_mm)} equals position_mm: no direction"
+                )
+        return self
+
+    def pose(self, object_distance_mm: float) -> tuple[Vector3, Vector3]:
+        """(position, viewing direction) in the world frame, the defaults filled in."""
+        pos = self.position_mm or (0.0, 0.0, float(object_distance_mm))
+        if self.direction is not None:
+            return pos, self.direction
+        if self.look_at_mm is None:
+            return pos, (0.0, 0.0, -1.0)
+        view = tuple(t - p for t, p in zip(self.look_at_mm, pos, strict=True))
+        if not any(view):
+            raise ValueError(f"look_at_mm = {list(self.look_at_mm)} equals the camera position")
+        return pos, view  # type: ignore[return-value]
+
+
 class Sensor(_Model):
     """The image plane, binned into pixels, and the digital camera that records it.
 
@@ -380,6 +425,7 @@ class Scene(_Model):
     face: Face = Face()
     head_offset_mm: Vector3 = (0.0, 0.0, 0.0)
     lens: ImagingLens
+    camera: Camera = Camera()
     sensor: Sensor = Sensor()
     eye_plane: EyePlane = EyePlane()
     run: Run = Run()
