@@ -53,6 +53,7 @@ from eyelume.scene.sources import cos_power_exponent, led_poses, relative_intens
 
 __all__ = [
     "CompiledScene",
+    "FirstOrder",
     "compile_scene",
     "scene_frame",
     "gaze_rotation",
@@ -97,6 +98,26 @@ def gaze_rotation(eye, share_vertical: float = 1.0, share_horizontal: float = 1.
     return _rot_y(h) @ _rot_x(-v), np.array([0.0, 0.0, -eye.rotation_centre_mm])
 
 
+@dataclass(frozen=True)
+class FirstOrder:
+    """The camera's first-order optics in the camera frame (mm; z along the lens axis, the
+    object plane at z = 0): ``efl``, ``f_number`` (EFL / entrance-pupil diameter), the
+    ``object_distance`` (object plane → lens), entrance pupil (``entrance_pupil_z``, its radius
+    ``entrance_pupil_radius``), exit pupil (``exit_pupil_z``, ``exit_pupil_magnification``), the
+    sensor's ``image_z``, and ``magnification`` (signed, object plane → image). A prescription's
+    come from its paraxial trace; an ideal lens's are exact (the pupils are the lens)."""
+
+    efl: float
+    f_number: float
+    object_distance: float
+    entrance_pupil_z: float
+    entrance_pupil_radius: float
+    exit_pupil_z: float
+    exit_pupil_magnification: float
+    image_z: float
+    magnification: float
+
+
 @dataclass
 class CompiledScene:
     """A scene compiled for the kernels (see module docstring): ``tables`` is what a forward
@@ -112,6 +133,7 @@ class CompiledScene:
     omega_eff: float  # sr: Φ_LED = I₀ · omega_eff
     tallies: list[str]
     frame: Frame  # world → camera frame (eyelume.scene.pose); every table is in the camera frame
+    first_order: FirstOrder  # the camera's first-order optics (camera frame)
 
     @property
     def surfaces(self) -> SurfaceTable:
@@ -418,6 +440,67 @@ def _compile_lens(scene: Scene) -> tuple[LensTable, list[float], int]:
     return LensTable(lf, float(image_z)), idx, stop
 
 
+#: Widest half field (°) an ideal (rectilinear) lens is allowed to cover: the slope tan θ of a
+#: ray at 85° is 11, where a thin-lens model of a real module has long stopped meaning much.
+MAX_IDEAL_HALF_FIELD_DEG = 85.0
+
+
+def _compile_ideal(scene: Scene) -> tuple[LensTable, list[float], int]:
+    """The ideal (thin, perfect) lens of ``[camera.ideal]`` as a one-row lens table: the lens
+    plane at the focus distance, its aperture the stop, the sensor at the image distance v.
+    Raises SceneError when the chip's corner lies beyond the field the lens covers."""
+    ideal = scene.camera.ideal
+    assert ideal is not None  # the model's validator
+    lf = np.zeros((1, Q.N_LENS_COL))
+    lf[0, Q.L_Z] = ideal.focus_distance_mm
+    lf[0, Q.L_SD] = ideal.pupil_radius_mm
+    lf[0, Q.L_N0] = lf[0, Q.L_N1] = 1.0
+    lf[0, Q.L_POWER] = 1.0 / ideal.efl_mm
+    lf[0, Q.L_K1], lf[0, Q.L_K2], lf[0, Q.L_WAY] = ideal.k1, ideal.k2, 1.0
+    v = ideal.image_distance_mm
+    w, h = scene.sensor.field_mm
+    corner = math.hypot(w, h) / 2.0 / v  # the chief ray's distorted slope at the corner
+    rho = float(Q.undistorted_radius(ideal.k1, ideal.k2, corner))
+    if math.isnan(rho) or math.degrees(math.atan(rho)) > MAX_IDEAL_HALF_FIELD_DEG:
+        seen = (
+            "beyond the distortion's monotonic range"
+            if math.isnan(rho)
+            else (f"{math.degrees(math.atan(rho)):.1f}° off the axis")
+        )
+        raise SceneError(
+            f"sensor: the chip's corner ({w / 2:.3g}, {h / 2:.3g}) mm lies {seen}: more than "
+            f"the ideal lens covers (≤ {MAX_IDEAL_HALF_FIELD_DEG:g}°; camera.ideal.efl_mm = "
+            f"{ideal.efl_mm}, k1 = {ideal.k1}, k2 = {ideal.k2})"
+        )
+    return LensTable(lf, float(ideal.focus_distance_mm + v)), [1.0, 1.0], 0
+
+
+def _first_order(scene: Scene, lens: LensTable, idx: list[float], stop: int) -> FirstOrder:
+    """The camera's first-order optics (:class:`FirstOrder`)."""
+    s_obj = scene.object_distance_mm
+    if scene.camera.optics == "ideal":
+        ideal = scene.camera.ideal
+        assert ideal is not None
+        a = ideal.pupil_radius_mm
+        return FirstOrder(
+            ideal.efl_mm, ideal.f_number, s_obj, s_obj, a, s_obj, 1.0, lens.image_z,
+            -ideal.image_distance_mm / s_obj,
+        )  # fmt: skip
+    par = lens_paraxial(scene, idx)
+    xp_z, xp_m = _exit_pupil(scene, idx, stop, lens.lf)
+    return FirstOrder(
+        efl=par.efl,
+        f_number=scene.lens.f_number,  # type: ignore[union-attr]
+        object_distance=s_obj,
+        entrance_pupil_z=s_obj + par.entrance_pupil_position(stop),
+        entrance_pupil_radius=par.efl / scene.lens.f_number / 2.0,  # type: ignore[union-attr]
+        exit_pupil_z=xp_z,
+        exit_pupil_magnification=xp_m,
+        image_z=lens.image_z,
+        magnification=par.magnification(s_obj),
+    )
+
+
 def _check_eye_apertures(scene: Scene) -> None:
     """An eye that can exist (a Scene built without :func:`eyelume.scene.io.validate_scene`,
     e.g. by ``Scene.model_validate``, is checked here too)."""
@@ -626,7 +709,7 @@ def _grids(scene: Scene) -> tuple[PlaneGrid, PlaneGrid]:
     """The picture's pixels on the sensor and the eye-plane receiver's bins."""
     sn, ep = scene.sensor, scene.eye_plane
     return (
-        picture_grid(sn.width_mm, sn.height_mm, sn.cols, sn.rows),
+        picture_grid(*sn.field_mm, sn.cols, sn.rows),
         eye_plane_grid(ep.width_mm, ep.height_mm, ep.cols, ep.rows),
     )
 
@@ -644,6 +727,7 @@ def _mirrored_lens(lf: np.ndarray) -> np.ndarray:
     rev = lf[::-1].copy()
     rev[:, Q.L_Z] = -rev[:, Q.L_Z]
     rev[:, Q.L_CURV] = -rev[:, Q.L_CURV]
+    rev[:, Q.L_WAY] = -rev[:, Q.L_WAY]
     rev[:, Q.L_N0], rev[:, Q.L_N1] = lf[::-1, Q.L_N1].copy(), lf[::-1, Q.L_N0].copy()
     return np.ascontiguousarray(rev)
 
@@ -657,31 +741,57 @@ def _exit_pupil(scene: Scene, idx: list[float], stop: int, lf: np.ndarray) -> tu
     return xp_z, float(rear.magnification(par.gaps[stop]))
 
 
-def _cornea_image(scene: Scene, pupil_z: float, pupil_r: float) -> tuple[float, float]:
-    """World z and radius of the entrance pupil's paraxial image through the cornea."""
+def _cornea_image(
+    scene: Scene, frame: Frame, pupil_z: float, pupil_r: float
+) -> tuple[np.ndarray, float]:
+    """Camera-frame centre and radius of the entrance pupil's paraxial image through the cornea.
+
+    The paper's rig (identity frame): on the z axis, the pupil at distance ``pupil_z`` from the
+    corneal vertex. A camera anywhere: about the line from the anterior cornea's centre of
+    curvature C through the pupil's centre E (a sphere images about any line through its
+    centre), at depth z′ behind that line's vertex C + R û."""
     eye = eye_paraxial(scene)
     cornea = ParaxialSystem(eye.curvatures[:2], eye.gaps[:1], eye.indices[:3])
-    image = cornea.image_distance(pupil_z)  # beyond the posterior cornea, eye frame
-    mag = cornea.magnification(pupil_z)
+    if frame.is_identity:
+        distance, centre = pupil_z, None
+    else:
+        radius = scene.eye.surfaces[0].radius_mm
+        gaze, c0 = gaze_rotation(scene.eye)
+        head = np.asarray(scene.head_offset_mm, dtype=float)
+        c = frame.point(head + c0 + gaze @ (np.array([0.0, 0.0, -radius]) - c0))
+        u = np.array([0.0, 0.0, pupil_z]) - c
+        distance = float(np.linalg.norm(u)) - radius
+        u = u / np.linalg.norm(u)
+        centre = (c, u, radius)
+    image = cornea.image_distance(distance)  # beyond the posterior cornea, eye frame
+    mag = cornea.magnification(distance)
     z_eye = scene.eye.surfaces[0].thickness_mm + image
-    return -z_eye, abs(mag) * pupil_r
+    if centre is None:
+        return np.array([0.0, 0.0, -z_eye]), abs(mag) * pupil_r
+    c, u, radius = centre
+    return c + (radius - z_eye) * u, abs(mag) * pupil_r
 
 
 def _camera_tables(
-    scene: Scene, surfaces: SurfaceTable, names: list[str], lens: LensTable, idx, stop: int
+    scene: Scene,
+    surfaces: SurfaceTable,
+    names: list[str],
+    lens: LensTable,
+    first: FirstOrder,
+    stop: int,
+    frame: Frame,
 ) -> CameraTables:
     """The camera as the camera-side estimator sees it (:class:`CameraTables`; the physics in
     :mod:`eyelume.estimators.camera`)."""
     lf = lens.lf
-    par = lens_paraxial(scene, idx)
-    ep_z = scene.lens.object_distance_mm + par.entrance_pupil_position(stop)
-    ep_r = par.efl / scene.lens.f_number / 2.0 * _PUPIL_MARGIN
+    ep_z = first.entrance_pupil_z
+    ep_r = first.entrance_pupil_radius * _PUPIL_MARGIN
     lf_rev = _mirrored_lens(lf)
     lf_open = lf_rev.copy()
     lf_open[:, Q.L_SD] = np.inf
-    xp_z, xp_m = _exit_pupil(scene, idx, stop, lf)
+    xp_z, xp_m = first.exit_pupil_z, first.exit_pupil_magnification
     aim = np.zeros((surfaces.sf.shape[0], 2, N_AIM))
-    iris_z, iris_r = _cornea_image(scene, ep_z, ep_r)
+    iris_c, iris_r = _cornea_image(scene, frame, ep_z, ep_r)
     through = np.array([name in _IRIS for name in names], dtype=np.int64)
     for s, name in enumerate(names):
         if surfaces.si[s, G.ACTION] != G.ACT_OPAQUE:
@@ -690,7 +800,7 @@ def _camera_tables(
             if surfaces.sf[s, rho_col] <= 0.0:
                 continue
             if name in _IRIS:
-                aim[s, side] = (0.0, 0.0, iris_z, iris_r, AIM_PROBABILITY)
+                aim[s, side] = (*iris_c, iris_r, AIM_PROBABILITY)
             elif name == "retina" or (name == "sclera" and side == 0):
                 continue  # inside the eye behind the crystalline lens: cosine sampling
             else:
@@ -717,7 +827,11 @@ def compile_scene(scene: Scene) -> CompiledScene:
     lens, a missing glass)."""
     frame = scene_frame(scene)
     t = _Table(frame)
-    lens, idx, stop = _compile_lens(scene)
+    if scene.camera.optics == "ideal":
+        lens, idx, stop = _compile_ideal(scene)
+    else:
+        lens, idx, stop = _compile_lens(scene)
+    first = _first_order(scene, lens, idx, stop)
     _add_eye(t, scene)
     _add_face(t, scene)
     centres, axes = led_poses(scene.leds)
@@ -735,7 +849,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
     return CompiledScene(
         scene=scene,
         tables=tables,
-        camera=_camera_tables(scene, surfaces, t.names, lens, idx, stop),
+        camera=_camera_tables(scene, surfaces, t.names, lens, first, stop, frame),
         surface_names=t.names,
         lens_indices=idx,
         stop_index=stop,
@@ -743,6 +857,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
         omega_eff=omega,
         tallies=t.tallies,
         frame=frame,
+        first_order=first,
     )
 
 
@@ -750,7 +865,7 @@ def scene_frame(scene: Scene) -> Frame:
     """The world → camera-frame transform of ``scene`` (:mod:`eyelume.scene.pose`). Raises
     SceneError when the camera's view has no direction."""
     try:
-        pos, view = scene.camera.pose(scene.lens.object_distance_mm)
+        pos, view = scene.camera.pose(scene.object_distance_mm)
     except ValueError as exc:
         raise SceneError(f"camera: {exc}") from None
-    return camera_frame(pos, view, scene.camera.roll_deg, scene.lens.object_distance_mm)
+    return camera_frame(pos, view, scene.camera.roll_deg, scene.object_distance_mm)

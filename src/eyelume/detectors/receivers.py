@@ -31,7 +31,7 @@ class BinnedPlane:
     @classmethod
     def picture(cls, sensor) -> BinnedPlane:
         """The picture's pixels on a scene's ``sensor`` (width_mm, height_mm, cols, rows)."""
-        return cls(picture_grid(sensor.width_mm, sensor.height_mm, sensor.cols, sensor.rows))
+        return cls(picture_grid(*sensor.field_mm, sensor.cols, sensor.rows))
 
     @classmethod
     def eye_plane(cls, plane) -> BinnedPlane:

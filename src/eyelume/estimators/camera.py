@@ -95,10 +95,35 @@ class ChiefRay(NamedTuple):
 
 
 @njit(cache=True, inline="always")
+def is_ideal(cam):
+    """True when the camera is an ideal (thin) lens: one row, the stop, with power."""
+    return cam.lf_rev.shape[0] == 1 and cam.lf_rev[0, Q.L_POWER] != 0.0
+
+
+@njit(cache=True, inline="always")
+def ideal_radiance_gain(row, dx, dy, dz, ex, ey, ez):
+    """L_sensor / L_scene through the ideal lens ``row`` (:mod:`eyelume.kernels.sequential`)
+    for the ray with sensor-side direction (dx, dy, dz) and scene-side direction (ex, ey, ez).
+
+    The lens maps slopes s⃗ → s⃗′ = D(s⃗) − φ h⃗ at a fixed crossing h⃗, so it keeps the flux
+    L cos θ dΩ dA = L dA d²s / (1 + |s⃗|²)² of a bundle while its slope area changes by
+    |det ∂D/∂s⃗|: L′ = L (1 + |s⃗′|²)² / ((1 + |s⃗|²)² |det ∂D/∂s⃗|) = L cos⁴θ / (cos⁴θ′ |det|),
+    with det = g (g + 2ρ² (k1 + 2 k2 ρ²)), g = 1 + k1 ρ² + k2 ρ⁴, ρ = |s⃗| (θ scene side, θ′
+    sensor side). A real prescription needs no such factor (refraction keeps L / n²)."""
+    s2 = (ex * ex + ey * ey) / (ez * ez)
+    u2 = (dx * dx + dy * dy) / (dz * dz)
+    k1, k2 = row[Q.L_K1], row[Q.L_K2]
+    g = 1.0 + s2 * (k1 + k2 * s2)
+    det = g * (g + 2.0 * s2 * (k1 + 2.0 * k2 * s2))
+    r = (1.0 + u2) / (1.0 + s2)
+    return r * r / abs(det)
+
+
+@njit(cache=True, inline="always")
 def into_scene(cam, xs, ys, qx, qy):
     """Trace the ray from sensor point (xs, ys) toward point (qx, qy) of the last vertex plane
     back out of the lens (``cam.lf_rev``: mirror z → −z on the way in and out). Returns a
-    :class:`SceneRay`."""
+    :class:`SceneRay`; for an ideal lens ``g`` includes :func:`ideal_radiance_gain`."""
     dx, dy, dz = qx - xs, qy - ys, cam.rear_z - cam.image_z
     d2 = dx * dx + dy * dy + dz * dz
     d = math.sqrt(d2)
@@ -106,7 +131,11 @@ def into_scene(cam, xs, ys, qx, qy):
     status, x, y, z, ex, ey, ez, _, _ = Q.trace_lens(
         cam.lf_rev, xs, ys, -cam.image_z, dx, dy, -dz, None, 0, False
     )
-    return SceneRay(status == Q.LENS_PASSED, x, y, -z, ex, ey, -ez, dz * dz / d2)
+    g = dz * dz / d2
+    passed = status == Q.LENS_PASSED
+    if passed and is_ideal(cam):
+        g *= ideal_radiance_gain(cam.lf_rev[0], dx, dy, dz, ex, ey, ez)
+    return SceneRay(passed, x, y, -z, ex, ey, -ez, g)
 
 
 @njit(cache=True)
@@ -162,6 +191,8 @@ def aim_at_stop(cam, xs, ys, tx, ty, qx, qy, a):
     ~1e-5), then the Jacobian by forward differences at the solution. Returns a
     :class:`StopAim`.
     """
+    if is_ideal(cam):  # the stop is the lens, in the last vertex plane: q is the stop point
+        return StopAim(True, tx, ty, 1.0)
     det = a.a11 * a.a22 - a.a12 * a.a21
     if det == 0.0 or math.isnan(det):
         return StopAim(False, qx, qy, 0.0)
@@ -183,6 +214,8 @@ def aim_at_stop(cam, xs, ys, tx, ty, qx, qy, a):
 def aim_chief(cam, xs, ys):
     """The chief ray of sensor point (xs, ys) — through the stop's centre — by Newton's method
     from the paraxial guess. Returns a :class:`ChiefRay`."""
+    if is_ideal(cam):
+        return ChiefRay(True, 0.0, 0.0, Mat2(1.0, 0.0, 0.0, 1.0))
     qx, qy = paraxial_crossing(cam, xs, ys, 0.0, 0.0)
     for _ in range(20):
         sx, sy, j = stop_jacobian(cam, xs, ys, qx, qy)

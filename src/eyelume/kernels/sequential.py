@@ -2,8 +2,18 @@
 
 Lens table ``lf[j, :]`` (filled by :mod:`eyelume.compile`), one row per surface in order:
 vertex z (world mm), curvature c (1/mm), conic constant k, semi-diameter (mm), index before and
-after. Every surface transmits 100 % (ideal coatings); a ray outside a semi-diameter is stopped
-by the mount (vignetting), one beyond the critical angle is lost to total internal reflection.
+after, and for an *ideal* (thin, perfect) lens its power φ = 1/f (1/mm; 0 for a real surface),
+radial distortion k1, k2 and which way the row is traced (+1 as light goes from the scene to the
+sensor, −1 for the mirrored, reversed table the camera-side estimator traces). Every surface
+transmits 100 % (ideal coatings); a ray outside a semi-diameter is stopped by the mount
+(vignetting), one beyond the critical angle is lost to total internal reflection.
+
+An ideal lens is a plane (c = 0) that turns a ray crossing it at height h⃗ = (x, y) with slope
+s⃗ = (dx, dy)/dz into slope s⃗′ = D(s⃗) − φ h⃗ (scene → sensor), D(s⃗) = s⃗ (1 + k1 |s⃗|² + k2 |s⃗|⁴):
+rays of equal slope meet at f D(s⃗) in the back focal plane, so every point of any object plane
+images to one point (Zemax's paraxial surface, pbrt's thin lens). Traced the other way (mirrored
+and reversed: the incoming slope is −s⃗′, the outgoing −s⃗) the same lens is
+s⃗ = D⁻¹(s⃗_in − φ h⃗), D⁻¹ by Newton's method on the radius.
 """
 
 from __future__ import annotations
@@ -21,8 +31,8 @@ from eyelume.kernels.geometry import (
 )
 from eyelume.kernels.interact import refract
 
-L_Z, L_CURV, L_CONIC, L_SD, L_N0, L_N1 = 0, 1, 2, 3, 4, 5
-N_LENS_COL = 6
+L_Z, L_CURV, L_CONIC, L_SD, L_N0, L_N1, L_POWER, L_K1, L_K2, L_WAY = range(10)
+N_LENS_COL = 10
 
 LENS_PASSED, LENS_VIGNETTED, LENS_TIR = 0, 1, 2
 
@@ -37,6 +47,55 @@ def conic_hit_sequential(c, k, px, py, pz, dx, dy, dz):
     if n == 2 and t2 > -1e-9 and on_vertex_branch(c, k, pz + t2 * dz):
         return t2
     return math.nan
+
+
+@njit(cache=True, inline="always")
+def distortion_gain(k1, k2, rho2):
+    """D(s⃗)/s⃗ = 1 + k1 ρ² + k2 ρ⁴ at ρ² = |s⃗|²."""
+    return 1.0 + rho2 * (k1 + k2 * rho2)
+
+
+@njit(cache=True)
+def undistorted_radius(k1, k2, rho_d):
+    """ρ with ρ (1 + k1 ρ² + k2 ρ⁴) = ρ_d, by Newton's method from ρ_d (NaN when it does not
+    converge: a distorted radius beyond the lens's monotonic range)."""
+    rho = rho_d
+    for _ in range(30):
+        r2 = rho * rho
+        f = rho * (1.0 + r2 * (k1 + k2 * r2)) - rho_d
+        df = 1.0 + r2 * (3.0 * k1 + 5.0 * k2 * r2)
+        if df <= 0.0:
+            return math.nan
+        step = f / df
+        rho -= step
+        if abs(step) < 1e-15 * (1.0 + abs(rho)):
+            return rho
+    return math.nan
+
+
+@njit(cache=True, inline="always")
+def ideal_lens(row, x, y, dx, dy, dz):
+    """The unit direction after the ideal lens ``row`` (a row of ``lf``) of a ray crossing it
+    at (x, y) with unit direction (dx, dy, dz), dz > 0 (module docstring). Returns (ok, dx, dy,
+    dz); not ok when the distortion cannot be inverted there."""
+    sx, sy = dx / dz, dy / dz
+    phi, k1, k2 = row[L_POWER], row[L_K1], row[L_K2]
+    if k1 != 0.0 or k2 != 0.0:
+        if row[L_WAY] > 0.0:
+            g = distortion_gain(k1, k2, sx * sx + sy * sy)
+            sx, sy = g * sx - phi * x, g * sy - phi * y
+        else:
+            sx, sy = sx - phi * x, sy - phi * y
+            rho_d = math.sqrt(sx * sx + sy * sy)
+            if rho_d > 0.0:
+                rho = undistorted_radius(k1, k2, rho_d)
+                if math.isnan(rho):
+                    return False, dx, dy, dz
+                sx, sy = sx * rho / rho_d, sy * rho / rho_d
+    else:
+        sx, sy = sx - phi * x, sy - phi * y
+    inv = 1.0 / math.sqrt(1.0 + sx * sx + sy * sy)
+    return True, sx * inv, sy * inv, inv
 
 
 @njit(cache=True)
@@ -66,6 +125,11 @@ def trace_lens(lf, x, y, z, dx, dy, dz, path, n_path, record):
             n_path += 1
         if x * x + y * y > lf[j, L_SD] * lf[j, L_SD]:
             return LENS_VIGNETTED, x, y, z, dx, dy, dz, met, n_path
+        if lf[j, L_POWER] != 0.0:
+            ok, dx, dy, dz = ideal_lens(lf[j], x, y, dx, dy, dz)
+            if not ok:
+                return LENS_VIGNETTED, x, y, z, dx, dy, dz, met, n_path
+            continue
         nx, ny, nz = conic_normal(c, k, x, y, z - zv)
         ok, dx, dy, dz = refract(dx, dy, dz, nx, ny, nz, lf[j, L_N0] / lf[j, L_N1])
         if not ok:

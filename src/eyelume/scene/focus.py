@@ -67,7 +67,8 @@ def focus(scene: Scene, par: ParaxialSystem, stop: int, stop_semi_diameter: floa
     image = par.image_distance(s_obj) if u_k != 0.0 else math.inf
     n_w = par.working_f_number(s_obj, stop, stop_semi_diameter) if u_k != 0.0 else math.inf
     sensor = scene.sensor
-    pixel = max(sensor.width_mm / sensor.cols, sensor.height_mm / sensor.rows)
+    width, height = sensor.field_mm
+    pixel = max(width / sensor.cols, height / sensor.rows)
     return Focus(
         image_distance_mm=float(image),
         sensor_distance_mm=scene.lens.surfaces[-1].thickness_mm,

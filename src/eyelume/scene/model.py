@@ -20,6 +20,7 @@ __all__ = [
     "EyePlane",
     "EyeSurface",
     "Face",
+    "IdealLens",
     "ImagingLens",
     "LedArray",
     "LedProfile",
@@ -291,8 +292,51 @@ class ImagingLens(_Model):
         return self
 
 
+class IdealLens(_Model):
+    """A camera module's lens as its datasheet gives it: a thin, perfect (ideal) lens.
+
+    ``efl_mm`` f, ``f_number`` N = f / D (D the entrance pupil's diameter; the stop is the lens),
+    ``focus_distance_mm`` s: the distance from the lens to the plane in focus, so the sensor sits
+    at v = 1 / (1/f − 1/s) behind the lens (s > f). Every ray from a point of the focus plane
+    meets at its image: a ray crossing the lens plane at height h with slope s⃗ = (dx, dy)/dz
+    leaves with slope D(s⃗) − h⃗/f (Zemax's paraxial surface; pbrt's thin-lens camera), where
+    D(s⃗) = s⃗ (1 + k1 |s⃗|² + k2 |s⃗|⁴) is the radial distortion of OpenCV's camera model in
+    normalised image coordinates (k1 = k2 = 0: none). Depth of field, the blur of a glint off
+    the focus plane and the cos⁴ fall-off follow from the geometry; radiance is carried through
+    the lens with the étendue of this mapping (see :mod:`eyelume.estimators.camera`).
+    """
+
+    efl_mm: float = Field(gt=0.05, le=1000.0)
+    f_number: float = Field(gt=0.5, le=64.0)
+    focus_distance_mm: Positive
+    k1: float = Field(0.0, ge=-1.0, le=1.0)
+    k2: float = Field(0.0, ge=-1.0, le=1.0)
+
+    @model_validator(mode="after")
+    def _real_image(self) -> IdealLens:
+        if self.focus_distance_mm <= self.efl_mm:
+            raise ValueError(
+                f"focus_distance_mm = {self.focus_distance_mm} must exceed efl_mm = "
+                f"{self.efl_mm}: a plane inside the focal length has no real image"
+            )
+        return self
+
+    @property
+    def image_distance_mm(self) -> float:
+        """v = 1 / (1/f − 1/s): lens → sensor (mm)."""
+        return 1.0 / (1.0 / self.efl_mm - 1.0 / self.focus_distance_mm)
+
+    @property
+    def pupil_radius_mm(self) -> float:
+        """D / 2 = f / (2N): the entrance (and exit) pupil's radius, the lens's aperture (mm)."""
+        return self.efl_mm / (2.0 * self.f_number)
+
+
 class Camera(_Model):
-    """Where the camera is and where it looks, in the world (headset) frame (mm, degrees).
+    """The camera's optics and where it is and looks, in the world (headset) frame (mm, °).
+
+    ``optics``: ``"prescription"``, the sequential lens of ``[lens]``, or ``"ideal"``, the thin
+    lens of a module datasheet in ``[camera.ideal]`` (:class:`IdealLens`).
 
     ``position_mm``: the lens's position (the first vertex of the prescription); unset, the
     camera sits on the world z axis at ``lens.object_distance_mm`` (the paper's rig).
@@ -304,6 +348,8 @@ class Camera(_Model):
     lens axis.
     """
 
+    optics: Literal["prescription", "ideal"] = "prescription"
+    ideal: IdealLens | None = None
     position_mm: Vector3 | None = None
     look_at_mm: Vector3 | None = None
     direction: Vector3 | None = None
@@ -311,6 +357,8 @@ class Camera(_Model):
 
     @model_validator(mode="after")
     def _one_view(self) -> Camera:
+        if self.optics == "ideal" and self.ideal is None:
+            raise ValueError("optics = 'ideal' needs [camera.ideal] (efl_mm, f_number, …)")
         if self.look_at_mm is not None and self.direction is not None:
             raise ValueError("give look_at_mm or direction, not both")
         if self.direction is not None and not any(self.direction):
@@ -338,9 +386,10 @@ class Camera(_Model):
 class Sensor(_Model):
     """The image plane, binned into pixels, and the digital camera that records it.
 
-    Geometry: the image field ``width_mm`` × ``height_mm`` (centred on the axis) is sampled by
-    ``cols`` × ``rows`` pixels. The paper's lens images the 40 × 30 mm eye area at magnification
-    −1.144 onto this 46 × 34.3 mm field, binned 87 × 65.
+    Geometry: a chip of ``cols`` × ``rows`` photosites of pitch ``pixel_pitch_um``, centred on
+    the lens axis: the picture is pitch × (cols, rows). Or, given ``width_mm`` × ``height_mm``,
+    that image field sampled by ``cols`` × ``rows`` pixels: the paper's lens images the 40 × 30
+    mm eye area at magnification −1.144 onto a 46 × 34.3 mm field, binned 87 × 65 (below).
 
     Camera: the paper's optics fix the image field and the working F-number, hence the
     image-plane irradiance E. The digital camera is that optics scaled to a real chip at the same
@@ -356,8 +405,8 @@ class Sensor(_Model):
     (see :mod:`eyelume.detectors.sensor`). ``quantum_efficiency`` is at the scene's wavelength.
     """
 
-    width_mm: Positive = 46.0
-    height_mm: Positive = 34.3
+    width_mm: Positive | None = None
+    height_mm: Positive | None = None
     cols: int = Field(87, ge=1, le=4096)
     rows: int = Field(65, ge=1, le=4096)
     pixel_pitch_um: float = Field(3.0, gt=0, le=100)
@@ -371,6 +420,8 @@ class Sensor(_Model):
 
     @model_validator(mode="after")
     def _black_level_in_range(self) -> Sensor:
+        if (self.width_mm is None) != (self.height_mm is None):
+            raise ValueError("give both width_mm and height_mm, or neither (the chip's size)")
         full_scale = 2**self.adc_bits - 1
         if self.black_level_dn >= full_scale:
             raise ValueError(
@@ -378,6 +429,15 @@ class Sensor(_Model):
                 f"2^adc_bits − 1 = {full_scale}"
             )
         return self
+
+    @property
+    def field_mm(self) -> tuple[float, float]:
+        """The picture's size on the image plane (width, height) mm: ``width_mm`` ×
+        ``height_mm`` when given, else the chip's, pitch × (cols, rows)."""
+        if self.width_mm is not None and self.height_mm is not None:
+            return self.width_mm, self.height_mm
+        pitch = self.pixel_pitch_um * 1e-3
+        return pitch * self.cols, pitch * self.rows
 
 
 class EyePlane(_Model):
@@ -424,8 +484,25 @@ class Scene(_Model):
     eye: Eye
     face: Face = Face()
     head_offset_mm: Vector3 = (0.0, 0.0, 0.0)
-    lens: ImagingLens
+    lens: ImagingLens | None = None
     camera: Camera = Camera()
     sensor: Sensor = Sensor()
     eye_plane: EyePlane = EyePlane()
     run: Run = Run()
+
+    @model_validator(mode="after")
+    def _optics_given(self) -> Scene:
+        if self.camera.optics == "prescription" and self.lens is None:
+            raise ValueError(
+                "camera.optics = 'prescription' needs a [lens] prescription "
+                "(or set camera.optics = 'ideal' with [camera.ideal])"
+            )
+        return self
+
+    @property
+    def object_distance_mm(self) -> float:
+        """The distance (mm) from the camera's lens (first vertex, or the thin lens) to the plane
+        it images onto the sensor, along its axis."""
+        if self.camera.optics == "ideal":
+            return self.camera.ideal.focus_distance_mm  # type: ignore[union-attr]
+        return self.lens.object_distance_mm  # type: ignore[union-attr]

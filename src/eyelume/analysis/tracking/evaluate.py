@@ -82,7 +82,7 @@ def pinhole_camera(scene: Scene) -> PinholeCamera:
         node_mm=(0.0, 0.0, node),
         cols=scene.sensor.cols,
         rows=scene.sensor.rows,
-        sensor_width_mm=scene.sensor.width_mm,
+        sensor_width_mm=scene.sensor.field_mm[0],
         magnification=par.magnification(scene.lens.object_distance_mm),
     )
 
