@@ -22,9 +22,19 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 RESULTS = HERE / "results"
 
-#: Numba cache for the warm measurements, kept outside ``src/`` (``cache=True`` would otherwise
-#: write index files beside the sources) and reused between runs of the scripts.
-WARM_CACHE = Path(tempfile.gettempdir()) / "eyelume-bench-numba-cache"
+
+def _warm_cache() -> Path:
+    """Numba cache for the warm measurements, kept outside ``src/`` (``cache=True`` would
+    otherwise write index files beside the sources) and reused between runs of the scripts;
+    named by the sources (``eyelume._sources_digest``: Numba would otherwise reuse a kernel
+    compiled against an older version of a file it inlines)."""
+    from eyelume import _sources_digest
+
+    digest = _sources_digest(REPO / "src" / "eyelume")
+    return Path(tempfile.gettempdir()) / f"eyelume-bench-numba-cache-{digest}"
+
+
+WARM_CACHE = _warm_cache()
 
 
 def cpu_model() -> str:

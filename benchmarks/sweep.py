@@ -14,8 +14,9 @@ On ``paper2005`` with the δ target (:func:`eyelume.analysis.targets.gaussian_ta
 - ``refine``: :func:`eyelume.optimize.refine` from the sweep's best within the paper's bounds.
 
 Each is warmed up once (compilation, or loading the Numba cache in
-``$TMPDIR/eyelume-bench-numba-cache``), then timed as the best of ``--repeats``. Prints the figures
-and how they were run, and appends a JSON line to ``benchmarks/results/sweep.jsonl``.
+``$TMPDIR/eyelume-bench-numba-cache-<digest of the sources>``), then timed as the best of
+``--repeats``. Prints the figures and how they were run, and appends a JSON line to
+``benchmarks/results/sweep.jsonl``.
 """
 
 from __future__ import annotations

@@ -105,3 +105,19 @@ def test_public_names_load_lazily():
     env = dict(os.environ, PYTHONPATH=str(SRC))
     subprocess.run([sys.executable, "-c", code], env=env, check=True, timeout=600)
     assert set(eyelume.__all__) <= set(dir(eyelume))
+
+
+def test_kernel_cache_is_named_by_the_sources(tmp_path):
+    """A change to any module (a kernel another file inlines) gives a new cache directory, so
+    no stale compiled kernel is reused (Numba keys a cache on the kernel's own file only)."""
+    import shutil
+
+    src = Path(eyelume.__file__).parent
+    copy = tmp_path / "eyelume"
+    shutil.copytree(src, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    before = eyelume._sources_digest(copy)
+    assert before == eyelume._sources_digest(src)
+    seq = copy / "kernels" / "sequential.py"
+    seq.write_text(seq.read_text(encoding="utf-8") + "\n# changed\n", encoding="utf-8")
+    assert eyelume._sources_digest(copy) != before
+    assert all(before in c.name for c in eyelume._numba_cache_candidates())

@@ -79,10 +79,29 @@ def _writable_dir(path: Path) -> bool:
         return False
 
 
+def _sources_digest(root: Path | None = None) -> str:
+    """A digest of every module of the package under ``root`` (default: this package): its
+    ``.py`` files' paths and bytes.
+
+    Numba keys a cached kernel on its own file's timestamp only: a kernel that inlines a
+    function from another file (every estimator inlines the kernels') is not recompiled when
+    only that other file changes, and would run stale code. The cache directory is therefore
+    named by the sources as a whole (hashing them takes about a millisecond)."""
+    import hashlib
+
+    root = root or Path(__file__).parent
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        h.update(str(path.relative_to(root)).encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
 def _numba_cache_candidates() -> list[Path]:
     """Where the compiled kernels may be cached, best first: the user's cache directory
-    (``$XDG_CACHE_HOME`` or ``~/.cache``), then the system's temporary directory."""
-    tag = f"numba-py{sys.version_info.major}{sys.version_info.minor}"
+    (``$XDG_CACHE_HOME`` or ``~/.cache``), then the system's temporary directory; named by the
+    Python version and :func:`_sources_digest`."""
+    tag = f"numba-py{sys.version_info.major}{sys.version_info.minor}-{_sources_digest()}"
     out = []
     xdg = os.environ.get("XDG_CACHE_HOME")
     home = os.path.expanduser("~")

@@ -2,20 +2,108 @@
 
 from __future__ import annotations
 
-from eyelume.compile import compile_scene, eye_paraxial, lens_indices, lens_paraxial
+import math
+
+from eyelume.compile import (
+    CompiledScene,
+    compile_scene,
+    eye_paraxial,
+    lens_indices,
+    lens_paraxial,
+)
 from eyelume.kernels import sequential as Q
 from eyelume.scene.eye import LAMBDA_D, eye_indices
 from eyelume.scene.focus import focus
 from eyelume.scene.model import Scene
+from eyelume.scene.pose import opencv_extrinsics
 from eyelume.scene.sources import cos_power_exponent
 
-__all__ = ["scene_info"]
+__all__ = ["scene_info", "camera_info"]
+
+
+def camera_info(cs: CompiledScene) -> dict:
+    """The camera's pose and its pinhole model in OpenCV's convention.
+
+    ``K`` (3 × 3, pixels): fx = fy = f_p / p with p the picture's pixel pitch on the sensor and
+    f_p the pinhole distance — for an ideal lens the image distance v (the model is exact up to
+    the distortion ``dist``), for a prescription |m| times the entrance pupil's distance from
+    the object plane (paraxial); cx, cy the picture's centre, pixel centres at integers.
+    ``R``, ``t``: a world point p (mm) has OpenCV camera coordinates R p + t, origin at the
+    entrance pupil (:func:`eyelume.scene.pose.opencv_extrinsics`)."""
+    scene, fo = cs.scene, cs.first_order
+    width, _ = scene.sensor.field_mm
+    pitch = width / scene.sensor.cols
+    pinhole = abs(fo.magnification) * fo.entrance_pupil_z
+    r, t = opencv_extrinsics(cs.frame, fo.entrance_pupil_z)
+    pos, view = scene.camera.pose(scene.object_distance_mm)
+    ideal = scene.camera.ideal if scene.camera.optics == "ideal" else None
+    return {
+        "optics": scene.camera.optics,
+        "position_mm": list(pos),
+        "view_direction": list(view),
+        "roll_deg": scene.camera.roll_deg,
+        "object_distance_mm": fo.object_distance,
+        "opencv": {
+            "K": [
+                [pinhole / pitch, 0.0, (scene.sensor.cols - 1) / 2],
+                [0.0, pinhole / pitch, (scene.sensor.rows - 1) / 2],
+                [0.0, 0.0, 1.0],
+            ],
+            "dist": [ideal.k1, ideal.k2, 0.0, 0.0] if ideal else [0.0, 0.0, 0.0, 0.0],
+            "R": r.tolist(),
+            "t_mm": t.tolist(),
+            "image_size": [scene.sensor.cols, scene.sensor.rows],
+        },
+    }
+
+
+def _ideal_lens_info(cs: CompiledScene) -> dict:
+    ideal = cs.scene.camera.ideal
+    assert ideal is not None
+    fo = cs.first_order
+    half = [
+        math.degrees(math.atan(w / 2 / ideal.image_distance_mm)) for w in cs.scene.sensor.field_mm
+    ]
+    return {
+        "name": "ideal thin lens",
+        "effective_focal_length_mm": ideal.efl_mm,
+        "f_number_efl_over_epd": ideal.f_number,
+        "entrance_pupil_diameter_mm": 2 * ideal.pupil_radius_mm,
+        "object_distance_mm": fo.object_distance,
+        "image_distance_mm": ideal.image_distance_mm,
+        "magnification": fo.magnification,
+        "working_f_number": ideal.f_number * (1 - fo.magnification),
+        "field_of_view_deg": [2 * h for h in half],
+        "distortion_k1_k2": [ideal.k1, ideal.k2],
+        "image_plane_z_mm": cs.image_z,
+    }
 
 
 def scene_info(scene: Scene) -> dict:
     """First-order properties of the scene at its wavelength, as JSON-ready data (mm, D, W)."""
     cs = compile_scene(scene)
+    out = {
+        "scene": scene.name,
+        "wavelength_nm": scene.wavelength_nm,
+        "camera": camera_info(cs),
+    }
+    if scene.camera.optics == "ideal":
+        out["imaging_lens"] = _ideal_lens_info(cs)
+        out["glasses"] = {}
+    else:
+        out["imaging_lens"], out["glasses"] = _prescription_info(scene, cs)
+    out["eye"] = _eye_info(scene)
+    out["leds"] = _led_info(scene, cs)
+    out["reading_of_the_paper"] = (
+        "F/2.51 is read as EFL / entrance-pupil diameter at infinite conjugate; the stop is "
+        "sized for it. The working F-number above is that of the finite eye-plane conjugate."
+    )
+    return out
+
+
+def _prescription_info(scene: Scene, cs: CompiledScene) -> tuple[dict, dict]:
     lens = scene.lens
+    assert lens is not None
     par = lens_paraxial(scene, cs.lens_indices)
     s_obj = lens.object_distance_mm
     stop_sd = float(cs.lf[cs.stop_index, Q.L_SD])
@@ -34,61 +122,58 @@ def scene_info(scene: Scene) -> dict:
                 "wavelength_in_catalog_range": g.in_range(scene.wavelength_nm),
                 "source": g.source,
             }
+    return {
+        "name": lens.name,
+        "effective_focal_length_mm": par.efl,
+        "back_focal_distance_mm": par.back_focal_distance,
+        "f_number_efl_over_epd": lens.f_number,
+        "entrance_pupil_diameter_mm": par.efl / lens.f_number,
+        "stop_semi_diameter_mm": stop_sd,
+        "object_distance_mm": s_obj,
+        "paraxial_image_distance_mm": par.image_distance(s_obj),
+        "prescription_image_distance_mm": lens.surfaces[-1].thickness_mm,
+        "eye_plane_magnification": par.magnification(s_obj),
+        "working_f_number": par.working_f_number(s_obj, cs.stop_index, stop_sd),
+        "semi_diameters_mm": [float(v) for v in cs.lf[:, Q.L_SD]],
+        "image_plane_z_mm": cs.image_z,
+        "sensor_defocus_mm": foc.defocus_mm,
+        "depth_of_focus_mm": foc.depth_of_focus_mm,
+    }, glasses
+
+
+def _eye_info(scene: Scene) -> dict:
     eye_wl = eye_paraxial(scene)
     eye_d = eye_paraxial(scene, LAMBDA_D)
+    return {
+        "model": scene.eye.model,
+        "power_d": eye_wl.power * 1000.0,
+        "power_d_at_587nm": eye_d.power * 1000.0,
+        "indices": dict(
+            zip(
+                ["air"] + [f"after {s.name}" for s in scene.eye.surfaces[:-1]],
+                eye_indices(scene.eye, scene.wavelength_nm),
+                strict=True,
+            )
+        ),
+    }
+
+
+def _led_info(scene: Scene, cs: CompiledScene) -> dict:
     led = scene.leds
     return {
-        "scene": scene.name,
-        "wavelength_nm": scene.wavelength_nm,
-        "imaging_lens": {
-            "name": lens.name,
-            "effective_focal_length_mm": par.efl,
-            "back_focal_distance_mm": par.back_focal_distance,
-            "f_number_efl_over_epd": lens.f_number,
-            "entrance_pupil_diameter_mm": par.efl / lens.f_number,
-            "stop_semi_diameter_mm": stop_sd,
-            "object_distance_mm": s_obj,
-            "paraxial_image_distance_mm": par.image_distance(s_obj),
-            "prescription_image_distance_mm": lens.surfaces[-1].thickness_mm,
-            "eye_plane_magnification": par.magnification(s_obj),
-            "working_f_number": par.working_f_number(s_obj, cs.stop_index, stop_sd),
-            "semi_diameters_mm": [float(v) for v in cs.lf[:, Q.L_SD]],
-            "image_plane_z_mm": cs.image_z,
-            "sensor_defocus_mm": foc.defocus_mm,
-            "depth_of_focus_mm": foc.depth_of_focus_mm,
-        },
-        "eye": {
-            "model": scene.eye.model,
-            "power_d": eye_wl.power * 1000.0,
-            "power_d_at_587nm": eye_d.power * 1000.0,
-            "indices": dict(
-                zip(
-                    ["air"] + [f"after {s.name}" for s in scene.eye.surfaces[:-1]],
-                    eye_indices(scene.eye, scene.wavelength_nm),
-                    strict=True,
-                )
-            ),
-        },
-        "glasses": glasses,
-        "leds": {
-            "count": led.count,
-            "cos_power_exponent": (
-                cos_power_exponent(led.profile.half_intensity_angle_deg)
-                if led.profile.kind == "cos_power"
-                else None
-            ),
-            "power_per_led_w": cs.led_power_w,
-            "total_power_w": cs.emitted_w,
-            "effective_solid_angle_sr": cs.omega_eff,
-            "pitch_deg": led.pitch_deg,
-            "height_mm": led.height_mm,
-            "distance_mm": led.distance_mm,
-            "spread_full_angle_deg": 2 * led.profile.half_intensity_angle_deg
+        "count": led.count,
+        "cos_power_exponent": (
+            cos_power_exponent(led.profile.half_intensity_angle_deg)
             if led.profile.kind == "cos_power"
-            else None,
-        },
-        "reading_of_the_paper": (
-            "F/2.51 is read as EFL / entrance-pupil diameter at infinite conjugate; the stop is "
-            "sized for it. The working F-number above is that of the finite eye-plane conjugate."
+            else None
         ),
+        "power_per_led_w": cs.led_power_w,
+        "total_power_w": cs.emitted_w,
+        "effective_solid_angle_sr": cs.omega_eff,
+        "pitch_deg": led.pitch_deg,
+        "height_mm": led.height_mm,
+        "distance_mm": led.distance_mm,
+        "spread_full_angle_deg": 2 * led.profile.half_intensity_angle_deg
+        if led.profile.kind == "cos_power"
+        else None,
     }

@@ -24,8 +24,9 @@ A world point p has camera-frame coordinates p_c = R (p − O), R the matrix who
 x̂_c, ŷ_c, ẑ_c. The paper's rig (camera at (0, 0, L) looking at the origin, no roll) is the
 identity: R = I, O = 0.
 
-OpenCV's camera frame (x right, y down, z forward along the view) is (x_c, −y_c, −z_c − L)
-measured from the lens: :func:`opencv_extrinsics` gives its rotation and translation.
+OpenCV's camera frame (x right, y down, z forward along the view) is (x_c, −y_c, z₀ − z_c)
+measured from a point z₀ of the lens axis: :func:`opencv_extrinsics` gives its rotation and
+translation.
 """
 
 from __future__ import annotations
@@ -106,13 +107,15 @@ def camera_frame(
     return Frame(rotation, origin)
 
 
-def opencv_extrinsics(frame: Frame, object_distance_mm: float) -> tuple[np.ndarray, np.ndarray]:
+def opencv_extrinsics(frame: Frame, origin_z_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """OpenCV's extrinsics (R, t) of the camera: a world point p (mm) has OpenCV camera
-    coordinates R p + t (x right, y down, z along the view, origin at the lens position).
+    coordinates R p + t (x right, y down, z along the view), with the origin at the point
+    (0, 0, ``origin_z_mm``) of the camera frame on the lens axis (the lens position at the
+    object distance L, or the entrance pupil for a pinhole model).
 
     Returns ``R`` (3, 3) and ``t`` (3,) mm."""
     flip = np.diag([1.0, -1.0, -1.0])
     r = flip @ frame.rotation
-    # camera-frame lens position (0, 0, L) ↦ OpenCV origin
-    t = -r @ frame.origin + np.array([0.0, 0.0, object_distance_mm])
+    # camera-frame point (0, 0, origin_z) ↦ OpenCV origin
+    t = -r @ frame.origin + np.array([0.0, 0.0, origin_z_mm])
     return r, t
