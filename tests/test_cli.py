@@ -29,6 +29,7 @@ def test_render_writes_every_output(tmp_path):
         "eye_image_plot.png",
         "eye_plane_plot.png",
         "layout.png",
+        "layout_xz.png",
     ):
         assert (out / name).stat().st_size > 1000, name
     summary = json.loads((out / "summary.json").read_text())

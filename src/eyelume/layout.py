@@ -1,7 +1,15 @@
-"""The y–z section (plane x = 0) of a compiled scene, as polylines for layout drawings.
+"""Sections of a compiled scene in the world (headset) frame, as polylines for layout drawings.
 
-Reads the compiled surface tables, so it sits beside :mod:`eyelume.compile`. Curves are cut
-where a surface's clip ranges end, so each returned polyline is one connected piece.
+Two orthogonal views: ``"yz"``, the section by the plane x = 0 (z across, y up), and ``"xz"``,
+the section by y = 0 (z across, x up). The eye, the face and the LED bodies are cut by the
+plane; the camera — its lens surfaces, stop and sensor, drawn in the camera's meridional plane
+closest to the view — and its field of view (from the entrance pupil to the edges of the imaged
+field) are projected onto it, so a camera anywhere shows where it is and what it sees. LEDs
+show their axes.
+
+Reads the compiled surface tables (camera frame, :mod:`eyelume.scene.pose`) and turns them to
+the world frame, so it sits beside :mod:`eyelume.compile`. Curves are cut where a surface's
+clip ranges end, so each returned polyline is one connected piece.
 """
 
 from __future__ import annotations
@@ -16,12 +24,16 @@ from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
 from eyelume.scene.optics import sag
 
-__all__ = ["Section", "system_sections"]
+__all__ = ["Section", "VIEWS", "system_sections", "world_table"]
+
+#: The views: the world axis cut to 0 (the section plane's normal) and the vertical axis.
+VIEWS = {"yz": (0, 1), "xz": (1, 0)}
 
 
 @dataclass(frozen=True)
 class Section:
-    """A polyline of the system's y–z section (x = 0) for layout drawings (world mm)."""
+    """A polyline of a view for layout drawings (world mm): ``z`` across and ``y`` the view's
+    vertical coordinate (world y in the ``"yz"`` view, world x in the ``"xz"`` view)."""
 
     name: str
     category: str
@@ -64,72 +76,133 @@ def _clip_mask(sf: np.ndarray, s: int, world: np.ndarray) -> np.ndarray:
     )
 
 
-def _surface_points(sf: np.ndarray, si: np.ndarray, s: int, extent: float) -> np.ndarray:
-    """World points of surface ``s`` along its intersection with x = 0 (ordered)."""
+def _surface_points(sf: np.ndarray, si: np.ndarray, s: int, extent: float, cut: int) -> np.ndarray:
+    """World points of surface ``s`` along its intersection with the plane p[cut] = 0."""
     rot = sf[s, G.R00 : G.R22 + 1].reshape(3, 3)
     o = sf[s, G.OX : G.OZ + 1]
     shape = si[s, G.SHAPE]
     if shape == G.SHAPE_CONIC:
         rmax = min(math.sqrt(sf[s, G.RMAX2]), extent)
         c, k = sf[s, G.CURV], sf[s, G.CONIC]
-        # the meridian in x = 0: local direction (cos ψ, sin ψ, 0) whose world x part vanishes
-        psi = math.atan2(-rot[0, 0], rot[1, 0])
+        # the meridian in the plane: local direction (cos ψ, sin ψ, 0) whose world p[cut] vanishes
+        psi = math.atan2(-rot[0, cut], rot[1, cut])
         r = np.linspace(-rmax, rmax, 801)
         z = sag(c, k, np.abs(r))
         local = np.stack([r * math.cos(psi), r * math.sin(psi), z], 1)
         return local @ rot + o
     if shape == G.SHAPE_SPHERE:
         rad = sf[s, G.RADIUS]
-        if abs(o[0]) >= rad:
+        if abs(o[cut]) >= rad:
             return np.zeros((0, 3))
-        rc = math.sqrt(rad * rad - o[0] ** 2)
+        rc = math.sqrt(rad * rad - o[cut] ** 2)
         a = np.linspace(0.0, 2 * math.pi, 721)
-        return np.stack([np.zeros_like(a), o[1] + rc * np.cos(a), o[2] + rc * np.sin(a)], 1)
-    # cylinder: points (R cos a, R sin a, h) local; solve world x = 0 for h (axis not ⟂ x)
+        pts = np.zeros((a.size, 3))
+        pts[:, 1 - cut] = o[1 - cut] + rc * np.cos(a)
+        pts[:, 2] = o[2] + rc * np.sin(a)
+        return pts
+    # cylinder: points (R cos a, R sin a, h) local; solve world p[cut] = 0 for h (axis not ⟂)
     rad = sf[s, G.RADIUS]
     ax = rot[2]
     a = np.linspace(0.0, 2 * math.pi, 721)
     ring = rad * (np.outer(np.cos(a), rot[0]) + np.outer(np.sin(a), rot[1]))
-    if abs(ax[0]) > 1e-9:
-        h = -(o[0] + ring[:, 0]) / ax[0]
+    if abs(ax[cut]) > 1e-9:
+        h = -(o[cut] + ring[:, cut]) / ax[cut]
         return o + ring + np.outer(h, ax)
-    # axis in the section plane: two lines along the axis where the ring crosses x = 0
+    # axis in the section plane: two lines along the axis where the ring crosses the plane
     lines = []
     h = np.linspace(sf[s, G.ZLO], sf[s, G.ZHI], 201)
-    for ang in np.unique(np.round(np.arctan2(-rot[0, 0], rot[1, 0]) + np.array([0, math.pi]), 12)):
+    base = np.arctan2(-rot[0, cut], rot[1, cut])
+    for ang in np.unique(np.round(base + np.array([0, math.pi]), 12)):
         p = o + rad * (math.cos(ang) * rot[0] + math.sin(ang) * rot[1])
-        if abs(p[0]) < 1e-6:
+        if abs(p[cut]) < 1e-6:
             lines.append(p + np.outer(h, ax))
     return np.concatenate(lines) if lines else np.zeros((0, 3))
 
 
-def system_sections(cs: CompiledScene, extent: float = 60.0) -> list[Section]:
-    """Every surface's y–z section: eye, tissues, LEDs, lens surfaces, stop, sensor, eye plane."""
+def world_table(cs: CompiledScene) -> np.ndarray:
+    """The surface table ``sf`` with each surface's placement (origin, rotation, bounding
+    sphere) turned from the camera frame back to the world frame."""
+    f = cs.frame
+    sf = cs.sf.copy()
+    if f.is_identity:
+        return sf
+    for s in range(sf.shape[0]):
+        rot = sf[s, G.R00 : G.R22 + 1].reshape(3, 3) @ f.rotation  # local = rot_c R (p_w − o_w)
+        sf[s, G.R00 : G.R22 + 1] = rot.ravel()
+        sf[s, G.OX : G.OZ + 1] = f.world_point(sf[s, G.OX : G.OZ + 1])
+        sf[s, G.BX : G.BZ + 1] = f.world_point(sf[s, G.BX : G.BZ + 1])
+    return sf
+
+
+def _meridian(cs: CompiledScene, vertical: int) -> np.ndarray:
+    """Unit camera-frame direction across the lens axis closest to the view's vertical axis."""
+    e = np.zeros(3)
+    e[vertical] = 1.0
+    m = cs.frame.vector(e)
+    m[2] = 0.0
+    n = float(np.linalg.norm(m))
+    return m / n if n > 1e-9 else np.array([1.0, 0.0, 0.0])
+
+
+def _camera_sections(cs: CompiledScene, cut: int, vertical: int) -> list[Section]:
+    """The lens surfaces, stop, sensor and field of view, in the camera's meridian closest to
+    the view, turned to the world and projected onto the view."""
+    m = _meridian(cs, vertical)
     out: list[Section] = []
-    for s, name in enumerate(cs.surface_names):
-        if cs.si[s, G.ACTION] == G.ACT_LENS:
-            continue  # drawn with the sequential lens below
-        pts = _surface_points(cs.sf, cs.si, s, extent)
-        if len(pts) == 0:
-            continue
-        keep = _clip_mask(cs.sf, s, pts) & (np.abs(pts[:, 1]) <= extent)
-        for run in _runs(pts, keep):
-            out.append(
-                Section(name, _category(name, int(cs.si[s, G.ACTION])), run[:, 2], run[:, 1])
-            )
+
+    def add(name: str, category: str, r: np.ndarray, z: np.ndarray) -> None:
+        pts = cs.frame.world_point(np.outer(r, m) + np.outer(z, [0.0, 0.0, 1.0]))
+        out.append(Section(name, category, pts[:, 2], pts[:, vertical]))
+
     for j in range(cs.lf.shape[0]):
         sd = cs.lf[j, Q.L_SD]
         c, k = cs.lf[j, Q.L_CURV], cs.lf[j, Q.L_CONIC]
         if j == cs.stop_index:
             for sign in (1.0, -1.0):
-                y = sign * np.array([sd, sd + 8.0])
-                out.append(Section("aperture stop", "stop", np.full(2, cs.lf[j, Q.L_Z]), y))
-            continue
+                ring = sign * np.array([sd, sd + max(8.0 * sd / 26.0, 0.3)])
+                add("aperture stop", "stop", ring, np.full(2, cs.lf[j, Q.L_Z]))
+            if cs.lf[j, Q.L_POWER] == 0.0:
+                continue
         r = np.linspace(-sd, sd, 201)
-        z = cs.lf[j, Q.L_Z] + sag(c, k, np.abs(r))
-        out.append(Section(f"lens S{j + 1}", "lens", z, r))
-    half = cs.picture.height_mm / 2
-    out.append(Section("sensor", "sensor", np.full(2, cs.image_z), np.array([-half, half])))
-    half = cs.eye_plane.height_mm / 2
+        add(f"lens S{j + 1}", "lens", r, cs.lf[j, Q.L_Z] + sag(c, k, np.abs(r)))
+    w, h = cs.picture.width_mm, cs.picture.height_mm
+    half = math.hypot(w * m[0], h * m[1]) / 2  # the picture's half-extent along the meridian
+    add("sensor", "sensor", np.array([-half, half]), np.full(2, cs.image_z))
+    fo = cs.first_order
+    edge = half / abs(fo.magnification)  # the imaged field's half-extent on the object plane
+    for sign in (1.0, -1.0):
+        add(
+            "field of view",
+            "field",
+            np.array([0.0, sign * edge]),
+            np.array([fo.entrance_pupil_z, 0.0]),
+        )
+    return out
+
+
+def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -> list[Section]:
+    """Every part of the system in one view (module docstring), world mm: the eye and face
+    surfaces and LED bodies cut by the view's plane, the LEDs' axes (10 mm), the camera, its
+    field of view, and the eye-plane receiver (world z = 0)."""
+    cut, vertical = VIEWS[view]
+    sf = world_table(cs)
+    out: list[Section] = []
+    for s, name in enumerate(cs.surface_names):
+        if cs.si[s, G.ACTION] == G.ACT_LENS:
+            continue  # drawn with the camera below
+        pts = _surface_points(sf, cs.si, s, extent, cut)
+        if len(pts) == 0:
+            continue
+        keep = _clip_mask(sf, s, pts) & (np.abs(pts[:, vertical]) <= extent)
+        for run in _runs(pts, keep):
+            category = _category(name, int(cs.si[s, G.ACTION]))
+            out.append(Section(name, category, run[:, 2], run[:, vertical]))
+    emit = cs.frame.world_point(cs.led.points)
+    axes = cs.frame.world_vector(cs.led.axes)
+    for k, (p, a) in enumerate(zip(emit, axes, strict=True)):
+        line = np.stack([p, p + 10.0 * a])
+        out.append(Section(f"LED {k} axis", "led", line[:, 2], line[:, vertical]))
+    out.extend(_camera_sections(cs, cut, vertical))
+    half = (cs.eye_plane.height_mm if vertical == 1 else cs.eye_plane.width_mm) / 2
     out.append(Section("eye plane", "receiver", np.zeros(2), np.array([-half, half])))
     return out

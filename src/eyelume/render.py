@@ -26,7 +26,7 @@ from eyelume.compile import CompiledScene, compile_scene
 from eyelume.detectors.receivers import BinnedPlane
 from eyelume.estimators.fast_run import RunControl, direct_eye_plane, trace_fast, warm_up
 from eyelume.estimators.forward import trace_forward, trace_paths
-from eyelume.layout import Section, system_sections
+from eyelume.layout import VIEWS, Section, system_sections
 from eyelume.scene.model import Scene
 
 __all__ = ["RenderExtras", "RenderResult", "render", "render_extras"]
@@ -277,18 +277,21 @@ class RenderExtras:
     """What ``eyelume render`` draws and records beside its images, computed here (where rays
     may be traced) so that :mod:`eyelume.report` only writes it.
 
-    ``sections``: every surface's y–z section (:func:`eyelume.layout.system_sections`);
-    ``ray_paths``: a few dozen traced rays, ((k, 3) world vertices in mm, reached the sensor)
-    (:func:`eyelume.estimators.forward.trace_paths`); ``truth``: the true gaze, pupil and glint
-    positions on the picture (:func:`eyelume.analysis.truth.eye_truth`).
+    ``sections``: the system in two orthogonal views, ``"yz"`` and ``"xz"``, world frame
+    (:func:`eyelume.layout.system_sections`); ``ray_paths``: a few dozen traced rays, ((k, 3)
+    world vertices in mm, reached the sensor) (:func:`eyelume.estimators.forward.trace_paths`);
+    ``truth``: the true gaze, pupil and glint positions on the picture
+    (:func:`eyelume.analysis.truth.eye_truth`).
     """
 
-    sections: list[Section]
+    sections: dict[str, list[Section]]
     ray_paths: list[tuple[np.ndarray, bool]]
     truth: dict
 
 
 def render_extras(cs: CompiledScene, seed: int) -> RenderExtras:
-    """The layout section, ray paths (drawn from the seed's stream) and truth of a compiled
+    """The layout views, ray paths (drawn from the seed's stream) and truth of a compiled
     scene (:class:`RenderExtras`)."""
-    return RenderExtras(system_sections(cs), trace_paths(cs, seed), eye_truth(cs))
+    views = {view: system_sections(cs, view=view) for view in VIEWS}
+    paths = [(cs.frame.world_point(p), hit) for p, hit in trace_paths(cs, seed)]
+    return RenderExtras(views, paths, eye_truth(cs))

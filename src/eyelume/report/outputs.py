@@ -69,14 +69,17 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
         title=f"{name}: eye-plane irradiance toward the eye",
     )
     rays = extras.ray_paths
-    curves = [SectionCurve(s.name, s.category, s.z, s.y) for s in extras.sections]
-    save_layout(
-        curves,
-        [p for p, _ in rays],
-        path("layout.png"),
-        title=f"{name}: y–z section, rays reaching the sensor (red) and others (orange)",
-        ray_colors=["tab:red" if hit else "tab:orange" for _, hit in rays],
-    )
+    for view, file, vertical in (("yz", "layout.png", "y"), ("xz", "layout_xz.png", "x")):
+        curves = [SectionCurve(s.name, s.category, s.z, s.y) for s in extras.sections[view]]
+        save_layout(
+            curves,
+            [p for p, _ in rays],
+            path(file),
+            title=f"{name}: {vertical}–z section (world, camera projected), rays reaching the "
+            "sensor (red) and others (orange)",
+            ray_colors=["tab:red" if hit else "tab:orange" for _, hit in rays],
+            vertical=vertical,
+        )
     summary = result.summary()
     summary["camera"] = camera_summary(sc.sensor, sc.wavelength_nm, digital)
     write_json(path("summary.json"), summary)

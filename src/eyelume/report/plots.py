@@ -49,9 +49,10 @@ CATEGORY_COLORS: dict[str, str] = {
     "stop": "black",
     "sensor": "tab:purple",
     "receiver": "tab:gray",
+    "field": "tab:purple",
 }
 
-_CATEGORY_STYLES: dict[str, str] = {"receiver": "--"}
+_CATEGORY_STYLES: dict[str, str] = {"receiver": "--", "field": ":"}
 _DEFAULT_RAY_COLOR = "tab:orange"
 _DPI = 150
 
@@ -373,8 +374,9 @@ class SectionCurve:
         object.__setattr__(self, "y", y)
 
 
-def _ray_segments(rays: Sequence[np.ndarray]) -> list[np.ndarray]:
-    """Each ray's (z, y) vertices as a (k, 2) array, after checking shape and finiteness."""
+def _ray_segments(rays: Sequence[np.ndarray], vertical: int = 1) -> list[np.ndarray]:
+    """Each ray's (z, vertical) vertices as a (k, 2) array (vertical 1: y, 0: x), after checking
+    shape and finiteness."""
     segments = []
     for i, ray in enumerate(rays):
         v = np.asarray(ray, dtype=np.float64)
@@ -388,7 +390,7 @@ def _ray_segments(rays: Sequence[np.ndarray]) -> list[np.ndarray]:
                 f"ray {i}: {bad} non-finite value(s) (NaN or inf); "
                 "end escaping rays at a finite point before plotting"
             )
-        segments.append(v[:, [2, 1]])
+        segments.append(v[:, [2, vertical]])
     return segments
 
 
@@ -399,8 +401,11 @@ def save_layout(
     *,
     title: str,
     ray_colors: Sequence[str] | None = None,
+    vertical: str = "y",
 ) -> None:
-    """Write a y–z cross-section of the optical system, surfaces and rays, as a layout plot.
+    """Write a y–z (or x–z) cross-section of the optical system, surfaces and rays, as a
+    layout plot (``vertical``: ``"y"`` or ``"x"``, the world axis drawn upward; the rays are
+    projected onto that plane).
 
     z runs horizontally, y vertically, both in mm and at equal scale. Each curve is a line in its
     category's colour (receivers dashed), with one legend entry per category present. Each ray is
@@ -444,7 +449,9 @@ def save_layout(
     for curve in curves:
         if not isinstance(curve, SectionCurve):
             raise ValueError(f"curves must hold SectionCurve objects, got {type(curve).__name__}")
-    segments = _ray_segments(rays)
+    if vertical not in ("x", "y"):
+        raise ValueError(f"vertical must be 'x' or 'y', got {vertical!r}")
+    segments = _ray_segments(rays, 1 if vertical == "y" else 0)
     if ray_colors is None:
         colors: list[str] = [_DEFAULT_RAY_COLOR] * len(segments)
     else:
@@ -492,8 +499,8 @@ def save_layout(
             for c in order
         ]
         ax.legend(handles=handles, loc="upper right", fontsize="small", framealpha=0.85)
-    ax.set_xlabel("z (mm)")
-    ax.set_ylabel("y (mm)")
+    ax.set_xlabel("world z (mm)")
+    ax.set_ylabel(f"world {vertical} (mm)")
     ax.set_title(title)
     ax.grid(True, linewidth=0.3, alpha=0.5)
     _save_figure(fig, path)
