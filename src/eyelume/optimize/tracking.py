@@ -31,6 +31,7 @@ from eyelume.analysis.tracking.evaluate import (
     analyse_frame,
     analyse_frames,
     failure_reason,
+    led_picture_azimuths,
     mean_deg,
     tracking_score,
 )
@@ -64,8 +65,9 @@ def render_frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> F
     cs = compile_scene(sc)
     result = render(cs, estimator="fast", samples_per_pixel=samples, seed=seed)
     digital = digitize(result.eye_image, sc.sensor, sc.wavelength_nm, seed=seed)
+    azimuths = led_picture_azimuths(cs)
     frame = analyse_frame(
-        (h, v), digital.counts, eye_truth(cs), list(sc.leds.azimuths()), render_s=result.wall_time_s
+        (h, v), digital.counts, eye_truth(cs), azimuths, render_s=result.wall_time_s
     )
     frame.saturated_share = digital.saturated_pixels / max(digital.counts.size, 1)
     return frame

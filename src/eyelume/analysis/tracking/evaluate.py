@@ -31,6 +31,7 @@ __all__ = [
     "analyse_frames",
     "error_map_rows",
     "pinhole_camera",
+    "led_picture_azimuths",
     "tracking_score",
 ]
 
@@ -71,20 +72,47 @@ class TrackingReport:
 
 
 def pinhole_camera(scene: Scene) -> PinholeCamera:
-    """The scene's camera as a pinhole at its entrance pupil, with its paraxial magnification
-    at the eye plane (what the geometric gaze model assumes)."""
-    from eyelume.compile import lens_indices, lens_paraxial
+    """The scene's camera as a pinhole at its entrance pupil, with its first-order
+    magnification at the plane in focus and its pose (what the geometric gaze model assumes)."""
+    from eyelume.compile import compile_scene
 
-    par = lens_paraxial(scene, lens_indices(scene)[0])
-    stop = next(j for j, s in enumerate(scene.lens.surfaces) if s.stop)
-    node = scene.lens.object_distance_mm + par.entrance_pupil_position(stop)
+    cs = compile_scene(scene)
+    fo = cs.first_order
     return PinholeCamera(
-        node_mm=(0.0, 0.0, node),
+        node_mm=(0.0, 0.0, fo.entrance_pupil_z),
         cols=scene.sensor.cols,
         rows=scene.sensor.rows,
         sensor_width_mm=scene.sensor.field_mm[0],
-        magnification=par.magnification(scene.lens.object_distance_mm),
+        magnification=fo.magnification,
+        frame=None if cs.frame.is_identity else cs.frame,
     )
+
+
+def led_picture_azimuths(cs) -> list[float]:
+    """The direction (degrees; 0° = picture +x, 90° = up) in which each LED's glint lies from
+    the middle of the glints, for matching found glints to LEDs.
+
+    The paper's rig (the camera on the eye's axis): the LEDs' own azimuths. A camera anywhere:
+    LED k's glint lies where the corneal sphere (centre **c**, radius R, eye in primary gaze)
+    has its normal along the bisector of the directions to the LED and to the camera's
+    entrance pupil E, **g**ₖ = **c** + R · unit(unit(Lₖ − **c**) + unit(E − **c**)) (the law of
+    reflection for a glint seen from E, in the small-glint limit); each is projected by the
+    pinhole camera of :func:`pinhole_camera` and its direction taken from their mean."""
+    scene = cs.scene
+    if cs.frame.is_identity:
+        return list(scene.leds.azimuths())
+    cam = pinhole_camera(scene)
+    radius = scene.eye.surfaces[0].radius_mm
+    c = cs.frame.point(np.asarray(scene.head_offset_mm, float) + np.array([0.0, 0.0, -radius]))
+    e = np.array([0.0, 0.0, cs.first_order.entrance_pupil_z]) - c
+    e /= np.linalg.norm(e)
+    pts = []
+    for led in cs.led.points:
+        d = led - c
+        n = d / np.linalg.norm(d) + e
+        pts.append(cam.project(c + radius * n / np.linalg.norm(n)))
+    g = np.asarray(pts) - np.mean(pts, axis=0)
+    return [math.degrees(math.atan2(-dy, dx)) % 360.0 for dx, dy in g]
 
 
 def _truth_ellipse_centre(truth: dict) -> tuple[float, float] | None:
@@ -140,19 +168,22 @@ def analyse_frames(
 ) -> TrackingReport:
     """Gaze estimates and statistics of the test ``frames``: the PCCR polynomial fitted on the
     ``calibration`` frames (when at least 6 have a pupil–glint vector) and the geometric model
-    of ``scene``'s camera with the LEDs at ``leds_mm`` (n, 3) in the world frame (mm)."""
+    of ``scene``'s camera with the LEDs at ``leds_mm`` (n, 3) in the camera frame (mm: the
+    compiled scene's LED table, :mod:`eyelume.scene.pose`; the world frame for the paper's
+    rig)."""
     usable = [f for f in calibration if f.pg_vector is not None]
     pccr = None
     if len(usable) >= 6:
         pccr = PccrModel.fit(
             np.array([f.pg_vector for f in usable]), np.array([f.gaze for f in usable])
         )
-    geometric = GeometricGaze(pinhole_camera(scene), leds_mm)
+    camera = pinhole_camera(scene)
+    geometric = GeometricGaze(camera, leds_mm)
     for f in frames:
         if pccr is not None and f.pg_vector is not None:
             f.pccr = tuple(float(x) for x in pccr.predict(np.array([f.pg_vector]))[0])
         f.geometric = _geometric(geometric, f, len(leds_mm))
-    mm_per_px = pinhole_camera(scene).scale_mm  # eye-plane mm per pixel
+    mm_per_px = camera.scale_mm  # mm per pixel on the plane in focus
     report = TrackingReport(frames, calibration, mm_per_px)
     report.summary = summarise(report, pccr_calibrated=pccr is not None)
     report.summary["safety"] = eye_safety(scene)

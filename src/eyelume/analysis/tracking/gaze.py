@@ -94,7 +94,12 @@ class PinholeCamera:
 
     (the sample at integer (col, row) is the centre of that pixel), along the ray from the node
     O = ``node_mm`` (the entrance pupil, (0, 0, 174.66) mm by default) through that point. Any
-    world point is pictured where its line to O crosses z = 0 (:meth:`project`).
+    point is pictured where its line to O crosses z = 0 (:meth:`project`).
+
+    All of this is in the camera's frame (:mod:`eyelume.scene.pose`: z along the lens axis, the
+    plane in focus at z = 0), which is the world frame for the paper's rig. ``frame`` (a
+    :class:`eyelume.scene.pose.Frame`, world → camera frame; None: the identity) turns gaze
+    directions and targets between the two (:meth:`to_world`, :meth:`from_world`).
 
     >>> cam = PinholeCamera()
     >>> cam.project(cam.pixel_to_plane(np.array([10.0, 20.0])))
@@ -108,7 +113,9 @@ class PinholeCamera:
         rows: int = 65,
         sensor_width_mm: float = 46.0,
         magnification: float = -1.144,
+        frame=None,
     ) -> None:
+        self.frame = frame
         self.node = np.asarray(node_mm, dtype=float)
         if self.node[2] <= 0:
             raise ValueError(f"node_mm must lie in front of the eye (z > 0), got {node_mm}")
@@ -116,6 +123,14 @@ class PinholeCamera:
         self.pitch_mm = sensor_width_mm / cols
         #: Size of one pixel on the eye plane, mm.
         self.scale_mm = self.pitch_mm / abs(magnification)
+
+    def to_world(self, direction: np.ndarray) -> np.ndarray:
+        """A camera-frame direction (3,) in the world frame."""
+        return direction if self.frame is None else self.frame.world_vector(direction)
+
+    def from_world(self, point_mm: np.ndarray) -> np.ndarray:
+        """A world point (3,) mm in the camera frame."""
+        return point_mm if self.frame is None else self.frame.point(point_mm)
 
     def pixel_to_plane(self, px: np.ndarray) -> np.ndarray:
         """Points (..., 3) on the plane z = 0 seen by picture positions ``px`` (..., 2)."""
@@ -424,7 +439,7 @@ class GeometricGaze:
         if p is None:
             return _failed(why, n_found, c)
         omega = _unit(p - c)
-        h, v = angles_from_axis(omega)
+        h, v = angles_from_axis(self.camera.to_world(omega))
         return GazeEstimate(
             h + self.kappa_deg[0], v + self.kappa_deg[1], c, p, True, why, omega, n_found
         )
@@ -440,7 +455,8 @@ class GeometricGaze:
         est = self.with_kappa((0.0, 0.0)).estimate(pupil_px, glints_px)
         if not est.ok:
             raise ValueError(f"kappa calibration frame failed: {est.reason}")
-        th, tv = angles_from_axis(_unit(np.asarray(target_mm, dtype=float) - est.cornea_centre_mm))
+        target = self.camera.from_world(np.asarray(target_mm, dtype=float))
+        th, tv = angles_from_axis(self.camera.to_world(_unit(target - est.cornea_centre_mm)))
         return self.with_kappa((th - est.h_deg, tv - est.v_deg))
 
     def with_kappa(self, kappa_deg: tuple[float, float]) -> GeometricGaze:
