@@ -11,7 +11,7 @@ from eyelume.compile import compile_scene
 from eyelume.errors import GeometryError
 from eyelume.kernels import sequential as Q
 from eyelume.kernels.sequential import trace_lens
-from eyelume.scene.io import SceneError
+from eyelume.scene.io import SceneError, apply_overrides, load_scene
 
 
 @njit(cache=True)
@@ -88,3 +88,32 @@ def test_eye_aperture_beyond_its_conicoid_is_refused(overrides, words):
     with pytest.raises(GeometryError) as info:  # on loading (scene.eye.check_eye_geometry)
         compile_scene(eyelume.load_scene("paper2005", overrides))
     assert all(w in str(info.value) for w in words), str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "words"),
+    [
+        ({"camera.look_at_mm": None, "camera.direction": [0.0, 0.0, 1.0]}, "behind the camera"),
+        ({"camera.look_at_mm": [30.0, 0.0, 0.0]}, "outside the"),
+        ({"camera.look_at_mm": [20.785, -12.0, 20.0]}, "equals position_mm"),
+        ({"head_offset_mm": [0.0, 0.0, 14.5]}, "inside the face: face.tissues 'brow'"),
+        (
+            {
+                "head_offset_mm": [0.0, 0.0, 5.0],
+                "leds.height_mm": 3.0,
+                "leds.distance_mm": 4.0,
+                "leds.pitch_deg": 0.0,
+            },
+            "inside the eye",
+        ),
+        ({"sensor.pixel_pitch_um": 80.0}, "more than the ideal lens covers"),
+    ],
+)
+def test_a_camera_anywhere_refuses_impossible_views(overrides, words):
+    """A camera that sees no eye, a look-at point at the camera, an LED inside the face or the
+    eye, a chip larger than the lens covers: one line naming the field and value."""
+    scene = load_scene("vr-offaxis")
+    with pytest.raises(SceneError) as e:
+        compile_scene(apply_overrides(scene, overrides))
+    msg = str(e.value)
+    assert words in msg and "\n" not in msg

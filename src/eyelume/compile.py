@@ -408,6 +408,8 @@ def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame)
         # the body against the lens's first surface, within its clear aperture (camera frame)
         cc = frame.point(c)
         r_c = math.hypot(cc[0], cc[1])
+        if r_c - rb >= lf[0, Q.L_SD]:
+            continue  # wholly outside the lens's clear aperture
         for r in np.linspace(max(0.0, r_c - rb), min(r_c + rb, lf[0, Q.L_SD]), 32):
             half = math.sqrt(max(0.0, rb * rb - (r - r_c) ** 2))
             if half > 0 and cc[2] + half > _lens_surface_z(lf, 0, r):
@@ -416,6 +418,75 @@ def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame)
                     f"{r_c:.1f} mm from the camera's axis) overlaps the imaging lens's first "
                     f"surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
                 )
+
+
+def _check_leds_in_head(scene: Scene, centres: np.ndarray) -> None:
+    """No LED body inside the eyeball (with the cornea's bulge) or inside a face tissue's solid
+    (a sphere or cylinder within its clip ranges, or behind a disk within its ring)."""
+    rb = scene.leds.body_diameter_mm / 2
+    eye = scene.eye
+    gaze, c0 = gaze_rotation(eye)
+    head = np.asarray(scene.head_offset_mm, dtype=float)
+    _, _, z_c = limbus_geometry(eye)
+    eyeball = head + c0 + gaze @ (np.array([0.0, 0.0, -z_c]) - c0)
+    vertex = head + c0 + gaze @ (np.zeros(3) - c0)
+    axis = gaze @ np.array([0.0, 0.0, 1.0])
+    for i, c in enumerate(centres):
+        d = c - eyeball
+        # the eyeball sphere, and the cornea standing proud of it up to the vertex
+        if np.linalg.norm(d) < eye.sclera_radius_mm + rb or (
+            (c - vertex) @ axis < rb
+            and np.linalg.norm(d - (d @ axis) * axis) < eye.surfaces[0].semi_diameter_mm + rb
+            and d @ axis > 0
+        ):
+            raise SceneError(
+                f"leds: LED {i} body (world centre {np.round(c, 2).tolist()} mm, radius {rb}) is "
+                "inside the eye"
+            )
+        if not scene.face.enabled:
+            continue
+        for tis in scene.face.tissues:
+            o = head + np.asarray(tis.center_mm, dtype=float)
+            local = _frame(tis.axis) @ (c - o)
+            r = math.hypot(local[0], local[1])
+            in_clip = tis.clip_z_mm[0] <= local[2] <= tis.clip_z_mm[1] and (
+                tis.clip_r_mm[0] <= r <= tis.clip_r_mm[1]
+            )
+            if tis.shape == "sphere":
+                inside = in_clip and np.linalg.norm(c - o) < tis.radius_mm + rb
+            elif tis.shape == "cylinder":
+                inside = in_clip and r < tis.radius_mm + rb
+            else:
+                inside = tis.clip_r_mm[0] <= r <= tis.clip_r_mm[1] and local[2] < rb
+            if inside:
+                raise SceneError(
+                    f"leds: LED {i} body (world centre {np.round(c, 2).tolist()} mm) is inside "
+                    f"the face: face.tissues '{tis.name}'"
+                )
+
+
+def _check_view(scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGrid) -> None:
+    """The camera sees the eye: its corneal vertex (gaze and head offset applied) lies in front
+    of the entrance pupil and is imaged inside the picture. Raises SceneError."""
+    eye = scene.eye
+    gaze, c0 = gaze_rotation(eye)
+    head = np.asarray(scene.head_offset_mm, dtype=float)
+    p = frame.point(head + c0 + gaze @ (np.zeros(3) - c0))
+    ep = first.entrance_pupil_z
+    pos, view = scene.camera.pose(scene.object_distance_mm)
+    where = f"camera at {list(pos)} mm looking along {np.round(view, 3).tolist()}"
+    if p[2] >= ep - 1e-9:
+        raise SceneError(f"camera: sees no eye: the corneal vertex is behind the {where}")
+    # where the vertex's line to the entrance pupil meets the plane in focus, in picture units
+    xy = p[:2] * ep / (ep - p[2])
+    half_w = picture.width_mm / 2 / abs(first.magnification)
+    half_h = picture.height_mm / 2 / abs(first.magnification)
+    if abs(xy[0]) > half_w or abs(xy[1]) > half_h:
+        raise SceneError(
+            f"camera: sees no eye: the corneal vertex is imaged at ({xy[0]:.1f}, {xy[1]:.1f}) "
+            f"mm on the plane in focus, outside the ±{half_w:.1f} × ±{half_h:.1f} mm the "
+            f"picture covers ({where})"
+        )
 
 
 def _compile_lens(scene: Scene) -> tuple[LensTable, list[float], int]:
@@ -836,6 +907,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
     _add_face(t, scene)
     centres, axes = led_poses(scene.leds)
     _check_leds(scene, centres, lens.lf, frame)
+    _check_leds_in_head(scene, centres)
     _add_led_bodies(t, scene, centres, axes)
     if not frame.is_identity:
         centres, axes = frame.point(centres), frame.vector(axes)
@@ -845,6 +917,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
         np.ascontiguousarray(np.stack(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))
     )
     picture, eye_plane = _grids(scene)
+    _check_view(scene, frame, first, picture)
     tables = SceneTables(surfaces, lens, led, picture, eye_plane, int(scene.run.max_events))
     return CompiledScene(
         scene=scene,
