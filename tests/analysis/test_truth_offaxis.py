@@ -103,3 +103,17 @@ def test_pupil_centre_of_an_off_axis_camera_projects_through_the_cornea():
     )
     shift = np.hypot(*(np.array(truth["pupil"]["centre_px"]) - px.ravel()))
     assert 0.5 < shift < 15.0
+
+
+def test_ring_glints_slide_off_the_cornea_as_the_eye_turns_away():
+    """vr-offaxis: the camera sits nasal (+x) and low; turning the eye 20° temporally (−x, away
+    from the camera) moves ring glints off the corneal cap, toward the camera keeps them."""
+    from eyelume.analysis.truth import glint_counts
+
+    counts = glint_counts(load_scene("vr-offaxis"), gaze_h=(-20.0, 0.0, 20.0), gaze_v=(0.0,))
+    on = counts["on_cornea"][0]
+    assert counts["leds"] == 8
+    assert on[1] == 8  # primary gaze: every LED's glint on the cornea
+    assert on[0] < 8  # away from the camera: some slide off
+    assert on[2] == 8  # toward the camera: none do
+    assert all(v <= o for v, o in zip(counts["visible"][0], on, strict=True))

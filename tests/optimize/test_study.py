@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
 from eyelume.optimize.runner import run_study
@@ -164,6 +165,22 @@ def test_tracking_metric_of_one_run():
     m = run_metrics(eyelume.load_scene("paper2005"), {"leds.pitch_deg": 20.0}, st)
     assert 0 <= m["tracking_score_deg"] <= 10 and 0 <= m["detection_rate"] <= 1
     assert m["within_exempt_group"] and m["corneal_margin"] > 1
+
+
+@pytest.mark.slow
+def test_glints_metric_of_one_run():
+    """The glints metric on the off-axis preset: over the ±20° × ±15° gaze grid, some gazes
+    lose glints off the cornea (the camera is 50° off the eye's axis), primary gaze none."""
+    import eyelume
+    from eyelume.analysis.truth import glint_counts
+    from eyelume.optimize.study import Study, run_metrics
+
+    scene = eyelume.load_scene("vr-offaxis")
+    m = run_metrics(scene, {}, Study(name="g", scene="vr-offaxis", metrics=["glints"]))
+    counts = np.asarray(glint_counts(scene)["visible"], dtype=float)
+    assert m["glints_visible_min"] == counts.min() < 8
+    assert m["glints_visible_mean"] == pytest.approx(counts.mean())
+    assert 0 < m["gaze_share_all_glints"] < 1
 
 
 @pytest.mark.slow

@@ -29,7 +29,7 @@ from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import reflect, refract
 from eyelume.kernels.sampling import orthonormal_basis
 
-__all__ = ["eye_truth", "sensor_to_pixel"]
+__all__ = ["eye_truth", "glint_counts", "sensor_to_pixel"]
 
 _H = 1e-4  # mm on the sensor: forward-difference step
 _EDGE_POINTS = 72
@@ -218,10 +218,11 @@ def _glint_truth(v: _View, k: int, led: np.ndarray) -> dict:
     c_img = v.image_of(v.turned(np.array([0.0, 0.0, -3.9])))
     guess = (c_img if c_img is not None else np.zeros(2)) - 0.05 * abs(v.par_m) * led[:2]
     s = _solve(residual, guess)
-    entry: dict = {"led": k, "centre_px": None, "visible": False, "reason": ""}
+    entry: dict = {"led": k, "centre_px": None, "on_cornea": False, "visible": False, "reason": ""}
     if s is None:
-        entry["reason"] = "no reflection toward this LED on the cornea's cap"
+        entry["reason"] = "no reflection toward this LED on the cornea's cap (off the cornea)"
         return entry
+    entry["on_cornea"] = True
     entry["centre_px"] = list(sensor_to_pixel(cs, *s))
     ray = _chief_ray(cs, cam, *s)
     hit = _off_cornea(cs, cornea, *ray)
@@ -240,11 +241,14 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
 
     Returns a JSON-ready dict (``truth.json``): gaze angles; the pupil's 3D centre (world mm),
     its apparent centre in pixels, the pixel positions of 72 points of its edge, the share of
-    them visible (not under a lid); per LED its glint's pixel position, or why there is none.
+    them visible (not under a lid); per LED its glint's pixel position, whether its reflection
+    lies on the cornea's cap (``on_cornea``) and is seen (``visible``), or why there is none;
+    the counts ``glints_on_cornea`` and ``glints_visible``.
     """
     v = _view(cs, cam or cs.camera)
     eye = cs.scene.eye
     depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
+    glints = [_glint_truth(v, k, led) for k, led in enumerate(cs.led.points)]
     return {
         "gaze_deg": {
             "horizontal": eye.gaze_horizontal_deg,
@@ -254,5 +258,43 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
         "pixel_convention": "OpenCV: pixel (column c, row r) centred at (x, y) = (c, r); row 0 "
         "at the top of the upright picture",
         "pupil": _pupil_truth(v, v.turned(np.array([0.0, 0.0, -depth]))),
-        "glints": [_glint_truth(v, k, led) for k, led in enumerate(cs.led.points)],
+        "glints": glints,
+        "glints_on_cornea": sum(g["on_cornea"] for g in glints),
+        "glints_visible": sum(g["visible"] for g in glints),
+    }
+
+
+#: The gaze grid of :func:`glint_counts` (degrees): ±20° horizontally, ±15° vertically.
+COUNT_GAZE_H = (-20.0, -10.0, 0.0, 10.0, 20.0)
+COUNT_GAZE_V = (-15.0, -7.5, 0.0, 7.5, 15.0)
+
+
+def glint_counts(scene, gaze_h=COUNT_GAZE_H, gaze_v=COUNT_GAZE_V) -> dict:
+    """How many LEDs' glints lie on the cornea, and how many of those are visible (not hidden
+    by a lid or the face), over a gaze grid: ring glints slide off the cornea (onto the sclera)
+    as the eye turns away from the camera.
+
+    Returns ``{"gaze_h_deg": [...], "gaze_v_deg": [...], "on_cornea": (nv, nh) list,
+    "visible": (nv, nh) list, "leds": N}`` (rows: vertical gaze, columns: horizontal)."""
+    from eyelume.compile import compile_scene
+    from eyelume.scene.io import apply_overrides
+
+    on, seen = [], []
+    for gv in gaze_v:
+        row_on, row_seen = [], []
+        for gh in gaze_h:
+            turned = apply_overrides(
+                scene, {"eye.gaze_horizontal_deg": gh, "eye.gaze_vertical_deg": gv}
+            )
+            t = eye_truth(compile_scene(turned))
+            row_on.append(t["glints_on_cornea"])
+            row_seen.append(t["glints_visible"])
+        on.append(row_on)
+        seen.append(row_seen)
+    return {
+        "gaze_h_deg": list(gaze_h),
+        "gaze_v_deg": list(gaze_v),
+        "on_cornea": on,
+        "visible": seen,
+        "leds": scene.leds.count,
     }

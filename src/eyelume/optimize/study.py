@@ -5,9 +5,12 @@ A study file (TOML)::
     name = "led-height"
     scene = "paper2005"            # a preset or a scene file (relative: to the study file)
     seed = 1                       # for random and Latin-hypercube samples, and every render
-    metrics = ["eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", "safety"]
+    metrics = ["eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", "safety",
+               "glints"]
     delta = 0.3                    # the eye-plane target of eye_plane_merit
     samples_per_pixel = 16         # renders of eye_image_merit / skin_uniformity
+    # glints: glints_visible_min / _mean over a ±20° × ±15° gaze grid and the share of gazes
+    # with every LED's glint on the cornea and seen (eyelume.analysis.truth.glint_counts)
 
     [[vary]]                       # one table per parameter; the runs are their product
     path = "leds.height_mm"
@@ -45,7 +48,14 @@ from eyelume.scene.model import Scene
 
 __all__ = ["METRICS", "Study", "Vary", "load_study", "plan_runs", "run_key", "run_metrics"]
 
-METRICS = ("eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", "safety")
+METRICS = (
+    "eye_plane_merit",
+    "eye_image_merit",
+    "skin_uniformity",
+    "tracking",
+    "safety",
+    "glints",
+)
 
 
 class Vary(BaseModel):
@@ -81,7 +91,9 @@ class Study(BaseModel):
     scene: str = "paper2005"
     seed: int = Field(0, ge=0)
     metrics: list[
-        Literal["eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", "safety"]
+        Literal[
+            "eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", "safety", "glints"
+        ]
     ] = [
         "eye_plane_merit",
         "safety",
@@ -236,6 +248,13 @@ def run_metrics(base: Scene, overrides: dict, study: Study) -> dict:
         )
         out["tracking_score_deg"] = tracking_score(rep)
         out["detection_rate"] = rep.summary["detection_rate"]
+    if "glints" in study.metrics:
+        from eyelume.analysis.truth import glint_counts
+
+        counts = np.asarray(glint_counts(scene)["visible"], dtype=float)
+        out["glints_visible_min"] = float(counts.min())
+        out["glints_visible_mean"] = float(counts.mean())
+        out["gaze_share_all_glints"] = float(np.mean(counts == scene.leds.count))
     if "safety" in study.metrics:
         s = eye_safety(scene)
         out["corneal_margin"] = s["corneal_margin"]
