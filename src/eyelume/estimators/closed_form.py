@@ -41,7 +41,7 @@ from numba import njit, prange
 from eyelume.errors import GeometryError
 from eyelume.kernels.bins import eye_plane_grid, from_grid
 from eyelume.scene.model import EyePlane, LedArray, LedProfile, Scene
-from eyelume.scene.sources import cos_power_exponent, read_profile_table
+from eyelume.scene.sources import cos_power_exponent, led_poses, read_profile_table, ring_poses
 
 __all__ = [
     "AUTO_RTOL",
@@ -145,21 +145,20 @@ def led_emitters(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Emission points and unit axes, (n, N, 3) each, of ``leds`` at n configurations (Y, Z, θ).
 
-    Same placement as :func:`eyelume.scene.sources.led_poses`; the emission point is the apex of
-    the body, centre + axis · body_diameter/2, as in :mod:`eyelume.compile`.
+    The placement of :func:`eyelume.scene.sources.ring_poses` (the LEDs one by one: their
+    fixed positions at every configuration); the emission point is the apex of the body,
+    centre + axis · body_diameter/2, as in :mod:`eyelume.compile`.
     """
-    y = np.asarray(heights, dtype=float).reshape(-1, 1)
-    z = np.asarray(distances, dtype=float).reshape(-1, 1)
-    th = np.radians(np.asarray(pitches, dtype=float)).reshape(-1, 1)
-    phi = np.radians(np.asarray(leds.azimuths(), dtype=float)).reshape(1, -1)
     rb = leds.body_diameter_mm / 2
-    st, ct = np.sin(th), np.cos(th)
-    axes = np.stack(
-        np.broadcast_arrays(-st * np.cos(phi), -st * np.sin(phi), -ct * np.ones_like(phi)), axis=2
-    )
-    centres = np.stack(
-        np.broadcast_arrays(y * np.cos(phi), y * np.sin(phi), z * np.ones_like(phi)), axis=2
-    )
+    if leds.positions_mm is not None:  # one by one: nothing to vary
+        centres, axes = led_poses(leds)
+        n = np.asarray(heights).size
+        centres, axes = (
+            np.broadcast_to(centres, (n, *centres.shape)),
+            np.broadcast_to(axes, (n, *axes.shape)),
+        )
+    else:
+        centres, axes = ring_poses(leds, heights, distances, pitches)
     return np.ascontiguousarray(centres + axes * rb), np.ascontiguousarray(axes)
 
 
@@ -435,9 +434,19 @@ def configuration_irradiance(
     )
     if not len(y) == len(z) == len(t):
         raise ValueError(f"heights, distances, pitches have lengths {len(y)}, {len(z)}, {len(t)}")
-    for i, why in enumerate(geometry_problems(sc.leds, y, z, t)):
-        if why is not None:
-            raise GeometryError(f"configuration {i} (Y, Z, θ) = ({y[i]}, {z[i]}, {t[i]}): {why}")
+    if sc.leds.positions_mm is not None:
+        if len(y) != 1:
+            raise GeometryError(
+                "the LEDs are placed one by one (leds.positions_mm): there is no ring (Y, Z, θ) "
+                "to vary",
+                field="leds.positions_mm",
+            )
+    else:
+        for i, why in enumerate(geometry_problems(sc.leds, y, z, t)):
+            if why is not None:
+                raise GeometryError(
+                    f"configuration {i} (Y, Z, θ) = ({y[i]}, {z[i]}, {t[i]}): {why}"
+                )
     emit, axes = led_emitters(sc.leds, y, z, t)
     xe, ye = plane_edges(sc.eye_plane)
     return bin_irradiance(
@@ -488,6 +497,11 @@ def eye_plane_irradiance(
     """
     sc = _scene_of(scene)
     leds = sc.leds
+    if leds.positions_mm is not None and (height_mm, distance_mm, pitch_deg) != (None,) * 3:
+        raise GeometryError(
+            "the LEDs are placed one by one (leds.positions_mm): give no ring (Y, Z, θ)",
+            field="leds.positions_mm",
+        )
     y = leds.height_mm if height_mm is None else height_mm
     z = leds.distance_mm if distance_mm is None else distance_mm
     t = leds.pitch_deg if pitch_deg is None else pitch_deg

@@ -71,10 +71,17 @@ class LedProfile(_Model):
 
 
 class LedArray(_Model):
-    """N identical LEDs placed symmetrically about the camera axis (paper Fig. 8).
+    """N identical LEDs: a ring (paper Fig. 8) about any axis, or placed one by one.
 
-    LED ``i`` sits at azimuth φᵢ (from +x toward +y as seen from the camera), its body centre at
-    (Y cos φ, Y sin φ, Z) in the world frame, its axis pitched by θ from −z toward the optical axis.
+    The ring: LED ``i`` sits at azimuth φᵢ, its body centre at c + Y (cos φ ê₁ + sin φ ê₂) + Z n̂
+    in the world frame, its axis pitched by θ from −n̂ toward the ring's axis. The ring's centre
+    c = ``ring_centre_mm`` and axis n̂ = ``ring_axis`` default to the corneal vertex and world +z,
+    where ê₁, ê₂ = +x, +y (the paper's ring: (Y cos φ, Y sin φ, Z), φ from +x toward +y as seen
+    from the camera); for another axis ê₁ is world +x made perpendicular to n̂ (world +y when n̂
+    is along x) and ê₂ = n̂ × ê₁. One by one: ``positions_mm`` (N, 3) body centres (world mm;
+    the ring's Y, Z, θ and azimuths are then not used). Aim: ``aim_at_mm``, a point every LED's
+    axis points at (instead of the pitch θ), or, for LEDs placed one by one, ``directions``
+    (N, 3).
     Light leaves from the apex of the spherical body (a point source at centre + r·axis).
     ``emitter_diameter_mm`` is the apparent size of the emitting area (the die as the dome
     lens shows it), used only for the retinal thermal hazard (its radiance and angular
@@ -91,17 +98,63 @@ class LedArray(_Model):
     emitter_diameter_mm: Positive = 1.0
     radiant_intensity_w_sr: Positive = 0.015
     profile: LedProfile = LedProfile()
+    ring_centre_mm: Vector3 = (0.0, 0.0, 0.0)
+    ring_axis: Vector3 = (0.0, 0.0, 1.0)
+    positions_mm: list[Vector3] | None = None
+    aim_at_mm: Vector3 | None = None
+    directions: list[Vector3] | None = None
 
     @model_validator(mode="after")
     def _azimuths_match_count(self) -> LedArray:
-        if self.azimuths_deg is not None and len(self.azimuths_deg) != self.count:
+        ring = self.positions_mm is None
+        if ring and self.azimuths_deg is not None and len(self.azimuths_deg) != self.count:
             raise ValueError(
                 f"azimuths_deg has {len(self.azimuths_deg)} entries but count is {self.count}"
             )
+        if not any(self.ring_axis):
+            raise ValueError("ring_axis = (0, 0, 0) has no direction")
+        for name in ("positions_mm", "directions"):
+            v = getattr(self, name)
+            if v is not None and len(v) != self.count:
+                raise ValueError(f"{name} has {len(v)} entries but count is {self.count}")
         return self
 
+    @model_validator(mode="after")
+    def _placement_consistent(self) -> LedArray:
+        if self.directions is not None:
+            if self.positions_mm is None:
+                raise ValueError("directions needs positions_mm (LEDs placed one by one)")
+            if self.aim_at_mm is not None:
+                raise ValueError("give aim_at_mm or directions, not both")
+            for k, d in enumerate(self.directions):
+                if not any(d):
+                    raise ValueError(f"directions[{k}] = (0, 0, 0) has no direction")
+        if self.positions_mm is not None and self.directions is None and self.aim_at_mm is None:
+            raise ValueError("LEDs placed by positions_mm need aim_at_mm or directions")
+        return self
+
+    @model_validator(mode="after")
+    def _aim_not_at_an_led(self) -> LedArray:
+        for k, c in enumerate(self.positions_mm or []):
+            if self.aim_at_mm is not None and tuple(c) == tuple(self.aim_at_mm):
+                raise ValueError(f"aim_at_mm equals positions_mm[{k}]: no direction")
+        return self
+
+    @property
+    def is_paper_ring(self) -> bool:
+        """True for the paper's ring: about world z through the vertex, pitched by θ."""
+        return (
+            self.positions_mm is None
+            and self.aim_at_mm is None
+            and tuple(self.ring_centre_mm) == (0.0, 0.0, 0.0)
+            and tuple(self.ring_axis) == (0.0, 0.0, 1.0)
+        )
+
     def azimuths(self) -> list[float]:
-        """Azimuth of every LED in degrees (evenly spaced from 0° unless given)."""
+        """Azimuth of every LED in degrees (evenly spaced from 0° unless given; of LEDs placed
+        one by one, their positions' about the world z axis)."""
+        if self.positions_mm is not None:
+            return [math.degrees(math.atan2(p[1], p[0])) % 360.0 for p in self.positions_mm]
         if self.azimuths_deg is not None:
             return list(self.azimuths_deg)
         return [360.0 * i / self.count for i in range(self.count)]

@@ -18,6 +18,8 @@ __all__ = [
     "TABLE_END_FRACTION",
     "cos_power_exponent",
     "led_poses",
+    "ring_basis",
+    "ring_poses",
     "read_profile_table",
     "relative_intensity",
 ]
@@ -139,28 +141,57 @@ def relative_intensity(profile: LedProfile) -> Callable[[np.ndarray], np.ndarray
     return lambda alpha: np.interp(alpha, alpha_t, value_t, right=0.0)
 
 
-def led_poses(leds: LedArray) -> tuple[np.ndarray, np.ndarray]:
-    """Body centres (N, 3) and unit axes (N, 3) of the LEDs in the world frame (mm).
+def ring_basis(leds: LedArray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The ring's centre c and orthonormal basis ê₁, ê₂, n̂ (world), :class:`LedArray`."""
+    c = np.asarray(leds.ring_centre_mm, dtype=float)
+    n = np.asarray(leds.ring_axis, dtype=float)
+    n = n / np.linalg.norm(n)
+    if tuple(leds.ring_axis) == (0.0, 0.0, 1.0):
+        return c, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), n
+    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = helper - (helper @ n) * n
+    e1 /= np.linalg.norm(e1)
+    return c, e1, np.cross(n, e1), n
 
-    LED i at azimuth φ: centre (Y cos φ, Y sin φ, Z), axis pitched by θ from −z toward the axis:
-    a = (−sin θ cos φ, −sin θ sin φ, −cos θ).
-    """
-    phi = np.radians(leds.azimuths())
-    th = math.radians(leds.pitch_deg)
-    centres = np.stack(
-        [
-            leds.height_mm * np.cos(phi),
-            leds.height_mm * np.sin(phi),
-            np.full_like(phi, leds.distance_mm),
-        ],
-        axis=1,
-    )
-    axes = np.stack(
-        [
-            -math.sin(th) * np.cos(phi),
-            -math.sin(th) * np.sin(phi),
-            np.full_like(phi, -math.cos(th)),
-        ],
-        axis=1,
-    )
+
+def ring_poses(leds: LedArray, heights, distances, pitches) -> tuple[np.ndarray, np.ndarray]:
+    """Body centres and unit axes, (n, N, 3) each (world mm), of the ring ``leds`` at n
+    configurations (Y, Z, θ) (arrays of n): the one definition of the ring (class
+    :class:`LedArray`). Raises ValueError for LEDs placed one by one (no ring to vary)."""
+    if leds.positions_mm is not None:
+        raise ValueError("the LEDs are placed one by one (leds.positions_mm): no ring to vary")
+    y = np.asarray(heights, dtype=float).reshape(-1, 1, 1)
+    z = np.asarray(distances, dtype=float).reshape(-1, 1, 1)
+    th = np.radians(np.asarray(pitches, dtype=float)).reshape(-1, 1, 1)
+    phi = np.radians(np.asarray(leds.azimuths(), dtype=float)).reshape(1, -1, 1)
+    c, e1, e2, n = ring_basis(leds)
+    radial = np.cos(phi) * e1 + np.sin(phi) * e2  # (1, N, 3)
+    if leds.is_paper_ring:  # the paper's formulas exactly (Fig. 8)
+        cp, sp = np.cos(phi[..., 0]), np.sin(phi[..., 0])
+        st, ct = np.sin(th[..., 0]), np.cos(th[..., 0])
+        yy, zz = y[..., 0], z[..., 0]
+        centres = np.stack(np.broadcast_arrays(yy * cp, yy * sp, zz * np.ones_like(cp)), axis=2)
+        axes = np.stack(np.broadcast_arrays(-st * cp, -st * sp, -ct * np.ones_like(cp)), axis=2)
+        return centres, axes
+    centres = c + y * radial + z * n
+    if leds.aim_at_mm is not None:
+        d = np.asarray(leds.aim_at_mm, dtype=float) - centres
+        axes = d / np.linalg.norm(d, axis=2, keepdims=True)
+    else:
+        axes = -np.sin(th) * radial - np.cos(th) * n
     return centres, axes
+
+
+def led_poses(leds: LedArray) -> tuple[np.ndarray, np.ndarray]:
+    """Body centres (N, 3) and unit axes (N, 3) of the LEDs in the world frame (mm): the ring
+    (:func:`ring_poses`; the paper's: centre (Y cos φ, Y sin φ, Z), axis pitched by θ from −z
+    toward the axis, a = (−sin θ cos φ, −sin θ sin φ, −cos θ)) or the LEDs one by one."""
+    if leds.positions_mm is None:
+        centres, axes = ring_poses(leds, [leds.height_mm], [leds.distance_mm], [leds.pitch_deg])
+        return centres[0], axes[0]
+    centres = np.asarray(leds.positions_mm, dtype=float).reshape(-1, 3)
+    if leds.directions is not None:
+        d = np.asarray(leds.directions, dtype=float).reshape(-1, 3)
+    else:
+        d = np.asarray(leds.aim_at_mm, dtype=float) - centres
+    return centres, d / np.linalg.norm(d, axis=1, keepdims=True)

@@ -92,14 +92,15 @@ def led_picture_azimuths(cs) -> list[float]:
     """The direction (degrees; 0° = picture +x, 90° = up) in which each LED's glint lies from
     the middle of the glints, for matching found glints to LEDs.
 
-    The paper's rig (the camera on the eye's axis): the LEDs' own azimuths. A camera anywhere:
+    The paper's rig (the camera on the eye's axis, the paper's ring): the LEDs' own azimuths.
+    A camera or LEDs anywhere:
     LED k's glint lies where the corneal sphere (centre **c**, radius R, eye in primary gaze)
     has its normal along the bisector of the directions to the LED and to the camera's
     entrance pupil E, **g**ₖ = **c** + R · unit(unit(Lₖ − **c**) + unit(E − **c**)) (the law of
     reflection for a glint seen from E, in the small-glint limit); each is projected by the
     pinhole camera of :func:`pinhole_camera` and its direction taken from their mean."""
     scene = cs.scene
-    if cs.frame.is_identity:
+    if cs.frame.is_identity and scene.leds.is_paper_ring:
         return list(scene.leds.azimuths())
     cam = pinhole_camera(scene)
     radius = scene.eye.surfaces[0].radius_mm
