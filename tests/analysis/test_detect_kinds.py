@@ -126,6 +126,32 @@ def test_black_border_is_not_the_pupil():
     assert_pupil(d)
 
 
+@pytest.mark.parametrize("cut", [62, 70])
+def test_black_border_cutting_the_pupil_is_missing_pixels(cut):
+    """A crop that ran off the sensor: black rows (exactly 0) over the top 15–25 % of the
+    pupil. Darker than the pupil and joined to it, they once made pupil and border one
+    border-connected region, and a dark speck elsewhere was refused as "pupil too small" (a
+    real close-up did so). As missing pixels they cut the pupil; the rest gives its centre."""
+    img = u8(closeup(pupil=25.0))
+    img[:cut, :] = 0
+    d = detect(img)
+    assert_pupil(d)
+    assert any(f.startswith("warning: a black border") for f in d.failures), d.failures
+
+
+@pytest.mark.parametrize("speck_radius", [1.5, 2.5])
+def test_pupil_cut_by_the_frame_is_not_called_too_small(speck_radius):
+    """The pupil's centre on the picture's top edge (half of it outside) and a small dark speck
+    below: the speck is not answered as the pupil, and the refusal says the pupil-sized dark
+    region is on the border rather than that the pupil is too small."""
+    img = closeup(centre=(80.4, 0.0))
+    r = int(round(speck_radius * 16))
+    cv2.circle(img, (40 * 16, 120 * 16), r, 10.0, -1, cv2.LINE_AA, 4)
+    d = detect(u8(img))
+    assert not d.ok and d.pupil is None
+    assert d.failures[0].startswith("no pupil off the picture's border: "), d.failures
+
+
 def test_small_pupil_is_measured_not_the_iris():
     """A 2 mm pupil (12 px across at this framing, ~110 px of area) in a 90 px iris."""
     d = detect(u8(closeup(pupil_axes=(12.5, 11.5), iris=60.0)))
@@ -134,7 +160,7 @@ def test_small_pupil_is_measured_not_the_iris():
 
 
 def test_pupil_too_small_is_refused_by_name():
-    """A 2.5 px pupil (a 3 px one is still measured, within 0.1 px)."""
+    """A 2.5 px pupil: under the 30 px of area a pupil needs (``pupil_min_area_px``)."""
     d = detect(u8(closeup(pupil_axes=(2.5, 2.5), blur=0.8)))
     assert not d.ok and d.pupil is None
     assert d.failures[0].startswith("pupil too small: "), d.failures

@@ -17,7 +17,9 @@ Conventions
   are in the input's own units.
 * **Missing pixels**: non-finite pixels (NaN, inf) of a float picture and pixels outside the
   optional ``valid`` mask are missing: no dark region touching them is the pupil, no outline
-  point next to them is used. A picture with none left is a ValueError.
+  point next to them is used. So is a black border (:func:`_black_border`: a region at exactly
+  the darkest value touching the picture's edge, ≥ 0.5 % of it; a warning says so). A picture
+  with none left is a ValueError.
 
 Pipeline (each step's choices are explained in :mod:`.pupil` and :mod:`.glints`)
 ----------------------------------------------------------------------------------
@@ -98,7 +100,8 @@ class DetectParams:
         two steps; a merge with the iris multiplies the area).
     max_candidates : stable blobs fitted in turn, darkest first, before giving up (3).
     pupil_min_area_px, pupil_max_area_frac : area bounds of the dark blob (px; fraction of the
-        picture, 10 %: an iris seen without a pupil is larger at the framing of an eye tracker).
+        picture, 10 %: an iris seen without a pupil is larger at the framing of an eye tracker);
+        the fitted ellipse (π a b) must hold ``pupil_min_area_px`` too ("pupil too small").
     pupil_tiny_area_px : compact dark blobs from this up to the minimum area are reported as
         "pupil too small" when nothing larger is found.
     pupil_min_solidity : area / convex-hull area of the closed blob (0.8); an ellipse, even cut
@@ -287,6 +290,25 @@ def _missing(img: np.ndarray, valid: np.ndarray | None) -> np.ndarray | None:
     return invalid
 
 
+def _black_border(img: np.ndarray, min_frac: float = 0.005) -> np.ndarray | None:
+    """Pixels of a black border (bool), or None: the 4-connected regions of pixels at exactly
+    the picture's darkest value that touch its edge and hold ≥ ``min_frac`` (0.5 %) of it — a
+    crop that runs off the sensor, padding. A camera's dark pixels carry noise; a flat run at
+    the minimum along the edge is no scene. Darker than any pupil, it would join a pupil it
+    touches into one border-connected region; as missing pixels it cuts it instead."""
+    lo = img.min()
+    edge = (img[0], img[-1], img[:, 0], img[:, -1])
+    if not any((e == lo).any() for e in edge):
+        return None
+    flat = (img == lo).astype(np.uint8)
+    _, lab, stats, _ = cv2.connectedComponentsWithStats(flat, connectivity=4)
+    on_edge = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
+    on_edge = on_edge[(on_edge > 0) & (stats[on_edge, cv2.CC_STAT_AREA] >= min_frac * img.size)]
+    if not len(on_edge):
+        return None
+    return np.isin(lab, on_edge)
+
+
 def _mend_hot_pixels(img: np.ndarray, noise: float) -> int:
     """Isolated hot pixels (stuck or defective: above the 99.9th percentile and 8 σ of the pixel
     noise above all 8 neighbours, which are flat within 8 σ) take the median of those
@@ -330,13 +352,19 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None):
         if invalid.all():
             raise ValueError("the picture has no valid pixel (all NaN/inf or masked out)")
         img[invalid] = img[~invalid].min()
+    black = _black_border(img)
+    n_black = 0
+    if black is not None and not (invalid is not None and (invalid | black).all()):
+        n_black = int(black.sum()) if invalid is None else int((black & ~invalid).sum())
+        invalid = black if invalid is None else invalid | black
     noise = max(noise_sigma(img), 0.5 if img.dtype.kind in "iu" else 0.0)
     n_hot = _mend_hot_pixels(img, noise)
     lo, hi, _, _ = cv2.minMaxLoc(img)
+    extra = (n_hot, noise, n_black)
     if hi <= lo:
-        return img, invalid, np.zeros(img.shape, np.uint8), float(lo), float(hi), (n_hot, noise)
+        return img, invalid, np.zeros(img.shape, np.uint8), float(lo), float(hi), extra
     u8 = cv2.normalize(img, None, 0, 255, cv2.NORM_MINMAX, dtype=cv2.CV_8U)
-    return img, invalid, u8, float(lo), float(hi), (n_hot, noise)
+    return img, invalid, u8, float(lo), float(hi), extra
 
 
 def _pupil_result(fit, params) -> tuple[Pupil | None, list[str]]:
@@ -478,7 +506,7 @@ def detect(
         raise ValueError(f"LED azimuths must be finite degrees, got {list(led_azimuths_deg)}")
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    img, invalid, u8, lo, hi, (n_hot, noise) = _prepare(image, valid)
+    img, invalid, u8, lo, hi, (n_hot, noise, n_black) = _prepare(image, valid)
     if hi <= lo:
         timings["total"] = 1e3 * (time.perf_counter() - t_start)
         return Detection(
@@ -507,6 +535,11 @@ def detect(
     warnings = _glint_warnings(glints, fit, led_azimuths_deg, params)
     if n_hot:
         warnings.append(f"warning: {n_hot} isolated hot pixel(s) replaced by their neighbours")
+    if n_black:
+        warnings.append(
+            f"warning: a black border ({n_black} px at the picture's darkest value, touching its "
+            "edge) is left out as missing pixels"
+        )
     t4 = time.perf_counter()
     timings["match"] = 1e3 * (t4 - t3)
     timings["total"] = 1e3 * (t4 - t_start)

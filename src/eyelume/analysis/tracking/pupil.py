@@ -21,7 +21,9 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    q ≤ 1 walked on to the local minimum of q — the pupil's area holds while the threshold
    crosses its edge band, then jumps when it merges with the iris. Refusals: "no pupil (merged
    with the iris?)" (compact dark blobs, none stable), "pupil too small: N px", "no dark pupil:
-   bright-pupil image?" (no dark blob but a compact bright one of a pupil's size).
+   bright-pupil image?" (no dark blob but a compact bright one of a pupil's size), and "no
+   pupil off the picture's border" when a darker pupil-sized region touches the border or the
+   missing pixels (a pupil cut by the frame; the blob inside is then not called the pupil).
 4. **Full-resolution blob** (:func:`full_res_blob`): the picture (σ 1 px Gaussian) thresholded
    at the chosen level around the blob; glints touching it joined; a closing with an
    elliptical element of ≈ 0.15 × its diameter (odd, ≥ 3) fills what is left of a glint's
@@ -423,7 +425,7 @@ def _level_candidates(lab, stats, cent, min_area, max_area, touch):
     return out
 
 
-def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list]:
+def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, tuple]:
     """Step 2 (module doc): chains of nested compact dark blobs over a ladder of thresholds.
 
     The picture is reduced by f = max(1, round(min(rows, cols) / ``ladder_rows``)) (area
@@ -431,8 +433,9 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list]:
     later at full resolution — and thresholded at up to ``ladder_levels`` levels evenly spaced
     from its darkest pixel to its ``ladder_top_percentile``. At each level the compact inner blobs
     (:func:`_level_candidates`) are kept; a blob holding an earlier chain's seed continues that
-    chain (blobs only grow up the ladder). Returns the chains (darkest level first), f and the
-    (level, area in full-resolution px) of blobs too small to be a pupil, for the refusal."""
+    chain (blobs only grow up the ladder). Returns the chains (darkest level first), f and, for
+    the refusals, (the (level, area in full-resolution px) of blobs too small to be a pupil,
+    :func:`_edge_dark`'s darkest pupil-sized region on the border or missing pixels)."""
     small, inv, f = _reduced(wp, params)
     p_lo, top = (float(v) for v in np.percentile(small, [0.5, params.ladder_top_percentile]))
     step = max(1.0, (top - p_lo) / params.ladder_levels)
@@ -443,6 +446,7 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list]:
     chains: list[list[Candidate]] = []
     tiny: list[tuple[float, int]] = []
     areas: list[tuple[np.ndarray, np.ndarray]] = []
+    edge_dark: tuple[float, int] | tuple = ()
     n_levels = int((top - lo) / step + 1e-9)
     for li in range(n_levels + 1):
         t = lo + (li + 1) * step
@@ -450,6 +454,7 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list]:
         _, lab, stats, cent = cv2.connectedComponentsWithStats(dark, connectivity=8)
         areas.append((lab, stats[:, cv2.CC_STAT_AREA]))
         touch = np.unique(lab[inv]) if inv is not None else None
+        edge_dark = edge_dark or _edge_dark(lab, stats, touch, min_area, f, t)
         for c in _level_candidates(lab, stats, cent, tiny_area, max_area, touch):
             c.level, c.index = t, li
             if c.area < min_area:
@@ -465,7 +470,23 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, list]:
     for ch in chains:
         if ch[-1].index == len(areas) - 1:
             ch[-1].q = _growth(areas, ch[-1])
-    return chains, f, tiny
+    return chains, f, (tiny, edge_dark)
+
+
+def _edge_dark(lab, stats, touch, min_area: int, f: int, level: float) -> tuple:
+    """(level, area in full-resolution px) of the largest dark region of a pupil's size or
+    more touching the picture's border or the missing pixels at this level, or () when none:
+    the ladder leaves such regions out, so a pupil cut by the frame is not a refusal's "too
+    small" blob."""
+    rows, cols = lab.shape
+    x, y, w, h, a = (stats[1:, i] for i in range(5))
+    on_edge = (x == 0) | (y == 0) | (x + w == cols) | (y + h == rows)
+    if touch is not None and len(touch):
+        on_edge |= np.isin(np.arange(1, len(stats)), touch)
+    big = on_edge & (a >= min_area)
+    if not big.any():
+        return ()
+    return (level, int(a[big].max()) * f * f)
 
 
 def _reduced(wp: WorkPicture, params) -> tuple[np.ndarray, np.ndarray | None, int]:
@@ -540,7 +561,7 @@ def _area_at(areas, i: int, seed: tuple[int, int]) -> int:
 # --- Step 3: choosing the pupil ----------------------------------------------------------------
 
 
-def choose(chains: list[list[Candidate]], f: int, tiny: list, wp: WorkPicture, params):
+def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, params):
     """Step 3 (module doc): the darkest chain's first stable blob, or a refusal naming why none.
 
     A chain's blob is stable at the first level where q ≤ ``ladder_max_growth`` and q is a local
@@ -562,6 +583,14 @@ def choose(chains: list[list[Candidate]], f: int, tiny: list, wp: WorkPicture, p
             unstable.append(ch[0].level)
     if picks:
         return picks
+    tiny, edge_dark = tiny
+    if tiny and edge_dark and edge_dark[0] <= min(tiny)[0]:
+        return Refusal(
+            f"no pupil off the picture's border: the darkest region of a pupil's size "
+            f"({edge_dark[1]} px) touches the border or missing pixels (a pupil cut by the "
+            f"frame?); the only compact dark blob inside is {min(tiny)[1]} px, too small for "
+            "a pupil"
+        )
     if tiny and (not unstable or min(tiny)[0] < min(unstable)):
         area = min(tiny)[1]
         return Refusal(
@@ -854,6 +883,14 @@ def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, p
         if e2 is None:
             break
         e, inl, sigma, xr, yr = e2, inl2, sigma2, x2[ok2], y2[ok2]
+    fitted_area = math.pi * e.a * e.b
+    if fitted_area < params.pupil_min_area_px:
+        return PupilFit(
+            None,
+            reason=f"pupil too small: {fitted_area:.0f} px inside its fitted outline (a pupil "
+            f"needs ≥ {params.pupil_min_area_px} px)",
+            dropped=dropped,
+        )
     d = sampson_distance(e, xr[inl], yr[inl])
     dropped["outlier"] = int((~inl).sum())
     span = wp.hi - wp.lo
@@ -896,4 +933,12 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit
         if fit.ellipse is not None:
             return fit
         reasons.append(fit.reason)
+    edge_dark = tiny[1]
+    if edge_dark and edge_dark[0] <= picks[0].level:
+        return PupilFit(
+            None,
+            reason=f"no pupil off the picture's border: a darker region of a pupil's size "
+            f"({edge_dark[1]} px) touches the border or missing pixels (a pupil cut by the "
+            f"frame?); the darkest blob inside was refused: {reasons[0]}",
+        )
     return PupilFit(None, reason=reasons[0])
