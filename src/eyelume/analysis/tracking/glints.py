@@ -38,6 +38,8 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from eyelume.analysis.tracking.pupil import median
+
 __all__ = ["find_glints", "glint_blobs", "glint_threshold", "match_leds", "default_max_angle"]
 
 
@@ -158,7 +160,7 @@ def _blob(c, approx_area, above, bright, img, max_area, noise, params) -> dict |
         d_oth = cv2.distanceTransform((~others).astype(np.uint8) * 255, cv2.DIST_L2, 3)
         region &= d_own <= d_oth
         background &= d_oth > m
-    base = float(np.median(win[background])) if background.any() else float(win.min())
+    base = median(win[background]) if background.any() else float(win.min())
     peak = float(win[own > 0].max())
     if peak - base < params.glint_min_snr * noise:
         return None  # a noise speck, not a glint
