@@ -230,11 +230,15 @@ def _refine_edge(
     t = np.arange(-reach, reach + 1e-9, 0.5)
     px = x[:, None] + nx[:, None] * t[None, :]
     py = y[:, None] + ny[:, None] * t[None, :]
-    v = _bilinear(img, px, py)
-    for off in range(1, tangential + 1):  # parallel profiles ± off px along the tangent
-        for sgn in (-off, off):
-            v = v + _bilinear(img, px - sgn * ny[:, None], py + sgn * nx[:, None])
-    v = v / (2 * tangential + 1)
+    # The profile and its parallels ± off px along the tangent, sampled in one remap.
+    offs = [0] + [s for off in range(1, tangential + 1) for s in (-off, off)]
+    n = len(x)
+    v = _bilinear(
+        img,
+        np.concatenate([px - s * ny[:, None] for s in offs]),
+        np.concatenate([py + s * nx[:, None] for s in offs]),
+    )
+    v = v.reshape(len(offs), n, -1).sum(axis=0) / len(offs)
     # Each profile's own edge level, from the pupil's level toward its outer half (the iris
     # there): an unevenly lit iris then moves no edge. A profile reaching a much brighter
     # neighbour (a lid's skin, a glint) is held to the iris's level, median + 3 σ (MAD), lest
@@ -719,14 +723,21 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
     x1, y1 = min(cols, bx + bw + m), min(rows, by + bh + m)
     roi = cv2.GaussianBlur(wp.u8[y0:y1, x0:x1], (5, 5), 1.0)
     _, dark = cv2.threshold(roi, cand.level, 255, cv2.THRESH_BINARY_INV)
-    _, lab, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=8)
     sx, sy = cand.seed[0] * f + f // 2 - x0, cand.seed[1] * f + f // 2 - y0
-    lab_seed = lab[min(sy, lab.shape[0] - 1), min(sx, lab.shape[1] - 1)]
-    if lab_seed == 0:
+    sx, sy = min(sx, dark.shape[1] - 1), min(sy, dark.shape[0] - 1)
+    if dark[sy, sx]:
+        # The 8-connected component under the seed, by a flood fill (∝ its size; labelling
+        # the whole window costs more).
+        filled = np.zeros((dark.shape[0] + 2, dark.shape[1] + 2), np.uint8)
+        flags = 8 | (255 << 8) | cv2.FLOODFILL_MASK_ONLY
+        cv2.floodFill(dark, filled, (sx, sy), 0, 0, 0, flags)
+        raw = filled[1:-1, 1:-1]
+    else:
+        _, lab, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=8)
         if len(stats) < 2:
             return Refusal("no pupil: the dark blob vanishes at full resolution")
         lab_seed = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    raw = np.where(lab == lab_seed, 255, 0).astype(np.uint8)
+        raw = np.where(lab == lab_seed, 255, 0).astype(np.uint8)
     comp = raw.copy()
     near_glint = _grown_glints(bright[y0:y1, x0:x1], params)
     if near_glint.any():
@@ -737,9 +748,7 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
         joined[glab[(cv2.dilate(comp, np.ones((3, 3), np.uint8)) > 0) & (glab > 0)]] = True
         if joined.any():
             comp[joined[glab]] = 255
-    closed = cv2.morphologyEx(
-        comp, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-    )
+    closed = _closing(comp, k)
     contours, _ = cv2.findContours(closed, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea)
     c_area = cv2.contourArea(contour)
@@ -753,6 +762,25 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
         )
     diam = math.sqrt(4.0 * area / math.pi)
     return Blob(x0, y0, closed, raw, near_glint, contour, area, diam, cand.level)
+
+
+def _closing(mask: np.ndarray, k: int) -> np.ndarray:
+    """Morphological closing of a 0/255 mask by the k × k elliptical element (OpenCV's default
+    borders), worked only on the mask's bounding box padded by k // 2 + 1: the same pixels as
+    on the whole mask — the dilation reaches k // 2 past the box, so the pad's outer ring stays
+    0 and every erosion window reaching past it holds a 0 of that ring — at a fraction of the
+    cost."""
+    bx, by, bw, bh = cv2.boundingRect(mask)
+    pad = k // 2 + 1
+    x0, y0 = max(0, bx - pad), max(0, by - pad)
+    x1, y1 = min(mask.shape[1], bx + bw + pad), min(mask.shape[0], by + bh + pad)
+    out = np.zeros_like(mask)
+    out[y0:y1, x0:x1] = cv2.morphologyEx(
+        mask[y0:y1, x0:x1],
+        cv2.MORPH_CLOSE,
+        cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)),
+    )
+    return out
 
 
 def _grown_glints(bright: np.ndarray, params, extra: int = 0, radius: float | None = None):
@@ -794,8 +822,16 @@ def blob_contrast(img: np.ndarray, wp: WorkPicture, blob: Blob, params):
     pupil_level = median(sub[inside])
     ring_in = max(2, int(round(0.05 * blob.diam)))
     ring_out = ring_in + max(2, int(round(0.05 * blob.diam)))
-    outside = cv2.distanceTransform(cv2.bitwise_not(blob.mask), cv2.DIST_L2, 3)
-    ring = (outside > ring_in) & (outside <= ring_out) & usable
+    # Distances from the blob, worked only on its box padded past the ring (the chamfer
+    # distance's shortest paths stay in the box of their ends: the same values).
+    bx, by, bw, bh = cv2.boundingRect(blob.mask)
+    pad = ring_out + 2
+    x0, y0 = max(0, bx - pad), max(0, by - pad)
+    x1, y1 = min(w, bx + bw + pad), min(h, by + bh + pad)
+    outside = cv2.distanceTransform(cv2.bitwise_not(blob.mask[y0:y1, x0:x1]), cv2.DIST_L2, 3)
+    ring = np.zeros((h, w), bool)
+    ring[y0:y1, x0:x1] = (outside > ring_in) & (outside <= ring_out)
+    ring &= usable
     if not ring.any():
         return Refusal("no pupil: the dark blob has no surround to compare with")
     surround = median(sub[ring])
