@@ -4,6 +4,7 @@ Run from the repository root::
 
     python benchmarks/detect_real.py                  # ../shared/realdata beside the clone
     python benchmarks/detect_real.py --data DIR       # another copy of the data set
+    python benchmarks/detect_real.py --record         # and append the table to results/
 
 Reads ``realdata/labels.csv`` (``../shared/realdata`` beside the clone; from a git worktree,
 beside the main checkout too) and runs :func:`eyelume.analysis.tracking.detect` on every
@@ -19,19 +20,29 @@ people; ``openeds``: 3 frames of a VR headset's eye camera) it prints:
 - **ms**: median time per picture;
 - the refusal causes (the failure messages with their numbers blanked, counted).
 
-Where ``pupil-detectors`` (Pupil Labs' 2D detector; ``pip install -e .[bench]``) is installed,
-the same table for it (found = confidence ≥ 0.6, Pupil Capture's default threshold for using a
-pupil datum), side by side. The ``itmo`` crops are centred on the pupil, so the row "centre
-guess" (the picture's centre as the answer) is the baseline a detector must beat.
+Where ``pupil-detectors`` (Pupil Labs' 2D detector) is installed, the same table for it (found
+= confidence ≥ 0.6, Pupil Capture's default threshold for using a pupil datum), side by side.
+Install it with ``pip install --no-deps pupil-detectors==2.0.2``: its wheel bundles its own
+OpenCV libraries and imports ``cv2`` from whichever build is installed, but its metadata
+requires ``opencv-python``, which pip would install beside eyelume's
+``opencv-python-headless`` — two distributions writing one ``cv2`` folder, where uninstalling
+or upgrading either breaks the other. So it is in no extra. Without it, the Pupil Labs rows of
+the last run that had it are printed from ``benchmarks/results/detect_real.jsonl``, marked as
+recorded, with that run's date, commit and ``pupil-detectors`` version.
+
+The ``itmo`` crops are centred on the pupil, so the row "centre guess" (the picture's centre as
+the answer) is the baseline a detector must beat.
 
 The pictures are for internal evaluation only (their README): this script reads them where they
-are and writes nothing; no picture, crop or per-picture figure is stored in the repository.
+are; it stores only the table's aggregate rows (``benchmarks/results/detect_real.jsonl``), no
+picture, crop or per-picture figure.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import json
 import re
 import statistics
 import subprocess
@@ -46,7 +57,9 @@ import numpy as np
 from eyelume.analysis.tracking import detect
 
 REPO = Path(__file__).resolve().parent.parent
+RECORD = REPO / "benchmarks" / "results" / "detect_real.jsonl"
 PL_MIN_CONFIDENCE = 0.6
+PL_RECORDED = "pupil-labs (recorded)"
 
 
 def find_data(explicit: Path | None) -> Path | None:
@@ -123,37 +136,112 @@ def run(data: Path) -> dict[str, dict[str, list]]:
     return out
 
 
-def table(results: dict[str, dict[str, list]]) -> str:
-    head = f"{'source':8} {'detector':13} {'n':>4} {'found':>6} {'≤5 px':>6} {'median':>7} "
-    head += f"{'p95':>7} {'wrong':>6} {'ms':>6}"
-    lines = [head, "-" * len(head)]
-    causes = []
+def summary_rows(results: dict[str, dict[str, list]]) -> list[dict]:
+    """One aggregate row per source and detector (no per-picture figure): n, found %, ≤ 5 px %,
+    median and p95 error (px) of those found, wrong (> 5 px off), median ms, refusal causes."""
+    rows = []
     for src, dets in results.items():
         for name, rec in dets.items():
             if not rec:
                 continue
             n = len(rec)
             errs = [e for e, _, _ in rec if e is not None]
-            within = sum(e <= 5.0 for e in errs)
-            wrong = sum(e > 5.0 for e in errs)
-            med = statistics.median(errs) if errs else float("nan")
-            p95 = float(np.percentile(errs, 95)) if errs else float("nan")
-            ms = statistics.median(t for _, t, _ in rec)
-            found = f"{100 * len(errs) / n:5.1f}%"
-            lines.append(
-                f"{src:8} {name:13} {n:4d} {found:>6} {100 * within / n:5.1f}% {med:7.2f} "
-                f"{p95:7.2f} {wrong:6d} {ms:6.1f}"
+            rows.append(
+                {
+                    "source": src,
+                    "detector": name,
+                    "n": n,
+                    "found_pct": 100 * len(errs) / n,
+                    "within5_pct": 100 * sum(e <= 5.0 for e in errs) / n,
+                    "median_px": statistics.median(errs) if errs else None,
+                    "p95_px": float(np.percentile(errs, 95)) if errs else None,
+                    "wrong": sum(e > 5.0 for e in errs),
+                    "ms": statistics.median(t for _, t, _ in rec),
+                    "refusals": dict(Counter(c for _, _, c in rec if c is not None).most_common()),
+                }
             )
-            if name == "eyelume":
-                c = Counter(cause for _, _, cause in rec if cause is not None)
-                causes.append(f"{src}: eyelume refusals ({sum(c.values())}):")
-                causes += [f"  {k:4d} × {v}" for v, k in c.most_common()]
+    return rows
+
+
+def recorded_pupil_labs(path: Path = RECORD) -> tuple[list[dict], str] | None:
+    """The Pupil Labs rows of the last recorded run that had ``pupil-detectors``, renamed
+    :data:`PL_RECORDED`, and a line saying where they come from; None when there is none."""
+    if not path.is_file():
+        return None
+    last = None
+    for line in path.read_text().splitlines():
+        rec = json.loads(line) if line.strip() else {}
+        if rec.get("pupil_detectors"):
+            last = rec
+    if last is None:
+        return None
+    rows = [{**r, "detector": PL_RECORDED} for r in last["rows"] if r["detector"] == "pupil-labs"]
+    git = last.get("git", {})
+    where = (
+        f"{PL_RECORDED}: from {path.relative_to(REPO)}, run {last.get('time_utc')} at commit "
+        f"{git.get('commit', '?')} with pupil-detectors {last['pupil_detectors']} "
+        f"({last.get('data')})"
+    )
+    return rows, where
+
+
+def _fmt(v, spec: str) -> str:
+    return format(v, spec) if v is not None else format(float("nan"), spec)
+
+
+def table(rows: list[dict]) -> str:
+    head = f"{'source':8} {'detector':21} {'n':>4} {'found':>6} {'≤5 px':>6} {'median':>7} "
+    head += f"{'p95':>7} {'wrong':>6} {'ms':>6}"
+    lines = [head, "-" * len(head)]
+    causes = []
+    for r in sorted(rows, key=lambda r: r["source"]):
+        lines.append(
+            f"{r['source']:8} {r['detector']:21} {r['n']:4d} {r['found_pct']:5.1f}% "
+            f"{r['within5_pct']:5.1f}% {_fmt(r['median_px'], '7.2f')} {_fmt(r['p95_px'], '7.2f')} "
+            f"{r['wrong']:6d} {r['ms']:6.1f}"
+        )
+        if r["detector"] == "eyelume":
+            causes.append(f"{r['source']}: eyelume refusals ({sum(r['refusals'].values())}):")
+            causes += [f"  {k:4d} × {v}" for v, k in r["refusals"].items()]
     return "\n".join(lines + [""] + causes)
+
+
+def _git_commit() -> str:
+    try:
+        return subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True, text=True
+        ).stdout.strip()
+    except OSError:
+        return "?"
+
+
+def record(rows: list[dict], data: Path, pl_version: str | None) -> Path:
+    """Append this run's aggregate rows (no per-picture figure) to :data:`RECORD`."""
+    RECORD.parent.mkdir(parents=True, exist_ok=True)
+    rec = {
+        "time_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "command": "python benchmarks/detect_real.py",
+        "git": {"commit": _git_commit()},
+        "opencv": cv2.__version__,
+        "pupil_detectors": pl_version,
+        "pupil_labs_min_confidence": PL_MIN_CONFIDENCE,
+        "data": f"realdata/labels.csv, {sum(r['n'] for r in rows if r['detector'] == 'eyelume')}"
+        " pictures",
+        "rows": rows,
+    }
+    with RECORD.open("a") as fh:
+        fh.write(json.dumps(rec) + "\n")
+    return RECORD
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=None, help="the realdata folder")
+    ap.add_argument(
+        "--record",
+        action="store_true",
+        help="append the aggregate rows to benchmarks/results/detect_real.jsonl",
+    )
     args = ap.parse_args(argv)
     data = find_data(args.data)
     if data is None:
@@ -161,13 +249,32 @@ def main(argv: list[str] | None = None) -> int:
         print(f"detect_real: skipped — no realdata/labels.csv at {where} (internal data set)")
         return 0
     cv2.setNumThreads(1)
+    pl_version = None
+    notes = []
     if _pupil_labs() is None:
-        print(
-            "detect_real: pupil-detectors (Pupil Labs 2D) is not installed "
-            "(pip install -e .[bench]): its table is left out"
+        notes.append(
+            "detect_real: pupil-detectors (Pupil Labs 2D) is not installed (pip install "
+            "--no-deps pupil-detectors==2.0.2; module doc for why --no-deps)"
         )
+    else:
+        from importlib.metadata import version
+
+        pl_version = version("pupil-detectors")
     print(f"detect_real: {data}")
-    print(table(run(data)))
+    rows = summary_rows(run(data))
+    shown = list(rows)
+    if pl_version is None:
+        old = recorded_pupil_labs()
+        if old is None:
+            notes.append("detect_real: and no recorded Pupil Labs run: its rows are left out")
+        else:
+            shown += old[0]
+            notes.append(old[1])
+    print(table(shown))
+    for n in notes:
+        print(n)
+    if args.record:
+        print(f"detect_real: appended to {record(rows, data, pl_version).relative_to(REPO)}")
     return 0
 
 

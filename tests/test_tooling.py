@@ -1,5 +1,6 @@
 """The tools hold the line: every per-file allowance in pyproject.toml is still needed (a file
-that no longer exceeds a limit loses its allowance, so it cannot grow back unnoticed)."""
+that no longer exceeds a limit loses its allowance, so it cannot grow back unnoticed), and no
+extra installs a second OpenCV build over the headless one."""
 
 from __future__ import annotations
 
@@ -47,3 +48,25 @@ def test_every_allowance_is_still_needed():
             if not any((name, code) in found for name in names):
                 stale.append(f"{pattern}: {code}")
     assert not stale, f"allowances no longer needed, remove them from pyproject.toml: {stale}"
+
+
+#: Distributions that put a second ``cv2`` package beside ``opencv-python-headless`` (the same
+#: folder: uninstalling or upgrading one breaks the other): OpenCV's other builds, and
+#: ``pupil-detectors``, whose metadata requires ``opencv-python`` (install it with --no-deps).
+SECOND_CV2 = {"opencv-python", "opencv-contrib-python", "opencv-contrib-python-headless"}
+SECOND_CV2 |= {"pupil-detectors"}
+
+
+def test_no_extra_installs_a_second_opencv():
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    project = config["project"]
+    reqs = {"(core)": project["dependencies"], **project["optional-dependencies"]}
+    bad = {}
+    for extra, items in reqs.items():
+        for r in items:
+            name = r.split(";")[0].split("[")[0]
+            for sep in "<>=!~ ":
+                name = name.split(sep)[0]
+            if name.strip().lower().replace("_", "-") in SECOND_CV2:
+                bad.setdefault(extra, []).append(r)
+    assert not bad, f"these extras would install a second cv2 over the headless build: {bad}"
