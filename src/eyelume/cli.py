@@ -693,8 +693,11 @@ def track(
 ) -> None:
     """The detection pipeline on any grey eye picture: pupil ellipse and centre, glints with
     sub-pixel centroids matched to LEDs; prints JSON, and one line per failure. Non-finite
-    pixels of a float .npy are missing pixels; a colour picture is read as its luminance."""
-    from eyelume.analysis.tracking.detect import detect, detection_to_dict
+    pixels of a float .npy are missing pixels; a colour picture is read as its luminance. A
+    picture enlarged k× by nearest neighbour (``render``'s PNGs of a small sensor) is read at
+    its own size: positions are then in its original pixels (``"enlargement": k``), as in
+    ``truth.json``."""
+    from eyelume.analysis.tracking.detect import detect, detection_to_dict, enlargement_factor
     from eyelume.errors import InputFileError
 
     azimuths = _parse_leds(leds)
@@ -706,15 +709,35 @@ def track(
             raise InputFileError(
                 f"mask shape {mask.shape} differs from the picture's {data.shape}", file=valid
             )
+    k = enlargement_factor(data)
+    if k > 1:
+        data = data[::k, ::k]
+        mask = None if mask is None else mask[::k, ::k]
+        err.print(
+            f"note: {image.name} is enlarged {k}× by nearest neighbour from a "
+            f"{data.shape[1]} × {data.shape[0]} picture; detecting on that picture, positions "
+            f"in its pixels (x_file = {k} x + {(k - 1) / 2:g})",
+            highlight=False,
+            soft_wrap=True,
+        )
     try:
         result = detect(data, led_azimuths_deg=azimuths, valid=mask)
     except ValueError as exc:
         raise InputFileError(str(exc), file=image) from None
     from eyelume.json_files import dumps
 
-    sys.stdout.write(dumps(detection_to_dict(result)) + "\n")
+    sys.stdout.write(dumps({**detection_to_dict(result), "enlargement": k}) + "\n")
     for reason in result.failures:
         err.print(f"[yellow]{escape(reason)}[/]", highlight=False)
+    if image.name == "eye_image.png" and not result.ok:
+        err.print(
+            f"note: {image.name} is render's display picture of the irradiance (clipped at its "
+            "99.5th percentile, so the glints saturate with the brightest skin), not a camera's; "
+            "track eye_image_digital.png or eye_image_digital.npy beside it (the camera's "
+            "reading)",
+            highlight=False,
+            soft_wrap=True,
+        )
 
 
 @app.command("evaluate-tracking")

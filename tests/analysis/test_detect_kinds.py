@@ -285,3 +285,21 @@ def test_track_nan_pixels_are_missing_and_bad_inputs_are_one_line(tmp_path):
         lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
         assert len(lines) == 1 and word in lines[0], (args, res.stderr)
         assert "Traceback" not in res.output
+
+
+def test_enlargement_factor_finds_nearest_neighbour_blocks_only():
+    """k × k blocks of one value (a nearest-neighbour enlargement) give k; a camera's noisy
+    picture, a uniform one and a picture whose blocks break in one pixel give 1."""
+    from eyelume.analysis.tracking import enlargement_factor
+
+    base = u8(closeup())
+    for k in (2, 3, 8):
+        assert enlargement_factor(np.kron(base, np.ones((k, k), np.uint8))) == k
+    assert enlargement_factor(base) == 1
+    assert enlargement_factor(np.zeros((64, 64))) == 1
+    big = np.kron(base, np.ones((4, 4), np.uint8))
+    big[100, 101] ^= 1
+    assert enlargement_factor(big) == 1
+    f = np.kron(closeup(), np.ones((2, 2)))
+    f[10:12, 20:22] = np.nan  # NaN pixels, enlarged with the rest
+    assert enlargement_factor(f) == 2

@@ -105,3 +105,49 @@ def test_big_render_ok_only_when_right(big_frame, tmp_path):
     d = detect(f["irradiance"], led_azimuths_deg=f["leds"])
     if not _check(d, f):
         assert any("broken up" in m or "glint lost" in m for m in d.failures), d.failures
+
+
+@pytest.mark.slow
+def test_track_reads_the_pngs_render_writes(small_frames, tmp_path):
+    """``eyelume track`` on the two PNGs ``render`` writes for an 87 × 65 sensor (the same
+    ``save_grey_png`` calls as ``render``'s outputs, so 8× enlarged): the camera's
+    ``eye_image_digital.png`` is read at its own size and answered within 1 px of the truth in
+    the sensor's pixels; ``eye_image.png`` (the irradiance clipped at its 99.5th percentile for
+    display) is never a wrong answer, and a failure there points at the digital picture."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from eyelume.cli import app
+
+    f = small_frames[0]
+    save_grey_png(f["irradiance"], tmp_path / "eye_image.png")
+    save_grey_png(f["counts"], tmp_path / "eye_image_digital.png", white=f["full_scale"])
+    leds = ",".join(f"{a:g}" for a in f["leds"])
+    runner = CliRunner()
+    res = runner.invoke(app, ["track", str(tmp_path / "eye_image_digital.png"), "--leds", leds])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    assert data["enlargement"] == 8
+    assert "enlarged 8× by nearest neighbour from a 87 × 65 picture" in res.stderr
+    png = cv2.imread(str(tmp_path / "eye_image_digital.png"), cv2.IMREAD_UNCHANGED)
+    d = detect(png[::8, ::8], led_azimuths_deg=f["leds"])  # as on the 87 × 65 picture
+    assert data["ok"] and d.ok, data["failures"]
+    assert math.hypot(*np.subtract(data["pupil"]["centre_px"], d.pupil.centre_px)) < 1e-6
+    cx, cy = _truth_ellipse_centre(f["truth"])
+    assert math.hypot(data["pupil"]["centre_px"][0] - cx, data["pupil"]["centre_px"][1] - cy) <= 1
+    truth = {g["led"]: g["centre_px"] for g in f["truth"]["glints"]}
+    assert sorted(g["led"] for g in data["glints"]) == sorted(truth)
+    for g in data["glints"]:
+        assert math.hypot(*np.subtract(g["centre_px"], truth[g["led"]])) <= 1.0
+
+    res = runner.invoke(app, ["track", str(tmp_path / "eye_image.png"), "--leds", leds])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    assert data["enlargement"] == 8
+    if data["ok"]:
+        assert (
+            math.hypot(data["pupil"]["centre_px"][0] - cx, data["pupil"]["centre_px"][1] - cy) <= 1
+        )
+    else:
+        assert "track eye_image_digital.png or eye_image_digital.npy" in res.stderr, res.stderr

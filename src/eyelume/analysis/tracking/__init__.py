@@ -10,6 +10,15 @@ from eyelume.analysis.tracking.detect import (
     Pupil,
     detect,
     detection_to_dict,
+    enlargement_factor,
 )
 
-__all__ = ["DetectParams", "Detection", "Glint", "Pupil", "detect", "detection_to_dict"]
+__all__ = [
+    "DetectParams",
+    "Detection",
+    "Glint",
+    "Pupil",
+    "detect",
+    "detection_to_dict",
+    "enlargement_factor",
+]

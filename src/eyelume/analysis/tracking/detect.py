@@ -80,7 +80,15 @@ from eyelume.analysis.tracking.pupil import (
     sampson_distance,
 )
 
-__all__ = ["DetectParams", "Detection", "Glint", "Pupil", "detect", "detection_to_dict"]
+__all__ = [
+    "DetectParams",
+    "Detection",
+    "Glint",
+    "Pupil",
+    "detect",
+    "detection_to_dict",
+    "enlargement_factor",
+]
 
 PIXEL_CONVENTION = (
     "OpenCV: pixel (column c, row r) centred at (x, y) = (c, r), row 0 at the top; ellipse "
@@ -559,6 +567,37 @@ def detect(
         timings_ms=timings,
         glint_threshold=tg_value,
     )
+
+
+def enlargement_factor(image: np.ndarray, min_side: int = 8) -> int:
+    """The factor k ≥ 2 by which a 2-D picture was enlarged by nearest neighbour (every k × k
+    block one value, as ``eyelume render``'s PNGs of a small sensor are: 87 × 65 → 696 × 520),
+    or 1. The largest such k leaving ≥ ``min_side`` pixels a side and a non-uniform picture;
+    NaN equals NaN. A camera's picture, whose noise differs pixel to pixel, gives 1.
+
+    >>> enlargement_factor(np.kron(np.arange(80.0).reshape(8, 10), np.ones((3, 3))))
+    3
+    """
+    img = np.asarray(image)
+    if img.ndim != 2:
+        return 1
+    rows, cols = img.shape
+    g = math.gcd(rows, cols)
+    eq_nan = img.dtype.kind == "f"
+    for k in sorted((d for d in range(2, g + 1) if g % d == 0), reverse=True):
+        if rows // k < min_side or cols // k < min_side:
+            continue
+        small = img[::k, ::k]
+        row = np.repeat(small[0], k)
+        if not np.array_equal(img[0], row, equal_nan=eq_nan):  # cheap first look
+            continue
+        finite = small[np.isfinite(small)] if eq_nan else small
+        if finite.size == 0 or finite.min() == finite.max():
+            continue  # uniform (or all NaN): nothing says it was enlarged
+        big = np.repeat(np.repeat(small, k, axis=0), k, axis=1)
+        if np.array_equal(img, big, equal_nan=eq_nan):
+            return k
+    return 1
 
 
 def detection_to_dict(d: Detection) -> dict:
