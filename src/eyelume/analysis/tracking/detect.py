@@ -153,7 +153,7 @@ class DetectParams:
         points) to an outlier are left out; min_edge_points : fewest edge points for a fit.
     min_boundary_support, max_boundary_gap : fewest fraction of the ellipse's outline backed
         by inliers (0.45) and longest unbacked arc (0.45 of it): a lid over the top quarter of
-        the pupil leaves an arc of ~25 % and passes, with the centre within 0.25 px; over half
+        the pupil leaves an arc of ~25 % and passes, with the centre within 0.3 px; over half
         of it does not; a ragged real edge leaves many short gaps.
     max_fit_residual_px, max_fit_residual_frac : largest RMS distance of the inliers to the
         ellipse: max(0.5 px, 3 % of the semi-minor axis) — a ragged outline (a noisy or

@@ -36,11 +36,13 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    along the normal of a first ellipse fit to where the profile (the mean of three parallel
    profiles 1 px apart, which averages the noise along the edge without moving it across)
    crosses ``edge_fraction`` (¼) of the way from the pupil's level to the profile's own outer
-   level. Under a symmetric blur every such iso-line is an ellipse with the pupil's centre,
-   whatever the threshold; a per-profile level keeps an unevenly lit iris from shifting it, and
-   a low fraction reads the edge on the quiet dark side, where the iris's shading and texture
-   and the glints' skirts weigh least. The axes are those of that iso-line: narrower than the
-   sharp pupil's by 2 × 0.674 σ for a Gaussian blur of σ (Φ⁻¹(¾) = 0.674).
+   level (capped at the median outer level of all profiles: a lid's skin or the sclera beyond
+   the iris does not lift it). Under a symmetric blur every such iso-line is an ellipse with
+   the pupil's centre, whatever the threshold; a per-profile level keeps an unevenly lit iris
+   from shifting it, and a low fraction reads the edge on the quiet dark side, where the
+   iris's shading and texture and the glints' skirts weigh least. The axes are those of that
+   iso-line: narrower than the sharp pupil's by 2 × 0.674 σ for a Gaussian blur of σ
+   (Φ⁻¹(¾) = 0.674).
    A pupil under 30 px across is refined a second time from the first fit.
 6. **Robust fit** (:func:`_robust_fit`): ``cv2.fitEllipse`` on the edge points; when more than
    5 % lie off it, the best of fits to contiguous runs of the outline, so an eyelid's edge or a
@@ -225,7 +227,8 @@ def _refine_edge(
     """Move each point along the ellipse's outward normal to the nearest rising crossing of its
     edge level within ± ``reach`` px (bilinear samples every 0.5 px, linear interpolation); the
     edge level is ``fraction`` of the way from ``pupil_level`` to the median of the profile's
-    outer half. Returns the new x, y and which points found a crossing."""
+    outer half, or to the median of those over all profiles when that is lower. Returns the new
+    x, y and which points found a crossing."""
     nx, ny = e.outward_normal(x, y)
     t = np.arange(-reach, reach + 1e-9, 0.5)
     px = x[:, None] + nx[:, None] * t[None, :]
@@ -240,12 +243,13 @@ def _refine_edge(
     )
     v = v.reshape(len(offs), n, -1).sum(axis=0) / len(offs)
     # Each profile's own edge level, from the pupil's level toward its outer half (the iris
-    # there): an unevenly lit iris then moves no edge. A profile reaching a much brighter
-    # neighbour (a lid's skin, a glint) is held to the iris's level, median + 3 σ (MAD), lest
-    # its level climb the edge.
+    # there), but never above the iris's typical level (the median over the profiles): an
+    # iris shaded by a lid lowers the level where it is darker, while a profile whose outer
+    # half reaches a brighter neighbour (a lid's skin, the sclera, a glint's skirt) does not
+    # lift its level up the edge — that pushed the top of eyelume's renders' pupils outward,
+    # 0.15 px on average (the former cap, median + 3 σ of the MAD, let it through).
     outer = _row_medians(v[:, t >= 0.5 * reach])
-    mid = median(outer)
-    outer = np.minimum(outer, mid + 3.0 * 1.4826 * median(np.abs(outer - mid)))
+    outer = np.minimum(outer, median(outer))
     v = v - (pupil_level + fraction * (outer - pupil_level))[:, None]
     rising = (v[:, :-1] < 0) & (v[:, 1:] >= 0)
     frac = v[:, :-1] / np.where(rising, v[:, :-1] - v[:, 1:], 1.0)
