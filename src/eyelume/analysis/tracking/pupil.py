@@ -516,10 +516,13 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, tuple]:
     areas: list[tuple[np.ndarray, np.ndarray]] = []
     edge_dark: tuple[float, int] | tuple = ()
     n_levels = int((top - lo) / step + 1e-9)
+    # 16-bit labels when they fit (a 8-connected picture has ≤ ¼ of its pixels + 1 blobs):
+    # the same labels, labelled faster.
+    ltype = cv2.CV_16U if small.size < 4 * 65535 else cv2.CV_32S
     for li in range(n_levels + 1):
         t = lo + (li + 1) * step
         _, dark = cv2.threshold(small, t, 255, cv2.THRESH_BINARY_INV)
-        _, lab, stats, cent = cv2.connectedComponentsWithStats(dark, connectivity=8)
+        _, lab, stats, cent = cv2.connectedComponentsWithStats(dark, connectivity=8, ltype=ltype)
         areas.append((lab, stats[:, cv2.CC_STAT_AREA]))
         touch = np.unique(lab[inv]) if inv is not None else None
         edge_dark = edge_dark or _edge_dark(lab, stats, touch, min_area, f, t)
