@@ -2,8 +2,8 @@
 
     python benchmarks/bit_identity.py
 
-Renders ``eyelume.render(load_scene("paper2005"), seed=1)`` and compares the SHA-256 of its
-``eye_image``, ``eye_image_variance`` and ``eye_plane`` (float64, C order) with
+Renders ``eyelume.render(load_scene("paper2005"), RenderOptions(seed=1))`` and compares the
+SHA-256 of its ``eye_image``, ``eye_image_variance`` and ``eye_plane`` (float64, C order) with
 ``results/bit_identity.json``, recorded on this project's 2-vCPU machine by the commit that added
 the iris root (issue 12; a deliberate change of the render), before it at commit 3b58b61.
 Prints MATCH or DIFFER per array and exits 1 on any difference. (The test suite's
@@ -26,7 +26,7 @@ RESULTS = Path(__file__).parent / "results" / "bit_identity.json"
 
 def main() -> int:
     want = json.loads(RESULTS.read_text())["sha256"]
-    r = eyelume.render(eyelume.load_scene("paper2005"), seed=1)
+    r = eyelume.render(eyelume.load_scene("paper2005"), eyelume.RenderOptions(seed=1))
     got = {
         "eye_image": r.eye_image,
         "eye_image_variance": r.eye_image_variance,

@@ -23,9 +23,9 @@ it, a summary against the issue's targets, and appends one JSON line to
 
 Sections
 --------
-target_87x65    ``render(cs, estimator="fast", rel_error=0.01)`` at the default 87 × 65: wall time,
-                samples per pixel chosen, achieved skin error; and the default ``render(cs)``.
-                Target: ≤ 1 % in ≤ 1 s.
+target_87x65    ``render(cs, RenderOptions(estimator="fast", rel_error=0.01))`` at the default
+                87 × 65: wall time, samples per pixel chosen, achieved skin error; and the
+                default ``render(cs)``. Target: ≤ 1 % in ≤ 1 s.
 target_640x480  the same at 640 × 480 with ``rel_error=0.02``. Target: ≤ 2 % in ≤ 20 s. With
                 ``--quick``: a 120 × 90 check instead (not the target; no PASS/FAIL).
 noise_check     fast at 87 × 65, ``--seeds`` renders (seeds seed…seed+K−1) at 32 samples/pixel
@@ -95,8 +95,8 @@ def _warm_up(seed: int) -> float:
 
     t0 = time.perf_counter()
     cs = _compiled(16, 12)
-    eyelume.render(cs, estimator="fast", samples_per_pixel=1, seed=seed)
-    eyelume.render(cs, estimator="forward", rays=20_000, seed=seed)
+    eyelume.render(cs, eyelume.RenderOptions(estimator="fast", samples_per_pixel=1, seed=seed))
+    eyelume.render(cs, eyelume.RenderOptions(estimator="forward", rays=20_000, seed=seed))
     return time.perf_counter() - t0
 
 
@@ -192,12 +192,16 @@ def worker_target(a: argparse.Namespace) -> dict:
     def with_target():
         rounds.clear()
         return eyelume.render(
-            cs, estimator="fast", rel_error=a.rel_error, seed=a.seed, status=rounds.append
+            cs,
+            eyelume.RenderOptions(estimator="fast", rel_error=a.rel_error, seed=a.seed),
+            status=rounds.append,
         )
 
     t_rel = _timed(with_target, a.repeats, a.budget, threads)
     r_rel = t_rel.pop("last")
-    t_def = _timed(lambda: eyelume.render(cs, seed=a.seed), a.repeats, a.budget, threads)
+    t_def = _timed(
+        lambda: eyelume.render(cs, eyelume.RenderOptions(seed=a.seed)), a.repeats, a.budget, threads
+    )
     r_def = t_def.pop("last")
     return {
         "threads": threads,
@@ -224,11 +228,16 @@ def worker_efficiency(a: argparse.Namespace) -> dict:
     warm = _warm_up(a.seed)
     cs = _compiled()
     t_fast = _timed(
-        lambda: eyelume.render(cs, estimator="fast", seed=a.seed), a.repeats, a.budget, threads
+        lambda: eyelume.render(cs, eyelume.RenderOptions(estimator="fast", seed=a.seed)),
+        a.repeats,
+        a.budget,
+        threads,
     )
     r_fast = t_fast.pop("last")
     t_fwd = _timed(
-        lambda: eyelume.render(cs, estimator="forward", rays=a.rays, seed=a.seed),
+        lambda: eyelume.render(
+            cs, eyelume.RenderOptions(estimator="forward", rays=a.rays, seed=a.seed)
+        ),
         a.repeats,
         a.budget,
         threads,
@@ -305,9 +314,11 @@ def worker_memory(a: argparse.Namespace) -> dict:
     tracemalloc.start()
     t0 = time.perf_counter()
     if a.estimator == "fast":
-        r = eyelume.render(cs, estimator="fast", samples_per_pixel=a.spp, seed=a.seed)
+        r = eyelume.render(
+            cs, eyelume.RenderOptions(estimator="fast", samples_per_pixel=a.spp, seed=a.seed)
+        )
     else:
-        r = eyelume.render(cs, estimator="forward", rays=a.rays, seed=a.seed)
+        r = eyelume.render(cs, eyelume.RenderOptions(estimator="forward", rays=a.rays, seed=a.seed))
     wall = time.perf_counter() - t0
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
@@ -342,7 +353,7 @@ def worker_curve(a: argparse.Namespace) -> dict:
     for spp in a.spp_list:
         t = _timed(
             lambda spp=spp: eyelume.render(
-                cs, estimator="fast", samples_per_pixel=spp, seed=a.seed
+                cs, eyelume.RenderOptions(estimator="fast", samples_per_pixel=spp, seed=a.seed)
             ),
             a.repeats,
             a.budget,
@@ -353,7 +364,9 @@ def worker_curve(a: argparse.Namespace) -> dict:
         ref = r  # the largest fast budget is the reference for the Poisson prediction
     for rays in a.rays_list:
         t = _timed(
-            lambda rays=rays: eyelume.render(cs, estimator="forward", rays=rays, seed=a.seed),
+            lambda rays=rays: eyelume.render(
+                cs, eyelume.RenderOptions(estimator="forward", rays=rays, seed=a.seed)
+            ),
             a.repeats,
             a.budget,
             threads,
@@ -390,7 +403,9 @@ def worker_scatter(a: argparse.Namespace) -> dict:
     for spp in a.spp_list:
         t0 = time.perf_counter()
         rs = [
-            eyelume.render(cs, estimator="fast", samples_per_pixel=spp, seed=a.seed + k)
+            eyelume.render(
+                cs, eyelume.RenderOptions(estimator="fast", samples_per_pixel=spp, seed=a.seed + k)
+            )
             for k in range(a.seeds)
         ]
         wall = time.perf_counter() - t0

@@ -14,9 +14,10 @@ JSON line to ``benchmarks/results/forward.jsonl``.
 
 Figures
 -------
-throughput  rays/s and surface interactions/s of ``eyelume.render(compiled, rays=N, seed=S)``
-            after compilation, per thread count; best of ``--repeats`` plus spread; the wall time
-            of the paper's 1.5 M-ray run (LightTools: ~20 min on a 3.2 GHz Pentium 4).
+throughput  rays/s and surface interactions/s of
+            ``eyelume.render(compiled, RenderOptions(rays=N, seed=S))`` after compilation, per
+            thread count; best of ``--repeats`` plus spread; the wall time of the paper's 1.5 M-ray
+            run (LightTools: ~20 min on a 3.2 GHz Pentium 4).
 startup     ``python -c "import eyelume"``; process start → first 1000-ray render done with an
             empty Numba cache (compile) and with the cache that run filled.
 memory      max RSS (``resource.getrusage``) and the tracemalloc peak of one render of 10⁶, 10⁷,
@@ -65,12 +66,14 @@ def worker_throughput(a: argparse.Namespace) -> dict:
     threads = numba.get_num_threads()
     cs = compile_scene(eyelume.load_scene(SCENE, _overrides(not a.face_off)))
     batch = cs.scene.run.batch_size
-    eyelume.render(cs, rays=1000, seed=a.seed)  # JIT (from the warm cache)
-    eyelume.render(cs, rays=min(a.rays, batch), seed=a.seed)  # thread pool, first touch
+    eyelume.render(cs, eyelume.RenderOptions(rays=1000, seed=a.seed))  # JIT (from the warm cache)
+    eyelume.render(
+        cs, eyelume.RenderOptions(rays=min(a.rays, batch), seed=a.seed)
+    )  # thread pool, first touch
     traced: list[float] = []
 
     def once():
-        r = eyelume.render(cs, rays=a.rays, seed=a.seed)
+        r = eyelume.render(cs, eyelume.RenderOptions(rays=a.rays, seed=a.seed))
         traced.append(r.wall_time_s)
         return r
 
@@ -113,7 +116,7 @@ def worker_startup(a: argparse.Namespace) -> dict:
     t2 = time.perf_counter()
     cs = compile_scene(scene)
     t3 = time.perf_counter()
-    r = eyelume.render(cs, rays=1000, seed=a.seed)
+    r = eyelume.render(cs, eyelume.RenderOptions(rays=1000, seed=a.seed))
     t4 = time.perf_counter()
     t_done = time.time()
     return {
@@ -138,11 +141,11 @@ def worker_memory(a: argparse.Namespace) -> dict:
     from eyelume.compile import compile_scene
 
     cs = compile_scene(eyelume.load_scene(SCENE))
-    eyelume.render(cs, rays=1000, seed=a.seed)
+    eyelume.render(cs, eyelume.RenderOptions(rays=1000, seed=a.seed))
     rss_warm = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
     tracemalloc.start()
     t0 = time.perf_counter()
-    r = eyelume.render(cs, rays=a.rays, seed=a.seed)
+    r = eyelume.render(cs, eyelume.RenderOptions(rays=a.rays, seed=a.seed))
     wall = time.perf_counter() - t0
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
@@ -218,11 +221,11 @@ def worker_anatomy(a: argparse.Namespace) -> dict:
         hits = np.empty(n, dtype=np.int64)
         emission_rays(1000, a.seed, cs.led, rays)
         search_all(cs.sf, cs.si, rays[:1000], hits[:1000])
-        eyelume.render(cs, rays=min(n, cs.scene.run.batch_size), seed=a.seed)
+        eyelume.render(cs, eyelume.RenderOptions(rays=min(n, cs.scene.run.batch_size), seed=a.seed))
         # interleaved, so the three costs see the same machine conditions
         t_render, t_emit, t_search, res = [], [], [], None
         for _ in range(a.repeats):
-            res = eyelume.render(cs, rays=n, seed=a.seed)
+            res = eyelume.render(cs, eyelume.RenderOptions(rays=n, seed=a.seed))
             t_render.append(res.wall_time_s)
             t0 = time.perf_counter()
             emission_rays(n, a.seed, cs.led, rays)

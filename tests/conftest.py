@@ -37,4 +37,4 @@ def paper_compiled(paper_scene):
 
 @pytest.fixture(scope="session")
 def fig6b_render(paper_compiled):
-    return eyelume.render(paper_compiled, rays=FIG6B_RAYS, seed=2005)
+    return eyelume.render(paper_compiled, eyelume.RenderOptions(rays=FIG6B_RAYS, seed=2005))

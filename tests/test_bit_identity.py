@@ -1,13 +1,14 @@
 """The default render is the same, sample for sample, across refactors (issue 10).
 
 ``tests/reference/default_render_seed1.npz`` holds ``eyelume.render(load_scene("paper2005"),
-seed=1)`` as rendered by the commit that closed the eye with the iris root (issue 12: a deliberate
-physics change, 357 of the 5655 eye-image pixels moved, the eye plane unchanged); the record
-before it was made at commit 3b58b61, before the kernels took named tables. On that machine the
-arrays are bit-identical (their SHA-256 are in ``benchmarks/results/bit_identity.json``, checked
-exactly by ``python benchmarks/bit_identity.py``); here the comparison allows 1e-9 relative so a
-CPU whose libm rounds a last bit differently still passes, while any change of a sample, a stream
-or a weight (which moves pixels by 1e-3 or more) fails.
+RenderOptions(seed=1))`` (before issue 10's options struct: ``seed=1`` as a keyword) as rendered
+by the commit that closed the eye with the iris root (issue 12: a deliberate physics change, 357
+of the 5655 eye-image pixels moved, the eye plane unchanged); the record before it was made at
+commit 3b58b61, before the kernels took named tables. On that machine the arrays are
+bit-identical (their SHA-256 are in ``benchmarks/results/bit_identity.json``, checked exactly by
+``python benchmarks/bit_identity.py``); here the comparison allows 1e-9 relative so a CPU whose
+libm rounds a last bit differently still passes, while any change of a sample, a stream or a
+weight (which moves pixels by 1e-3 or more) fails.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ REF = Path(__file__).parent / "reference" / "default_render_seed1.npz"
 
 def test_default_render_matches_recorded_reference():
     ref = np.load(REF)
-    r = eyelume.render(eyelume.load_scene("paper2005"), seed=1)
+    r = eyelume.render(eyelume.load_scene("paper2005"), eyelume.RenderOptions(seed=1))
     np.testing.assert_allclose(r.eye_image, ref["eye_image"], rtol=1e-9, atol=0)
     np.testing.assert_allclose(r.eye_image_variance, ref["eye_image_variance"], rtol=1e-9, atol=0)
     np.testing.assert_allclose(r.eye_plane, ref["eye_plane"], rtol=1e-9, atol=0)
@@ -39,7 +40,7 @@ def test_chunks_of_work_change_nothing(monkeypatch):
     monkeypatch.setattr(fast_run, "CHUNK_SAMPLES", 1000)
     monkeypatch.setattr(fast_run, "CHUNK_PATHS", 3001)
     ref = np.load(REF)
-    r = eyelume.render(eyelume.load_scene("paper2005"), seed=1)
+    r = eyelume.render(eyelume.load_scene("paper2005"), eyelume.RenderOptions(seed=1))
     np.testing.assert_allclose(r.eye_image, ref["eye_image"], rtol=1e-9, atol=0)
     np.testing.assert_allclose(r.eye_image_variance, ref["eye_image_variance"], rtol=1e-9, atol=0)
     r_cs = compile_scene(r.scene)

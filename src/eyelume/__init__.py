@@ -21,6 +21,7 @@ from pathlib import Path
 
 __all__ = [
     "EyelumeError",
+    "RenderOptions",
     "RenderResult",
     "SceneError",
     "apply_overrides",
@@ -33,6 +34,7 @@ __version__ = "0.1.0"
 _HOMES = {
     "EyelumeError": "eyelume.errors",
     "SceneError": "eyelume.errors",
+    "RenderOptions": "eyelume.render",
     "RenderResult": "eyelume.render",
     "render": "eyelume.render",
     "apply_overrides": "eyelume.scene.io",

@@ -269,8 +269,8 @@ def render(
     """Render a scene and write the eye image (irradiance, its noise, the camera's digital
     reading), the eye-plane irradiance, pictures, layout and summary into OUT."""
     from eyelume.compile import compile_scene
+    from eyelume.render import RenderOptions, render_extras
     from eyelume.render import render as render_scene
-    from eyelume.render import render_extras
     from eyelume.report.outputs import write_render_outputs
 
     sc = _load(scene, set_)
@@ -292,9 +292,7 @@ def render(
             task = bar.add_task("trace", total=total)
             result = render_scene(
                 cs,
-                rays=rays,
-                seed=seed,
-                estimator="forward",
+                RenderOptions(rays=rays, seed=seed, estimator="forward"),
                 progress=lambda d, t: bar.update(task, completed=d),
             )
         if t_load:
@@ -351,6 +349,7 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
     with an ETA, Ctrl-C/SIGTERM answered within about a second (nothing written when no sample
     set had finished), and a warning when a --rel-error target stops at --max-samples."""
     from eyelume.estimators.fast_run import array_bytes, pilot_rates, planned_sets
+    from eyelume.render import RenderOptions
     from eyelume.render import render as render_scene
 
     sc = cs.scene
@@ -389,11 +388,13 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
         try:
             result = render_scene(
                 cs,
-                seed=seed,
-                estimator="fast",
-                samples_per_pixel=samples,
-                rel_error=rel_error,
-                max_samples_per_pixel=max_samples,
+                RenderOptions(
+                    seed=seed,
+                    estimator="fast",
+                    samples_per_pixel=samples,
+                    rel_error=rel_error,
+                    max_samples_per_pixel=max_samples,
+                ),
                 status=lambda msg: bar.update(task, description=msg),
                 advance=lambda d, t: bar.update(task, completed=d, total=t),
             )

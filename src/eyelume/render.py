@@ -4,9 +4,10 @@ This is the Python API behind ``eyelume render``::
 
     import eyelume
     scene = eyelume.load_scene("paper2005", {"leds.height_mm": 40})
-    result = eyelume.render(scene, seed=1)                     # the fast estimator
-    result = eyelume.render(scene, rel_error=0.01)     # … to 1 % in the median skin pixel
-    result = eyelume.render(scene, estimator="forward", rays=2_000_000)   # plain forward MC
+    from eyelume import RenderOptions
+    result = eyelume.render(scene, RenderOptions(seed=1))          # the fast estimator
+    result = eyelume.render(scene, RenderOptions(rel_error=0.01))  # … to 1 % in the median skin
+    result = eyelume.render(scene, RenderOptions(estimator="forward", rays=2_000_000))  # forward MC
     result.eye_image          # (rows, cols) W/mm², row 0 at the top of the picture
     result.ledger             # forward only: {"sensor": W, "iris": W, ..., "escaped": W}
 """
@@ -29,7 +30,7 @@ from eyelume.estimators.forward import trace_forward, trace_paths
 from eyelume.layout import VIEWS, Section, system_sections
 from eyelume.scene.model import Scene
 
-__all__ = ["RenderExtras", "RenderResult", "render", "render_extras"]
+__all__ = ["RenderExtras", "RenderOptions", "RenderResult", "render", "render_extras"]
 
 
 @dataclass
@@ -158,18 +159,59 @@ def warm_up_forward(cs: CompiledScene) -> float | None:
     return time.perf_counter() - t0
 
 
+@dataclass(frozen=True)
+class RenderOptions:
+    """The run options of :func:`render`: which estimator, its budget and the seed.
+
+    Every field left ``None`` takes the scene's ``[run]`` value (:class:`eyelume.scene.model.Run`)
+    when the render starts; the result depends on (scene, options, seed) only, never on the
+    progress callbacks given beside the options.
+
+    Attributes
+    ----------
+    estimator : "fast", "forward" or None
+        ``"fast"`` (:mod:`eyelume.estimators.fast`) or ``"forward"`` (plain forward Monte Carlo);
+        default ``"forward"`` when ``rays`` is given, else the scene's ``run.estimator``. Any
+        other value raises ``ValueError`` from :func:`render`.
+    seed : int or None
+        Random seed; default ``run.seed``.
+    rays : int or None
+        Forward: rays to trace (default ``run.rays``).
+    batch_size : int or None
+        Forward: rays per batch (default ``run.batch_size``); the result does not depend on it.
+    samples_per_pixel : int or None
+        Fast: camera samples per pixel (default ``run.samples_per_pixel``; with
+        ``run.light_paths_per_pixel`` light paths per pixel and per 16 samples).
+    rel_error : float or None
+        Fast: keep adding rounds until the median skin pixel's relative standard error is this
+        (a fraction, e.g. 0.01) or ``max_samples_per_pixel`` is reached (``target_reached``).
+    max_samples_per_pixel : int or None
+        Fast, with ``rel_error``: the cap on samples per pixel (default: no cap below the fast
+        run's hard limit, :class:`eyelume.estimators.fast_run.RunControl`; the CLI passes
+        :data:`eyelume.estimators.fast_run.MAX_SAMPLES_REL_ERROR`).
+
+    Examples
+    --------
+    >>> RenderOptions(estimator="forward", rays=2_000_000, seed=1).rays
+    2000000
+    """
+
+    estimator: str | None = None
+    seed: int | None = None
+    rays: int | None = None
+    batch_size: int | None = None
+    samples_per_pixel: int | None = None
+    rel_error: float | None = None
+    max_samples_per_pixel: int | None = None
+
+
 def render(
     scene: Scene | CompiledScene,
-    rays: int | None = None,
-    seed: int | None = None,
-    batch_size: int | None = None,
+    options: RenderOptions | None = None,
+    *,
     progress: Callable[[int, int], None] | None = None,
-    estimator: str | None = None,
-    samples_per_pixel: int | None = None,
-    rel_error: float | None = None,
     status: Callable[[str], None] | None = None,
     advance: Callable[[int, int], None] | None = None,
-    max_samples_per_pixel: int | None = None,
 ) -> RenderResult:
     """Render a scene's eye image and eye-plane irradiance.
 
@@ -177,28 +219,29 @@ def render(
     ----------
     scene
         A :class:`Scene` (compiled here) or an already compiled scene.
-    estimator
-        ``"fast"`` (:mod:`eyelume.estimators.fast`) or ``"forward"`` (plain forward Monte Carlo);
-        default ``"forward"`` when ``rays`` is given, else the scene's ``run.estimator``.
-    rays, batch_size, progress
-        Forward: rays to trace (default ``run.rays``), rays per batch, and
-        ``progress(rays_done, rays_total)`` after each batch.
-    samples_per_pixel, rel_error, status
-        Fast: camera samples per pixel (default ``run.samples_per_pixel``; with
-        ``run.light_paths_per_pixel`` light paths per pixel and per 16 samples), or keep adding
-        rounds until the median skin pixel's relative standard error is ``rel_error`` or
-        ``max_samples_per_pixel`` is reached (``target_reached``); ``status(message)`` after
-        each round, ``advance(done, planned)`` every fraction of a second
-        (:func:`eyelume.estimators.fast_run.trace_fast`). The kernels' compilation (or loading
-        from Numba's cache), the first time in a process, is timed apart in ``kernel_load_s``
-        and not counted in ``wall_time_s``.
-    seed
-        Default ``run.seed``. The result depends on (scene, budget, seed) only.
+    options
+        The estimator, its budget and the seed (:class:`RenderOptions`); default
+        ``RenderOptions()``, the scene's ``[run]`` table.
+    progress
+        Forward: ``progress(rays_done, rays_total)`` after each batch.
+    status, advance
+        Fast: ``status(message)`` after each round, ``advance(done, planned)`` every fraction
+        of a second (:func:`eyelume.estimators.fast_run.trace_fast`).
+
+    The kernels' compilation (or loading from Numba's cache), the first time in a process, is
+    timed apart in ``kernel_load_s`` and not counted in ``wall_time_s``.
+
+    Raises
+    ------
+    ValueError
+        ``options.estimator`` is neither ``"fast"`` nor ``"forward"``.
     """
+    opt = RenderOptions() if options is None else options
+    rays, seed, samples_per_pixel = opt.rays, opt.seed, opt.samples_per_pixel
     cs = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
     sc = cs.scene
     seed = sc.run.seed if seed is None else int(seed)
-    estimator = estimator or ("forward" if rays is not None else sc.run.estimator)
+    estimator = opt.estimator or ("forward" if rays is not None else sc.run.estimator)
     picture, eye_plane = BinnedPlane(cs.picture), BinnedPlane(cs.eye_plane)
     extents = {"picture_extent_mm": picture.extent_mm, "plane_extent_mm": eye_plane.extent_mm}
     px_area = picture.bin_area_mm2
@@ -214,10 +257,10 @@ def render(
             spp,
             light,
             seed,
-            rel_error,
+            opt.rel_error,
             status,
             regions["skin"],
-            control=RunControl(advance, max_samples_per_pixel),
+            control=RunControl(advance, opt.max_samples_per_pixel),
         )
         plane = direct_eye_plane(cs, seed)
         wall = time.perf_counter() - t0
@@ -246,7 +289,7 @@ def render(
     rays = sc.run.rays if rays is None else int(rays)
     kernel_s = warm_up_forward(cs) or None
     t0 = time.perf_counter()
-    fc = trace_forward(cs, rays, seed, batch_size, progress)
+    fc = trace_forward(cs, rays, seed, opt.batch_size, progress)
     wall = time.perf_counter() - t0
     w = cs.emitted_w / fc.rays
     pl_area = eye_plane.bin_area_mm2

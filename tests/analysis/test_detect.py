@@ -264,7 +264,7 @@ def test_rendered_paper2005_picture(paper_scene):
     import eyelume
     from eyelume.detectors.sensor import digitize
 
-    result = eyelume.render(paper_scene, seed=1)
+    result = eyelume.render(paper_scene, eyelume.RenderOptions(seed=1))
     counts = digitize(result.eye_image, paper_scene.sensor, paper_scene.wavelength_nm, 1).counts
     d = detect(counts, led_azimuths_deg=paper_scene.leds.azimuths_deg)
     assert d.ok, d.failures

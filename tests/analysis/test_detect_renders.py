@@ -23,7 +23,7 @@ from eyelume.analysis.tracking.evaluate import _truth_ellipse_centre
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import compile_scene
 from eyelume.detectors.sensor import digitize
-from eyelume.render import render
+from eyelume.render import RenderOptions, render
 from eyelume.report.plots import save_grey_png
 
 
@@ -32,7 +32,7 @@ def _frame(h, v, seed, samples, sets=None):
         "paper2005", {"eye.gaze_horizontal_deg": h, "eye.gaze_vertical_deg": v, **(sets or {})}
     )
     cs = compile_scene(sc)
-    r = render(cs, estimator="fast", samples_per_pixel=samples, seed=seed)
+    r = render(cs, RenderOptions(estimator="fast", samples_per_pixel=samples, seed=seed))
     dig = digitize(r.eye_image, sc.sensor, sc.wavelength_nm, seed=seed)
     return {
         "leds": list(sc.leds.azimuths()),

@@ -184,8 +184,8 @@ def test_glints_off_scene(paper_scene):
 
 @pytest.mark.slow
 def test_glints_off_render_has_no_glints(paper_scene):
-    on = eyelume.render(paper_scene, seed=11)
-    off = eyelume.render(glints_off(paper_scene), seed=11)
+    on = eyelume.render(paper_scene, eyelume.RenderOptions(seed=11))
+    off = eyelume.render(glints_off(paper_scene), eyelume.RenderOptions(seed=11))
     reg = on.regions
     cornea = reg["pupil"] | reg["iris"]
     for k in (k for k in reg if k.startswith("glint")):

@@ -58,7 +58,7 @@ def test_default_scene_margin_and_summary():
     # four 15 mW/sr LEDs ~76 mm away, each ~3° off its axis: ≈ 4 · 0.015 / 0.0762² ≈ 10 W/m²
     assert 9.0 < s["corneal_irradiance_w_m2"] < 11.0
     assert s["within_exempt_group"]
-    summary = eyelume.render(scene, samples_per_pixel=8, seed=1).summary()
+    summary = eyelume.render(scene, eyelume.RenderOptions(samples_per_pixel=8, seed=1)).summary()
     assert summary["safety"]["corneal_margin"] == pytest.approx(s["corneal_margin"])
 
 

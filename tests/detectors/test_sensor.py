@@ -11,7 +11,7 @@ from PIL import Image
 
 from eyelume.compile import compile_scene
 from eyelume.detectors.sensor import digitize, electrons_per_w_mm2
-from eyelume.render import render, render_extras
+from eyelume.render import RenderOptions, render, render_extras
 from eyelume.report.outputs import write_render_outputs
 from eyelume.scene.io import SceneError, load_scene
 from eyelume.scene.model import Sensor
@@ -136,7 +136,7 @@ def test_bad_sensor_values_name_the_field(overrides, field):
 
 def test_render_writes_the_digital_image_and_camera_summary(tmp_path):
     scene = load_scene("paper2005", {"run.estimator": "forward"})
-    result = render(scene, rays=200_000, seed=1)
+    result = render(scene, RenderOptions(rays=200_000, seed=1))
     write_render_outputs(result, render_extras(compile_scene(scene), result.seed), tmp_path)
 
     counts = np.load(tmp_path / "eye_image_digital.npy")
@@ -167,7 +167,7 @@ def test_glints_saturate_and_skin_does_not_in_the_default_render():
     # enough light paths that a glint's peak pixel is known to ~5 % (its expected level is
     # ~1.2 full wells at the default exposure)
     scene = load_scene("paper2005", {"run.light_paths_per_pixel": 128})
-    result = render(scene, seed=3)
+    result = render(scene, RenderOptions(seed=3))
     dig = digitize(result.eye_image, scene.sensor, scene.wavelength_nm, seed=3)
     glints = [m for name, m in result.regions.items() if name.startswith("glint")]
     assert len(glints) == 4

@@ -142,7 +142,7 @@ def test_closed_form_matches_the_forward_monte_carlo_tally():
     """paper2005, face off: per-bin z-scores of the forward counts against RAYS·Φ_bin/Φ_emitted."""
     scene = eyelume.load_scene("paper2005", {"face.enabled": False})
     cs = compile_scene(scene)
-    result = eyelume.render(cs, rays=MC_RAYS, seed=11)
+    result = eyelume.render(cs, eyelume.RenderOptions(rays=MC_RAYS, seed=11))
     area = (scene.eye_plane.width_mm / scene.eye_plane.cols) * (
         scene.eye_plane.height_mm / scene.eye_plane.rows
     )

@@ -170,7 +170,7 @@ def test_aimed_scatter_weights_average_one(p_aim):
 
 def _small_render(seed, **kw):
     sc = eyelume.load_scene("paper2005", SMALL)
-    return eyelume.render(sc, estimator="fast", seed=seed, **kw)
+    return eyelume.render(sc, eyelume.RenderOptions(estimator="fast", seed=seed, **kw))
 
 
 def test_noise_estimates_match_the_scatter_between_seeds():
@@ -199,7 +199,8 @@ def test_same_seed_same_image_whatever_the_thread_count(tmp_path):
     script = (
         "import sys, numpy as np, eyelume\n"
         f"sc = eyelume.load_scene('paper2005', {SMALL!r})\n"
-        "r = eyelume.render(sc, estimator='fast', samples_per_pixel=32, seed=8)\n"
+        "opt = eyelume.RenderOptions(estimator='fast', samples_per_pixel=32, seed=8)\n"
+        "r = eyelume.render(sc, opt)\n"
         "np.save(sys.argv[1], np.stack([r.eye_image, r.eye_image_variance]))\n"
     )
     out = {}
@@ -228,8 +229,10 @@ def test_rel_error_target_is_met():
 def test_fast_eye_plane_is_the_direct_irradiance(paper_compiled):
     """Away from occluders the eye plane is the LEDs' direct light: compare with the forward
     tally (all light crossing the plane toward the eye) bin by bin."""
-    fwd = eyelume.render(paper_compiled, rays=4_000_000, seed=9)
-    fast = eyelume.render(paper_compiled, estimator="fast", samples_per_pixel=32, seed=9)
+    fwd = eyelume.render(paper_compiled, eyelume.RenderOptions(rays=4_000_000, seed=9))
+    fast = eyelume.render(
+        paper_compiled, eyelume.RenderOptions(estimator="fast", samples_per_pixel=32, seed=9)
+    )
     keep = fwd.plane_counts >= 100
     z = (fast.eye_plane[keep] - fwd.eye_plane[keep]) / (
         fwd.eye_plane[keep] / np.sqrt(fwd.plane_counts[keep])

@@ -32,7 +32,8 @@ MIN_COUNTS = 25
 @pytest.fixture(scope="module")
 def fast_render(paper_compiled):
     return eyelume.render(
-        paper_compiled, estimator="fast", samples_per_pixel=FAST_SAMPLES, seed=2005
+        paper_compiled,
+        eyelume.RenderOptions(estimator="fast", samples_per_pixel=FAST_SAMPLES, seed=2005),
     )
 
 

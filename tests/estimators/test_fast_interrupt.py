@@ -104,5 +104,7 @@ def test_an_unreachable_target_stops_at_the_cap_and_says_so(paper_compiled):
 
 def test_samples_rendered_are_whole_sets():
     assert [FR.planned_sets(n) for n in (1, 9, 33)] == [(2, 2), (2, 3), (4, 3)]
-    r = eyelume.render(eyelume.load_scene("paper2005"), samples_per_pixel=1, seed=1)
+    r = eyelume.render(
+        eyelume.load_scene("paper2005"), eyelume.RenderOptions(samples_per_pixel=1, seed=1)
+    )
     assert r.samples_per_pixel == 8 and r.summary()["samples_per_pixel"] == 8

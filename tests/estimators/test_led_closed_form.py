@@ -70,7 +70,7 @@ def test_single_led_eye_plane_matches_closed_form(tmp_path, profile):
         overrides |= {"leds.profile.kind": '"table"', "leds.profile.table_csv": f'"{csv}"'}
     scene = eyelume.load_scene("paper2005", overrides)
     cs = compile_scene(scene)
-    result = eyelume.render(cs, rays=RAYS, seed=7)
+    result = eyelume.render(cs, eyelume.RenderOptions(rays=RAYS, seed=7))
 
     expected_flux = closed_form_eye_plane(cs)
     p = expected_flux / cs.emitted_w  # probability that a ray lands in each bin

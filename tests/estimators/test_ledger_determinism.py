@@ -13,7 +13,7 @@ import eyelume
 
 
 def test_ledger_sums_to_emitted_power(paper_compiled):
-    result = eyelume.render(paper_compiled, rays=400_000, seed=3)
+    result = eyelume.render(paper_compiled, eyelume.RenderOptions(rays=400_000, seed=3))
     total = sum(result.ledger.values())
     assert abs(total - result.emitted_w) <= 1e-9 * result.emitted_w
     assert all(v >= 0 for v in result.ledger.values())
@@ -31,19 +31,25 @@ def test_ledger_sums_to_emitted_power(paper_compiled):
 
 
 def test_same_seed_same_arrays_whatever_the_batch_size(paper_compiled):
-    a = eyelume.render(paper_compiled, rays=300_000, seed=11, batch_size=300_000)
-    b = eyelume.render(paper_compiled, rays=300_000, seed=11, batch_size=7_919)
+    a = eyelume.render(
+        paper_compiled, eyelume.RenderOptions(rays=300_000, seed=11, batch_size=300_000)
+    )
+    b = eyelume.render(
+        paper_compiled, eyelume.RenderOptions(rays=300_000, seed=11, batch_size=7_919)
+    )
     assert np.array_equal(a.eye_image, b.eye_image)
     assert np.array_equal(a.eye_plane, b.eye_plane)
     assert a.ledger == b.ledger
-    c = eyelume.render(paper_compiled, rays=300_000, seed=12)
+    c = eyelume.render(paper_compiled, eyelume.RenderOptions(rays=300_000, seed=12))
     assert not np.array_equal(a.image_counts, c.image_counts)
 
 
 _SCRIPT = """
 import sys, numpy as np, eyelume
 scene = eyelume.load_scene("paper2005")
-r = eyelume.render(scene, rays=200_000, seed=5, batch_size=int(sys.argv[2]))
+r = eyelume.render(
+    scene, eyelume.RenderOptions(rays=200_000, seed=5, batch_size=int(sys.argv[2]))
+)
 np.save(sys.argv[1], np.concatenate([r.eye_image.ravel(), r.eye_plane.ravel()]))
 """
 

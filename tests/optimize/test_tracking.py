@@ -58,7 +58,7 @@ def test_track_command_on_a_rendered_image(tmp_path):
     scene = eyelume.load_scene("paper2005")
     from eyelume.detectors.sensor import digitize
 
-    r = eyelume.render(scene, seed=2)
+    r = eyelume.render(scene, eyelume.RenderOptions(seed=2))
     path = tmp_path / "frame.npy"
     np.save(path, digitize(r.eye_image, scene.sensor, scene.wavelength_nm, seed=2).counts)
     res = CliRunner().invoke(app, ["track", str(path), "--leds", "0,90,180,270"])

@@ -74,7 +74,7 @@ def save_best_run(folder: str | Path, scene: str) -> Path | None:
     run = best[0]
     sc = eyelume.load_scene(scene, run["overrides"])
     pattern = eye_plane_irradiance(sc)
-    image = eyelume.render(sc, samples_per_pixel=16, seed=0).eye_image
+    image = eyelume.render(sc, eyelume.RenderOptions(samples_per_pixel=16, seed=0)).eye_image
     tracking = None
     if any("tracking_score_deg" in r["metrics"] for r in rows):
         rep = evaluate_tracking(sc, GAZE_H, GAZE_V, 8, 0, calibrate=False)

@@ -24,7 +24,7 @@ from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.targets import gaussian_target
 from eyelume.compile import compile_scene
 from eyelume.optimize.sweep import refine, sweep_leds
-from eyelume.render import RenderResult, render
+from eyelume.render import RenderOptions, RenderResult, render
 from eyelume.scene.io import apply_overrides
 from eyelume.scene.model import Scene
 
@@ -113,9 +113,7 @@ def evaluate_placement(
     """Render ``scene`` with its glints removed; (result, merit, merit SE, noise bias)."""
     result = render(
         compile_scene(glints_off(scene)),
-        estimator="fast",
-        samples_per_pixel=samples_per_pixel,
-        seed=seed,
+        RenderOptions(estimator="fast", samples_per_pixel=samples_per_pixel, seed=seed),
     )
     merit = evaluator_merit(result.eye_image, mask.image, mask.weights)
     se, bias = merit_noise(result, mask)

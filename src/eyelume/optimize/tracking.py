@@ -40,7 +40,7 @@ from eyelume.compile import compile_scene
 from eyelume.detectors.sensor import digitize
 from eyelume.errors import SceneError
 from eyelume.optimize.delta_study import PAPER_CHOICE, with_placement
-from eyelume.render import render
+from eyelume.render import RenderOptions, render
 from eyelume.scene.io import apply_overrides
 from eyelume.scene.model import Scene
 
@@ -63,7 +63,7 @@ def render_frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> F
     read it out with the sensor model and analyse the picture against the truth."""
     sc = apply_overrides(scene, {"eye.gaze_horizontal_deg": h, "eye.gaze_vertical_deg": v})
     cs = compile_scene(sc)
-    result = render(cs, estimator="fast", samples_per_pixel=samples, seed=seed)
+    result = render(cs, RenderOptions(estimator="fast", samples_per_pixel=samples, seed=seed))
     digital = digitize(result.eye_image, sc.sensor, sc.wavelength_nm, seed=seed)
     azimuths = led_picture_azimuths(cs)
     frame = analyse_frame(
