@@ -603,111 +603,139 @@ class _Block:
     source: str = ""
 
 
-def _parse_agf(path: Path) -> list[Glass]:
-    """The glasses of one AGF file; GlassError naming file, line and value if malformed."""
-    text = _read_text(path)
-    blocks: list[_Block] = []
-    seen: dict[str, int] = {}
+class _AgfReader:
+    """Reads one AGF file's records into :class:`_Block` s, one method per record kind.
 
-    def bad(lineno: int, what: str) -> GlassError:
-        return GlassError(f"{path}: line {lineno}: {what}")
+    The records eyelume reads: ``NM`` (a glass: name, formula, nd, vd), ``CD`` (its dispersion
+    coefficients, continued on following lines that start with a number), ``LD`` (its stated
+    wavelength range, ``LD 0 0`` for none) and ``GC`` (a comment, kept as the glass's source).
+    ``TD``, ``OD``, ``ED``, ``IT``, ``CC``, ``BD`` and any other record are not needed for the
+    index and are passed over, as are their continuation lines. A glass named a second time in
+    the file keeps its first definition: every record up to the next ``NM`` is skipped.
+    """
 
-    def number(tok: str, lineno: int, what: str) -> float:
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.blocks: list[_Block] = []
+        self.seen: dict[str, int] = {}  # upper-case name -> line of its NM record
+        self.last_record = ""
+        self.skipping = False  # inside a glass named a second time: its records are ignored
+
+    def bad(self, lineno: int, what: str) -> GlassError:
+        """The error for a malformed line: file, line number, what is wrong."""
+        return GlassError(f"{self.path}: line {lineno}: {what}")
+
+    def number(self, tok: str, lineno: int, what: str) -> float:
+        """``tok`` as a finite float, else GlassError naming ``what`` and the value."""
         try:
             x = float(tok)
         except ValueError:
-            raise bad(lineno, f"{what} {tok!r} is not a number") from None
+            raise self.bad(lineno, f"{what} {tok!r} is not a number") from None
         if not math.isfinite(x):
-            raise bad(lineno, f"{what} {tok!r} is not finite")
+            raise self.bad(lineno, f"{what} {tok!r} is not finite")
         return x
 
-    def current(lineno: int, record: str) -> _Block:
-        if not blocks:
-            raise bad(lineno, f"{record} record before any NM (glass name) record")
-        return blocks[-1]
+    def current(self, lineno: int, record: str) -> _Block:
+        """The glass a record belongs to (the last NM), else GlassError."""
+        if not self.blocks:
+            raise self.bad(lineno, f"{record} record before any NM (glass name) record")
+        return self.blocks[-1]
 
-    last_record = ""
-    skipping = False  # inside a glass named a second time: its records are ignored
-    for lineno, raw_line in enumerate(text.splitlines(), start=1):
-        line = raw_line.strip().lstrip("\ufeff")
-        if not line:
-            continue
+    def line(self, lineno: int, line: str) -> None:
+        """One non-empty, stripped line: a continuation of the last record, or a record."""
         tokens = line.split()
-        record = tokens[0].upper()
         if _is_number(tokens[0]):
-            # a continuation line: Zemax reads a CD record's coefficients on as many lines as
-            # the vendor wrote them; other records' continuations hold nothing eyelume reads
-            if last_record == "CD" and not skipping:
-                block = blocks[-1]
-                block.coefficients = block.coefficients + tuple(
-                    number(t, lineno, f"CD coefficient of glass {block.name!r}") for t in tokens
-                )
-            continue
-        last_record = record
-        if record != "NM" and skipping:
-            continue
+            self.continuation(lineno, tokens)
+            return
+        record = tokens[0].upper()
+        self.last_record = record
         if record == "NM":
-            if len(tokens) < 6:
-                raise bad(lineno, f"NM record needs 'NM name formula MIL nd vd ...', got {line!r}")
-            name = tokens[1]
-            formula_number = _formula_number(tokens[2], bad, lineno, name)
-            nd = number(tokens[4], lineno, f"nd of glass {name!r}")
-            vd = number(tokens[5], lineno, f"vd of glass {name!r}")
-            if nd <= 0.0:
-                raise bad(lineno, f"nd of glass {name!r} is {tokens[4]!r}, must be > 0")
-            key = name.upper()
-            skipping = key in seen
-            if skipping:
-                warnings.warn(
-                    f"{path}: line {lineno}: glass {name!r} already defined on line "
-                    f"{seen[key]}: the first definition is used",
-                    GlassWarning,
-                    stacklevel=4,
-                )
-                continue
-            seen[key] = lineno
-            blocks.append(_Block(name, formula_number, nd, vd, lineno))
+            self.nm(lineno, tokens, line)
+        elif self.skipping:
+            return
         elif record == "CD":
-            block = current(lineno, "CD")
-            if block.coefficients is not None:
-                raise bad(lineno, f"second CD record for glass {block.name!r}")
-            block.coefficients = tuple(
-                number(t, lineno, f"CD coefficient of glass {block.name!r}") for t in tokens[1:]
-            )
+            self.cd(lineno, tokens)
         elif record == "LD":
-            block = current(lineno, "LD")
-            if len(tokens) < 3:
-                raise bad(lineno, f"LD record needs 'LD min_um max_um', got {line!r}")
-            lo = number(tokens[1], lineno, f"LD minimum wavelength of glass {block.name!r}")
-            hi = number(tokens[2], lineno, f"LD maximum wavelength of glass {block.name!r}")
-            block.has_range = True
-            if lo == 0.0 and hi == 0.0:
-                continue  # "LD 0 0": the vendor states no range
-            if not 0.0 < lo < hi:
-                raise bad(
-                    lineno,
-                    f"LD range of glass {block.name!r} is {tokens[1]!r} to {tokens[2]!r} um, "
-                    "need 0 < min < max",
-                )
-            block.range_um = (lo, hi)
+            self.ld(lineno, tokens, line)
         elif record == "GC":
-            block = current(lineno, "GC")
-            comment = line[2:].strip()
-            block.source = f"{block.source} {comment}".strip() if block.source else comment
+            self.gc(lineno, line)
         # TD, OD, ED, IT, CC, BD and any other record: not needed for the index
 
-    if not blocks:
-        raise GlassError(
-            f"{path}: not an AGF catalog (no NM glass record in {len(text.splitlines())} lines)"
-        )
-    glasses = []
-    for b in blocks:
+    def coefficients(self, tokens: list[str], lineno: int) -> tuple[float, ...]:
+        """CD coefficients of the current glass from ``tokens``."""
+        name = self.blocks[-1].name
+        return tuple(self.number(t, lineno, f"CD coefficient of glass {name!r}") for t in tokens)
+
+    def continuation(self, lineno: int, tokens: list[str]) -> None:
+        """A line that starts with a number: Zemax reads a CD record's coefficients on as many
+        lines as the vendor wrote them; other records' continuations hold nothing eyelume
+        reads."""
+        if self.last_record == "CD" and not self.skipping:
+            block = self.blocks[-1]
+            block.coefficients = block.coefficients + self.coefficients(tokens, lineno)
+
+    def nm(self, lineno: int, tokens: list[str], line: str) -> None:
+        """``NM name formula MIL nd vd ...``: a new glass, or a duplicate name to skip."""
+        if len(tokens) < 6:
+            raise self.bad(lineno, f"NM record needs 'NM name formula MIL nd vd ...', got {line!r}")
+        name = tokens[1]
+        formula_number = _formula_number(tokens[2], self.bad, lineno, name)
+        nd = self.number(tokens[4], lineno, f"nd of glass {name!r}")
+        vd = self.number(tokens[5], lineno, f"vd of glass {name!r}")
+        if nd <= 0.0:
+            raise self.bad(lineno, f"nd of glass {name!r} is {tokens[4]!r}, must be > 0")
+        key = name.upper()
+        self.skipping = key in self.seen
+        if self.skipping:
+            warnings.warn(
+                f"{self.path}: line {lineno}: glass {name!r} already defined on line "
+                f"{self.seen[key]}: the first definition is used",
+                GlassWarning,
+                stacklevel=6,  # the frame it named when _parse_agf warned itself (4), two up
+            )
+            return
+        self.seen[key] = lineno
+        self.blocks.append(_Block(name, formula_number, nd, vd, lineno))
+
+    def cd(self, lineno: int, tokens: list[str]) -> None:
+        """``CD c1 c2 ...``: the glass's dispersion coefficients (one CD per glass)."""
+        block = self.current(lineno, "CD")
+        if block.coefficients is not None:
+            raise self.bad(lineno, f"second CD record for glass {block.name!r}")
+        block.coefficients = self.coefficients(tokens[1:], lineno)
+
+    def ld(self, lineno: int, tokens: list[str], line: str) -> None:
+        """``LD min_um max_um``: the stated range; ``LD 0 0`` states none."""
+        block = self.current(lineno, "LD")
+        if len(tokens) < 3:
+            raise self.bad(lineno, f"LD record needs 'LD min_um max_um', got {line!r}")
+        lo = self.number(tokens[1], lineno, f"LD minimum wavelength of glass {block.name!r}")
+        hi = self.number(tokens[2], lineno, f"LD maximum wavelength of glass {block.name!r}")
+        block.has_range = True
+        if lo == 0.0 and hi == 0.0:
+            return  # "LD 0 0": the vendor states no range
+        if not 0.0 < lo < hi:
+            raise self.bad(
+                lineno,
+                f"LD range of glass {block.name!r} is {tokens[1]!r} to {tokens[2]!r} um, "
+                "need 0 < min < max",
+            )
+        block.range_um = (lo, hi)
+
+    def gc(self, lineno: int, line: str) -> None:
+        """``GC text``: a comment, appended to the glass's source."""
+        block = self.current(lineno, "GC")
+        comment = line[2:].strip()
+        block.source = f"{block.source} {comment}".strip() if block.source else comment
+
+    def glass(self, b: _Block) -> Glass:
+        """A read glass as a :class:`Glass`; GlassError when it has no CD record."""
         if b.coefficients is None:
-            raise bad(b.line, f"glass {b.name!r} has no CD (dispersion coefficients) record")
+            raise self.bad(b.line, f"glass {b.name!r} has no CD (dispersion coefficients) record")
         rng = None
         if b.range_um is not None:
             rng = tuple(round(x * 1000.0, 6) for x in b.range_um)
-        g = Glass(
+        return Glass(
             name=b.name,
             formula_number=b.formula_number,
             coefficients=b.coefficients,
@@ -715,9 +743,26 @@ def _parse_agf(path: Path) -> list[Glass]:
             vd=b.vd,
             wavelength_range_nm=rng,
             source=b.source,
-            catalog=path.name,
+            catalog=self.path.name,
         )
-        _check_nd(g, path, b.line)
+
+
+def _parse_agf(path: Path) -> list[Glass]:
+    """The glasses of one AGF file; GlassError naming file, line and value if malformed."""
+    text = _read_text(path)
+    reader = _AgfReader(path)
+    for lineno, raw_line in enumerate(text.splitlines(), start=1):
+        line = raw_line.strip().lstrip("\ufeff")
+        if line:
+            reader.line(lineno, line)
+    if not reader.blocks:
+        raise GlassError(
+            f"{path}: not an AGF catalog (no NM glass record in {len(text.splitlines())} lines)"
+        )
+    glasses = []
+    for b in reader.blocks:
+        g = reader.glass(b)
+        _check_nd(g, path, b.line)  # called from here: its stacklevel counts this frame
         glasses.append(g)
     return glasses
 
