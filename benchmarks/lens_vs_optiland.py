@@ -25,6 +25,7 @@ import math
 import sys
 import time
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -190,7 +191,7 @@ def optiland_rays(rays: dict, z_shift: float, wavelength_um: float):
 # ------------------------------------------------------------------------------------------------
 
 
-def main(argv: list[str] | None = None) -> None:
+def _parse_args(argv: list[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--quick", action="store_true", help="smoke run: 10⁵ rays, 2 repeats")
     p.add_argument("--rays", type=int, default=1_000_000)
@@ -207,46 +208,36 @@ def main(argv: list[str] | None = None) -> None:
     a = p.parse_args(argv)
     if a.quick:
         a.rays, a.repeats, a.optiland_repeats = 100_000, 2, 2
+    return a
 
-    import optiland
-    import optiland.backend as be
 
-    info = C.machine()
-    info["optiland"] = getattr(optiland, "__version__", None) or _dist_version("optiland")
-    info["optiland_backend"] = be.get_backend()
-    C.print_header("Table 3 lens alone: eyelume trace_lens vs Optiland", info)
-    print(f"   Optiland {info['optiland']} ({info['optiland_backend']} backend)")
+@dataclass
+class EyelumeRun:
+    """The eyelume side: image-plane points of the per-ray kernel and the timings."""
 
-    cs = compile_scene(eyelume.load_scene("paper2005"))
-    lf, n = cs.lf, a.rays
-    n_surf = lf.shape[0]
-    rays = make_rays(cs, n, a.seed)
-    print(
-        f"\n   lens: {n_surf} surfaces, EFL {rays['efl']:.4f} mm, EPD {rays['epd']:.4f} mm, "
-        f"entrance pupil at world z = {rays['z_ep']:.4f} mm, image plane z = {cs.image_z} mm"
-    )
-    print(f"   rays: {n:_} from the 40 × 30 mm eye plane to the entrance pupil (seed {a.seed})")
+    out: dict[str, np.ndarray]  # "x", "y" (mm), "L", "M" at the image plane
+    status: np.ndarray  # LENS_PASSED, ... per ray
+    passed: np.ndarray  # bool, status == LENS_PASSED
+    met_total: int  # surfaces met, summed over rays
+    threads: int
+    t_par: dict
+    t_ser: dict
+    t_blk: dict
+    t_blk1: dict
+    jit_s: dict[str, float]  # first call (compile + run): "prange", "serial", "block"
+    block_same_status: bool
+    block_max_diff: float
 
-    # --- eyelume ---------------------------------------------------------------------------------
+
+def time_eyelume(cs, rays: dict, a: argparse.Namespace) -> EyelumeRun:
+    """Trace the rays with the per-ray kernel (prange, serial) and the block kernel, timed; the
+    block kernel's fates and image points are compared with the per-ray kernel's."""
+    n = a.rays
     out = {k: np.empty(n) for k in ("x", "y", "L", "M")}
     status = np.empty(n, dtype=np.int64)
     met = np.empty(n, dtype=np.int64)
-    args = (
-        lf,
-        cs.image_z,
-        rays["x"],
-        rays["y"],
-        rays["z"],
-        rays["L"],
-        rays["M"],
-        rays["N"],
-        out["x"],
-        out["y"],
-        out["L"],
-        out["M"],
-        status,
-        met,
-    )
+    rays_in = (rays["x"], rays["y"], rays["z"], rays["L"], rays["M"], rays["N"])
+    args = (cs.lf, cs.image_z, *rays_in, out["x"], out["y"], out["L"], out["M"], status, met)
     t0 = time.perf_counter()
     trace_parallel(*args)
     t_jit_par = time.perf_counter() - t0
@@ -258,13 +249,12 @@ def main(argv: list[str] | None = None) -> None:
     t_ser = C.timed(lambda: trace_serial(*args), a.repeats, 1)
     t_par.pop("last")
     t_ser.pop("last")
-    passed_e = status == LENS_PASSED
-    met_total = int(met.sum())
+    passed = status == LENS_PASSED
     # the block kernel, on copies of the same rays; it must reproduce the per-ray kernel
     out_b = {k: np.empty(n) for k in ("x", "y", "L", "M")}
     status_b = np.empty(n, dtype=np.int64)
     work = np.empty((6, n))
-    args_b = (*args[:2], *args[2:8], out_b["x"], out_b["y"], out_b["L"], out_b["M"], status_b)
+    args_b = (*args[:8], out_b["x"], out_b["y"], out_b["L"], out_b["M"], status_b)
     t0 = time.perf_counter()
     trace_blocks(*args_b, work, a.block)
     t_jit_blk = time.perf_counter() - t0
@@ -274,17 +264,45 @@ def main(argv: list[str] | None = None) -> None:
     numba.set_num_threads(threads)
     t_blk.pop("last")
     t_blk1.pop("last")
-    same_status = bool(np.array_equal(status_b, status))
     blk_vs_ray = (
-        float(max(np.max(np.abs(out_b[k][passed_e] - out[k][passed_e])) for k in out))
-        if passed_e.any()
+        float(max(np.max(np.abs(out_b[k][passed] - out[k][passed])) for k in out))
+        if passed.any()
         else math.nan
     )
+    return EyelumeRun(
+        out=out,
+        status=status,
+        passed=passed,
+        met_total=int(met.sum()),
+        threads=threads,
+        t_par=t_par,
+        t_ser=t_ser,
+        t_blk=t_blk,
+        t_blk1=t_blk1,
+        jit_s={"prange": t_jit_par, "serial": t_jit_ser, "block": t_jit_blk},
+        block_same_status=bool(np.array_equal(status_b, status)),
+        block_max_diff=blk_vs_ray,
+    )
 
-    # --- Optiland --------------------------------------------------------------------------------
+
+@dataclass
+class OptilandRun:
+    """The Optiland side: the last traced rays, its EFL and the timings."""
+
+    traced: object  # optiland.rays.RealRays after surfaces.trace
+    z_shift: float  # world z of Optiland's z = 0 (the first vertex)
+    efl: float
+    t_trace: dict
+    t_trace_record: dict | None
+    t_generic: dict | None
+
+
+def time_optiland(cs, rays: dict, a: argparse.Namespace) -> OptilandRun:
+    """Trace the same rays with Optiland's ``surfaces.trace`` (timed), and, unless
+    ``--no-optiland-extras``, time ``record=True`` and ``trace_generic`` too."""
     warnings.simplefilter("ignore", DeprecationWarning)
     op = build_optiland(cs, rays["epd"])
-    z_shift = float(lf[0, Q.L_Z])  # Optiland puts the first vertex at z = 0
+    z_shift = float(cs.lf[0, Q.L_Z])  # Optiland puts the first vertex at z = 0
     wl_um = cs.scene.wavelength_nm / 1000.0
     efl_o = float(op.paraxial.f2())
     op.surfaces.trace(optiland_rays(rays, z_shift, wl_um), record=False)  # warm-up
@@ -304,33 +322,45 @@ def main(argv: list[str] | None = None) -> None:
         batches = [optiland_rays(rays, z_shift, wl_um) for _ in range(a.optiland_repeats)]
         t_opt_rec = C.timed(lambda: run_optiland(True), a.optiland_repeats, 1)
         t_opt_rec.pop("last")
-        # trace_generic: the same eye-plane field (normalised to the 25 mm corner) and a uniform
-        # pupil disc, but Optiland generates and aims the rays itself (other rays: timing only)
-        g = np.random.default_rng(a.seed + 1)
-        hmax = float(op.fields.max_field)
-        hx = g.uniform(-0.5, 0.5, n) * cs.scene.eye_plane.width_mm / hmax
-        hy = g.uniform(-0.5, 0.5, n) * cs.scene.eye_plane.height_mm / hmax
-        pr, pa = np.sqrt(g.uniform(0, 1, n)) * 0.999, g.uniform(0, 2 * math.pi, n)
-        px, py = pr * np.cos(pa), pr * np.sin(pa)
-        op.ray_tracer.trace_generic(hx[:1000], hy[:1000], px[:1000], py[:1000], wl_um)
-        t_gen = C.timed(
-            lambda: op.ray_tracer.trace_generic(hx, hy, px, py, wl_um, record=False),
-            a.optiland_repeats,
-            1,
-        )
-        t_gen.pop("last")
+        t_gen = _time_trace_generic(op, cs, a, wl_um)
     ro = traced[-1]
     batches.clear()
+    return OptilandRun(ro, z_shift, efl_o, t_opt, t_opt_rec, t_gen)
 
-    # --- agreement -------------------------------------------------------------------------------
+
+def _time_trace_generic(op, cs, a: argparse.Namespace, wl_um: float) -> dict:
+    """trace_generic: the same eye-plane field (normalised to the 25 mm corner) and a uniform
+    pupil disc, but Optiland generates and aims the rays itself (other rays: timing only)."""
+    n = a.rays
+    g = np.random.default_rng(a.seed + 1)
+    hmax = float(op.fields.max_field)
+    hx = g.uniform(-0.5, 0.5, n) * cs.scene.eye_plane.width_mm / hmax
+    hy = g.uniform(-0.5, 0.5, n) * cs.scene.eye_plane.height_mm / hmax
+    pr, pa = np.sqrt(g.uniform(0, 1, n)) * 0.999, g.uniform(0, 2 * math.pi, n)
+    px, py = pr * np.cos(pa), pr * np.sin(pa)
+    op.ray_tracer.trace_generic(hx[:1000], hy[:1000], px[:1000], py[:1000], wl_um)
+    t_gen = C.timed(
+        lambda: op.ray_tracer.trace_generic(hx, hy, px, py, wl_um, record=False),
+        a.optiland_repeats,
+        1,
+    )
+    t_gen.pop("last")
+    return t_gen
+
+
+def compare(rays: dict, ey: EyelumeRun, op: OptilandRun) -> tuple[dict, bool]:
+    """Image-plane agreement of the rays that pass both tracers, printed; (record, agree)."""
+    ro, out, passed_e = op.traced, ey.out, ey.passed
     xo, yo = np.asarray(ro.x), np.asarray(ro.y)
     passed_o = (np.asarray(ro.i) > 0) & np.isfinite(xo) & np.isfinite(yo)
     both = passed_e & passed_o
-    dx = float(np.max(np.abs(xo[both] - out["x"][both]))) if both.any() else math.nan
-    dy = float(np.max(np.abs(yo[both] - out["y"][both]))) if both.any() else math.nan
-    dl = float(np.max(np.abs(np.asarray(ro.L)[both] - out["L"][both]))) if both.any() else math.nan
-    dm = float(np.max(np.abs(np.asarray(ro.M)[both] - out["M"][both]))) if both.any() else math.nan
-    z_img = np.unique(np.asarray(ro.z)[both] + z_shift)
+
+    def max_diff(theirs: np.ndarray, ours: np.ndarray) -> float:
+        return float(np.max(np.abs(theirs[both] - ours[both]))) if both.any() else math.nan
+
+    dx, dy = max_diff(xo, out["x"]), max_diff(yo, out["y"])
+    dl, dm = max_diff(np.asarray(ro.L), out["L"]), max_diff(np.asarray(ro.M), out["M"])
+    z_img = np.unique(np.asarray(ro.z)[both] + op.z_shift)
     only_e = int((passed_e & ~passed_o).sum())
     only_o = int((~passed_e & passed_o).sum())
     agreement = {
@@ -344,7 +374,7 @@ def main(argv: list[str] | None = None) -> None:
         "max_abs_dM": dm,
         "optiland_image_z_world_mm": z_img.tolist()[:3],
         "efl_eyelume_mm": rays["efl"],
-        "efl_optiland_mm": efl_o,
+        "efl_optiland_mm": op.efl,
     }
     print("\n-- agreement (image plane, rays passing both)")
     print(
@@ -356,16 +386,23 @@ def main(argv: list[str] | None = None) -> None:
         f"max |ΔM| = {dm:.2e}"
     )
     print(
-        f"   EFL eyelume {rays['efl']:.9f} mm, Optiland {efl_o:.9f} mm; Optiland image "
+        f"   EFL eyelume {rays['efl']:.9f} mm, Optiland {op.efl:.9f} mm; Optiland image "
         f"plane at world z = {z_img[:3]}"
     )
     ok = only_e == 0 and only_o == 0 and max(dx, dy) < 1e-9
     print(f"   {'AGREE' if ok else 'DISAGREE'} (criterion: same rays pass, |Δ| < 1e-9 mm)")
+    return agreement, ok
 
-    # --- figures ---------------------------------------------------------------------------------
-    rs_par = n / t_par["best_s"]
-    rs_ser = n / t_ser["best_s"]
-    rs_opt = n / t_opt["best_s"]
+
+def _rate(n: int, t: dict | None) -> float | None:
+    return None if t is None else n / t["best_s"]
+
+
+def print_speed(a: argparse.Namespace, n_surf: int, ey: EyelumeRun, op: OptilandRun) -> None:
+    """The timings, their ratios and the brief's reference figures."""
+    n, threads = a.rays, ey.threads
+    rs_par, rs_ser, rs_opt = _rate(n, ey.t_par), _rate(n, ey.t_ser), _rate(n, op.t_trace)
+    rs_blk, rs_blk1 = _rate(n, ey.t_blk), _rate(n, ey.t_blk1)
     print("\n-- speed (best of repeats; spread = (worst − best) / best)")
 
     def line(name, t, rate, th):
@@ -377,26 +414,27 @@ def main(argv: list[str] | None = None) -> None:
             f"cpu_util {util}, others {t['others_cpu_s']} CPU-s, steal {t['steal_s']} s{warn}"
         )
 
-    rs_blk = n / t_blk["best_s"]
-    rs_blk1 = n / t_blk1["best_s"]
-    line(f"eyelume block kernel ({threads} threads)", t_blk, rs_blk, threads)
-    line("eyelume block kernel (1 thread)", t_blk1, rs_blk1, 1)
-    line(f"eyelume prange ({threads} threads)", t_par, rs_par, threads)
-    line("eyelume serial", t_ser, rs_ser, 1)
-    line("Optiland surfaces.trace(record=False)", t_opt, rs_opt, 1)
-    rs_opt_rec = rs_gen = None
-    if t_opt_rec:
-        rs_opt_rec = n / t_opt_rec["best_s"]
-        line("Optiland surfaces.trace(record=True)", t_opt_rec, rs_opt_rec, 1)
-        rs_gen = n / t_gen["best_s"]
-        line("Optiland trace_generic(record=False)", t_gen, rs_gen, 1)
+    line(f"eyelume block kernel ({threads} threads)", ey.t_blk, rs_blk, threads)
+    line("eyelume block kernel (1 thread)", ey.t_blk1, rs_blk1, 1)
+    line(f"eyelume prange ({threads} threads)", ey.t_par, rs_par, threads)
+    line("eyelume serial", ey.t_ser, rs_ser, 1)
+    line("Optiland surfaces.trace(record=False)", op.t_trace, rs_opt, 1)
+    if op.t_trace_record:
+        line(
+            "Optiland surfaces.trace(record=True)",
+            op.t_trace_record,
+            _rate(n, op.t_trace_record),
+            1,
+        )
+        line("Optiland trace_generic(record=False)", op.t_generic, _rate(n, op.t_generic), 1)
+    jit = ey.jit_s
     print(
-        f"   first call (JIT compile + run): prange {t_jit_par:.2f} s, serial {t_jit_ser:.2f} s, "
-        f"block {t_jit_blk:.2f} s"
+        f"   first call (JIT compile + run): prange {jit['prange']:.2f} s, serial "
+        f"{jit['serial']:.2f} s, block {jit['block']:.2f} s"
     )
     print(
         f"   block kernel ({a.block} rays/block) against the per-ray kernel: same fates "
-        f"{same_status}, max |Δ| {blk_vs_ray:.2e} (mm, direction cosines)"
+        f"{ey.block_same_status}, max |Δ| {ey.block_max_diff:.2e} (mm, direction cosines)"
     )
     print(
         f"\n   ratio eyelume block kernel / Optiland = {rs_blk / rs_opt:.1f}×  (target ≥ "
@@ -417,13 +455,12 @@ def main(argv: list[str] | None = None) -> None:
         f"{C.fmt_rate(REF_OPTILAND_RAYS_S)}rays/s; eyelume prange against that reference: "
         f"{rs_par / REF_OPTILAND_RAYS_S:.1f}×"
     )
-    ia_par = rs_par * n_surf
-    ia_ser = rs_ser * n_surf
+    ia_par, ia_ser = rs_par * n_surf, rs_ser * n_surf
     print(
         f"   eyelume lens-only surface interactions/s (rays × {n_surf} / s): prange "
         f"{C.fmt_rate(ia_par)}, serial {C.fmt_rate(ia_ser)}; surfaces actually met "
-        f"({met_total / n:.3f}/ray): prange {C.fmt_rate(met_total / t_par['best_s'])}, serial "
-        f"{C.fmt_rate(met_total / t_ser['best_s'])}"
+        f"({ey.met_total / n:.3f}/ray): prange {C.fmt_rate(ey.met_total / ey.t_par['best_s'])}, "
+        f"serial {C.fmt_rate(ey.met_total / ey.t_ser['best_s'])}"
     )
     print(
         f"   references: 256-ray blocks {C.fmt_rate(REF_BLOCK_256_INTERACTIONS_S)}/s "
@@ -434,8 +471,16 @@ def main(argv: list[str] | None = None) -> None:
     )
     print(f"   {1e9 / ia_ser:.1f} ns per surface per ray, one thread")
 
-    info["loadavg_at_end"] = C.loadavg()
-    rec = {
+
+def result_record(
+    a, info: dict, n_surf: int, ey: EyelumeRun, op: OptilandRun, agreement: dict, ok: bool
+) -> dict:
+    """The JSON line appended to ``benchmarks/results/lens_vs_optiland.jsonl``."""
+    n, threads = a.rays, ey.threads
+    rs_par, rs_ser, rs_opt = _rate(n, ey.t_par), _rate(n, ey.t_ser), _rate(n, op.t_trace)
+    rs_blk = _rate(n, ey.t_blk)
+    t_opt_rec, t_gen = op.t_trace_record, op.t_generic
+    return {
         "machine": info,
         "command": C.command_line(),
         "quick": a.quick,
@@ -444,28 +489,61 @@ def main(argv: list[str] | None = None) -> None:
         "lens_surfaces": n_surf,
         "agreement": agreement,
         "agree": ok,
-        "eyelume_block": {**t_blk, "threads": threads, "block": a.block, "rays_per_s": rs_blk},
-        "eyelume_block_1thread": {**t_blk1, "rays_per_s": rs_blk1},
-        "block_same_fates_as_per_ray": same_status,
-        "block_max_abs_diff_vs_per_ray": blk_vs_ray,
+        "eyelume_block": {**ey.t_blk, "threads": threads, "block": a.block, "rays_per_s": rs_blk},
+        "eyelume_block_1thread": {**ey.t_blk1, "rays_per_s": _rate(n, ey.t_blk1)},
+        "block_same_fates_as_per_ray": ey.block_same_status,
+        "block_max_abs_diff_vs_per_ray": ey.block_max_diff,
         "ratio_block_vs_optiland": rs_blk / rs_opt,
-        "eyelume_prange": {**t_par, "threads": threads, "rays_per_s": rs_par},
-        "eyelume_serial": {**t_ser, "rays_per_s": rs_ser},
-        "optiland_record_false": {**t_opt, "rays_per_s": rs_opt},
+        "eyelume_prange": {**ey.t_par, "threads": threads, "rays_per_s": rs_par},
+        "eyelume_serial": {**ey.t_ser, "rays_per_s": rs_ser},
+        "optiland_record_false": {**op.t_trace, "rays_per_s": rs_opt},
         "optiland_record_true": (
-            {**t_opt_rec, "rays_per_s": rs_opt_rec} if t_opt_rec is not None else None
+            {**t_opt_rec, "rays_per_s": _rate(n, t_opt_rec)} if t_opt_rec is not None else None
         ),
         "optiland_trace_generic": (
-            {**t_gen, "rays_per_s": rs_gen, "note": "Optiland's own rays, timing only"}
+            {**t_gen, "rays_per_s": _rate(n, t_gen), "note": "Optiland's own rays, timing only"}
             if t_gen is not None
             else None
         ),
         "ratio_prange_vs_optiland": rs_par / rs_opt,
         "ratio_serial_vs_optiland": rs_ser / rs_opt,
-        "interactions_per_s_nominal": {"prange": ia_par, "serial": ia_ser},
-        "surfaces_met_per_ray": met_total / n,
-        "jit_first_call_s": {"prange": t_jit_par, "serial": t_jit_ser},
+        "interactions_per_s_nominal": {"prange": rs_par * n_surf, "serial": rs_ser * n_surf},
+        "surfaces_met_per_ray": ey.met_total / n,
+        "jit_first_call_s": {"prange": ey.jit_s["prange"], "serial": ey.jit_s["serial"]},
     }
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Set up, trace and time both tracers on the same rays, compare, print and record."""
+    a = _parse_args(argv)
+
+    import optiland
+    import optiland.backend as be
+
+    info = C.machine()
+    info["optiland"] = getattr(optiland, "__version__", None) or _dist_version("optiland")
+    info["optiland_backend"] = be.get_backend()
+    C.print_header("Table 3 lens alone: eyelume trace_lens vs Optiland", info)
+    print(f"   Optiland {info['optiland']} ({info['optiland_backend']} backend)")
+
+    cs = compile_scene(eyelume.load_scene("paper2005"))
+    n_surf = cs.lf.shape[0]
+    rays = make_rays(cs, a.rays, a.seed)
+    print(
+        f"\n   lens: {n_surf} surfaces, EFL {rays['efl']:.4f} mm, EPD {rays['epd']:.4f} mm, "
+        f"entrance pupil at world z = {rays['z_ep']:.4f} mm, image plane z = {cs.image_z} mm"
+    )
+    print(
+        f"   rays: {a.rays:_} from the 40 × 30 mm eye plane to the entrance pupil (seed {a.seed})"
+    )
+
+    ey = time_eyelume(cs, rays, a)
+    op = time_optiland(cs, rays, a)
+    agreement, ok = compare(rays, ey, op)
+    print_speed(a, n_surf, ey, op)
+
+    info["loadavg_at_end"] = C.loadavg()
+    rec = result_record(a, info, n_surf, ey, op, agreement, ok)
     path = C.append_result("lens_vs_optiland", rec)
     print(f"\nloadavg at end {info['loadavg_at_end']}; appended to {path.relative_to(C.REPO)}")
 
