@@ -226,6 +226,13 @@ class SurfaceSpec:
         f[G.RHO_A], f[G.RHO_B] = self.rho_a, self.rho_b
         return f
 
+    def int_row(self, tally_a: int, tally_b: int) -> np.ndarray:
+        """The int row: shape, action, Fresnel flag and the ledger indices of its two sides."""
+        i = np.zeros(G.N_INT, dtype=np.int64)
+        i[G.SHAPE], i[G.ACTION], i[G.FRESNEL] = self.shape, self.action, int(self.fresnel)
+        i[G.TALLY_A], i[G.TALLY_B] = tally_a, tally_b
+        return i
+
 
 class _Table:
     """Collects non-sequential surfaces and ledger names."""
@@ -251,12 +258,10 @@ class _Table:
             rot = np.asarray(rot, dtype=float) @ f.rotation.T  # local = rot Rᵀ (p_c − o_c)
             bound = (f.point(bound[0]), bound[1])
         spec = SurfaceSpec(name, shape, origin, rot, bound, **options)
-        i = np.zeros(G.N_INT, dtype=np.int64)
-        i[G.SHAPE], i[G.ACTION], i[G.FRESNEL] = spec.shape, spec.action, int(spec.fresnel)
-        i[G.TALLY_A] = self.tally(spec.tally_a or name)
-        i[G.TALLY_B] = self.tally(spec.tally_b or name)
+        tally_a = self.tally(spec.tally_a or name)
+        tally_b = self.tally(spec.tally_b or name)
         self.rows_f.append(spec.float_row())
-        self.rows_i.append(i)
+        self.rows_i.append(spec.int_row(tally_a, tally_b))
         self.names.append(name)
 
 

@@ -27,6 +27,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
+from eyelume.compile import SurfaceSpec
 from eyelume.kernels import geometry as G
 from eyelume.kernels.geometry import (
     T_MIN,
@@ -44,37 +45,19 @@ HUGE_BOUND = ((0.0, 0.0, 0.0), 1e12)
 # --- building surface tables ----------------------------------------------------------------------
 
 
-def _row(
-    shape,
-    *,
-    origin=(0.0, 0.0, 0.0),
-    rot=None,
-    curv=0.0,
-    conic=0.0,
-    radius=0.0,
-    rmin=0.0,
-    rmax=math.inf,
-    zlo=-math.inf,
-    zhi=math.inf,
-    bound=HUGE_BOUND,
-):
-    """One row of the float and int tables, filled column by column as eyelume.compile does."""
-    f = np.zeros(G.N_FLOAT)
-    f[G.OX : G.OZ + 1] = origin
-    f[G.R00 : G.R22 + 1] = (np.eye(3) if rot is None else np.asarray(rot)).ravel()
-    f[G.CURV], f[G.CONIC], f[G.RADIUS] = curv, conic, radius
-    f[G.RMIN2], f[G.RMAX2] = rmin**2, rmax**2
-    f[G.ZLO], f[G.ZHI] = zlo, zhi
-    f[G.BX : G.BZ + 1] = bound[0]
-    f[G.BR] = bound[1]
-    f[G.N_A] = f[G.N_B] = 1.0
-    i = np.zeros(G.N_INT, dtype=np.int64)
-    i[G.SHAPE] = shape
-    return f, i
+def _surface(shape, *, origin=(0.0, 0.0, 0.0), rot=None, bound=HUGE_BOUND, **fields):
+    """A surface as eyelume.compile builds it (:class:`eyelume.compile.SurfaceSpec`): at the
+    origin, unrotated, with a huge bounding sphere unless told; ``fields`` are SurfaceSpec's
+    (``curv``, ``conic``, ``radius``, ``clip_r``, ``clip_z``, ...)."""
+    rot = np.eye(3) if rot is None else np.asarray(rot)
+    return SurfaceSpec("surface", shape, np.asarray(origin, dtype=float), rot, bound, **fields)
 
 
-def _table(*rows):
-    return np.array([r[0] for r in rows]), np.array([r[1] for r in rows])
+def _table(*surfaces):
+    """The float and int tables of ``surfaces``, packed by SurfaceSpec as compile does."""
+    sf = np.array([s.float_row() for s in surfaces])
+    si = np.array([s.int_row(0, 0) for s in surfaces])
+    return sf, si
 
 
 def _random_rotation(rng):
@@ -224,7 +207,9 @@ def test_conicoid_hits_match_brute_force():
     n_rays, total_skipped, total_hits = 120, 0, 0
     for c, k, ap in CONICS:
         rot, origin = _random_rotation(rng), rng.uniform(-5, 5, 3)
-        sf, si = _table(_row(G.SHAPE_CONIC, origin=origin, rot=rot, curv=c, conic=k, rmax=ap))
+        sf, si = _table(
+            _surface(G.SHAPE_CONIC, origin=origin, rot=rot, curv=c, conic=k, clip_r=(0.0, ap))
+        )
 
         def targets(n, c=c, k=k, ap=ap):
             r = ap * np.sqrt(rng.random(n)) * 1.3  # some beyond the aperture
@@ -272,14 +257,14 @@ def _check_conic_normal(sf, si, rot, origin, c, k, x, y, h):
 
 def test_conic_along_paraboloid_axis_and_plane_parallel():
     # a = 0 in the quadratic: the linear root
-    sf, si = _table(_row(G.SHAPE_CONIC, curv=1 / 20, conic=-1.0, rmax=30.0))
+    sf, si = _table(_surface(G.SHAPE_CONIC, curv=1 / 20, conic=-1.0, clip_r=(0.0, 30.0)))
     # from z = −5 up the axis: the vertex, t = 5 (exactly representable)
     assert intersect_surface(sf, si, 0, 0.0, 0.0, -5.0, 0.0, 0.0, 1.0, math.inf) == 5.0
     # parallel to the axis at r = 10: z = r²/(2R) = 2.5 → t = 7.5
     t = intersect_surface(sf, si, 0, 10.0, 0.0, -5.0, 0.0, 0.0, 1.0, math.inf)
     assert abs(t - 7.5) < 1e-13
     # a ray in a plane's plane never meets it
-    sf, si = _table(_row(G.SHAPE_CONIC, rmax=10.0))
+    sf, si = _table(_surface(G.SHAPE_CONIC, clip_r=(0.0, 10.0)))
     assert intersect_surface(sf, si, 0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, math.inf) == -1.0
     t = intersect_surface(sf, si, 0, 1.0, 2.0, 3.0, 0.6, 0.0, -0.8, math.inf)
     assert abs(t - 3.0 / 0.8) < 1e-14
@@ -288,7 +273,7 @@ def test_conic_along_paraboloid_axis_and_plane_parallel():
 def test_conic_other_sheet_is_not_a_hit():
     # A sphere's far hemisphere is the other sheet of c(x²+y²+z²) − 2z = 0: from inside the
     # sphere R = 10 moving +z, the kernel must not return the back of the sphere (z = 20).
-    sf, si = _table(_row(G.SHAPE_CONIC, curv=0.1, rmax=10.0))
+    sf, si = _table(_surface(G.SHAPE_CONIC, curv=0.1, clip_r=(0.0, 10.0)))
     assert intersect_surface(sf, si, 0, 0.0, 0.0, 5.0, 0.0, 0.0, 1.0, math.inf) == -1.0
     # … but coming from behind it finds the vertex
     t = intersect_surface(sf, si, 0, 0.0, 0.0, 25.0, 0.0, 0.0, -1.0, math.inf)
@@ -305,9 +290,9 @@ def _clips(rng, shape, radius):
         zlo = rng.choice([-math.inf, rng.uniform(-radius, 0.3 * radius)])
         zhi = rng.choice([math.inf, rng.uniform(-0.3 * radius, radius)])
         zlo, zhi = min(zlo, zhi), max(zlo, zhi)
-        return dict(rmin=rmin, rmax=rmax, zlo=zlo, zhi=zhi)
+        return dict(clip_r=(rmin, rmax), clip_z=(zlo, zhi))
     zlo = rng.uniform(-20, 5)
-    return dict(zlo=zlo, zhi=zlo + rng.uniform(1, 25))
+    return dict(clip_z=(zlo, zlo + rng.uniform(1, 25)))
 
 
 def test_sphere_and_cylinder_hits_match_brute_force_and_closed_form():
@@ -318,7 +303,7 @@ def test_sphere_and_cylinder_hits_match_brute_force_and_closed_form():
             radius = rng.uniform(2, 15)
             rot, origin = _random_rotation(rng), rng.uniform(-5, 5, 3)
             clips = _clips(rng, shape, radius)
-            sf, si = _table(_row(shape, origin=origin, rot=rot, radius=radius, **clips))
+            sf, si = _table(_surface(shape, origin=origin, rot=rot, radius=radius, **clips))
 
             def targets(n, radius=radius, shape=shape):
                 v = rng.normal(size=(n, 3))
@@ -348,18 +333,18 @@ def test_sphere_and_cylinder_hits_match_brute_force_and_closed_form():
 
 
 def test_sphere_clip_rejects_first_root_returns_second():
-    sf, si = _table(_row(G.SHAPE_SPHERE, radius=10.0))
+    sf, si = _table(_surface(G.SHAPE_SPHERE, radius=10.0))
     ray = (0.0, 0.0, -20.0, 0.0, 0.0, 1.0)  # meets z = −10 at t = 10 and z = +10 at t = 30
     assert intersect_surface(sf, si, 0, *ray, math.inf) == 10.0
     for clips, expected in (
-        (dict(zlo=0.0), 30.0),
-        (dict(zhi=0.0), 10.0),
-        (dict(zlo=-5.0, zhi=5.0), -1.0),
+        (dict(clip_z=(0.0, math.inf)), 30.0),
+        (dict(clip_z=(-math.inf, 0.0)), 10.0),
+        (dict(clip_z=(-5.0, 5.0)), -1.0),
     ):
-        sf, si = _table(_row(G.SHAPE_SPHERE, radius=10.0, **clips))
+        sf, si = _table(_surface(G.SHAPE_SPHERE, radius=10.0, **clips))
         assert intersect_surface(sf, si, 0, *ray, math.inf) == expected, clips
     # t_max is exclusive and respected
-    sf, si = _table(_row(G.SHAPE_SPHERE, radius=10.0))
+    sf, si = _table(_surface(G.SHAPE_SPHERE, radius=10.0))
     assert intersect_surface(sf, si, 0, *ray, 10.0) == -1.0
     assert intersect_surface(sf, si, 0, *ray, 20.0) == 10.0
     # radial clip: a tilted ray meets the sphere at two different radii (closed form below)
@@ -374,7 +359,7 @@ def test_sphere_clip_rejects_first_root_returns_second():
         (0.0, 0.5 * (r1 + r2), t1 if r1 < r2 else t2),
         (max(r1, r2) + 0.1, math.inf, None),
     ):
-        sf, si = _table(_row(G.SHAPE_SPHERE, radius=10.0, rmin=rmin, rmax=rmax))
+        sf, si = _table(_surface(G.SHAPE_SPHERE, radius=10.0, clip_r=(rmin, rmax)))
         t = intersect_surface(sf, si, 0, *p, *d, math.inf)
         if expected is None:
             assert t == -1.0
@@ -384,7 +369,7 @@ def test_sphere_clip_rejects_first_root_returns_second():
 
 def test_cylinder_clip_and_distance():
     radius = 5.0
-    sf, si = _table(_row(G.SHAPE_CYLINDER, radius=radius))
+    sf, si = _table(_surface(G.SHAPE_CYLINDER, radius=radius))
     p = np.array([-20.0, 0.0, -10.0])
     d = np.array([1.0, 0.0, 0.5]) / math.hypot(1.0, 0.5)
     # closed form: x = −20 + t dx = ∓5 → t = 15/dx, 25/dx; z = −10 + t dz
@@ -392,26 +377,26 @@ def test_cylinder_clip_and_distance():
     z1, z2 = p[2] + t1 * d[2], p[2] + t2 * d[2]
     assert abs(intersect_surface(sf, si, 0, *p, *d, math.inf) - t1) < 1e-12
     for clips, expected in (
-        (dict(zlo=0.5 * (z1 + z2)), t2),
-        (dict(zhi=0.5 * (z1 + z2)), t1),
-        (dict(zlo=z2 + 0.1), None),
+        (dict(clip_z=(0.5 * (z1 + z2), math.inf)), t2),
+        (dict(clip_z=(-math.inf, 0.5 * (z1 + z2))), t1),
+        (dict(clip_z=(z2 + 0.1, math.inf)), None),
     ):
-        sf, si = _table(_row(G.SHAPE_CYLINDER, radius=radius, **clips))
+        sf, si = _table(_surface(G.SHAPE_CYLINDER, radius=radius, **clips))
         t = intersect_surface(sf, si, 0, *p, *d, math.inf)
         if expected is None:
             assert t == -1.0
         else:
             assert abs(t - expected) < 1e-12
     # a ray along the axis never meets the mantle (a = 0, b = 0)
-    sf, si = _table(_row(G.SHAPE_CYLINDER, radius=radius))
+    sf, si = _table(_surface(G.SHAPE_CYLINDER, radius=radius))
     assert intersect_surface(sf, si, 0, 1.0, 1.0, -50.0, 0.0, 0.0, 1.0, math.inf) == -1.0
 
 
 # --- nearest hit among several surfaces ---------------------------------------------------------
 
 
-def _sphere_row(centre, radius, **clips):
-    return _row(
+def _sphere(centre, radius, **clips):
+    return _surface(
         G.SHAPE_SPHERE,
         origin=centre,
         radius=radius,
@@ -423,9 +408,9 @@ def _sphere_row(centre, radius, **clips):
 def test_nearest_hit_three_spheres_on_a_line():
     # listed far → near so that the search must replace its best candidate
     sf, si = _table(
-        _sphere_row((0.0, 0.0, 50.0), 3.0),
-        _sphere_row((0.0, 0.0, 30.0), 3.0),
-        _sphere_row((0.0, 0.0, 10.0), 3.0),
+        _sphere((0.0, 0.0, 50.0), 3.0),
+        _sphere((0.0, 0.0, 30.0), 3.0),
+        _sphere((0.0, 0.0, 10.0), 3.0),
     )
     assert nearest_hit(sf, si, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0) == (2, 7.0)
     assert nearest_hit(sf, si, 0.0, 0.0, 20.0, 0.0, 0.0, 1.0) == (1, 7.0)
@@ -440,7 +425,7 @@ def _random_scene(rng):
     for _ in range(3):
         centre = rng.uniform(-20, 20, 3)
         radius = rng.uniform(2, 8)
-        rows.append(_sphere_row(centre, radius, zlo=rng.uniform(-radius, 0.0)))
+        rows.append(_sphere(centre, radius, clip_z=(rng.uniform(-radius, 0.0), math.inf)))
     for _ in range(2):
         rot, origin = _random_rotation(rng), rng.uniform(-20, 20, 3)
         radius, zlo = rng.uniform(1, 5), rng.uniform(-10, 0)
@@ -448,13 +433,12 @@ def _random_scene(rng):
         centre = origin + rot[2] * 0.5 * (zlo + zhi)
         bound = (centre, math.hypot(radius, 0.5 * (zhi - zlo)) * (1 + 1e-6))
         rows.append(
-            _row(
+            _surface(
                 G.SHAPE_CYLINDER,
                 origin=origin,
                 rot=rot,
                 radius=radius,
-                zlo=zlo,
-                zhi=zhi,
+                clip_z=(zlo, zhi),
                 bound=bound,
             )
         )
@@ -468,7 +452,15 @@ def _random_scene(rng):
         s = float(_sag(c, k, ap))
         bound = (origin + rot[2] * s / 2, math.hypot(ap, s / 2) * (1 + 1e-6))
         rows.append(
-            _row(G.SHAPE_CONIC, origin=origin, rot=rot, curv=c, conic=k, rmax=ap, bound=bound)
+            _surface(
+                G.SHAPE_CONIC,
+                origin=origin,
+                rot=rot,
+                curv=c,
+                conic=k,
+                clip_r=(0.0, ap),
+                bound=bound,
+            )
         )
     return _table(*rows)
 
