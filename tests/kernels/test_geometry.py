@@ -207,9 +207,8 @@ def test_conicoid_hits_match_brute_force():
     n_rays, total_skipped, total_hits = 120, 0, 0
     for c, k, ap in CONICS:
         rot, origin = _random_rotation(rng), rng.uniform(-5, 5, 3)
-        sf, si = _table(
-            _surface(G.SHAPE_CONIC, origin=origin, rot=rot, curv=c, conic=k, clip_r=(0.0, ap))
-        )
+        surface = _surface(G.SHAPE_CONIC, origin=origin, rot=rot, curv=c, conic=k, clip_r=(0.0, ap))
+        sf, si = _table(surface)
 
         def targets(n, c=c, k=k, ap=ap):
             r = ap * np.sqrt(rng.random(n)) * 1.3  # some beyond the aperture
@@ -229,12 +228,14 @@ def test_conicoid_hits_match_brute_force():
             # on the sag of the vertex sheet: rounding of the point ~ε·300 mm ≈ 1e-13 mm times
             # the slope (≤ 3 inside these apertures); 1e-9 mm leaves ample headroom
             assert abs(z - _sag(c, k, r)) < 1e-9, (c, k, r, z)
-            _check_conic_normal(sf, si, rot, origin, c, k, x, y, h)
+            _check_conic_normal(surface, sf, si, x, y, h)
     assert total_skipped <= 0.02 * n_rays * len(CONICS)
     assert total_hits > n_rays * len(CONICS) // 3
 
 
-def _check_conic_normal(sf, si, rot, origin, c, k, x, y, h):
+def _check_conic_normal(surface, sf, si, x, y, h):
+    """The conic normal at local (x, y) of ``surface`` (world hit ``h``; tables ``sf``, ``si``)."""
+    rot, c, k = surface.rot, surface.curv, surface.conic
     n = np.array(conic_normal(c, k, x, y, _sag(c, k, math.hypot(x, y))))
     assert abs(np.linalg.norm(n) - 1.0) < 1e-12
     assert n[2] >= 0.0  # toward +z (side B) on the vertex sheet
