@@ -6,7 +6,8 @@ sphere, per mm² on a disk). The harness histograms n samples over a grid of cel
 parameter rectangle, integrates the pdf over every cell (Gauss–Legendre, ``ires`` × ``ires``
 nodes per cell) to get the expected counts, pools the cells expecting fewer than 5 (so that the
 χ² approximation holds) and returns the p-value of Pearson's statistic (``scipy.stats.chi2``,
-cells − 1 degrees of freedom). It also reports the integral of the pdf over the domain (1 for a
+cells − 1 degrees of freedom; :func:`pearson`, which 1-D tests use directly through
+:func:`pearson_1d`). It also reports the integral of the pdf over the domain (1 for a
 normalised pdf) and any sample that fell where the pdf integrates to 0.
 
 Domains (parameters (a, b), and dΩ or dA per da db):
@@ -27,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-__all__ = ["Domain", "SPHERE", "disk", "ChiSquareTest", "ChiSquareResult"]
+__all__ = ["Domain", "SPHERE", "disk", "ChiSquareTest", "ChiSquareResult", "pearson", "pearson_1d"]
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,31 @@ def disk(radius: float) -> Domain:
         return np.stack([r * np.cos(b), r * np.sin(b)], axis=-1)
 
     return Domain(f"disk(R={radius})", (0.0, 1.0), to_params, to_points, radius**2 / 2.0)
+
+
+def pearson(observed: np.ndarray, expected: np.ndarray) -> tuple[float, float, int]:
+    """Pearson's χ² of counts against expected counts (any shape, same shape): the cells
+    expecting fewer than 5 pooled into one, cells expecting 0 left out; (p-value, statistic,
+    degrees of freedom = cells − 1)."""
+    obs, exp = np.asarray(observed, float).ravel(), np.asarray(expected, float).ravel()
+    low = exp < 5.0
+    if low.any():
+        obs = np.append(obs[~low], obs[low].sum())
+        exp = np.append(exp[~low], exp[low].sum())
+    keep = exp > 0.0
+    obs, exp = obs[keep], exp[keep]
+    stat = float(((obs - exp) ** 2 / exp).sum())
+    dof = obs.size - 1
+    return float(stats.chi2.sf(stat, dof)), stat, dof
+
+
+def pearson_1d(samples: np.ndarray, edges: np.ndarray, probs: np.ndarray) -> float:
+    """p-value of 1-D ``samples`` histogrammed over ``edges`` against the cells' probabilities
+    ``probs`` (summing to 1: every sample falls in a cell), by :func:`pearson`."""
+    observed, _ = np.histogram(samples, bins=edges)
+    assert observed.sum() == len(samples), "samples outside the cells"
+    assert abs(float(np.sum(probs)) - 1.0) < 1e-9, float(np.sum(probs))
+    return pearson(observed, np.asarray(probs) * len(samples))[0]
 
 
 @dataclass
@@ -122,15 +148,5 @@ class ChiSquareTest:
         probs = self.expected_probabilities()
         integral = float(probs.sum())
         impossible = int(observed[probs <= 0.0].sum())
-        obs, exp = observed.ravel(), probs.ravel() * self.sample_count
-        low = exp < 5.0
-        if low.any():
-            obs = np.append(obs[~low], obs[low].sum())
-            exp = np.append(exp[~low], exp[low].sum())
-        keep = exp > 0.0
-        obs, exp = obs[keep], exp[keep]
-        stat = float(((obs - exp) ** 2 / exp).sum())
-        dof = obs.size - 1
-        return ChiSquareResult(
-            float(stats.chi2.sf(stat, dof)), stat, dof, integral, impossible, observed, probs
-        )
+        p_value, stat, dof = pearson(observed, probs * self.sample_count)
+        return ChiSquareResult(p_value, stat, dof, integral, impossible, observed, probs)

@@ -2,8 +2,9 @@
 inverse round trips, frames, and the LED-profile tables.
 
 χ² tests draw from the counter-based streams with fixed seeds, so they are deterministic; they
-reject at p < 1e-3, the usual threshold for this style of test. Cells whose expected count is
-below 5 are pooled into one, as Mitsuba does, so that the χ² approximation holds.
+reject at p < 1e-3, the usual threshold for this style of test. They use the one χ² harness,
+``chi2.py`` (cells expecting fewer than 5 pooled into one, as Mitsuba does, so that the χ²
+approximation holds).
 """
 
 from __future__ import annotations
@@ -12,11 +13,11 @@ import math
 
 import numpy as np
 import pytest
+from chi2 import SPHERE, ChiSquareTest, pearson_1d
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numba import njit
 from scipy.integrate import quad
-from scipy.stats import chisquare
 
 from eyelume.kernels.rng import next_uniform, stream_start
 from eyelume.kernels.sampling import (
@@ -47,19 +48,6 @@ def _table_profile(alpha):
     return np.interp(alpha, TABLE_ALPHA, TABLE_I)
 
 
-def _chi2_p(observed: np.ndarray, probs: np.ndarray) -> float:
-    """p-value of observed counts against cell probabilities, low-expectation cells pooled."""
-    observed, probs = observed.ravel().astype(float), probs.ravel()
-    assert abs(probs.sum() - 1.0) < 1e-9, probs.sum()  # the expected counts cover all outcomes
-    expected = probs * observed.sum()
-    low = expected < 5.0
-    if low.any():
-        observed = np.append(observed[~low], observed[low].sum())
-        expected = np.append(expected[~low], expected[low].sum())
-    expected *= observed.sum() / expected.sum()
-    return float(chisquare(observed, expected).pvalue)
-
-
 @njit(cache=True)
 def _uniform_pairs(seed, n):
     out = np.empty((n, 2))
@@ -79,6 +67,14 @@ def _cosine_samples(us):
 
 
 @njit(cache=True)
+def _cosine_pdf(v):
+    out = np.empty(v.shape[0])
+    for i in range(v.shape[0]):
+        out[i] = cosine_hemisphere_pdf(v[i, 2])
+    return out
+
+
+@njit(cache=True)
 def _polar_samples(us, alpha_grid, cdf_grid):
     out = np.empty(us.shape[0])
     for i in range(us.shape[0]):
@@ -90,18 +86,19 @@ def _polar_samples(us, alpha_grid, cdf_grid):
 
 
 def test_cosine_hemisphere_chi2():
-    us = _uniform_pairs(1, N_SAMPLES)
-    v = _cosine_samples(us)
-    n_cos, n_phi = 20, 40
-    cos_edges = np.linspace(0.0, 1.0, n_cos + 1)
-    phi_edges = np.linspace(0.0, 2 * np.pi, n_phi + 1)
-    phi = np.mod(np.arctan2(v[:, 1], v[:, 0]), 2 * np.pi)
-    observed, _, _ = np.histogram2d(v[:, 2], phi, bins=(cos_edges, phi_edges))
-    # ∫∫ pdf dΩ over a cell, with dΩ = d(cos θ) dφ and pdf = cos θ/π:
-    # (c_hi² − c_lo²)/2 · Δφ/π; the pdf under test is the kernel's own cosine_hemisphere_pdf,
-    # whose closed-form integral this is (checked pointwise below).
-    cell = np.outer(np.diff(cos_edges**2) / 2.0, np.diff(phi_edges) / np.pi)
-    assert _chi2_p(observed, cell) > P_REJECT
+    # The counter-based streams' uniforms (tests/kernels/test_samplers.py draws numpy's) into
+    # the one harness, against the kernel's own cosine_hemisphere_pdf: cells of 0.05 in cos θ
+    # (40 over [−1, 1]) by 9° in φ; Gauss–Legendre integrates the linear pdf exactly.
+    test = ChiSquareTest(
+        SPHERE,
+        lambda n: _cosine_samples(_uniform_pairs(1, n)),
+        _cosine_pdf,
+        sample_count=N_SAMPLES,
+        res=(40, 40),
+    )
+    result = test.run()
+    assert result.impossible == 0  # no sample below the horizon
+    assert result.p_value > P_REJECT
     for c in np.linspace(0.0, 1.0, 11):
         assert cosine_hemisphere_pdf(c) == c / math.pi
     assert cosine_hemisphere_pdf(-0.5) == 0.0
@@ -191,8 +188,7 @@ def _alpha_chi2(profile, cell_probs_of, seed):
     alpha = _polar_samples(u, alpha_grid, cdf_grid)
     assert alpha.min() >= 0.0 and alpha.max() <= math.pi / 2
     edges = np.linspace(0.0, math.pi / 2, 46)  # 2° cells
-    observed, _ = np.histogram(alpha, bins=edges)
-    return _chi2_p(observed, cell_probs_of(edges))
+    return pearson_1d(alpha, edges, cell_probs_of(edges))
 
 
 def test_profile_polar_angle_cos_m_chi2():
