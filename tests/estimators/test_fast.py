@@ -16,20 +16,11 @@ from scipy import stats
 import eyelume
 from eyelume.compile import compile_scene
 from eyelume.estimators import fast as F
-from eyelume.estimators.camera import (
-    A_P,
-    A_R,
-    A_Z,
-    N_AIM,
-    Mat2,
-    aim_at_stop,
-    aim_chief,
-    into_scene,
-)
+from eyelume.estimators.camera import Mat2, aim_at_stop, aim_chief, into_scene
 from eyelume.kernels import geometry as G
 from eyelume.kernels.rng import stream_start
 from eyelume.kernels.sampling import cos_power_tables
-from eyelume.kernels.tables import Facet, LedTable, SurfaceTable
+from eyelume.kernels.tables import A_P, A_R, A_Z, N_AIM, Facet, LedTable, SurfaceTable
 from eyelume.scene.sources import cos_power_exponent
 
 SMALL = {"sensor.cols": 29, "sensor.rows": 22}  # 1.6 mm pixels: quick renders

@@ -24,10 +24,11 @@ import numpy as np
 
 from eyelume.compile import CompiledScene, gaze_rotation
 from eyelume.detectors.receivers import BinnedPlane
-from eyelume.estimators.camera import CameraTables, aim_chief, into_scene
+from eyelume.estimators.camera import aim_chief, into_scene
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import reflect, refract
 from eyelume.kernels.sampling import orthonormal_basis
+from eyelume.kernels.tables import CameraTables
 
 __all__ = ["eye_truth", "glint_counts", "sensor_to_pixel"]
 

@@ -27,22 +27,12 @@ from typing import NamedTuple
 
 from numba import njit
 
-from eyelume.compile import AIM_PROBABILITY
 from eyelume.kernels import sequential as Q
-from eyelume.kernels.tables import A_P, A_R, A_X, A_Y, A_Z, N_AIM, CameraTables
 
 __all__ = [
-    "CameraTables",
     "into_scene",
     "aim_at_stop",
     "aim_chief",
-    "AIM_PROBABILITY",
-    "A_X",
-    "A_Y",
-    "A_Z",
-    "A_R",
-    "A_P",
-    "N_AIM",
     "Mat2",
     "SceneRay",
     "StopAim",
