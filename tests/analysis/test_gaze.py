@@ -16,6 +16,7 @@ import pytest
 
 from eyelume.analysis.tracking.gaze import (
     GeometricGaze,
+    ModelEye,
     PccrModel,
     PinholeCamera,
     angles_from_axis,
@@ -242,7 +243,7 @@ def test_geometric_follows_the_head(camera, leds):
     """No per-user calibration: the eye 3 mm right, 2 mm down and 5 mm nearer changes nothing."""
     gaze = GeometricGaze(camera, leds)
     for h, v in [(0, 0), (-20, 10), (25, -15)]:
-        f = simulate_eye_features(camera, leds, h, v, offset_mm=(3.0, -2.0, 5.0))
+        f = simulate_eye_features(camera, leds, h, v, ModelEye(offset_mm=(3.0, -2.0, 5.0)))
         est = gaze.estimate(f.pupil_px, f.glints_px)
         assert est.ok and _angle_deg(est.optical_axis, f.optical_axis) < 0.01
 

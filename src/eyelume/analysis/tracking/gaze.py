@@ -41,6 +41,7 @@ __all__ = [
     "EyeFeatures",
     "GazeEstimate",
     "GeometricGaze",
+    "ModelEye",
     "PccrModel",
     "PinholeCamera",
     "axis_from_angles",
@@ -302,6 +303,27 @@ def _failed(reason: str, n_glints: int = 0, c: np.ndarray | None = None) -> Gaze
     return GazeEstimate(math.nan, math.nan, c, nan3, False, reason, nan3, n_glints)
 
 
+@dataclass(frozen=True)
+class ModelEye:
+    """The spherical-cornea eye that :func:`simulate_eye_features` turns to a gaze (mm).
+
+    ``R``, ``K``, ``n``: the corneal sphere's radius, the distance from its centre to the pupil
+    centre and the effective index, as :class:`GeometricGaze` takes them (their defaults are
+    these: the Arizona eye's 7.8 mm anterior cornea, K = 7.8 − 3.6 = 4.2 mm, the keratometric
+    index 1.3375). ``rotation_centre_mm``: depth of the centre of rotation behind the corneal
+    vertex (13.5, the usual value). ``cap_radius_mm``: the corneal cap's semi-diameter (the
+    Arizona cornea's 6 mm); a glint farther than this from the optical axis is missing.
+    ``offset_mm``: the corneal vertex in primary gaze (the world origin by default).
+    """
+
+    R: float = 7.8
+    K: float = 4.2
+    n: float = 1.3375
+    rotation_centre_mm: float = 13.5
+    cap_radius_mm: float = 6.0
+    offset_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
 class GeometricGaze:
     """Gaze by the geometric model of Guestrin & Eizenman (2006), from ≥ 2 glints.
 
@@ -359,9 +381,9 @@ class GeometricGaze:
         self,
         camera: PinholeCamera,
         leds_mm: np.ndarray,
-        R: float = 7.8,
-        K: float = 4.2,
-        n: float = 1.3375,
+        R: float = ModelEye.R,
+        K: float = ModelEye.K,
+        n: float = ModelEye.n,
         kappa_deg: tuple[float, float] = (0.0, 0.0),
     ) -> None:
         self.camera = camera
@@ -548,33 +570,28 @@ def simulate_eye_features(
     leds_mm: np.ndarray,
     h_deg: float,
     v_deg: float,
-    R: float = 7.8,
-    K: float = 4.2,
-    n: float = 1.3375,
-    rotation_centre_mm: float = 13.5,
-    cap_radius_mm: float = 6.0,
-    offset_mm: Sequence[float] = (0.0, 0.0, 0.0),
+    eye: ModelEye = ModelEye(),
 ) -> EyeFeatures:
     """Exact pupil and glint picture positions of the spherical-cornea eye at gaze (h, v).
 
-    The eye, in primary gaze with its corneal vertex at ``offset_mm`` (the world origin by
-    default), turns about its centre of rotation ``rotation_centre_mm`` behind the vertex until
-    its optical axis is ω = :func:`axis_from_angles` (h, v): the centre of corneal curvature is
+    The eye (:class:`ModelEye`), in primary gaze with its corneal vertex at ``eye.offset_mm``,
+    turns about its centre of rotation ``eye.rotation_centre_mm`` behind the vertex until its
+    optical axis is ω = :func:`axis_from_angles` (h, v): the centre of corneal curvature is
     then c = C + (d − R) ω and the pupil centre p = c + K ω (C the rotation centre, d its depth).
     Each glint is the image of the specular point (:func:`specular_point`) of its LED toward the
     camera node; it is missing (None) when that point lies off the corneal cap — farther than
-    ``cap_radius_mm`` from the optical axis (the Arizona cornea's 6 mm semi-diameter) — or
-    outside the picture. The pupil's image is that of p seen through the sphere
-    (:func:`refraction_point`).
+    ``eye.cap_radius_mm`` from the optical axis — or outside the picture. The pupil's image is
+    that of p seen through the sphere (:func:`refraction_point`).
 
     >>> f = simulate_eye_features(PinholeCamera(), np.array([[0.0, 30.0, 70.0]]), 0.0, 0.0)
     >>> f.pupil_px.round(6)
     array([43., 32.])
     """
+    R, K, n, cap_radius_mm = eye.R, eye.K, eye.n, eye.cap_radius_mm
     leds = np.asarray(leds_mm, dtype=float).reshape(-1, 3)
     omega = axis_from_angles(h_deg, v_deg)
-    centre = np.asarray(offset_mm, dtype=float) - np.array([0.0, 0.0, rotation_centre_mm])
-    c = centre + (rotation_centre_mm - R) * omega
+    centre = np.asarray(eye.offset_mm, dtype=float) - np.array([0.0, 0.0, eye.rotation_centre_mm])
+    c = centre + (eye.rotation_centre_mm - R) * omega
     p = c + K * omega
     o = camera.node
     glints: list[np.ndarray | None] = []
