@@ -62,7 +62,7 @@ def _synthetic(rows: int = 480):
             {"led": k, "centre_px": list(p)} for k, p in enumerate(mod.glint_positions(centre))
         ],
     }
-    return mod.draw_eye(shape=(rows, 640), centre=centre), truth
+    return mod.draw_eye(mod.EyePicture(shape=(rows, 640), centre=centre)), truth
 
 
 def _render(out: Path) -> None:

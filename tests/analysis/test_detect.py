@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -37,23 +38,37 @@ def glint_positions(centre=CENTRE, r=GLINT_R, azimuths=LEDS) -> list[tuple[float
     ]
 
 
-def draw_eye(
-    *,
-    shape=SHAPE,
-    centre=CENTRE,
-    axes=AXES,
-    angle=ANGLE,
-    pupil=True,
-    iris_radius=125.0,
-    glints=None,
-    glint_sigma=GLINT_SIGMA,
-    eyelid_y: float | None = None,
-    noise=NOISE,
-    blur=BLUR,
-    seed=0,
-    dtype=np.uint16,
-) -> np.ndarray:
-    """A dark-pupil eye picture (module doc). ``eyelid_y``: a skin-bright band above that row."""
+class EyePicture(NamedTuple):
+    """What :func:`draw_eye` draws (module doc), in pixels of the picture, (col, row) order.
+
+    ``axes``: the pupil ellipse's full lengths; ``glints``: their centres (default: one per LED,
+    :func:`glint_positions`); ``eyelid_y``: a skin-bright band above that row; ``noise``: σ in
+    DN; ``blur``: the optics' Gaussian σ; ``seed``: of the noise; ``dtype``: of the picture.
+    """
+
+    shape: tuple[int, int] = SHAPE
+    centre: tuple[float, float] = CENTRE
+    axes: tuple[float, float] = AXES
+    angle: float = ANGLE
+    pupil: bool = True
+    iris_radius: float = 125.0
+    glints: list | None = None
+    glint_sigma: float = GLINT_SIGMA
+    eyelid_y: float | None = None
+    noise: float = NOISE
+    blur: float = BLUR
+    seed: int = 0
+    dtype: type = np.uint16
+
+
+PICTURE = EyePicture()  # the tests' default picture
+
+
+def draw_eye(picture: EyePicture = PICTURE) -> np.ndarray:
+    """A dark-pupil eye picture (module doc) as ``picture`` (:class:`EyePicture`) describes it."""
+    shape, centre, axes, angle = picture.shape, picture.centre, picture.axes, picture.angle
+    glints, glint_sigma, eyelid_y = picture.glints, picture.glint_sigma, picture.eyelid_y
+    noise, blur, seed, dtype = picture.noise, picture.blur, picture.seed, picture.dtype
     s, shift = 4, 8
     rows, cols = shape
     canvas = np.full((rows * s, cols * s), 500.0, np.float32)
@@ -64,9 +79,9 @@ def draw_eye(
     def size(v: float) -> int:
         return int(round(s * v * 2**shift))
 
-    cv2.circle(canvas, (fine(centre[0]), fine(centre[1])), size(iris_radius), 170.0, -1,
+    cv2.circle(canvas, (fine(centre[0]), fine(centre[1])), size(picture.iris_radius), 170.0, -1,
                cv2.LINE_8, shift)  # fmt: skip
-    if pupil:
+    if picture.pupil:
         cv2.ellipse(canvas, (fine(centre[0]), fine(centre[1])),
                     (size(axes[0] / 2), size(axes[1] / 2)), angle, 0, 360, 30.0, -1,
                     cv2.LINE_8, shift)  # fmt: skip
@@ -97,7 +112,7 @@ def _check_glints(d, truth=None, tol=0.1, leds=range(4)):
 
 
 def test_clean_picture_pupil_and_glints_to_a_tenth_of_a_pixel():
-    d = detect(draw_eye(noise=0.0), led_azimuths_deg=LEDS)
+    d = detect(draw_eye(EyePicture(noise=0.0)), led_azimuths_deg=LEDS)
     assert d.ok and d.failures == []
     p = d.pupil
     assert _err(p.centre_px, CENTRE) < 0.1
@@ -125,7 +140,7 @@ def test_clean_picture_pupil_and_glints_to_a_tenth_of_a_pixel():
 # by ~0.01 px, so the clean picture's 0.1 px holds.
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_noisy_picture_pupil_within_stated_tolerance(seed):
-    d = detect(draw_eye(seed=seed), led_azimuths_deg=LEDS)
+    d = detect(draw_eye(EyePicture(seed=seed)), led_azimuths_deg=LEDS)
     assert d.ok, d.failures
     assert _err(d.pupil.centre_px, CENTRE) < 0.1
     assert 0.1 < d.pupil.fit_residual_px < 0.3
@@ -138,9 +153,9 @@ def test_small_pupil_at_the_papers_framing(seed):
     rng = np.random.default_rng(seed)
     centre = (43.0 + rng.uniform(-3, 3), 32.0 + rng.uniform(-3, 3))
     glints = glint_positions(centre, r=3.5)
-    img = draw_eye(shape=(65, 87), centre=centre, axes=(15.5, 14.5), angle=rng.uniform(0, 180),
-                   iris_radius=12.0, glints=glints, glint_sigma=0.6, blur=1.0, noise=4.0,
-                   seed=seed)  # fmt: skip
+    img = draw_eye(EyePicture(shape=(65, 87), centre=centre, axes=(15.5, 14.5),
+                              angle=rng.uniform(0, 180), iris_radius=12.0, glints=glints,
+                              glint_sigma=0.6, blur=1.0, noise=4.0, seed=seed))  # fmt: skip
     d = detect(img, led_azimuths_deg=LEDS)
     assert d.ok, d.failures
     assert _err(d.pupil.centre_px, centre) < 0.15
@@ -149,7 +164,7 @@ def test_small_pupil_at_the_papers_framing(seed):
 
 def test_input_types_agree():
     """uint16 DN, float irradiance (any scale) and uint8 give the same answer (own range)."""
-    dn = draw_eye(seed=3)
+    dn = draw_eye(EyePicture(seed=3))
     ref = detect(dn)
     for img in (dn.astype(np.float64) * 3.7e-9, dn.astype(np.float32), dn.astype(np.int32)):
         d = detect(img)
@@ -162,7 +177,7 @@ def test_input_types_agree():
 
 
 def test_led_matching_follows_the_azimuths():
-    img = draw_eye(seed=4)
+    img = draw_eye(EyePicture(seed=4))
     # LED list in another order: the glint displaced toward +x belongs to the LED at 0°.
     az = (90.0, 180.0, 270.0, 0.0)
     d = detect(img, led_azimuths_deg=az)
@@ -178,7 +193,9 @@ def test_led_matching_follows_the_azimuths():
 
 def test_lost_glint_is_reported_and_the_rest_matched():
     truth = glint_positions()
-    d = detect(draw_eye(glints=[truth[0], truth[1], truth[3]], seed=5), led_azimuths_deg=LEDS)
+    d = detect(
+        draw_eye(EyePicture(glints=[truth[0], truth[1], truth[3]], seed=5)), led_azimuths_deg=LEDS
+    )
     assert not d.ok
     assert [g.led for g in d.glints] == [0, 1, 3]
     assert any(f.startswith("glint lost") and "LED 2" in f for f in d.failures)
@@ -186,7 +203,7 @@ def test_lost_glint_is_reported_and_the_rest_matched():
 
 
 def test_no_pupil_is_a_failure_not_a_number():
-    d = detect(draw_eye(pupil=False, seed=6), led_azimuths_deg=LEDS)
+    d = detect(draw_eye(EyePicture(pupil=False, seed=6)), led_azimuths_deg=LEDS)
     assert not d.ok and d.pupil is None
     assert d.failures[0].startswith("no pupil")
     # Uniform, and all-dark noise (LEDs off): no dark mode of its own.
@@ -196,7 +213,7 @@ def test_no_pupil_is_a_failure_not_a_number():
 
 
 def test_pupil_half_hidden_by_the_eyelid_is_reported():
-    d = detect(draw_eye(eyelid_y=CENTRE[1], seed=7), led_azimuths_deg=LEDS)
+    d = detect(draw_eye(EyePicture(eyelid_y=CENTRE[1], seed=7)), led_azimuths_deg=LEDS)
     assert not d.ok
     assert any(f.startswith("pupil cut or hidden") for f in d.failures), d.failures
     assert d.pupil.boundary_support < 0.6
@@ -206,7 +223,7 @@ def test_pupil_partly_under_the_eyelid_is_still_measured():
     """A quarter of the pupil under the lid: the lid's edge drops out of the fit. The centre
     is measured 0.20–0.25 px low over seeds 1–8 (the bright lid's blur lightens the pupil's
     top corners, moving their edge points inward; a systematic shift, not noise): 0.3 px."""
-    d = detect(draw_eye(eyelid_y=CENTRE[1] - 35.0, seed=8), led_azimuths_deg=LEDS)
+    d = detect(draw_eye(EyePicture(eyelid_y=CENTRE[1] - 35.0, seed=8)), led_azimuths_deg=LEDS)
     assert d.ok, d.failures
     assert 0.6 < d.pupil.boundary_support < 0.85
     assert _err(d.pupil.centre_px, CENTRE) < 0.3
@@ -216,7 +233,7 @@ def test_glint_on_the_pupil_edge_is_a_warning():
     truth = glint_positions()
     # LED 3's glint moved onto the lower edge of the (tilted) pupil.
     edge = (CENTRE[0] + 0.0, CENTRE[1] + 50.0)
-    d = detect(draw_eye(glints=[*truth[:3], edge], seed=9), led_azimuths_deg=LEDS)
+    d = detect(draw_eye(EyePicture(glints=[*truth[:3], edge], seed=9)), led_azimuths_deg=LEDS)
     assert d.ok
     assert any("glint 3 on the pupil edge" in f and f.startswith("warning") for f in d.failures)
     assert _err(d.pupil.centre_px, CENTRE) < 0.1
@@ -224,12 +241,12 @@ def test_glint_on_the_pupil_edge_is_a_warning():
 
 
 def test_detection_to_dict_is_json_ready():
-    d = detect(draw_eye(seed=10), led_azimuths_deg=LEDS)
+    d = detect(draw_eye(EyePicture(seed=10)), led_azimuths_deg=LEDS)
     out = json.loads(json.dumps(detection_to_dict(d)))
     assert out["ok"] is True and len(out["glints"]) == 4
     assert set(out["pupil"]) >= {"centre_px", "axes_px", "angle_deg", "boundary_support"}
     assert out["glints"][2]["led"] == 2 and "OpenCV" in out["convention"]
-    none = json.loads(json.dumps(detection_to_dict(detect(draw_eye(pupil=False)))))
+    none = json.loads(json.dumps(detection_to_dict(detect(draw_eye(EyePicture(pupil=False))))))
     assert none["pupil"] is None and none["ok"] is False
 
 
@@ -247,7 +264,7 @@ def test_bad_input_raises():
 def test_nan_pixels_are_missing_pixels():
     """Issue 12/13: a float picture with NaN pixels (a dead column, a masked patch, one
     pixel in the pupil) is measured from the rest, as before within 0.1 px."""
-    img = draw_eye(seed=11, dtype=np.float64)
+    img = draw_eye(EyePicture(seed=11, dtype=np.float64))
     img[:, 30] = np.nan  # a dead column far from the eye
     img[int(CENTRE[1]), int(CENTRE[0])] = np.nan  # one pixel inside the pupil
     img[200:204, 250:254] = np.inf
