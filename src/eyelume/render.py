@@ -164,7 +164,7 @@ class RenderOptions:
     """The run options of :func:`render`: which estimator, its budget and the seed.
 
     Every field left ``None`` takes the scene's ``[run]`` value (:class:`eyelume.scene.model.Run`)
-    when the render starts; the result depends on (scene, options, seed) only, never on the
+    when the render starts; the result depends on the scene and these options only, never on the
     progress callbacks given beside the options.
 
     Attributes
