@@ -523,7 +523,8 @@ class Summary:
 def bench_target(a, out, S: Summary, key: str, size, rel: float, max_s: float | None) -> None:
     cols, rows = size
     label = f"{cols}×{rows}"
-    print(f"\n-- {key}: render(cs, estimator='fast', rel_error={rel}) at {label}, warm")
+    call = f"render(cs, RenderOptions(estimator='fast', rel_error={rel}))"
+    print(f"\n-- {key}: {call} at {label}, warm")
     args = [
         "--cols",
         str(cols),
@@ -574,7 +575,7 @@ def bench_target(a, out, S: Summary, key: str, size, rel: float, max_s: float | 
     else:
         ok = tr["best_s"] <= max_s and err <= rel
         S.add(
-            f"{key}: render(cs, estimator='fast', rel_error={rel}) at {label}",
+            f"{key}: {call} at {label}",
             f"{tr['best_s']:.3f} s (best of {tr['repeats_done']}, spread "
             f"{tr['spread_pct']:.0f} %), error {_pct(err)}, {rr['samples_per_pixel']} spp",
             f"≤ {rel:.0%} in ≤ {max_s:g} s",

@@ -309,7 +309,7 @@ def quote_env(env: dict) -> str:
 
 
 def bench_throughput(a: argparse.Namespace, out: dict) -> None:
-    print(f"\n-- throughput: render(compiled, rays={a.rays:_}, seed={a.seed}), warm")
+    print(f"\n-- throughput: render(compiled, RenderOptions(rays={a.rays:_}, seed={a.seed})), warm")
     rows = {}
     for th in a.threads:
         env = {"NUMBA_NUM_THREADS": th, "NUMBA_CACHE_DIR": C.WARM_CACHE}
