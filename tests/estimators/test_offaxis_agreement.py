@@ -35,8 +35,10 @@ def test_fast_and_forward_agree_off_axis():
         },
     )
     cs = compile_scene(scene)
-    fwd = eyelume.render(cs, rays=60_000_000, seed=11)
-    fast = eyelume.render(cs, estimator="fast", samples_per_pixel=256, seed=12)
+    fwd = eyelume.render(cs, eyelume.RenderOptions(rays=60_000_000, seed=11))
+    fast = eyelume.render(
+        cs, eyelume.RenderOptions(estimator="fast", samples_per_pixel=256, seed=12)
+    )
     keep = fwd.image_counts >= MIN_COUNTS
     n = int(keep.sum())
     assert n > 60  # the eye and the skin around it, not a corner
