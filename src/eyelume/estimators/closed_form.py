@@ -277,18 +277,12 @@ def _row_means(c, r, quad, emitters, profile, out):
 
 @njit(cache=True, parallel=True)
 def _bin_means_parallel(quad, emitters, profile, out):
+    # flat structs of arrays and scalars, arguments of this function: a prange body takes them
+    # as they are (only nested ones, numba#10139, must be taken apart; kernels/tables.py)
     n, rows = out.shape[0], out.shape[1]
-    # parfors pass only arrays and scalars into a prange body (numba#10139): the structs are
-    # taken apart here and rebuilt inside it
-    (xn, xw, yn, yw), (emit, axes), (kind, m, alpha_t, value_t) = quad, emitters, profile
     for task in prange(n * rows):
         c = task // rows
-        q, e, p = (
-            Quadrature(xn, xw, yn, yw),
-            Emitters(emit, axes),
-            Profile(kind, m, alpha_t, value_t),
-        )
-        _row_means(c, task - c * rows, q, e, p, out)
+        _row_means(c, task - c * rows, quad, emitters, profile, out)
 
 
 @njit(cache=True)

@@ -51,7 +51,7 @@ import numpy as np
 from numba import njit, prange
 
 from eyelume.kernels import geometry as G
-from eyelume.kernels.bins import PlaneGrid, bin_of, from_grid
+from eyelume.kernels.bins import bin_of, from_grid
 from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.rng import mix64, next_uniform, stream_start
 from eyelume.kernels.sampling import (
@@ -66,15 +66,7 @@ from eyelume.kernels.sampling import (
     uniform_cone,
 )
 from eyelume.kernels.sequential import LENS_PASSED, trace_lens
-from eyelume.kernels.tables import (
-    CameraTables,
-    Facet,
-    LedTable,
-    LensTable,
-    Ray,
-    SceneTables,
-    SurfaceTable,
-)
+from eyelume.kernels.tables import Facet, Ray, SceneTables, scene_parts
 
 from .camera import aim_at_stop, aim_chief, into_scene
 from .cornea_nee import Receiver, irradiance_through_cornea
@@ -316,7 +308,7 @@ def _camera_radiance(state, scene, cam, ray):
     return state, radiance
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def camera_pass(seed, first_set, n_sets, scene, cam, grid, sums):
     """Add stratified sample sets ``first_set`` … ``first_set + n_sets − 1`` of each pixel in
     ``sums.pixels`` (a :class:`CameraSums`; flat indices, row × cols + col): ``sums.total[i]``
@@ -333,27 +325,32 @@ def camera_pass(seed, first_set, n_sets, scene, cam, grid, sums):
     lens receives along that ray, is an unbiased estimate of the pixel's mean irradiance
     (W/mm²); so is m, and the sets are independent, so their spread gives the variance.
     """
-    # parfors pass only arrays and scalars into a prange body (numba#10139): the tables are
-    # taken apart here and rebuilt inside it (no copy: the arrays are shared)
-    (sf, si), (lf, image_z), (pts, axes, i0, ag, cg, ig), pic_t, eye_t, n_ev = scene
-    pw, ph, pc, pr, psx, psy = pic_t
-    ew, eh, ec, er, esx, esy = eye_t
-    rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea = cam
+    _camera_pass(seed, first_set, n_sets, *scene_parts(scene), cam, grid, sums)
+
+
+@njit(cache=True, parallel=True)
+def _camera_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
+    seed,
+    first_set,
+    n_sets,
+    surfaces,
+    lens,
+    leds,
+    picture,
+    eye_plane,
+    max_events,
+    camera,
+    grid,
+    sums,
+):
+    """:func:`camera_pass` with the scene's parts (:func:`scene_parts`, numba#10139)."""
     pixels, out_sum, out_sq = sums
-    cols = pc
+    cols = picture.cols
+    stop_r = camera.stop_radius
+    cam_z, rear_z, xp_z = camera.image_z, camera.rear_z, camera.exit_pupil_z
     area = math.pi * stop_r * stop_r
     for i in prange(pixels.shape[0]):
-        tables = SceneTables(
-            SurfaceTable(sf, si),
-            LensTable(lf, image_z),
-            LedTable(pts, axes, i0, ag, cg, ig),
-            PlaneGrid(pw, ph, pc, pr, psx, psy),
-            PlaneGrid(ew, eh, ec, er, esx, esy),
-            n_ev,
-        )
-        camera = CameraTables(
-            rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea
-        )
+        tables = SceneTables(surfaces, lens, leds, picture, eye_plane, max_events)
         p = pixels[i]
         row = p // cols
         col = p - row * cols
@@ -575,32 +572,24 @@ def _light_path(i, seed, scene, cam, tally):
     _follow(state, w * tau, Ray(x, y, z, tx, ty, tz), scene, cam, tally, k, 1)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def light_pass(seed, first, count, scene, cam, sums):
     """Trace light paths ``first`` … ``first + count − 1``; chunk c adds to ``sums``' (a
     :class:`Tally` of (chunks, …) arrays) img[c], img2[c], led[c] (fixed-point Σc and Σc² in
     units q and q2 of W/mm² per unit path)."""
+    _light_pass(seed, first, count, *scene_parts(scene), cam, sums)
+
+
+@njit(cache=True, parallel=True)
+def _light_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
+    seed, first, count, surfaces, lens, leds, picture, eye_plane, max_events, camera, sums
+):
+    """:func:`light_pass` with the scene's parts (:func:`scene_parts`, numba#10139)."""
     img, img2, led_img, q, q2 = sums
     n_chunks = img.shape[0]
     lseed = mix64(np.uint64(seed) ^ np.uint64(_LIGHT_TAG))
-    # parfors pass only arrays and scalars into a prange body (numba#10139): the tables are
-    # taken apart here and rebuilt inside it (no copy: the arrays are shared)
-    (sf, si), (lf, image_z), (pts, axes, i0, ag, cg, ig), pic_t, eye_t, n_ev = scene
-    pw, ph, pc, pr, psx, psy = pic_t
-    ew, eh, ec, er, esx, esy = eye_t
-    rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea = cam
     for c in prange(n_chunks):
-        tables = SceneTables(
-            SurfaceTable(sf, si),
-            LensTable(lf, image_z),
-            LedTable(pts, axes, i0, ag, cg, ig),
-            PlaneGrid(pw, ph, pc, pr, psx, psy),
-            PlaneGrid(ew, eh, ec, er, esx, esy),
-            n_ev,
-        )
-        camera = CameraTables(
-            rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea
-        )
+        tables = SceneTables(surfaces, lens, leds, picture, eye_plane, max_events)
         lo = first + (count * c) // n_chunks
         hi = first + (count * (c + 1)) // n_chunks
         tally = Tally(img[c], img2[c], led_img[c], q, q2)
@@ -608,24 +597,26 @@ def light_pass(seed, first, count, scene, cam, sums):
             _light_path(i, lseed, tables, camera, tally)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def primary_surfaces(scene, cam, row0, labels, sides):
     """The surface each pixel sees in the ideal (refraction-only) image: the chief ray from the
     pixel centre through the stop's centre, always refracting (never reflecting), to the first
     opaque surface (``labels``; −1: nothing, or no chief ray) and the side it meets (``sides``:
     1 = side B, the side the surface's normal points to). ``labels`` and ``sides`` hold the band
     of picture rows from ``row0`` (so a large sensor is mapped band by band)."""
-    (sf, si), (pw, ph, pc, pr, psx, psy) = scene.surfaces, scene.picture
-    rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea = cam
+    _primary_surfaces(scene.surfaces, scene.picture, cam, row0, labels, sides)
+
+
+@njit(cache=True, parallel=True)
+def _primary_surfaces(surfaces, picture, camera, row0, labels, sides):
+    """:func:`primary_surfaces` with the scene's parts it reads (numba#10139)."""
+    sf, si = surfaces
     rows, cols = labels.shape
     for p in prange(rows * cols):
-        camera = CameraTables(
-            rev, opn, k_stop, stop_r, cam_z, rear_z, xp_z, xp_m, ep_z, aim_t, thr, cornea
-        )
         band_row = p // cols
         col = p - band_row * cols
         row = row0 + band_row
-        xs, ys = from_grid(PlaneGrid(pw, ph, pc, pr, psx, psy), col + 0.5, row + 0.5)
+        xs, ys = from_grid(picture, col + 0.5, row + 0.5)
         labels[band_row, col] = -1
         chief = aim_chief(camera, xs, ys)
         if not chief.found:
@@ -651,16 +642,19 @@ def primary_surfaces(scene, cam, row0, labels, sides):
                 break
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def plane_direct(seed, scene, n_sub, out):
     """Direct LED irradiance (W/mm²) toward the eye on the eye-plane bins (row 0 at +y): the
     mean over n_sub × n_sub jittered points per bin (one uniform point in each cell, so the
     mean is unbiased where an occluder's edge cuts the bin), each lit by the LEDs that see it."""
-    (sf, si), (pts, axes, i0, ag, cg, ig) = scene.surfaces, scene.leds
-    ew, eh, ec, er, esx, esy = scene.eye_plane
-    for p in prange(er * ec):
-        surfaces, leds = SurfaceTable(sf, si), LedTable(pts, axes, i0, ag, cg, ig)
-        g = PlaneGrid(ew, eh, ec, er, esx, esy)
+    _plane_direct(seed, scene.surfaces, scene.leds, scene.eye_plane, n_sub, out)
+
+
+@njit(cache=True, parallel=True)
+def _plane_direct(seed, surfaces, leds, g, n_sub, out):
+    """:func:`plane_direct` with the scene's parts it reads (numba#10139)."""
+    ec = g.cols
+    for p in prange(g.rows * ec):
         row = p // ec
         col = p - row * ec
         state = stream_start(mix64(np.uint64(seed) ^ np.uint64(_PLANE_TAG)), p)

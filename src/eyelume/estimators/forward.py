@@ -34,12 +34,12 @@ from eyelume.compile import (
 from eyelume.errors import BudgetError
 from eyelume.estimators.interrupt import interrupt_between_batches
 from eyelume.kernels import geometry as G
-from eyelume.kernels.bins import PlaneGrid, bin_of
+from eyelume.kernels.bins import bin_of
 from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.rng import next_uniform, stream_start
 from eyelume.kernels.sampling import about_axis, cosine_hemisphere, led_direction
 from eyelume.kernels.sequential import LENS_PASSED, LENS_TIR, trace_lens
-from eyelume.kernels.tables import LedTable, LensTable, SceneTables, SurfaceTable
+from eyelume.kernels.tables import SceneTables, scene_parts
 
 __all__ = ["ForwardCounts", "trace_forward", "trace_paths"]
 
@@ -205,27 +205,27 @@ def trace_ray(i, seed, scene, counts, path, record):
     return Traced(TALLY_LIMIT, interactions, npath)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def _trace_batch(start, count, seed, scene, img_counts, plane_counts, tallies, interactions):
-    n_chunks = img_counts.shape[0]
-    # parfors pass only arrays and scalars into a prange body (numba#10139): the tables are
-    # taken apart here and rebuilt inside it (no copy: the arrays are shared)
-    (sf, si), (lf, image_z), (pts, axes, i0, ag, cg, ig), pic_t, eye_t, n_ev = scene
-    pw, ph, pc, pr, psx, psy = pic_t
-    ew, eh, ec, er, esx, esy = eye_t
+    """Trace rays ``start`` … ``start + count − 1`` in chunks, one per leading index of the count
+    arrays: chunk c adds to ``img_counts[c]``, ``plane_counts[c]``, ``tallies[c]`` and
+    ``interactions[c]``."""
+    chunked = Counts(img_counts, plane_counts, tallies)
+    _trace_chunks(start, count, seed, *scene_parts(scene), chunked, interactions)
+
+
+@njit(cache=True, parallel=True)
+def _trace_chunks(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
+    start, count, seed, surfaces, lens, leds, picture, eye_plane, max_events, chunked, interactions
+):
+    """:func:`_trace_batch` with the scene's parts (:func:`~eyelume.kernels.tables.scene_parts`)."""
+    n_chunks = chunked.image.shape[0]
     for c in prange(n_chunks):
-        tables = SceneTables(
-            SurfaceTable(sf, si),
-            LensTable(lf, image_z),
-            LedTable(pts, axes, i0, ag, cg, ig),
-            PlaneGrid(pw, ph, pc, pr, psx, psy),
-            PlaneGrid(ew, eh, ec, er, esx, esy),
-            n_ev,
-        )
+        tables = SceneTables(surfaces, lens, leds, picture, eye_plane, max_events)
         lo = start + (count * c) // n_chunks
         hi = start + (count * (c + 1)) // n_chunks
         path = np.zeros((1, 3))
-        counts = Counts(img_counts[c], plane_counts[c], tallies[c])
+        counts = Counts(chunked.image[c], chunked.plane[c], chunked.tallies[c])
         inter = 0
         for i in range(lo, hi):
             inter += trace_ray(i, seed, tables, counts, path, False).interactions

@@ -13,6 +13,12 @@ C-contiguous float64 / int64; world millimetres throughout.
   of the camera-side estimator;
 * :class:`eyelume.kernels.bins.PlaneGrid` — the picture and the eye-plane receiver's bins;
 * :class:`SceneTables` — all of the above that a forward trace reads, in one struct.
+
+A ``prange`` body takes arrays, scalars and flat NamedTuples of them, but not a NamedTuple of
+NamedTuples (numba#10139: "scalar type … given for non scalar argument"), nor a NamedTuple made
+outside the loop in the same function. So a parallel kernel takes :func:`scene_parts` as
+separate arguments (its public, serial wrapper passes them) and rebuilds ``SceneTables(*parts)``
+inside its loop: no copy, the arrays are shared.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
 from eyelume.kernels.bins import PlaneGrid
 
@@ -31,6 +38,7 @@ __all__ = [
     "LedTable",
     "CameraTables",
     "SceneTables",
+    "scene_parts",
     "A_X",
     "A_Y",
     "A_Z",
@@ -138,3 +146,18 @@ class SceneTables(NamedTuple):
     picture: PlaneGrid
     eye_plane: PlaneGrid
     max_events: int
+
+
+@njit(cache=True, inline="always")
+def scene_parts(scene):
+    """The fields of a :class:`SceneTables` as a plain tuple (surfaces, lens, leds, picture,
+    eye_plane, max_events), to hand to a parallel kernel as separate arguments (``*parts``; see
+    the module docstring); ``SceneTables(*parts)`` rebuilds it."""
+    return (
+        scene.surfaces,
+        scene.lens,
+        scene.leds,
+        scene.picture,
+        scene.eye_plane,
+        scene.max_events,
+    )
