@@ -164,11 +164,18 @@ def paraxial_crossing(cam, xs, ys, tx, ty):
 def stop_jacobian(cam, xs, ys, qx, qy):
     """Stop point (sx, sy) of the ray toward (qx, qy) and the Jacobian ∂(s)/∂(q) by forward
     differences (step 1e-4 mm). Returns (sx, sy, Mat2); NaN if the ray fails."""
-    h = 1e-4
     sx, sy = _stop_crossing(cam, xs, ys, qx, qy)
+    return sx, sy, _jacobian_at(cam, xs, ys, qx, qy, sx, sy)
+
+
+@njit(cache=True)
+def _jacobian_at(cam, xs, ys, qx, qy, sx, sy):
+    """:func:`stop_jacobian`'s Mat2 when the stop point (sx, sy) of the ray toward (qx, qy) is
+    already known (two traces instead of three)."""
+    h = 1e-4
     s1x, s1y = _stop_crossing(cam, xs, ys, qx + h, qy)
     s2x, s2y = _stop_crossing(cam, xs, ys, qx, qy + h)
-    return sx, sy, Mat2((s1x - sx) / h, (s2x - sx) / h, (s1y - sy) / h, (s2y - sy) / h)
+    return Mat2((s1x - sx) / h, (s2x - sx) / h, (s1y - sy) / h, (s2y - sy) / h)
 
 
 @njit(cache=True)
@@ -191,8 +198,8 @@ def aim_at_stop(cam, xs, ys, tx, ty, qx, qy, a):
         if math.isnan(sx):
             return StopAim(False, qx, qy, 0.0)
         ex, ey = sx - tx, sy - ty
-        if ex * ex + ey * ey < 1e-8:
-            _, _, j = stop_jacobian(cam, xs, ys, qx, qy)
+        if ex * ex + ey * ey < 1e-8:  # (sx, sy) is this q's stop point: not traced again
+            j = _jacobian_at(cam, xs, ys, qx, qy, sx, sy)
             d = abs(j.a11 * j.a22 - j.a12 * j.a21)
             return StopAim(not math.isnan(d) and d > 0.0, qx, qy, d)
         qx -= (a.a22 * ex - a.a12 * ey) / det
