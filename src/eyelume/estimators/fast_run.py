@@ -120,6 +120,7 @@ class _Run:
         every = np.arange(self.cam_sum.size, dtype=np.int64)
         flat_sum, flat_sq = self.cam_sum.reshape(-1), self.cam_sq.reshape(-1)
         per = max(1, CHUNK_SAMPLES // (n_sets * self.grid * self.grid))
+        threads = numba.get_num_threads()
         saved = []
         for a in range(0, every.size, per):
             b = min(every.size, a + per)
@@ -130,9 +131,14 @@ class _Run:
                 return False
             if stop is not None:
                 saved.append((a, flat_sum[a:b].copy(), flat_sq[a:b].copy()))
-            sums = F.CameraSums(every[a:b], flat_sum[a:b], flat_sq[a:b])
+            # each thread takes an equal run of the pixels handed to the kernel, and a pixel can
+            # cost several times its neighbour rows' (the iris): dealt round-robin, every
+            # thread's run spans the whole chunk (the sums are per pixel: same result)
+            idx = np.concatenate([every[a + t : b : threads] for t in range(threads)])
+            sums = F.CameraSums(idx, flat_sum[idx], flat_sq[idx])
             cs = self.cs
             F.camera_pass(self.seed, self.sets, n_sets, cs.tables, cs.camera, self.grid, sums)
+            flat_sum[idx], flat_sq[idx] = sums.total, sums.squares
             if tick:
                 tick((b - a) * n_sets * self.grid * self.grid)
         del saved
