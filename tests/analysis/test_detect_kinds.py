@@ -115,6 +115,27 @@ def test_saturated_glints_do_not_set_the_scale():
     assert any("on the pupil edge" in f for f in d.failures)
 
 
+def test_glints_found_when_most_of_the_picture_saturates():
+    """Light skin over-exposed: skin at 600 and the iris at 240 clip to 255 and 240, so most of
+    the picture (the skin, ~70 %) is at full scale and the 99th percentile sits on it. The four
+    saturated glints (two over the pupil, two over the iris-pupil surround) are still found
+    against their own darker surround, centred within 0.5 px (a symmetric spot: its
+    background-weighted centroid is its centre), and matched to their LEDs; noise specks
+    (2 × 2 px, 3 σ) in the pupil and iris and saturated skin are not glints."""
+    c = CENTRE
+    glints = [(c[0] + 9.0, c[1]), (c[0], c[1] - 9.0), (c[0] - 9.0, c[1]), (c[0], c[1] + 9.0)]
+    img = closeup(skin=600.0, iris=200.0, glints=glints, glint_peak=3000.0, glint_sigma=1.5)
+    for x, y in [(70, 70), (92, 88), (110, 60), (50, 95)]:
+        img[y : y + 2, x : x + 2] += 6.0  # 3 σ of the noise
+    img = u8(img)
+    assert (img == 255).mean() > 0.5
+    d = detect(img, led_azimuths_deg=[0.0, 90.0, 180.0, 270.0])
+    assert_pupil(d)
+    assert [g.led for g in d.glints] == [0, 1, 2, 3], d.glints
+    for g, (gx, gy) in zip(d.glints, glints, strict=True):
+        assert math.hypot(g.centre_px[0] - gx, g.centre_px[1] - gy) < 0.5, (g, (gx, gy))
+
+
 def test_black_border_is_not_the_pupil():
     """A crop that runs off the sensor (black rows below) and black corners (outside a
     headset's lens): darker than the pupil and far larger; never taken for it."""

@@ -151,3 +151,16 @@ def test_track_reads_the_pngs_render_writes(small_frames, tmp_path):
         )
     else:
         assert "track eye_image_digital.png or eye_image_digital.npy" in res.stderr, res.stderr
+
+
+@pytest.mark.slow
+def test_over_exposed_render_glints_found():
+    """Light skin (reflectance 0.6, sclera 0.5): most of the camera's pixels saturate, the
+    99th percentile is at full scale; the four glints on the cornea are still found, each
+    matched to its LED within 1 px of the truth, and nothing else is called a glint."""
+    sets = {"face.skin_reflectance": 0.6, "eye.sclera_reflectance": 0.5}
+    f = _frame(0.0, 0.0, 0, 16, sets)
+    assert (f["counts"] >= 0.99 * f["counts"].max()).mean() > 0.5
+    d = detect(f["counts"], led_azimuths_deg=f["leds"])
+    assert _check(d, f), d.failures
+    assert sorted(g.led for g in d.glints) == [0, 1, 2, 3], d.glints

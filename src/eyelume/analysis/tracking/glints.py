@@ -7,8 +7,12 @@
   box around it (default odd ≈ min(rows, cols) / 16, ≥ 5: a few glints across). Over bright
   skin that is halfway from the skin to the maximum; over the dark pupil, where glints sit,
   half the maximum, so a glint the eye turned dimmer keeps its shoulders. When the maximum is
-  not ``glint_min_contrast`` of the range above the 99th percentile nothing stands out and
-  there are no glints (an over-lit or glint-free picture).
+  not ``glint_min_contrast`` of the range above the 99th percentile and under 5 % of the
+  picture is within that of its top, nothing stands out and there are no glints (a glint-free
+  picture). When more is (light skin or sclera at full scale: the percentile sits on the
+  saturated plateau), the floor is ``glint_min_contrast`` below the top and a glint is a blob
+  whose peak stands that contrast above its own surround (:func:`saturated_floor`): saturated
+  skin, whose surround is saturated too, is not one.
 * **Blobs**: the bright mask is closed with a small elliptical element (``glint_close_px``; by
   default odd ≈ min(rows, cols) / 160, i.e. none below 240 px, 3 px at 480 rows) so that a glint
   broken up by noise or a saturated speckle is one blob, then split into blobs (outer outlines,
@@ -40,7 +44,14 @@ from scipy.optimize import linear_sum_assignment
 
 from eyelume.analysis.tracking.pupil import median
 
-__all__ = ["find_glints", "glint_blobs", "glint_threshold", "match_leds", "default_max_angle"]
+__all__ = [
+    "find_glints",
+    "glint_blobs",
+    "glint_threshold",
+    "saturated_floor",
+    "match_leds",
+    "default_max_angle",
+]
 
 
 def glint_threshold(hist: np.ndarray, percentile: float, min_contrast: float) -> int | None:
@@ -61,6 +72,22 @@ def glint_threshold(hist: np.ndarray, percentile: float, min_contrast: float) ->
     return base
 
 
+def saturated_floor(hist: np.ndarray, min_contrast: float) -> int | None:
+    """8-bit floor of glint pixels in an over-exposed picture (``None`` if it is not one): when
+    more than 5 % of the picture lies at its top level or within ``min_contrast`` × 255 of it
+    (skin and sclera at full scale) the percentile floor sits on that plateau, and glints —
+    saturated too — are the pixels within ``min_contrast`` × 255 of the top; they are told
+    from the plateau by their surround (:func:`glint_blobs` with ``min_rise``), not by a
+    global level."""
+    if not hist.any():
+        return None
+    top = int(np.nonzero(hist)[0][-1])
+    floor = top - int(math.ceil(min_contrast * 255.0))
+    if floor <= 0 or hist[floor + 1 :].sum() <= 0.05 * hist.sum():
+        return None
+    return floor
+
+
 def find_glints(u8: np.ndarray, img: np.ndarray, value_range, noise: float, params):
     """Step 2 of :func:`~eyelume.analysis.tracking.detect.detect`: the glint blobs (dicts), the
     bright mask (uint8 0/255) and the glint floor in the input's units (``None`` when nothing
@@ -78,15 +105,21 @@ def find_glints(u8: np.ndarray, img: np.ndarray, value_range, noise: float, para
         lo, hi = (float(v) for v in cv2.minMaxLoc(smooth)[:2])
     hist = cv2.calcHist([u8], [0], None, [256], [0, 256]).ravel()
     tg8 = glint_threshold(hist, params.glint_percentile, params.glint_min_contrast)
+    min_rise = 0.0
     if tg8 is None:
-        return [], np.zeros_like(u8), None
+        # Over-exposed: glints are saturated blobs that stand out of a darker surround by
+        # the contrast a glint needs, in the input's units.
+        tg8 = saturated_floor(hist, params.glint_min_contrast)
+        if tg8 is None:
+            return [], np.zeros_like(u8), None
+        min_rise = params.glint_min_contrast * (value_range[1] - value_range[0])
     floor = 1e-6 * (value_range[1] - value_range[0])
-    blobs, bright = glint_blobs(u8, img, tg8, params, noise=max(noise, floor))
+    blobs, bright = glint_blobs(u8, img, tg8, params, noise=max(noise, floor), min_rise=min_rise)
     return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
 
 
 def glint_blobs(
-    u8: np.ndarray, img: np.ndarray, floor8: int, params, noise: float = 0.0
+    u8: np.ndarray, img: np.ndarray, floor8: int, params, noise: float = 0.0, min_rise: float = 0.0
 ) -> tuple[list[dict], np.ndarray]:
     """Bright blobs as dicts (centre_px, area_px, peak) and the (closed) bright mask (0/255).
 
@@ -95,6 +128,11 @@ def glint_blobs(
     blob's skirt; where skirts of neighbouring blobs meet, a pixel goes to the nearer blob. The
     spot's whole profile, down to its background, then weighs in: a saturated (flat-topped)
     spot's centroid is as smooth in its position as an unsaturated one's.
+
+    With ``min_rise`` > 0 (an over-exposed picture, :func:`saturated_floor`) a blob's peak must
+    also stand ``min_rise`` (input units) above its local background — a saturated fragment of
+    skin or sclera, whose surround is saturated too, is not a glint — and the bright mask
+    returned holds only the glints found (not the saturated skin).
     """
     rows, cols = u8.shape
     above, bright = _bright_mask(u8, floor8, params)
@@ -103,13 +141,19 @@ def glint_blobs(
         return [], bright
     max_area = max(params.glint_min_area_px, params.glint_max_area_frac * rows * cols)
     tops = [c for c, h in zip(contours, hier[0], strict=True) if h[3] == -1]
+    rise = max(params.glint_min_snr * noise, min_rise)
     blobs = []
+    kept = []
     for c in tops:
         approx_area = cv2.contourArea(c) + 0.5 * len(c) + 1.0
         if params.glint_min_area_px <= approx_area <= 1.5 * max_area + 4:
-            b = _blob(c, approx_area, above, bright, img, max_area, noise, params)
+            b = _blob(c, approx_area, above, bright, img, max_area, rise, params)
             if b is not None:
                 blobs.append(b)
+                kept.append(c)
+    if min_rise > 0:
+        bright = np.zeros_like(bright)
+        cv2.drawContours(bright, kept, -1, 255, thickness=-1)
     return blobs, bright
 
 
@@ -137,10 +181,11 @@ def _bright_mask(u8: np.ndarray, floor8: int, params) -> tuple[np.ndarray, np.nd
     return above, cv2.morphologyEx(above, cv2.MORPH_CLOSE, disc)
 
 
-def _blob(c, approx_area, above, bright, img, max_area, noise, params) -> dict | None:
+def _blob(c, approx_area, above, bright, img, max_area, rise, params) -> dict | None:
     """One glint from its outline ``c``: area, peak and skirt-weighted centroid (module doc), or
-    None when its area is out of bounds or it does not stand ``glint_min_snr`` × ``noise``
-    above its local background (a noise speck)."""
+    None when its area is out of bounds or its peak does not stand ``rise`` (input units:
+    ``glint_min_snr`` × the noise, or more in an over-exposed picture) above its local
+    background (a noise speck, or saturated skin)."""
     rows, cols = img.shape
     m = max(2, int(math.ceil(math.sqrt(approx_area / math.pi))))
     bx, by, bw, bh = cv2.boundingRect(c)
@@ -162,8 +207,8 @@ def _blob(c, approx_area, above, bright, img, max_area, noise, params) -> dict |
         background &= d_oth > m
     base = median(win[background]) if background.any() else float(win.min())
     peak = float(win[own > 0].max())
-    if peak - base < params.glint_min_snr * noise:
-        return None  # a noise speck, not a glint
+    if peak - base < rise:
+        return None  # a noise speck (or, over-exposed, saturated skin), not a glint
     wgt = np.where(region, np.maximum(win - base, 0.0), 0.0)
     tot = float(wgt.sum())
     if tot <= 0:
