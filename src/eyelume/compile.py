@@ -396,6 +396,48 @@ def _check_lens_geometry(lf: np.ndarray) -> None:
             )
 
 
+#: Rays of the axial fan :func:`real_best_focus` traces (over the first surface's aperture).
+_FOCUS_FAN = 400
+
+
+def real_best_focus(lf: np.ndarray) -> tuple[float, float] | None:
+    """(s_b, ρ_rms): the real-ray best focus of the eye plane's axial point, in mm after the
+    lens's last vertex, and the RMS spot radius (mm) there; None when no ray passes.
+
+    A meridional fan from the axial point (world origin) aimed at ``_FOCUS_FAN`` heights a
+    over the first surface's clear aperture is traced through the prescription ``lf`` (clear
+    apertures and stop included) by the production per-ray tracer
+    (:func:`eyelume.kernels.sequential.trace_lens`). After the last surface a ray is the line
+    y(z) = y_r + (z − z_r) m, m = dy/dz, referred to the last vertex z_r; weighting each ray by
+    a (the area of its ring of the rotationally symmetric pupil) the mean square spot radius
+    Σ w y(z)² / Σ w is least at
+
+        z_b = z_r − Σ w y_r m / Σ w m²,
+
+    so s_b = z_b − z_r, with the RMS radius ρ_rms = √(Σ w y(z_b)² / Σ w).
+    """
+    from eyelume.kernels.sequential import LENS_PASSED, trace_lens
+
+    z1, reach = lf[0, Q.L_Z], lf[0, Q.L_SD]
+    path = np.zeros((1, 3))
+    rays = []
+    for a in np.linspace(0.0, reach, _FOCUS_FAN + 1)[1:]:
+        n = math.hypot(a, z1)
+        st, _, y, z, _, dy, dz, _, _ = trace_lens(lf, 0.0, 0.0, 0.0, 0.0, a / n, z1 / n, path,
+                                                  0, False)  # fmt: skip
+        if st == LENS_PASSED and dz > 0:
+            rays.append((y, z, dy / dz, a))
+    if not rays:
+        return None
+    y, z, m, w = np.array(rays).T
+    z_r = lf[-1, Q.L_Z]
+    y_r = y + (z_r - z) * m
+    den = float(np.sum(w * m * m))
+    s_b = -float(np.sum(w * y_r * m)) / den if den > 0 else 0.0
+    rms = math.sqrt(float(np.sum(w * (y_r + s_b * m) ** 2) / np.sum(w)))
+    return s_b, rms
+
+
 def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame) -> None:
     """LED bodies (world ``centres``) in front of the eye, apart, and clear of the lens."""
     rb = scene.leds.body_diameter_mm / 2
@@ -504,7 +546,7 @@ def _compile_lens(scene: Scene) -> tuple[LensTable, list[float], int]:
     if not par.power > 0:
         raise SceneError(f"lens: the prescription has no positive power (EFL {par.efl:.3g} mm)")
     stop_sd = par.stop_semi_diameter_for_epd(stop, par.efl / scene.lens.f_number)
-    check_focus(scene, par, stop, stop_sd)  # a real image of the eye plane, near the sensor
+    check_focus(scene, par, stop, stop_sd, warn=False)  # a real image of the eye plane
     semi, rim_fraction = _auto_semi_diameters(scene, idx, par, stop, stop_sd)
     lf, image_z = _lens_table(scene, idx, semi)
     _check_lens_geometry(lf)
@@ -513,6 +555,8 @@ def _compile_lens(scene: Scene) -> tuple[LensTable, list[float], int]:
             f"lens: only {rim_fraction:.0%} of the rim rays of the eye-plane field pass the lens "
             "(total internal reflection or a surface missed): check the prescription"
         )
+    best = real_best_focus(lf)
+    check_focus(scene, par, stop, stop_sd, None if best is None else best[0])  # near the sensor
     return LensTable(lf, float(image_z)), idx, stop
 
 

@@ -10,6 +10,7 @@ from eyelume.compile import (
     eye_paraxial,
     lens_indices,
     lens_paraxial,
+    real_best_focus,
 )
 from eyelume.kernels import sequential as Q
 from eyelume.scene.eye import LAMBDA_D, eye_indices
@@ -107,7 +108,8 @@ def _prescription_info(scene: Scene, cs: CompiledScene) -> tuple[dict, dict]:
     par = lens_paraxial(scene, cs.lens_indices)
     s_obj = lens.object_distance_mm
     stop_sd = float(cs.lf[cs.stop_index, Q.L_SD])
-    foc = focus(scene, par, cs.stop_index, stop_sd)
+    best = real_best_focus(cs.lf)
+    foc = focus(scene, par, cs.stop_index, stop_sd, None if best is None else best[0])
     _, used = lens_indices(scene)
     glasses = {}
     for j, s in enumerate(lens.surfaces):
@@ -136,6 +138,8 @@ def _prescription_info(scene: Scene, cs: CompiledScene) -> tuple[dict, dict]:
         "working_f_number": par.working_f_number(s_obj, cs.stop_index, stop_sd),
         "semi_diameters_mm": [float(v) for v in cs.lf[:, Q.L_SD]],
         "image_plane_z_mm": cs.image_z,
+        "best_focus_distance_mm": foc.best_focus_mm,
+        "axial_rms_spot_radius_at_best_focus_mm": None if best is None else best[1],
         "sensor_defocus_mm": foc.defocus_mm,
         "depth_of_focus_mm": foc.depth_of_focus_mm,
     }, glasses
