@@ -13,6 +13,7 @@ import math
 import sys
 import time
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, NoReturn
 
@@ -167,6 +168,30 @@ def _progress_bar(label: str, count: str) -> Progress:
         console=err,
         transient=True,
     )
+
+
+def _counting(bar: Progress, task) -> Callable[[str], None]:
+    """A ``progress(message)`` callback for work that reports once per unit: each call advances
+    the bar by one unit (its ETA from their pace) and shows the message."""
+
+    def step(message: str) -> None:
+        bar.update(task, advance=1, description=escape(message))
+
+    return step
+
+
+def _counted(label: str, total: int, what: str, fn, *args, **kwargs):
+    """``fn(*args, progress=…, **kwargs)`` under a progress bar of ``total`` units."""
+    count = f"{{task.completed}}/{{task.total}} {what}"
+    with _progress_bar(f"[bold]{label}[/] {{task.description}}", count) as bar:
+        task = bar.add_task("", total=total)
+        return fn(*args, progress=_counting(bar, task), **kwargs)
+
+
+def _interrupted_with_nothing(what: str) -> NoReturn:
+    err.print(f"interrupted before {what} finished: nothing usable, no output")
+    _exit_interrupted()
+    raise AssertionError  # _exit_interrupted raises
 
 
 def _check_out(out: Path, option: str = "--out") -> None:
@@ -536,15 +561,9 @@ def reproduce(
     """The paper's Section 4 δ study: for each δ the generator's best LEDs, their eye image (glints
     off), the evaluator's merit; the best δ, the direct optimum, and a comparison with the
     paper, into OUT."""
-    from eyelume.analysis.masks import ideal_mask
     from eyelume.compile import compile_scene
-    from eyelume.optimize.delta_study import (
-        PAPER_CHOICE,
-        PAPER_MERITS,
-        evaluate_paper_placement,
-        run_delta_study,
-    )
-    from eyelume.optimize.direct import DirectSearch, optimize_direct
+    from eyelume.optimize.delta_study import PAPER_CHOICE, PAPER_MERITS
+    from eyelume.optimize.direct import DirectSearch
     from eyelume.report.optimize_outputs import write_delta_study_outputs
 
     sc = _load(preset, set_)
@@ -568,26 +587,16 @@ def reproduce(
     _check_out(out)
     compile_scene(sc)
     t0 = time.perf_counter()
-    rows = run_delta_study(sc, values, samples, seed, progress=err.print)
+    search = DirectSearch(
+        led_counts=counts,
+        vary_spread=vary_spread,
+        vary_azimuths=vary_azimuths,
+        samples_per_pixel=samples,
+        seed=seed,
+        max_evaluations=direct,
+    )
+    rows, paper, found, partial = _delta_study_parts(sc, values, samples, seed, search)
     best = min(rows, key=lambda r: r.evaluator_merit)
-    paper = evaluate_paper_placement(sc, samples, seed)
-    found = None
-    if direct:
-        err.print(f"direct optimisation of the eye image from δ = {best.delta:g}'s placement")
-        found = optimize_direct(
-            sc,
-            ideal_mask(compile_scene(sc)),
-            start=(best.height_mm, best.distance_mm, best.pitch_deg),
-            search=DirectSearch(
-                led_counts=counts,
-                vary_spread=vary_spread,
-                vary_azimuths=vary_azimuths,
-                samples_per_pixel=samples,
-                seed=seed,
-                max_evaluations=direct,
-            ),
-            progress=err.print,
-        )
     meta = {
         "scene": sc.name,
         "samples_per_pixel": samples,
@@ -596,11 +605,52 @@ def reproduce(
         "wall_time_s": round(time.perf_counter() - t0, 2),
         "paper_placement": paper,
     }
+    if partial:
+        meta["partial"] = partial
+        meta["notes"] = f"**Partial run** ({partial}): what is here is all that finished."
     written = write_delta_study_outputs(rows, found, PAPER_MERITS, PAPER_CHOICE, meta, out)
     err.print(
         f"best δ = {best.delta:g} (Y {best.height_mm:g}, Z {best.distance_mm:g}, "
         f"θ {best.pitch_deg:g}); {meta['wall_time_s']} s; wrote {len(written)} files to {out}"
+        + (f" — partial: {partial}" if partial else "")
     )
+    if partial:
+        _exit_interrupted()
+
+
+def _delta_study_parts(sc, values, samples, seed, search):
+    """(δ rows, the paper placement's evaluation, the direct optimum, a partial note or None):
+    the δ study under a progress bar, then the paper's placement, then the direct search (if
+    ``search.max_evaluations``). Ctrl-C or SIGTERM keeps the parts finished and says what was
+    cut; before the first δ finished it ends the command (exit 130/143, nothing written)."""
+    from eyelume.analysis.masks import ideal_mask
+    from eyelume.compile import compile_scene
+    from eyelume.estimators.interrupt import PartialRun
+    from eyelume.optimize.delta_study import evaluate_paper_placement, run_delta_study
+    from eyelume.optimize.direct import optimize_direct
+
+    try:
+        rows = _counted("δ study", len(values), "δ", run_delta_study, sc, values, samples, seed)
+    except PartialRun as exc:
+        if not exc.done:
+            _interrupted_with_nothing("the first δ")
+        return exc.done, None, None, str(exc)
+    paper = found = None
+    try:
+        err.print("the paper's placement (Y 40, Z 70, θ 20) in our model")
+        paper = evaluate_paper_placement(sc, samples, seed)
+        if search.max_evaluations:
+            best = min(rows, key=lambda r: r.evaluator_merit)
+            searches = len(search.led_counts) * (2 if search.try_rotated else 1)
+            err.print(f"direct optimisation of the eye image from δ = {best.delta:g}'s placement")
+            found = _counted("direct", searches, "searches", optimize_direct, sc,
+                             ideal_mask(compile_scene(sc)),
+                             start=(best.height_mm, best.distance_mm, best.pitch_deg),
+                             search=search)  # fmt: skip
+    except KeyboardInterrupt:
+        cut = "the direct optimisation" if paper is not None else "the paper's placement"
+        return rows, paper, None, f"interrupted during {cut}"
+    return rows, paper, found, None
 
 
 def _refuse_without_direct(direct, direct_leds, vary_spread, vary_azimuths) -> None:
@@ -764,8 +814,7 @@ def evaluate_tracking_cmd(
     into OUT."""
     from eyelume.analysis.tracking.evaluate import failure_reason
     from eyelume.compile import compile_scene
-    from eyelume.optimize.tracking import evaluate_tracking
-    from eyelume.report.tracking_outputs import write_population_outputs, write_tracking_outputs
+    from eyelume.report.tracking_outputs import write_tracking_outputs
 
     _refuse_gaze(set_, "evaluate-tracking")
     sc = _load(scene, set_)
@@ -774,14 +823,7 @@ def evaluate_tracking_cmd(
     _check_out(out)
     compile_scene(sc)
     t0 = time.perf_counter()
-    if population:
-        from eyelume.optimize.tracking import evaluate_population
-
-        members = evaluate_population(sc, samples_per_pixel=samples, seed=seed, progress=err.print)
-        write_population_outputs(members, sc.name, out)
-        report = members["nominal"]
-    else:
-        report = evaluate_tracking(sc, samples_per_pixel=samples, seed=seed, progress=err.print)
+    report, partial = _tracking_parts(sc, samples, seed, population, out)
     meta = {
         "scene": sc.name,
         "samples_per_pixel": samples,
@@ -789,6 +831,8 @@ def evaluate_tracking_cmd(
         "sensor": [sc.sensor.cols, sc.sensor.rows],
         "wall_time_s": round(time.perf_counter() - t0, 2),
     }
+    if partial:
+        meta["partial"] = partial
     written = write_tracking_outputs(report, meta, out)
     s = report.summary
     gp, gg = s["gaze_pccr"], s["gaze_geometric"]
@@ -803,9 +847,50 @@ def evaluate_tracking_cmd(
         + (f" ({why})" if why else "")
         + f"; pupil error {f'{pe:.3g} px' if pe is not None else 'none'}; "
         f"gaze PCCR {deg(gp)}, geometric {deg(gg)}; {meta['wall_time_s']} s; "
-        f"wrote {len(written)} files to {out}",
+        f"wrote {len(written)} files to {out}" + (f" — partial: {partial}" if partial else ""),
         highlight=False,
     )
+    if partial:
+        _exit_interrupted()
+
+
+def _tracking_parts(sc, samples: int, seed: int, population: bool, out: Path):
+    """(the nominal report, a partial note or None) of evaluate-tracking under a progress bar
+    with an ETA, the population's folders written when asked. Ctrl-C or SIGTERM keeps the
+    gazes (or population members) finished; before any, the command ends (nothing written)."""
+    from eyelume.estimators.interrupt import PartialRun
+    from eyelume.optimize.tracking import (
+        POPULATION,
+        evaluate_population,
+        evaluate_tracking,
+        frame_count,
+        member_line,
+    )
+    from eyelume.report.tracking_outputs import write_population_outputs
+
+    frames = frame_count()
+    partial = None
+    if not population:
+        try:
+            report = _counted("tracking", frames, "frames", evaluate_tracking, sc,
+                              samples_per_pixel=samples, seed=seed)  # fmt: skip
+        except PartialRun as exc:
+            if exc.done is None:
+                _interrupted_with_nothing("the first test gaze")
+            report, partial = exc.done, str(exc)
+        return report, partial
+    try:
+        total = frames * len(POPULATION)
+        members = _counted("population", total, "frames", evaluate_population, sc,
+                           samples_per_pixel=samples, seed=seed)  # fmt: skip
+    except PartialRun as exc:
+        if "nominal" not in exc.done:
+            _interrupted_with_nothing("the nominal member")
+        members, partial = exc.done, str(exc)
+    for name, rep in members.items():
+        err.print(member_line(name, rep), highlight=False)
+    write_population_outputs(members, sc.name, out, partial)
+    return members["nominal"], partial
 
 
 @app.command("optimize-tracking")
@@ -820,6 +905,7 @@ def optimize_tracking_cmd(
     """Choose the LEDs for tracking itself: 27 placements scored by the gaze error of the whole
     pipeline over 9 gazes, against the generator's δ-optimal placement and the paper's."""
     from eyelume.analysis.targets import gaussian_target
+    from eyelume.estimators.interrupt import PartialRun
     from eyelume.optimize.sweep import sweep_leds
     from eyelume.optimize.tracking import sweep_tracking
     from eyelume.report.optimize_outputs import write_tracking_sweep_outputs
@@ -831,20 +917,35 @@ def optimize_tracking_cmd(
     _check_out(out)
     b = sweep_leds(sc, gaussian_target(delta, sc.eye_plane)).best
     dopt = (b["height_mm"], b["distance_mm"], b["pitch_deg"])
-    rows, best, d_row, paper = sweep_tracking(
-        sc, dopt, samples=samples, seed=seed, progress=err.print
-    )
+    partial = None
+    try:
+        rows, best, d_row, paper = _counted("placements", 27 + 2, "placements", sweep_tracking,
+                                            sc, dopt, samples=samples, seed=seed)  # fmt: skip
+    except PartialRun as exc:
+        (rows, d_row, paper), partial = exc.done, str(exc)
+        if not rows:
+            _interrupted_with_nothing("the first placement")
+        best = min(rows, key=lambda r: r.score_deg)
     meta = {
         "delta": delta,
         "samples_per_pixel": samples,
         "seed": seed,
         "sensor": [sc.sensor.cols, sc.sensor.rows],
     }
+    if partial:
+        meta["partial"] = partial
     write_tracking_sweep_outputs(rows, best, d_row, paper, meta, out)
+
+    def score(r) -> str:
+        return "not scored" if r is None else f"{r.score_deg:.2f}°"
+
     err.print(
         f"tracking-optimal: Y {best.height_mm:g} Z {best.distance_mm:g} θ {best.pitch_deg:g} "
-        f"({best.score_deg:.2f}°); δ-optimal {d_row.score_deg:.2f}°; paper {paper.score_deg:.2f}°"
+        f"({best.score_deg:.2f}°); δ-optimal {score(d_row)}; paper {score(paper)}"
+        + (f" — partial: {partial}" if partial else "")
     )
+    if partial:
+        _exit_interrupted()
 
 
 @app.command()

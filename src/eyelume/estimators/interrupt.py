@@ -11,9 +11,40 @@ import signal
 import threading
 from contextlib import contextmanager
 
-__all__ = ["interrupt_between_batches", "last_signal", "sigterm_as_interrupt"]
+__all__ = [
+    "PartialRun",
+    "interrupt_between_batches",
+    "last_signal",
+    "run_unit",
+    "sigterm_as_interrupt",
+]
 
 _last: list[int | None] = [None]
+_count = [0]  # SIGINT/SIGTERM received in this process by the handlers below
+
+
+class PartialRun(KeyboardInterrupt):
+    """A run of units of work (δ values, gazes, placements) stopped by Ctrl-C or SIGTERM.
+
+    ``done`` holds what finished (whole units only; the unit in flight is dropped), ``total``
+    the planned number of units, ``what`` names them ("δ values", "test gazes", …). A caller
+    that does not catch it sees the KeyboardInterrupt it is."""
+
+    def __init__(self, done, count: int, total: int, what: str) -> None:
+        super().__init__(f"interrupted after {count} of {total} {what}")
+        self.done, self.count, self.total, self.what = done, count, total, what
+
+
+def run_unit(fn, *args, **kwargs):
+    """``fn(*args, **kwargs)`` as one unit of work that Ctrl-C or SIGTERM cancels whole:
+    KeyboardInterrupt if a signal arrived while it ran — also one that a render inside took as
+    a request to stop early (:func:`interrupt_between_batches`), whose result is then partial
+    and must not be used as a whole unit's."""
+    mark = _count[0]
+    value = fn(*args, **kwargs)
+    if _count[0] != mark:
+        raise KeyboardInterrupt
+    return value
 
 
 def last_signal() -> int | None:
@@ -35,6 +66,7 @@ def interrupt_between_batches():
         return
 
     def handler(signum, frame):
+        _count[0] += 1
         if flag.requested:
             raise KeyboardInterrupt
         flag.requested = True
@@ -56,6 +88,7 @@ def sigterm_as_interrupt() -> None:
         return
 
     def handler(signum, frame):
+        _count[0] += 1
         _last[0] = signum
         raise KeyboardInterrupt
 

@@ -23,6 +23,7 @@ from eyelume.analysis.masks import IdealMask, glints_off, ideal_mask
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.targets import gaussian_target
 from eyelume.compile import compile_scene
+from eyelume.estimators.interrupt import PartialRun, run_unit
 from eyelume.optimize.sweep import refine, sweep_leds
 from eyelume.render import RenderOptions, RenderResult, render
 from eyelume.scene.io import apply_overrides
@@ -127,44 +128,56 @@ def run_delta_study(
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
 ) -> list[DeltaRow]:
-    """Run the Section 4.3 iteration over ``deltas`` (see the module docstring)."""
+    """Run the Section 4.3 iteration over ``deltas`` (see the module docstring).
+
+    ``progress(message)`` once per δ (a progress bar counts them). Ctrl-C or SIGTERM stops the
+    study after the δ values finished: :class:`~eyelume.estimators.interrupt.PartialRun` with
+    their rows (the δ in flight is dropped whole)."""
     mask = ideal_mask(compile_scene(scene))
-    rows = []
-    for delta in deltas:
-        target = gaussian_target(float(delta), scene.eye_plane)
-        sweep = sweep_leds(scene, target)
-        b = sweep.best
-        y, z, th = b["height_mm"], b["distance_mm"], b["pitch_deg"]
-        refined = refine(scene, target, start=(y, z, th))
-        placed = with_placement(scene, y, z, th)
-        result, merit, se, bias = evaluate_placement(placed, mask, samples_per_pixel, seed)
-        mean, std, cv = skin_score(result.eye_image, result.regions["skin"])
-        safety = eye_safety(placed)
-        rows.append(
-            DeltaRow(
-                delta=float(delta),
-                height_mm=y,
-                distance_mm=z,
-                pitch_deg=th,
-                generator_merit=b["merit"],
-                refined=tuple(float(v) for v in refined),
-                evaluator_merit=merit,
-                evaluator_merit_se=se,
-                evaluator_noise_bias=bias,
-                skin_mean_w_mm2=mean,
-                skin_std_w_mm2=std,
-                skin_cv=cv,
-                pattern=sweep.patterns[sweep.best_index],
-                image=result.eye_image,
-                corneal_margin=safety["corneal_margin"],
-                retinal_margin=safety["retinal_margin"],
-            )
-        )
-        if progress:
-            progress(
-                f"δ = {delta:.2f}: Y {y:g} Z {z:g} θ {th:g}, evaluator merit {merit:.5f} ± {se:.5f}"
-            )
+    rows: list[DeltaRow] = []
+    try:
+        for delta in deltas:
+            rows.append(run_unit(_delta_row, scene, mask, float(delta), samples_per_pixel, seed))
+            r = rows[-1]
+            if progress:
+                progress(
+                    f"δ = {delta:.2f}: Y {r.height_mm:g} Z {r.distance_mm:g} θ {r.pitch_deg:g}, "
+                    f"evaluator merit {r.evaluator_merit:.5f} ± {r.evaluator_merit_se:.5f}"
+                )
+    except KeyboardInterrupt:
+        raise PartialRun(rows, len(rows), len(deltas), "δ values") from None
     return rows
+
+
+def _delta_row(scene: Scene, mask, delta: float, samples_per_pixel: int, seed: int) -> DeltaRow:
+    """One δ of the study: the generator's best placement, refined, and its evaluation."""
+    target = gaussian_target(float(delta), scene.eye_plane)
+    sweep = sweep_leds(scene, target)
+    b = sweep.best
+    y, z, th = b["height_mm"], b["distance_mm"], b["pitch_deg"]
+    refined = refine(scene, target, start=(y, z, th))
+    placed = with_placement(scene, y, z, th)
+    result, merit, se, bias = evaluate_placement(placed, mask, samples_per_pixel, seed)
+    mean, std, cv = skin_score(result.eye_image, result.regions["skin"])
+    safety = eye_safety(placed)
+    return DeltaRow(
+        delta=float(delta),
+        height_mm=y,
+        distance_mm=z,
+        pitch_deg=th,
+        generator_merit=b["merit"],
+        refined=tuple(float(v) for v in refined),
+        evaluator_merit=merit,
+        evaluator_merit_se=se,
+        evaluator_noise_bias=bias,
+        skin_mean_w_mm2=mean,
+        skin_std_w_mm2=std,
+        skin_cv=cv,
+        pattern=sweep.patterns[sweep.best_index],
+        image=result.eye_image,
+        corneal_margin=safety["corneal_margin"],
+        retinal_margin=safety["retinal_margin"],
+    )
 
 
 def evaluate_paper_placement(scene: Scene, samples_per_pixel: int, seed: int) -> dict:

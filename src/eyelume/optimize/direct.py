@@ -22,6 +22,7 @@ from scipy.optimize import minimize
 
 from eyelume.analysis.masks import IdealMask
 from eyelume.errors import SceneError
+from eyelume.estimators.interrupt import run_unit
 from eyelume.optimize.delta_study import evaluate_placement
 from eyelume.scene.io import apply_overrides
 from eyelume.scene.model import Scene
@@ -147,7 +148,9 @@ def _search_one(
         shifts = x[4 if spread else 3 :] if azimuths else None
         try:
             placed = apply_overrides(scene, _overrides(n, offset, y, z, th, half, shifts))
-            _, merit, _, _ = evaluate_placement(placed, mask, search.samples_per_pixel, search.seed)
+            _, merit, _, _ = run_unit(
+                evaluate_placement, placed, mask, search.samples_per_pixel, search.seed
+            )
         except SceneError:
             merit = float("inf")
         history.append((*map(float, x), merit))

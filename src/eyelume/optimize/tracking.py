@@ -39,6 +39,7 @@ from eyelume.analysis.truth import eye_truth
 from eyelume.compile import compile_scene
 from eyelume.detectors.sensor import digitize
 from eyelume.errors import SceneError
+from eyelume.estimators.interrupt import PartialRun, run_unit
 from eyelume.optimize.delta_study import PAPER_CHOICE, with_placement
 from eyelume.render import RenderOptions, render
 from eyelume.scene.io import apply_overrides
@@ -87,23 +88,43 @@ def evaluate_tracking(
 
     ``calibration_scene`` (default ``scene``) is the scene the PCCR calibration is rendered in:
     pass the nominal scene to measure a headset slip after calibration. Without ``calibrate``
-    only the geometric model (which needs no calibration) estimates gaze."""
-    calib = []
-    for v in CALIBRATION_V if calibrate else ():
-        for h in CALIBRATION_H:
-            calib.append(render_frame(calibration_scene or scene, h, v, samples_per_pixel, seed))
-    frames = []
-    for v in test_v:
-        for h in test_h:
-            frames.append(render_frame(scene, h, v, samples_per_pixel, seed))
+    only the geometric model (which needs no calibration) estimates gaze.
+
+    ``progress(message)`` once per frame, calibration frames first (:func:`frame_count`
+    frames; a progress bar counts them). Ctrl-C or SIGTERM stops it after the frames finished:
+    :class:`~eyelume.estimators.interrupt.PartialRun` whose ``done`` is the report over the
+    test gazes finished (None when none had: the calibration alone estimates nothing)."""
+    grid = [(h, v) for v in CALIBRATION_V for h in CALIBRATION_H] if calibrate else []
+    tests = [(h, v) for v in test_v for h in test_h]
+    calib: list = []
+    frames: list = []
+    try:
+        for h, v in grid:
+            cal = calibration_scene or scene
+            calib.append(run_unit(render_frame, cal, h, v, samples_per_pixel, seed))
+            if progress:
+                progress(f"calibration gaze ({h:+.0f}°, {v:+.0f}°)")
+        for h, v in tests:
+            frames.append(run_unit(render_frame, scene, h, v, samples_per_pixel, seed))
             if progress:
                 f = frames[-1]
                 progress(
                     f"gaze ({h:+.0f}°, {v:+.0f}°): "
                     + ("ok" if f.detection.ok else "; ".join(f.detection.failures))
                 )
+    except KeyboardInterrupt:
+        done = None
+        if frames:
+            done = analyse_frames(scene, compile_scene(scene).led.points, frames, calib)
+        raise PartialRun(done, len(frames), len(tests), "test gazes") from None
     leds = compile_scene(scene).led.points
     return analyse_frames(scene, leds, frames, calib)
+
+
+def frame_count(test_h=TEST_H, test_v=TEST_V, calibrate: bool = True) -> int:
+    """Frames :func:`evaluate_tracking` renders: the calibration grid's and the test grid's."""
+    calib = len(CALIBRATION_H) * len(CALIBRATION_V) if calibrate else 0
+    return calib + len(test_h) * len(test_v)
 
 
 #: The population of the issue: iris dark to light, skin reflectance range, eyelid aperture,
@@ -136,27 +157,44 @@ def evaluate_population(
     progress: Callable[[str], None] | None = None,
 ) -> dict[str, TrackingReport]:
     """:func:`evaluate_tracking` for each member of ``population``: (name, scene overrides,
-    whether the user calibrates in that state — False for a slip after calibration)."""
-    out = {}
+    whether the user calibrates in that state — False for a slip after calibration).
+
+    ``progress(message)`` once per frame of every member, "name: …" (a progress bar counts
+    them; each member's summary is in its report). Ctrl-C or SIGTERM stops it after the
+    members finished: :class:`~eyelume.estimators.interrupt.PartialRun` with their reports
+    (the member in flight is dropped)."""
+    out: dict[str, TrackingReport] = {}
     for name, overrides, recalibrate in population:
         member = apply_overrides(scene, overrides) if overrides else scene
-        out[name] = evaluate_tracking(
-            member,
-            test_h,
-            test_v,
-            samples_per_pixel,
-            seed,
-            calibration_scene=None if recalibrate else scene,
-        )
-        if progress:
-            s = out[name].summary
-            why = failure_reason(s)
-            progress(
-                f"{name}: detection {s['detection_rate']:.0%}, geometric gaze "
-                f"{mean_deg(s['gaze_geometric'])} mean, PCCR {mean_deg(s['gaze_pccr'])}"
-                + (f" — {why}" if why else "")
+        try:
+            out[name] = evaluate_tracking(
+                member,
+                test_h,
+                test_v,
+                samples_per_pixel,
+                seed,
+                calibration_scene=None if recalibrate else scene,
+                progress=None if progress is None else _prefixed(progress, name),
             )
+        except KeyboardInterrupt:
+            raise PartialRun(out, len(out), len(population), "population members") from None
     return out
+
+
+def member_line(name: str, report: TrackingReport) -> str:
+    """One line of a population member's result: detection, gaze errors and the reason for
+    lost frames."""
+    s = report.summary
+    why = failure_reason(s)
+    return (
+        f"{name}: detection {s['detection_rate']:.0%}, geometric gaze "
+        f"{mean_deg(s['gaze_geometric'])} mean, PCCR {mean_deg(s['gaze_pccr'])}"
+        + (f" — {why}" if why else "")
+    )
+
+
+def _prefixed(progress: Callable[[str], None], name: str) -> Callable[[str], None]:
+    return lambda message: progress(f"{name}: {message}")
 
 
 @dataclass
@@ -178,7 +216,7 @@ def score_placement(
     """Tracking score of the LEDs at (Y, Z, θ); an impossible placement scores +inf."""
     try:
         placed = with_placement(scene, y, z, th)
-        rep = evaluate_tracking(placed, GAZE_H, GAZE_V, samples, seed, calibrate=False)
+        rep = run_unit(evaluate_tracking, placed, GAZE_H, GAZE_V, samples, seed, calibrate=False)
     except SceneError:
         return PlacementScore(label, y, z, th, float("inf"), 0.0, float("nan"))
     g = rep.summary["gaze_geometric"]
@@ -203,22 +241,38 @@ def sweep_tracking(
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
 ) -> tuple[list[PlacementScore], PlacementScore, PlacementScore, PlacementScore]:
-    """The grid's scores, its best, the δ-optimal placement's and the paper's."""
-    rows = []
-    for y in heights:
-        for z in distances:
-            for th in pitches:
-                rows.append(score_placement(scene, y, z, th, samples, seed, "grid"))
-                if progress:
-                    r = rows[-1]
-                    progress(
-                        f"Y {y:g} Z {z:g} θ {th:g}: score {r.score_deg:.2f}° "
-                        f"(detection {r.detection_rate:.0%})"
-                    )
-    best = min(rows, key=lambda r: r.score_deg)
-    dopt = score_placement(scene, *delta_optimal, samples, seed, "δ-optimal (generator)")
+    """The grid's scores, its best, the δ-optimal placement's and the paper's.
+
+    ``progress(message)`` once per placement: the grid's, then the δ-optimal and the paper's
+    (a progress bar counts them). Ctrl-C or SIGTERM stops it after the placements finished:
+    :class:`~eyelume.estimators.interrupt.PartialRun` whose ``done`` is (grid rows, δ-optimal
+    row or None, paper row or None)."""
+    grid = [(y, z, th) for y in heights for z in distances for th in pitches]
+    total = len(grid) + 2
+
+    def say(r: PlacementScore) -> None:
+        if progress:
+            progress(
+                f"{r.label} Y {r.height_mm:g} Z {r.distance_mm:g} θ {r.pitch_deg:g}: score "
+                f"{r.score_deg:.2f}° (detection {r.detection_rate:.0%})"
+            )
+
+    rows: list[PlacementScore] = []
+    dopt = paper = None
     pc = PAPER_CHOICE
-    paper = score_placement(
-        scene, pc["height_mm"], pc["distance_mm"], pc["pitch_deg"], samples, seed, "paper"
-    )
+    try:
+        for y, z, th in grid:
+            rows.append(run_unit(score_placement, scene, y, z, th, samples, seed, "grid"))
+            say(rows[-1])
+        dopt = run_unit(
+            score_placement, scene, *delta_optimal, samples, seed, "δ-optimal (generator)"
+        )
+        say(dopt)
+        paper = run_unit(score_placement, scene, pc["height_mm"], pc["distance_mm"],
+                         pc["pitch_deg"], samples, seed, "paper")  # fmt: skip
+        say(paper)
+    except KeyboardInterrupt:
+        count = len(rows) + (dopt is not None)
+        raise PartialRun((rows, dopt, paper), count, total, "placements") from None
+    best = min(rows, key=lambda r: r.score_deg)
     return rows, best, dopt, paper

@@ -289,7 +289,8 @@ def write_tracking_sweep_outputs(rows, best, d_row, paper, meta: dict, out) -> l
     """The files of ``eyelume optimize-tracking``: ``tracking_sweep.csv`` (every placement's
     score, then the δ-optimal's and the paper's) and ``comparison.md`` (the tracking-optimal
     placement against the generator's and the paper's). ``meta`` holds ``delta``,
-    ``samples_per_pixel``, ``seed`` and ``sensor`` (cols, rows)."""
+    ``samples_per_pixel``, ``seed`` and ``sensor`` (cols, rows), and ``partial`` (what was
+    cut) for an interrupted run, whose ``d_row`` or ``paper`` may then be None (not scored)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     cols, rows_px = meta["sensor"]
@@ -297,7 +298,7 @@ def write_tracking_sweep_outputs(rows, best, d_row, paper, meta: dict, out) -> l
         w = csv.writer(f)
         w.writerow(["label", "height_mm", "distance_mm", "pitch_deg", "score_deg",
                     "detection_rate", "geometric_mean_deg"])  # fmt: skip
-        for r in [*rows, d_row, paper]:
+        for r in [*rows, *(x for x in (d_row, paper) if x is not None)]:
             w.writerow([r.label, r.height_mm, r.distance_mm, r.pitch_deg, f"{r.score_deg:.4f}",
                         f"{r.detection_rate:.3f}", f"{r.geometric_mean_deg:.4f}"])  # fmt: skip
     lines = [
@@ -307,11 +308,19 @@ def write_tracking_sweep_outputs(rows, best, d_row, paper, meta: dict, out) -> l
         f"as 10°; {meta['samples_per_pixel']} samples per pixel, seed {meta['seed']}, sensor "
         f"{cols} × {rows_px}.",
         "",
+        *(
+            [f"**Partial run** ({meta['partial']}): {len(rows)} grid placements scored.", ""]
+            if meta.get("partial")
+            else []
+        ),
         "| placement | Y (mm) | Z (mm) | θ (°) | score (°) | detection |",
         "|---|---|---|---|---|---|",
     ]
     for r, name in ((best, "tracking-optimal (grid)"), (d_row, f"δ = {meta['delta']:g} generator"),
                     (paper, "paper (δ = 0.3)")):  # fmt: skip
+        if r is None:
+            lines.append(f"| {name} | | | | not scored (interrupted) | |")
+            continue
         lines.append(
             f"| {name} | {r.height_mm:g} | {r.distance_mm:g} | {r.pitch_deg:g} | "
             f"{r.score_deg:.2f} | {r.detection_rate:.0%} |"

@@ -91,10 +91,13 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
     return written
 
 
-def write_population_outputs(members: dict, scene_name: str, out) -> list[Path]:
+def write_population_outputs(
+    members: dict, scene_name: str, out, partial: str | None = None
+) -> list[Path]:
     """Each member's tracking outputs (:func:`write_tracking_outputs`) in its own folder of
     ``out`` (its name with spaces, + and - spelled out) and ``population.json``: each member's
-    summary without its failures."""
+    summary without its failures, and ``"partial"``: what was cut when ``partial`` is given
+    (an interrupted run: the members missing were not evaluated)."""
     out = Path(out)
     written, table = [], {}
     for name, rep in members.items():
@@ -102,5 +105,5 @@ def write_population_outputs(members: dict, scene_name: str, out) -> list[Path]:
         written += write_tracking_outputs(rep, {"scene": scene_name, "member": name}, folder)
         table[name] = {k: v for k, v in rep.summary.items() if k != "failures"}
     out.mkdir(parents=True, exist_ok=True)
-    write_json(out / "population.json", table)
+    write_json(out / "population.json", {**table, "partial": partial} if partial else table)
     return [*written, out / "population.json"]
