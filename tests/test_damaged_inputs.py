@@ -3,14 +3,18 @@
 Hypothesis makes scene TOML files, LED profile CSVs and AGF glass catalogs, damages them
 (truncation, wrong types, NaN and infinities, huge and tiny values, other encodings, stray
 bytes, renamed keys, glasses named twice) and runs ``eyelume info --scene FILE --json`` in
-process. Every case must end in one of two ways:
+process; and, end to end, damaged scene files through ``eyelume render`` (a tiny picture and
+budget), damaged study files through ``eyelume study``, and damaged pictures (PNG, TIFF,
+``.npy``) through ``eyelume track``. Every case must end in one of two ways:
 
-* exit 0 with strict JSON on stdout whose numbers are all finite (null allowed), or
+* exit 0 with a finite result — strict JSON whose numbers are all finite (null allowed) on
+  stdout (``info``, ``track``) or in the outputs (``render``'s ``summary.json``, ``study``'s
+  table and store), or
 * exit 2 with exactly one line on stderr, ``error: …``, naming a file or a field —
 
-never a traceback, another exit code, or a hang: each case runs under a 20 s alarm (a warm
-case takes ~0.2 s). The examples are derandomized (a fixed sequence: CI is deterministic) and
-their number keeps the module under a minute on a warm cache.
+never a traceback, another exit code, or a hang: each case runs under an alarm (a warm
+``info`` case takes ~0.2 s). The examples are derandomized (a fixed sequence: CI is
+deterministic); the render and study cases, seconds each, are marked slow.
 """
 
 from __future__ import annotations
@@ -55,10 +59,15 @@ def _toml(data: dict) -> str:
     return tomli_w.dumps(ready(data))
 
 
+class CaseHang(BaseException):
+    """A case that ran over its time: a BaseException, so that no ``except Exception`` (nor
+    the commands' ``except OSError``) can turn a hang into a clean-looking exit."""
+
+
 @contextlib.contextmanager
 def _alarm(seconds: int):
     def fire(signum, frame):
-        raise TimeoutError(f"a case ran over {seconds} s")
+        raise CaseHang(f"a case ran over {seconds} s")
 
     old = signal.signal(signal.SIGALRM, fire)
     signal.alarm(seconds)
@@ -89,23 +98,33 @@ def _strict(text: str):
 _FIELD = re.compile(r"[a-z_]+\.[a-z0-9_]+")
 
 
-def run_info(folder: Path, scene_file: Path) -> None:
-    """``eyelume info --scene FILE --json`` and the two allowed outcomes (module docstring)."""
-    with _alarm(CASE_SECONDS):
-        res = CliRunner().invoke(app, ["info", "--scene", str(scene_file), "--json"])
+def run_command(folder: Path, args: list[str], seconds: int = CASE_SECONDS):
+    """``eyelume ARGS`` in process under an alarm; the result when it exits 0, else None after
+    checking the one allowed failure: exit 2 with one line ``error: …`` naming a file (in
+    ``folder``) or a field — never a traceback, another exit code or a hang."""
+    with _alarm(seconds):
+        res = CliRunner().invoke(app, args)
     assert "Traceback" not in res.output
     if res.exception is not None and not isinstance(res.exception, SystemExit):
         raise AssertionError(f"uncaught {type(res.exception).__name__}") from res.exception
     if res.exit_code == 0:
-        data = _strict(res.stdout)
-        assert _finite_numbers(data)
-        return
+        return res
     assert res.exit_code == 2, (res.exit_code, res.output)
     lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
     errors = [ln for ln in lines if ln.startswith("error:")]
     assert len(errors) == 1 and lines[-1] == errors[0], res.stderr
-    msg = errors[0]
-    assert str(folder) in msg or "field" in msg or _FIELD.search(msg), msg
+    msg = " ".join(errors[0].split())
+    names_option = re.search(r"--[a-z]", msg)
+    assert str(folder) in msg or "field" in msg or _FIELD.search(msg) or names_option, msg
+    return None
+
+
+def run_info(folder: Path, scene_file: Path) -> None:
+    """``eyelume info --scene FILE --json`` and the two allowed outcomes (module docstring)."""
+    res = run_command(folder, ["info", "--scene", str(scene_file), "--json"])
+    if res is not None:
+        data = _strict(res.stdout)
+        assert _finite_numbers(data)
 
 
 # --- damage ------------------------------------------------------------------------------------
@@ -239,3 +258,131 @@ def test_damaged_glass_catalogs(data):
 def test_degenerate_scene_files(tmp_path, raw):
     (tmp_path / "scene.toml").write_bytes(raw)
     run_info(tmp_path, tmp_path / "scene.toml")
+
+
+# --- end to end: render, study, track ----------------------------------------------------------
+
+#: A tiny render: 12 × 9 pixels, 8 samples per pixel (two 2 × 2 sets), fast estimator.
+TINY = dict(
+    BASE,
+    sensor=dict(BASE["sensor"], cols=12, rows=9),
+    run=dict(BASE["run"], estimator="fast", samples_per_pixel=8),
+)
+
+
+@pytest.fixture(scope="module")
+def kernels():
+    """The fast kernels compiled (or loaded) once, outside the cases' alarms: a first
+    compilation takes about a minute and is no hang."""
+    from eyelume.compile import compile_scene
+    from eyelume.estimators.fast_run import warm_up
+    from eyelume.scene.io import validate_scene
+
+    warm_up(compile_scene(validate_scene(TINY)))
+
+
+@pytest.mark.slow
+@settings(SETTINGS, max_examples=12)
+@given(st.data())
+def test_damaged_scene_files_render(kernels, data):
+    raw = data.draw(damaged_text("# a user's scene\n" + _toml(TINY)))
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        (folder / "scene.toml").write_bytes(raw)
+        out = folder / "out"
+        res = run_command(folder, ["render", "--scene", str(folder / "scene.toml"),
+                                   "--out", str(out)], seconds=60)  # fmt: skip
+        if res is not None:
+            summary = _strict((out / "summary.json").read_text(encoding="utf-8"))
+            assert summary["power_w"]["sensor"] is not None
+            assert _finite_numbers(summary)
+
+
+STUDY = """name = "damaged"
+scene = "scene.toml"
+seed = 1
+metrics = ["safety", "eye_plane_merit"]
+delta = 0.3
+[[vary]]
+path = "leds.height_mm"
+grid = [20.0, 40.0, 2]
+[[vary]]
+path = "leds.pitch_deg"
+values = [0, 20]
+"""
+
+
+@pytest.mark.slow
+@settings(SETTINGS, max_examples=12)
+@given(st.data())
+def test_damaged_study_files(kernels, data):
+    raw = data.draw(damaged_text(STUDY))
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        (folder / "scene.toml").write_text(_toml(TINY), encoding="utf-8")
+        (folder / "study.toml").write_bytes(raw)
+        out = folder / "out"
+        res = run_command(folder, ["study", str(folder / "study.toml"), "--out", str(out),
+                                   "--workers", "1"], seconds=120)  # fmt: skip
+        if res is None:
+            assert not (out / "results.sqlite").exists()  # refused before the store
+            return
+        rows = (out / "table.csv").read_text(encoding="utf-8").splitlines()
+        assert len(rows) >= 2
+        assert "nan" not in "".join(rows[1:]).lower() and "inf" not in "".join(rows[1:]).lower()
+
+
+@st.composite
+def picture_bytes(draw) -> tuple[str, bytes]:
+    """A small grey picture as a camera or eyelume writes it (8/16-bit PNG, TIFF, float .npy
+    with NaN pixels), then damaged: truncated, stray bytes, or left whole."""
+    import io
+
+    import cv2
+    import numpy as np
+
+    rows, cols = draw(st.integers(1, 40)), draw(st.integers(1, 40))
+    rng = np.random.default_rng(draw(st.integers(0, 2**16)))
+    kind = draw(st.sampled_from(["png8", "png16", "tif", "npy"]))
+    if kind == "npy":
+        img = rng.normal(100.0, 30.0, (rows, cols))
+        img[rng.random((rows, cols)) < draw(st.floats(0.0, 1.0))] = np.nan
+        buf = io.BytesIO()
+        np.save(buf, img.astype(draw(st.sampled_from(["float32", "float64"]))))
+        data, suffix = buf.getvalue(), ".npy"
+    else:
+        depth = np.uint16 if kind == "png16" else np.uint8
+        img = rng.integers(0, np.iinfo(depth).max, (rows, cols)).astype(depth)
+        suffix = ".tif" if kind == "tif" else ".png"
+        data = cv2.imencode(suffix, img)[1].tobytes()
+    damage = draw(st.sampled_from(["none", "truncate", "bytes"]))
+    if damage == "truncate":
+        data = data[: draw(st.integers(0, len(data)))]
+    elif damage == "bytes":
+        at = draw(st.integers(0, len(data)))
+        data = data[:at] + draw(st.binary(min_size=1, max_size=16)) + data[at:]
+    return suffix, data
+
+
+@SETTINGS
+@given(st.data())
+def test_damaged_pictures_track(data):
+    suffix, raw = data.draw(picture_bytes())
+    leds = data.draw(st.sampled_from([[], ["--leds", "0,90,180,270"], ["--leds", "nan,90"]]))
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        (folder / f"eye{suffix}").write_bytes(raw)
+        res = run_command(folder, ["track", str(folder / f"eye{suffix}"), *leds])
+        if res is not None:
+            assert _finite_numbers(_strict(res.stdout))
+
+
+@pytest.mark.parametrize("encoding", ["utf-8-sig", "utf-16", "utf-16-be", "cp1252"])
+def test_a_study_file_saved_in_another_encoding_loads(tmp_path, encoding):
+    """Found by the damaged-study cases: a study file not in UTF-8 was a UnicodeDecodeError
+    traceback; it is read as scene files are."""
+    from eyelume.optimize.study import load_study, plan_runs
+
+    text = "# °\n" + STUDY.replace('scene = "scene.toml"', 'scene = "paper2005"')
+    (tmp_path / "study.toml").write_bytes(text.encode(encoding))
+    assert len(plan_runs(load_study(tmp_path / "study.toml"))) == 4

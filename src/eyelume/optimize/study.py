@@ -45,6 +45,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from eyelume.errors import EyelumeError
 from eyelume.scene.io import SceneError, apply_overrides, load_scene, preset_names
 from eyelume.scene.model import Scene
+from eyelume.scene.textfile import decode_text
 
 __all__ = ["METRICS", "Study", "Vary", "load_study", "plan_runs", "run_key", "run_metrics"]
 
@@ -107,9 +108,13 @@ def load_study(path: str | Path) -> Study:
     """Read and validate a study file; SceneError naming the field and value on bad input."""
     p = Path(path)
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
+        raw = p.read_bytes()
     except OSError as exc:
         raise SceneError(f"study {p}: {exc.strerror or exc}") from None
+    # as scene files: UTF-8 (BOM or not), or what an editor saved (UTF-16, Windows-1252)
+    text = decode_text(raw, p, SceneError).lstrip("\ufeff")
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"study {p}: not valid TOML: {exc}") from None
     try:
