@@ -625,7 +625,7 @@ def _delta_study_parts(sc, values, samples, seed, search):
     cut; before the first δ finished it ends the command (exit 130/143, nothing written)."""
     from eyelume.analysis.masks import ideal_mask
     from eyelume.compile import compile_scene
-    from eyelume.estimators.interrupt import PartialRun
+    from eyelume.estimators.interrupt import PartialRun, run_unit
     from eyelume.optimize.delta_study import evaluate_paper_placement, run_delta_study
     from eyelume.optimize.direct import optimize_direct
 
@@ -638,7 +638,7 @@ def _delta_study_parts(sc, values, samples, seed, search):
     paper = found = None
     try:
         err.print("the paper's placement (Y 40, Z 70, θ 20) in our model")
-        paper = evaluate_paper_placement(sc, samples, seed)
+        paper = run_unit(evaluate_paper_placement, sc, samples, seed)
         if search.max_evaluations:
             best = min(rows, key=lambda r: r.evaluator_merit)
             searches = len(search.led_counts) * (2 if search.try_rotated else 1)

@@ -124,7 +124,9 @@ def optimize_direct(
                 best = cand
     assert best is not None
     placed = apply_overrides(scene, best.overrides())
-    _, merit, se, _ = evaluate_placement(placed, mask, search.samples_per_pixel, search.seed + 1)
+    _, merit, se, _ = run_unit(
+        evaluate_placement, placed, mask, search.samples_per_pixel, search.seed + 1
+    )
     best.merit_check, best.merit_check_se = merit, se
     return best
 
