@@ -429,7 +429,13 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
             _exit_interrupted()
     if t_load:
         result.kernel_load_s = t_load
-    if result.interrupted:
+    if result.interrupted and result.covered_pixels is not None:
+        err.print(
+            f"interrupted in the first round: writing the {result.covered_pixels:,} of "
+            f"{result.eye_image.size:,} pixels it finished ({result.samples_per_pixel} samples "
+            "per pixel, from the top row); the rest are missing (NaN), marked partial"
+        )
+    elif result.interrupted:
         err.print(
             f"interrupted: writing the {result.samples_per_pixel} samples per pixel finished"
             + (

@@ -86,6 +86,14 @@ class RenderResult:
     kernel_load_s: float | None = None
     target_reached: bool | None = None
     rel_error_achieved: float | None = None
+    covered_pixels: int | None = None  # fast, first round interrupted: pixels finished
+
+    @property
+    def missing_pixels(self) -> int:
+        """Pixels with no value (NaN): those an interrupted first round did not reach."""
+        if self.covered_pixels is None:
+            return 0
+        return self.eye_image.size - self.covered_pixels
 
     @property
     def pixel_area_mm2(self) -> float:
@@ -93,10 +101,11 @@ class RenderResult:
 
     def region_stats(self) -> dict[str, dict]:
         """Mean, median pixel and their relative standard errors per region."""
+        finished = np.isfinite(self.eye_image)  # all but a cut first round's missing pixels
         return region_stats(
-            self.eye_image,
-            self.eye_image_variance,
-            self.regions,
+            np.where(finished, self.eye_image, 0.0),
+            np.where(finished, self.eye_image_variance, 0.0),
+            {k: m & finished for k, m in self.regions.items()},
             self.pixel_area_mm2,
             self.variance_dof,
         )
@@ -121,12 +130,23 @@ class RenderResult:
                     "interrupted after one camera sample set: each pixel's value is the "
                     "unbiased mean of that set, but its variance is unknown (no spread of sets)"
                 )
+            if self.covered_pixels is not None:
+                rows = self.covered_pixels // self.eye_image.shape[1]
+                out["missing_pixels"] = self.missing_pixels
+                out["note"] = (
+                    f"interrupted in the first round: the first {self.covered_pixels} pixels "
+                    f"(rows 0 to {rows - 1} whole, from the top) finished — camera samples and "
+                    "light paths in proportion, unbiased; the other "
+                    f"{self.missing_pixels} are missing (NaN in the .npy files, 0 DN in the "
+                    "digital picture); region statistics cover the finished pixels"
+                    + ("" if self.variance_dof else "; the variance is unknown (one set)")
+                )
             if self.target_reached is not None:
                 out["rel_error_target_reached"] = self.target_reached
                 out["rel_error_achieved"] = self.rel_error_achieved
         else:
             out["surface_interactions"] = self.interactions
-        power = {"emitted": self.emitted_w, "sensor": float(self.eye_image.sum())}
+        power = {"emitted": self.emitted_w, "sensor": float(self.eye_image.sum())}  # NaN: partial
         power["sensor"] *= self.pixel_area_mm2
         if self.ledger is not None:
             power["absorbed"] = {
@@ -282,6 +302,7 @@ def render(
             kernel_load_s=kernel_s,
             target_reached=est.target_reached,
             rel_error_achieved=est.rel_error_achieved,
+            covered_pixels=est.covered_pixels,
             **extents,
         )
     if estimator != "forward":

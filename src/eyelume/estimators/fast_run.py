@@ -40,6 +40,11 @@ class FastEstimate:
     A run interrupted after a single camera set has an unbiased ``image`` (the mean of that
     set and of the light paths done) but no spread to estimate a variance from: ``variance``
     is then +inf everywhere and ``variance_dof`` 0 ("unknown").
+
+    A run interrupted inside its first round keeps the pixels that round finished
+    (``covered_pixels`` < rows × cols, in row-major order from the top row): their values
+    are unbiased (their camera sets, plus the light paths traced alongside, in proportion);
+    the other pixels are NaN (missing).
     """
 
     image: np.ndarray
@@ -51,6 +56,7 @@ class FastEstimate:
     variance_dof: int  # degrees of freedom of each pixel's variance (sets − 1; 0: unknown)
     target_reached: bool | None = None  # rel_error runs: whether the target was reached
     rel_error_achieved: float | None = None  # rel_error runs: the median error reached
+    covered_pixels: int | None = None  # first round interrupted: pixels finished (else None)
 
 
 #: Work between two looks at the Ctrl-C flag: camera samples (pixels × sets × grid²) and light
@@ -83,6 +89,8 @@ class _Run:
         self.led = np.zeros((chunks, nled, rows, cols), dtype=np.int64)
         self.sets = 0
         self.paths = 0
+        self.covered = 0  # first round stopped: pixels (flat, row-major) it finished
+        self.covered_sets = 0
         sf, cornea = cs.sf, cs.camera.cornea
         i0 = cs.led.i0
         centre, rb = sf[cornea, G.BX : G.BZ + 1], sf[cornea, G.BR]
@@ -115,21 +123,31 @@ class _Run:
         """Add ``n_sets`` camera sets to every pixel and light paths in proportion, in chunks
         (:data:`CHUNK_SAMPLES`, :data:`CHUNK_PATHS`), looking at ``stop.requested`` between
         chunks. A round stopped among its camera chunks is undone (every pixel keeps the same
-        sets) and False returned; stopped among its light chunks, the paths done are kept (each
-        is an independent sample). ``tick(units)`` after each chunk: camera samples or paths."""
+        sets) and False returned — except the first round, which keeps the pixels it finished
+        (``covered``; :class:`FastEstimate`), its light paths traced after each camera chunk in
+        proportion to the pixels done, so that what it finished is whole. Stopped among its
+        light chunks, the paths done are kept (each is an independent sample). The order of
+        the chunks changes no result (a pixel's samples depend on its index, its set and the
+        seed; a path's on its index and the seed). ``tick(units)`` after each chunk: camera
+        samples or paths."""
         every = np.arange(self.cam_sum.size, dtype=np.int64)
         flat_sum, flat_sq = self.cam_sum.reshape(-1), self.cam_sq.reshape(-1)
         per = max(1, CHUNK_SAMPLES // (n_sets * self.grid * self.grid))
         threads = numba.get_num_threads()
+        first = self.sets == 0
+        paths_end = int(round(paths_per_sample * (self.sets + n_sets) * self.grid**2))
         saved = []
         for a in range(0, every.size, per):
             b = min(every.size, a + per)
             if stop is not None and stop.requested:
+                if first:  # keep the pixels finished: nothing else to fall back on
+                    self.covered, self.covered_sets = a, n_sets
+                    return False
                 for a0, s, q in saved:  # undo the partial round
                     flat_sum[a0 : a0 + s.size] = s
                     flat_sq[a0 : a0 + s.size] = q
                 return False
-            if stop is not None:
+            if stop is not None and not first:
                 saved.append((a, flat_sum[a:b].copy(), flat_sq[a:b].copy()))
             # each thread takes an equal run of the pixels handed to the kernel, and a pixel can
             # cost several times its neighbour rows' (the iris): dealt round-robin, every
@@ -141,21 +159,25 @@ class _Run:
             flat_sum[idx], flat_sq[idx] = sums.total, sums.squares
             if tick:
                 tick((b - a) * n_sets * self.grid * self.grid)
+            if first:
+                self._light_to(paths_end * b // every.size, stop, tick)
         del saved
         self.sets += n_sets
-        n_paths = int(round(paths_per_sample * self.samples_per_pixel)) - self.paths
-        while n_paths > 0 and not (stop is not None and stop.requested):
-            c = min(CHUNK_PATHS, n_paths)
-            F.light_pass(self.seed, self.paths, c, self.cs.tables, self.cs.camera, self.tally())
-            self.paths += c
-            n_paths -= c
-            if tick:
-                tick(c)
+        self._light_to(paths_end, stop, tick)
         return True
 
+    def _light_to(self, end: int, stop, tick) -> None:
+        """Light paths up to path index ``end``, in chunks, until ``stop.requested``."""
+        while self.paths < end and not (stop is not None and stop.requested):
+            c = min(CHUNK_PATHS, end - self.paths)
+            F.light_pass(self.seed, self.paths, c, self.cs.tables, self.cs.camera, self.tally())
+            self.paths += c
+            if tick:
+                tick(c)
+
     def estimate(self, interrupted: bool) -> FastEstimate:
-        n = self.sets
-        if n < 1:
+        n = self.sets or self.covered_sets
+        if n < 1 or (self.sets == 0 and self.covered == 0):
             raise ValueError("no camera set has finished: nothing to estimate")
         mean_c = self.cam_sum / n
         if n >= 2:
@@ -163,6 +185,9 @@ class _Run:
             var_c = np.maximum(self.cam_sq - n * mean_c**2, 0.0) / (n * (n - 1))
         else:  # one set: the mean is unbiased, its variance unknown
             var_c = np.full_like(mean_c, np.inf)
+        if self.sets == 0:  # the first round stopped: the pixels it did not reach are missing
+            mean_c.reshape(-1)[self.covered :] = np.nan
+            var_c.reshape(-1)[self.covered :] = np.nan
         if self.paths:
             m = self.paths
             total, total_sq = self.light.sum(axis=0), self.light_sq.sum(axis=0)
@@ -179,10 +204,11 @@ class _Run:
             mean_c + mean_l,
             var_c + var_l,
             glints,
-            self.samples_per_pixel,
+            n * self.grid * self.grid,
             self.paths,
             interrupted,
-            self.sets - 1,
+            n - 1,
+            covered_pixels=None if self.sets else self.covered,
         )
 
 
@@ -449,7 +475,7 @@ def trace_fast(
         else:
             target = (rel_error, target_pixels)
             run, err = _to_target(args, stop, work, progress, target, cap)
-    if run.sets == 0:
+    if run.sets == 0 and run.covered == 0:
         raise KeyboardInterrupt("interrupted before a camera set finished: nothing usable")
     est = run.estimate(stop.requested)
     if rel_error is not None:

@@ -46,15 +46,19 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
     np.save(path("eye_image.npy"), result.eye_image)
     np.save(path("eye_image_std.npy"), np.sqrt(result.eye_image_variance))
     np.save(path("eye_plane.npy"), result.eye_plane)
-    save_grey_png(result.eye_image, path("eye_image.png"))
+    # a cut first round's missing pixels (NaN in the .npy files) are drawn black
+    missing = ~np.isfinite(result.eye_image)
+    shown = np.where(missing, 0.0, result.eye_image)
+    save_grey_png(shown, path("eye_image.png"))
     save_grey_png(result.eye_plane, path("eye_plane.png"), clip_percentile=100.0)
     sc = result.scene
-    digital = digitize(result.eye_image, sc.sensor, sc.wavelength_nm, result.seed)
+    digital = digitize(shown, sc.sensor, sc.wavelength_nm, result.seed)
+    digital.counts[missing] = 0
     np.save(path("eye_image_digital.npy"), digital.counts)
     save_grey_png(digital.counts, path("eye_image_digital.png"), white=digital.full_scale_dn)
     name = sc.name
     save_irradiance_plot(
-        result.eye_image,
+        shown,
         path("eye_image_plot.png"),
         extent_mm=result.picture_extent_mm,
         title=f"{name}: eye image, {result.rays:,} rays (glints clipped at 99.5 %)",
