@@ -467,10 +467,13 @@ def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame)
                 )
 
 
-def _check_leds_in_head(scene: Scene, centres: np.ndarray) -> None:
-    """No LED body inside the eyeball (with the cornea's bulge) or inside a face tissue's solid
-    (a sphere or cylinder within its clip ranges, or behind a disk within its ring)."""
-    rb = scene.leds.body_diameter_mm / 2
+def _check_leds_in_head(
+    scene: Scene, centres: np.ndarray, rb: float | None = None, what: str = "leds: LED"
+) -> None:
+    """No LED body (or, with ``what``, the camera's lens: radius ``rb``) inside the eyeball
+    (with the cornea's bulge) or inside a face tissue's solid (a sphere or cylinder within its
+    clip ranges, or behind a disk within its ring)."""
+    rb = scene.leds.body_diameter_mm / 2 if rb is None else rb
     eye = scene.eye
     gaze, c0 = gaze_rotation(eye)
     head = np.asarray(scene.head_offset_mm, dtype=float)
@@ -487,7 +490,7 @@ def _check_leds_in_head(scene: Scene, centres: np.ndarray) -> None:
             and d @ axis > 0
         ):
             raise SceneError(
-                f"leds: LED {i} body (world centre {np.round(c, 2).tolist()} mm, radius {rb}) is "
+                f"{what} {i} (world centre {np.round(c, 2).tolist()} mm, radius {rb}) is "
                 "inside the eye"
             )
         if not scene.face.enabled:
@@ -507,7 +510,7 @@ def _check_leds_in_head(scene: Scene, centres: np.ndarray) -> None:
                 inside = tis.clip_r_mm[0] <= r <= tis.clip_r_mm[1] and local[2] < rb
             if inside:
                 raise SceneError(
-                    f"leds: LED {i} body (world centre {np.round(c, 2).tolist()} mm) is inside "
+                    f"{what} {i} (world centre {np.round(c, 2).tolist()} mm) is inside "
                     f"the face: face.tissues '{tis.name}'"
                 )
 
@@ -521,6 +524,7 @@ def _check_view(scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGri
     p = frame.point(head + c0 + gaze @ (np.zeros(3) - c0))
     ep = first.entrance_pupil_z
     pos, view = scene.camera.pose(scene.object_distance_mm)
+    _check_leds_in_head(scene, np.array([pos], dtype=float), rb=0.0, what="camera: the lens")
     where = f"camera at {list(pos)} mm looking along {np.round(view, 3).tolist()}"
     if p[2] >= ep - 1e-9:
         raise SceneError(f"camera: sees no eye: the corneal vertex is behind the {where}")

@@ -95,10 +95,12 @@ def scene_info(scene: Scene) -> dict:
         out["imaging_lens"], out["glasses"] = _prescription_info(scene, cs)
     out["eye"] = _eye_info(scene)
     out["leds"] = _led_info(scene, cs)
-    out["reading_of_the_paper"] = (
-        "F/2.51 is read as EFL / entrance-pupil diameter at infinite conjugate; the stop is "
-        "sized for it. The working F-number above is that of the finite eye-plane conjugate."
-    )
+    if scene.camera.optics == "prescription":
+        out["reading_of_the_paper"] = (
+            "The F-number is read as EFL / entrance-pupil diameter at infinite conjugate (the "
+            "paper's F/2.51); the stop is sized for it. The working F-number above is that of "
+            "the finite eye-plane conjugate."
+        )
     return out
 
 
