@@ -213,6 +213,8 @@ def test_kernel_loading_is_timed_apart_and_first_compilation_is_said(tmp_path):
     ("args", "words"),
     [
         (["render", "--samples", "64", "--rel-error", "0.01"], ["--samples 64", "--rel-error"]),
+        (["render", "--samples", "4", "--rays", "1000"], ["--rays 1000 with --samples 4"]),
+        (["render", "--rel-error", "0.1", "--rays", "10"], ["--rays 10 with --rel-error 0.1"]),
         (["render", "--max-samples", "100"], ["--max-samples 100", "--rel-error"]),
         (["render", "--samples", "8", "--max-samples", "100"], ["--max-samples 100"]),
         (["sweep-leds", "--target", "T", "--delta", "0.5"], ["--delta 0.5", "--target"]),

@@ -349,6 +349,12 @@ def render(
 def _check_render_options(estimator, rays, samples, rel_error, max_samples, seed) -> None:
     if estimator not in ("fast", "forward"):
         _fail(f"--estimator {estimator!r}: must be 'fast' or 'forward'")
+    if rays is not None and (samples is not None or rel_error is not None):
+        other = f"--samples {samples}" if samples is not None else f"--rel-error {rel_error}"
+        _fail(
+            f"--rays {rays} with {other}: give one (--rays is the forward estimator's budget, "
+            "--samples and --rel-error the fast one's)"
+        )
     if rays is not None and (rays < 1 or estimator != "forward"):
         _fail(f"--rays {rays}: must be ≥ 1, with --estimator forward (fast: --samples)")
     cap = _SAMPLES_CAP
