@@ -166,13 +166,6 @@ def ring_poses(leds: LedArray, heights, distances, pitches) -> tuple[np.ndarray,
     phi = np.radians(np.asarray(leds.azimuths(), dtype=float)).reshape(1, -1, 1)
     c, e1, e2, n = ring_basis(leds)
     radial = np.cos(phi) * e1 + np.sin(phi) * e2  # (1, N, 3)
-    if leds.is_paper_ring:  # the paper's formulas exactly (Fig. 8)
-        cp, sp = np.cos(phi[..., 0]), np.sin(phi[..., 0])
-        st, ct = np.sin(th[..., 0]), np.cos(th[..., 0])
-        yy, zz = y[..., 0], z[..., 0]
-        centres = np.stack(np.broadcast_arrays(yy * cp, yy * sp, zz * np.ones_like(cp)), axis=2)
-        axes = np.stack(np.broadcast_arrays(-st * cp, -st * sp, -ct * np.ones_like(cp)), axis=2)
-        return centres, axes
     centres = c + y * radial + z * n
     if leds.aim_at_mm is not None:
         d = np.asarray(leds.aim_at_mm, dtype=float) - centres
