@@ -57,6 +57,7 @@ __all__ = [
     "compile_scene",
     "scene_frame",
     "gaze_rotation",
+    "eye_point",
     "lens_paraxial",
     "lens_indices",
 ]
@@ -96,6 +97,14 @@ def gaze_rotation(eye, share_vertical: float = 1.0, share_horizontal: float = 1.
     v = math.radians(eye.gaze_vertical_deg) * share_vertical
     h = math.radians(eye.gaze_horizontal_deg) * share_horizontal
     return _rot_y(h) @ _rot_x(-v), np.array([0.0, 0.0, -eye.rotation_centre_mm])
+
+
+def eye_point(scene: Scene, point) -> np.ndarray:
+    """A primary-gaze world point of the eye (mm), turned with the gaze about the centre of
+    rotation and moved with the head offset: C + h + R (p − C) (:func:`gaze_rotation`)."""
+    gaze, c0 = gaze_rotation(scene.eye)
+    head = np.asarray(scene.head_offset_mm, dtype=float)
+    return head + c0 + gaze @ (np.asarray(point, dtype=float) - c0)
 
 
 @dataclass(frozen=True)
@@ -475,12 +484,11 @@ def _check_leds_in_head(
     clip ranges, or behind a disk within its ring)."""
     rb = scene.leds.body_diameter_mm / 2 if rb is None else rb
     eye = scene.eye
-    gaze, c0 = gaze_rotation(eye)
-    head = np.asarray(scene.head_offset_mm, dtype=float)
     _, _, z_c = limbus_geometry(eye)
-    eyeball = head + c0 + gaze @ (np.array([0.0, 0.0, -z_c]) - c0)
-    vertex = head + c0 + gaze @ (np.zeros(3) - c0)
-    axis = gaze @ np.array([0.0, 0.0, 1.0])
+    head = np.asarray(scene.head_offset_mm, dtype=float)
+    eyeball = eye_point(scene, [0.0, 0.0, -z_c])
+    vertex = eye_point(scene, np.zeros(3))
+    axis = gaze_rotation(eye)[0] @ np.array([0.0, 0.0, 1.0])
     for i, c in enumerate(centres):
         d = c - eyeball
         # the eyeball sphere, and the cornea standing proud of it up to the vertex
@@ -518,10 +526,7 @@ def _check_leds_in_head(
 def _check_view(scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGrid) -> None:
     """The camera sees the eye: its corneal vertex (gaze and head offset applied) lies in front
     of the entrance pupil and is imaged inside the picture. Raises SceneError."""
-    eye = scene.eye
-    gaze, c0 = gaze_rotation(eye)
-    head = np.asarray(scene.head_offset_mm, dtype=float)
-    p = frame.point(head + c0 + gaze @ (np.zeros(3) - c0))
+    p = frame.point(eye_point(scene, np.zeros(3)))
     ep = first.entrance_pupil_z
     pos, view = scene.camera.pose(scene.object_distance_mm)
     _check_leds_in_head(scene, np.array([pos], dtype=float), rb=0.0, what="camera: the lens")
@@ -880,9 +885,7 @@ def _cornea_image(
         distance, centre = pupil_z, None
     else:
         radius = scene.eye.surfaces[0].radius_mm
-        gaze, c0 = gaze_rotation(scene.eye)
-        head = np.asarray(scene.head_offset_mm, dtype=float)
-        c = frame.point(head + c0 + gaze @ (np.array([0.0, 0.0, -radius]) - c0))
+        c = frame.point(eye_point(scene, [0.0, 0.0, -radius]))
         u = np.array([0.0, 0.0, pupil_z]) - c
         distance = float(np.linalg.norm(u)) - radius
         u = u / np.linalg.norm(u)
