@@ -1,7 +1,9 @@
-"""Warnings on the command line: one line each, once per command (issue 12)."""
+"""The command line's messages: warnings one line each, once per command; usage errors (a
+missing, unknown or badly typed option) one line naming the command, exit 2 (issue 12)."""
 
 from __future__ import annotations
 
+import pytest
 from typer.testing import CliRunner
 
 import eyelume
@@ -32,3 +34,34 @@ def test_catalog_warning_is_one_line_and_the_command_goes_on(tmp_path):
     assert len(warnings) == 1, res.stderr
     assert warnings[0].startswith("warning:") and "mine.agf: line 4" in warnings[0]
     assert "'N-BK7' already defined on line 1" in warnings[0]
+
+
+@pytest.mark.parametrize(
+    ("args", "command", "says"),
+    [
+        (["render"], "eyelume render", "Missing option '--out'"),
+        (["render", "--out", "x", "--bogus"], "eyelume render", "No such option: --bogus"),
+        (["render", "--out", "x", "--samples", "abc"], "eyelume render", "'--samples'"),
+        (["track"], "eyelume track", "Missing argument"),
+        (["no-such-command"], "eyelume", "No such command 'no-such-command'"),
+    ],
+)
+def test_usage_error_is_one_line_exit_2(args, command, says, tmp_path):
+    """Click's usage errors come as one 'error:' line naming the command and the option, exit
+    code 2, not Typer's framed box; nothing is written and no work starts."""
+    res = runner.invoke(app, args, prog_name="eyelume")
+    assert res.exit_code == 2, res.output
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1, res.stderr
+    assert lines[0].startswith(f"error: {command}: ") and says in lines[0], lines[0]
+    assert f"(see {command} --help)" in lines[0]
+    assert res.stdout == ""
+    assert not (tmp_path / "x").exists()
+
+
+def test_help_still_exits_0():
+    """--help, on the group and on a command, prints the help and exits 0."""
+    for args in (["--help"], ["render", "--help"]):
+        res = runner.invoke(app, args)
+        assert res.exit_code == 0, res.output
+        assert "Usage:" in res.stdout

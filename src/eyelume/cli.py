@@ -17,7 +17,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, NoReturn
 
-import click
 import typer
 from rich.console import Console
 from rich.markup import escape
@@ -35,11 +34,17 @@ _SAMPLES_CAP = next(
 
 err = Console(stderr=True)
 
+# Click's exception classes as Typer raises them: recent Typer vendors its own Click (the
+# installed ``click`` package's classes are then other classes), older Typer re-exports Click's;
+# typer.BadParameter is a UsageError, a ClickException, in both.
+_UsageError = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "UsageError")
+_ClickException = next(c for c in typer.BadParameter.__mro__ if c.__name__ == "ClickException")
+
 
 class _OneLineErrors(TyperGroup):
     """The command group; its :meth:`invoke` is the one place that reports an EyelumeError."""
 
-    def invoke(self, ctx: click.Context):
+    def invoke(self, ctx: typer.Context):
         with warnings.catch_warnings():
             warnings.simplefilter("always", EyelumeWarning)  # _show_warning says each once
             warnings.showwarning = _show_warning
@@ -54,6 +59,31 @@ class _OneLineErrors(TyperGroup):
             except KeyboardInterrupt:  # Ctrl-C or SIGTERM where a command keeps nothing partial
                 err.print("interrupted")
                 _exit_interrupted()
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        """Click's usage errors (a missing or unknown option, a bad value) as one line on stderr
+        and exit code 2, like every other bad input; Typer's standalone handling would draw a
+        framed box of five lines. With ``standalone_mode=False`` the caller handles them."""
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except _UsageError as exc:
+            where = exc.ctx.command_path if getattr(exc, "ctx", None) is not None else "eyelume"
+            err.print(
+                f"[bold red]error:[/] {escape(where)}: {escape(exc.format_message())} "
+                f"(see {escape(where)} --help)",
+                highlight=False,
+                soft_wrap=True,
+            )
+            sys.exit(exc.exit_code)
+        except _ClickException as exc:
+            err.print(f"[bold red]error:[/] {escape(exc.format_message())}", soft_wrap=True)
+            sys.exit(exc.exit_code)
+        except typer.Abort:
+            err.print("aborted")
+            sys.exit(1)
+        sys.exit(rv if isinstance(rv, int) else 0)
 
 
 _show_default = warnings.showwarning
