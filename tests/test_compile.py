@@ -8,7 +8,7 @@ from numba import njit
 
 import eyelume
 from eyelume.compile import compile_scene
-from eyelume.errors import GeometryError
+from eyelume.errors import EyelumeWarning, GeometryError
 from eyelume.kernels import sequential as Q
 from eyelume.kernels.sequential import trace_lens
 from eyelume.scene.io import SceneError, apply_overrides, load_scene
@@ -122,3 +122,52 @@ def test_a_camera_anywhere_refuses_impossible_views(overrides, words):
         compile_scene(apply_overrides(scene, overrides))
     msg = str(e.value)
     assert words in msg and "\n" not in msg
+
+
+@pytest.mark.parametrize(
+    ("overrides", "words"),
+    [
+        (
+            {"lens.surfaces.10.semi_diameter_mm": 3.0},
+            "lens.surfaces.10.semi_diameter_mm = 3 (the chief ray reaches",
+        ),
+        (
+            {"lens.surfaces.0.semi_diameter_mm": 5.0},
+            "lens.surfaces.0.semi_diameter_mm = 5 (the chief ray reaches",
+        ),
+    ],
+)
+def test_a_sensor_larger_than_the_prescription_covers_is_refused(overrides, words):
+    """A user's clear aperture that lets no ray from part of the sensor's field through (those
+    pixels would be black for want of a lens): one line naming the sensor and the aperture."""
+    with pytest.raises(SceneError) as e:
+        compile_scene(load_scene("paper2005", overrides))
+    msg = str(e.value)
+    assert msg.startswith("sensor: larger than the lens covers (46 × 34.3 mm")
+    assert words in msg and "\n" not in msg
+
+
+def test_a_vignetting_aperture_warns():
+    """An aperture that blocks the chief ray of part of the field while other rays pass: the
+    scene renders (vignetting is a lens property), with a warning saying how much is vignetted."""
+    with pytest.warns(EyelumeWarning, match=r"of 63 field points.*vignetted past 50 %"):
+        compile_scene(load_scene("paper2005", {"lens.surfaces.10.semi_diameter_mm": 8.0}))
+
+
+def test_automatic_apertures_cover_a_sensor_larger_than_the_eye_plane():
+    """Automatic clear apertures are sized for the sensor's field when it exceeds the eye
+    plane's: a 100 × 75 mm sensor (87 mm field in focus, the eye plane is 40 × 30 mm) gets a lens
+    that passes all 72 rim rays (at 0.999 of the stop's radius: the stop's own edge is a tie)
+    from each corner of its field (it used to vignette them: black
+    corners), found by the same real-ray aiming with the compiled apertures in place."""
+    scene = load_scene("paper2005", {"sensor.width_mm": 100.0, "sensor.height_mm": 75.0})
+    cs = compile_scene(scene)
+    m = abs(cs.first_order.magnification)
+    stop_sd = cs.lf[cs.stop_index, Q.L_SD]
+    ep = cs.first_order
+    for x0, y0 in [(50 / m, 37.5 / m), (-50 / m, 37.5 / m), (-50 / m, -37.5 / m)]:
+        _, found = Q.rim_ray_heights(
+            cs.lf, cs.stop_index, 0.999 * stop_sd, np.array([x0]), np.array([y0]), 72,
+            ep.entrance_pupil_radius / stop_sd, ep.entrance_pupil_z,
+        )  # fmt: skip
+        assert found == 72, (x0, y0, found)

@@ -21,11 +21,12 @@ The compiled scene holds, at the scene's wavelength, the named tables of
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from eyelume.errors import GeometryError, GlassError, SceneError
+from eyelume.errors import EyelumeWarning, GeometryError, GlassError, SceneError
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
 from eyelume.kernels.bins import PlaneGrid, eye_plane_grid, picture_grid
@@ -347,12 +348,22 @@ def _lens_table(scene: Scene, indices: list[float], semi: list[float]) -> tuple[
     return lf, z
 
 
+def _field_in_focus(scene: Scene, par: ParaxialSystem) -> tuple[float, float]:
+    """Width and height (mm) of the field the lens must pass on the plane in focus: the
+    eye-plane receiver's and the sensor's (its size / |paraxial magnification|), whichever is
+    larger in each direction."""
+    m = abs(par.magnification(scene.object_distance_mm))
+    sw, sh = scene.sensor.field_mm
+    return max(scene.eye_plane.width_mm, sw / m), max(scene.eye_plane.height_mm, sh / m)
+
+
 def _auto_semi_diameters(
     scene: Scene, indices: list[float], par: ParaxialSystem, stop: int, stop_sd: float
 ) -> tuple[list[float], float]:
-    """Clear semi-diameters from a real-ray trace of the full eye-plane field.
+    """Clear semi-diameters from a real-ray trace of the full field in focus.
 
-    For a 9 × 7 grid of object points over the eye plane (corners included) the rays through 72
+    For a 9 × 7 grid of object points over the field (:func:`_field_in_focus`: the eye-plane
+    receiver's or the sensor's, whichever is larger; corners included) the rays through 72
     points of the stop's rim are found by real-ray aiming; the largest height they reach at each
     surface + 1 % (a mechanical clear aperture) is its semi-diameter, so the stop alone limits
     every bundle from the eye area, as the paper's lens was designed. Also returns the fraction
@@ -362,9 +373,9 @@ def _auto_semi_diameters(
 
     n = len(scene.lens.surfaces)
     lf, _ = _lens_table(scene, indices, [math.inf] * n)
-    plane = scene.eye_plane
-    xs = np.linspace(-plane.width_mm / 2, plane.width_mm / 2, 9)
-    ys = np.linspace(-plane.height_mm / 2, plane.height_mm / 2, 7)
+    w, h = _field_in_focus(scene, par)
+    xs = np.linspace(-w / 2, w / 2, 9)
+    ys = np.linspace(-h / 2, h / 2, 7)
     # the aiming starts from the paraxial entrance pupil (its radius / the stop's)
     pupil_mag = par.efl / scene.lens.f_number / 2 / stop_sd
     pupil_z = scene.lens.object_distance_mm + par.entrance_pupil_position(stop)
@@ -564,9 +575,80 @@ def _compile_lens(scene: Scene) -> tuple[LensTable, list[float], int]:
             f"lens: only {rim_fraction:.0%} of the rim rays of the eye-plane field pass the lens "
             "(total internal reflection or a surface missed): check the prescription"
         )
+    _check_coverage(scene, par, stop, stop_sd, lf)
     best = real_best_focus(lf)
     check_focus(scene, par, stop, stop_sd, None if best is None else best[0])  # near the sensor
     return LensTable(lf, float(image_z)), idx, stop
+
+
+#: Stop zones (fractions of the stop's radius) and azimuths of the rays
+#: :func:`_check_coverage` aims from each field point: the chief ray and two rings.
+_COVERAGE_ZONES = (0.0, 0.5, 0.999)  # the stop's own edge is a tie
+_COVERAGE_AZIMUTHS = 8
+
+
+def _check_coverage(
+    scene: Scene, par: ParaxialSystem, stop: int, stop_sd: float, lf: np.ndarray
+) -> None:
+    """The lens covers the sensor: every point of a 9 × 7 grid over the sensor's field on the
+    plane in focus (its size / |paraxial magnification|, corners included) sends some ray
+    through the clear apertures to the sensor. Aperture limits are the user's
+    (``semi_diameter_mm``; the automatic ones pass the whole field by construction,
+    :func:`_auto_semi_diameters`). For each point, rays through the stop's centre and its half
+    and full radius (8 azimuths each) are aimed by
+    :func:`eyelume.kernels.sequential.rim_ray_heights` and traced with the apertures.
+
+    Raises SceneError when a field point passes no ray (that part of the picture would be black
+    for want of a lens, not of light), naming the sensor's size and the first clear aperture the
+    point's chief ray overfills. A point whose chief ray is blocked but some rays pass is
+    vignetted past 50 %: a warning."""
+    from eyelume.kernels.sequential import rim_ray_heights
+
+    if all(s.semi_diameter_mm is None for j, s in enumerate(scene.lens.surfaces) if j != stop):
+        return
+    m = abs(par.magnification(scene.object_distance_mm))
+    sw, sh = scene.sensor.field_mm
+    w, h = sw / m, sh / m
+    pupil_mag = par.efl / scene.lens.f_number / 2 / stop_sd
+    pupil_z = scene.lens.object_distance_mm + par.entrance_pupil_position(stop)
+    open_lf = lf.copy()
+    open_lf[:, Q.L_SD] = np.inf
+    open_lf[stop, Q.L_SD] = stop_sd
+    vignetted = []
+    for x0 in np.linspace(-w / 2, w / 2, 9):
+        for y0 in np.linspace(-h / 2, h / 2, 7):
+            xs, ys = np.array([x0]), np.array([y0])
+            passed = [
+                rim_ray_heights(lf, stop, z * stop_sd, xs, ys, n, pupil_mag, pupil_z)[1]
+                for z, n in zip(
+                    _COVERAGE_ZONES, (1, _COVERAGE_AZIMUTHS, _COVERAGE_AZIMUTHS), strict=True
+                )
+            ]
+            if passed[0]:
+                continue
+            heights, _ = rim_ray_heights(open_lf, stop, 0.0, xs, ys, 1, pupil_mag, pupil_z)
+            over = [j for j in range(lf.shape[0]) if heights[j] > lf[j, Q.L_SD]]
+            where = (
+                f"lens.surfaces.{over[0]}.semi_diameter_mm = {lf[over[0], Q.L_SD]:g} (the chief "
+                f"ray reaches {heights[over[0]]:.2f} mm there)"
+                if over
+                else "the lens"
+            )
+            if sum(passed) == 0:
+                raise SceneError(
+                    f"sensor: larger than the lens covers ({sw:.3g} × {sh:.3g} mm at "
+                    f"magnification {m:.3g}): the point ({x0:.1f}, {y0:.1f}) mm of the plane in "
+                    f"focus sends no ray through {where}"
+                )
+            vignetted.append((x0, y0, where))
+    if vignetted:
+        x0, y0, where = vignetted[0]
+        warnings.warn(
+            f"lens: {len(vignetted)} of 63 field points, e.g. ({x0:.1f}, {y0:.1f}) mm on the plane "
+            f"in focus, are vignetted past 50 %: the chief ray is blocked by {where}",
+            EyelumeWarning,
+            stacklevel=2,
+        )
 
 
 #: Widest half field (°) an ideal (rectilinear) lens is allowed to cover: the slope tan θ of a
