@@ -24,16 +24,18 @@ Every light path runs LED → … → camera. We split path space by how the pat
    paraxial image through the cornea) and cosine directions (defensive mixture: weight
    (cos θ/π) / pdf_mix ≤ 1/(1 − p_aim)), so aimed rays the cornea bends away from the lens cost
    time, never bias. Paths reaching the sensor deposit their power in their pixel.
+3. **Straight into the lens** (an LED the camera sees, beside a wide lens): estimated from the
+   LEDs too, by a second leg of every light path, aimed uniformly inside the cone of the lens's
+   first surface, counted only when the lens is what it meets first.
 
 Why a specular connection for the iris: a straight connection from the iris to an LED does not
 exist (refraction), and the LEDs are points, so neither plain NEE nor hitting the source works
 from the camera side, while tracing it forward leaves each iris pixel with the few paths that
 happen to scatter into the lens. The cornea maps LED directions to iris points one to one, so
 Newton's method finds the refracted path and its Jacobian gives the irradiance exactly; light
-paths give the rest (glints among it) without a manifold solve. The two parts cover disjoint
-sets of paths, so their sum is unbiased. Not covered by either: light an LED sends straight
-into the lens (impossible for LEDs facing the eye). The agreement test against the plain
-forward estimator checks all of it.
+paths give the rest (glints among it) without a manifold solve. The three parts cover disjoint
+sets of paths, so their sum is unbiased. The agreement test against the plain forward
+estimator, on every preset, checks all of it.
 
 Variance: each pixel keeps Σm and Σm² over independent stratified sets of camera samples, and
 Σc and Σc² of the light paths' deposits, so every pixel has its own variance estimate.
@@ -81,6 +83,7 @@ __all__ = [
 
 _INV_PI = 1.0 / math.pi
 _LIGHT_TAG = 0x4C49474854  # separates the light paths' streams from the camera paths'
+_DIRECT_TAG = 0x444952454354  # the light paths' direct legs (LED → lens) have their own
 _PLANE_TAG = 0x504C414E45  # … and the eye-plane points'
 
 
@@ -573,6 +576,42 @@ def _light_path(i, seed, scene, cam, tally):
 
 
 @njit(cache=True)
+def _direct_path(i, seed, scene, cam, tally, port):
+    """Light path ``i``'s second leg: LED i mod N straight into the lens (its first surface,
+    table row ``port``), the light of an LED the camera sees directly (a wide lens beside the
+    LED ring). Uniform inside the cone that holds the lens surface's bounding sphere (the whole
+    sphere of directions if the LED is inside it), weighted I(α)/pdf like the cornea leg; it
+    counts only when the lens is the first thing it meets, so it shares no path with the cornea
+    leg or the camera paths. Its own random stream, so the other legs' numbers do not change;
+    an LED that sends nothing toward the lens (I(α) = 0, the paper's ring) costs one profile
+    evaluation."""
+    sf, si = scene.surfaces.sf, scene.surfaces.si
+    leds = scene.leds
+    n_leds = leds.points.shape[0]
+    k = i % n_leds
+    px, py, pz = leds.points[k, 0], leds.points[k, 1], leds.points[k, 2]
+    wx, wy, wz = sf[port, G.BX] - px, sf[port, G.BY] - py, sf[port, G.BZ] - pz
+    dist = math.sqrt(wx * wx + wy * wy + wz * wz)
+    rb = sf[port, G.BR]
+    cos_max = math.sqrt(1.0 - rb * rb / (dist * dist)) if dist > rb else -1.0
+    state = stream_start(seed, i)
+    state, u1 = next_uniform(state)
+    state, u2 = next_uniform(state)
+    lx, ly, lz = uniform_cone(u1, u2, cos_max)
+    if dist > 0.0:
+        dx, dy, dz = about_axis(lx, ly, lz, wx / dist, wy / dist, wz / dist)
+    else:
+        dx, dy, dz = lx, ly, lz
+    w = n_leds * radiant_intensity(leds, k, dx, dy, dz) * 2.0 * math.pi * (1.0 - cos_max)
+    if w <= 0.0:
+        return
+    s, _ = G.nearest_hit(sf, si, px, py, pz, dx, dy, dz)
+    if s != port:
+        return
+    _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, -1, 0)
+
+
+@njit(cache=True)
 def light_pass(seed, first, count, scene, cam, sums):
     """Trace light paths ``first`` … ``first + count − 1``; chunk c adds to ``sums``' (a
     :class:`Tally` of (chunks, …) arrays) img[c], img2[c], led[c] (fixed-point Σc and Σc² in
@@ -588,6 +627,11 @@ def _light_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
     img, img2, led_img, q, q2 = sums
     n_chunks = img.shape[0]
     lseed = mix64(np.uint64(seed) ^ np.uint64(_LIGHT_TAG))
+    dseed = mix64(np.uint64(seed) ^ np.uint64(_DIRECT_TAG))
+    port = -1
+    for s in range(surfaces.si.shape[0]):
+        if surfaces.si[s, G.ACTION] == G.ACT_LENS:
+            port = s
     for c in prange(n_chunks):
         tables = SceneTables(surfaces, lens, leds, picture, eye_plane, max_events)
         lo = first + (count * c) // n_chunks
@@ -595,6 +639,8 @@ def _light_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
         tally = Tally(img[c], img2[c], led_img[c], q, q2)
         for i in range(lo, hi):
             _light_path(i, lseed, tables, camera, tally)
+            if port >= 0:
+                _direct_path(i, dseed, tables, camera, tally, port)
 
 
 @njit(cache=True)
