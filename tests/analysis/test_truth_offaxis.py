@@ -117,3 +117,57 @@ def test_ring_glints_slide_off_the_cornea_as_the_eye_turns_away():
     assert on[0] < 8  # away from the camera: some slide off
     assert on[2] == 8  # toward the camera: none do
     assert all(v <= o for v, o in zip(counts["visible"][0], on, strict=True))
+
+
+def test_leds_a_wide_lens_sees_directly_are_in_the_truth_and_the_picture():
+    """eyetrackvr's 130° lens sits beside its LED ring and sees all four LEDs directly. Each
+    one's truth pixel is the OpenCV projection of its emission point (the ideal lens's chief ray
+    is undeviated: a pinhole at the lens's centre); its radiant intensity toward the lens is
+    I₀ · I(α)/I₀ at the angle α between the LED's axis and the lens, computed here from the
+    scene's profile; and in a render the brightest pixel near each truth position is within a
+    pixel of it (the LED's own point image, blurred by defocus: it is 10–20 mm from the lens,
+    focused at 27.7 mm)."""
+    import eyelume
+    from eyelume.scene.sources import relative_intensity
+
+    scene = load_scene("eyetrackvr")
+    cs = compile_scene(scene)
+    truth = eye_truth(cs)
+    info = camera_info(cs)["opencv"]
+    centres, axes = led_poses(scene.leds)
+    emit = centres + axes * scene.leds.body_diameter_mm / 2
+    px, _ = cv2.projectPoints(
+        emit.reshape(-1, 1, 3),
+        cv2.Rodrigues(np.array(info["R"]))[0],
+        np.array(info["t_mm"]),
+        np.array(info["K"]),
+        np.zeros(5),
+    )
+    px = px.reshape(-1, 2)
+    seen = {e["led"]: e for e in truth["leds_in_view"]}
+    assert sorted(seen) == [0, 1, 2, 3]
+    lens = np.array(scene.camera.position_mm)
+    profile = relative_intensity(scene.leds.profile)
+    for k, e in seen.items():
+        assert np.allclose(e["centre_px"], px[k], atol=2e-3), (k, e["centre_px"], px[k])
+        to_lens = (lens - emit[k]) / np.linalg.norm(lens - emit[k])
+        alpha = math.acos(float(to_lens @ axes[k]))
+        want = scene.leds.radiant_intensity_w_sr * float(profile(np.array(alpha)))
+        # the kernels' profile is a table linear in α: within 1e-3 of the closed form
+        assert e["radiant_intensity_toward_lens_w_sr"] == pytest.approx(want, rel=1e-3)
+        assert e["visible"]
+    # the render at 1/4 of the resolution (60 × 60, 44 µm pixels)
+    small = compile_scene(
+        apply_overrides(scene, {"sensor.cols": 60, "sensor.rows": 60, "sensor.pixel_pitch_um": 44})
+    )
+    img = eyelume.render(
+        small, eyelume.RenderOptions(estimator="fast", samples_per_pixel=4, seed=3)
+    ).eye_image
+    for e in eye_truth(small)["leds_in_view"]:
+        c, r = e["centre_px"]
+        r0, c0 = int(round(r)), int(round(c))
+        win = img[max(r0 - 3, 0) : r0 + 4, max(c0 - 3, 0) : c0 + 4]
+        rr, cc = np.unravel_index(np.argmax(win), win.shape)
+        peak = (max(c0 - 3, 0) + cc, max(r0 - 3, 0) + rr)
+        assert math.hypot(peak[0] - c, peak[1] - r) < 1.5, (e, peak)
+        assert win.max() > 20 * np.median(img)  # a bright spot, not skin

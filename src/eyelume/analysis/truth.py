@@ -7,7 +7,9 @@ the stop's centre, :func:`eyelume.estimators.camera.aim_chief`) leaves the lens 
   the anterior and posterior cornea, passes through P — found by Newton's method on the sensor
   point, so the truth is the *apparent* pupil a camera sees through the cornea;
 * LED k's glint images where the chief ray, reflected by the anterior cornea, passes through the
-  LED's emission point (the centre of the blur disc of the first Purkinje image).
+  LED's emission point (the centre of the blur disc of the first Purkinje image);
+* an LED the camera sees directly images where the chief ray itself passes through its
+  emission point.
 
 Pixel coordinates follow OpenCV's convention on the upright picture: pixel (column c, row r) has
 its centre at (x, y) = (c, r), row 0 at the top. A point is *visible* when nothing (an eyelid,
@@ -27,7 +29,7 @@ from eyelume.detectors.receivers import BinnedPlane
 from eyelume.estimators.camera import aim_chief, into_scene
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import reflect, refract
-from eyelume.kernels.sampling import orthonormal_basis
+from eyelume.kernels.sampling import orthonormal_basis, radiant_intensity
 from eyelume.kernels.tables import CameraTables
 
 __all__ = ["eye_truth", "glint_counts", "sensor_to_pixel"]
@@ -237,6 +239,42 @@ def _glint_truth(v: _View, k: int, led: np.ndarray) -> dict:
     return entry
 
 
+def _led_in_view(v: _View, k: int, led: np.ndarray) -> dict | None:
+    """LED ``k`` seen directly (no cornea): the pixel whose chief ray passes through its
+    emission point, if it falls inside the picture; ``visible`` when nothing lies between the
+    lens and the LED and the LED sends light toward the lens (I(α) > 0, its radiant intensity
+    that way given in W/sr). None when the LED is behind the entrance pupil or imaged outside
+    the picture."""
+    cs, cam = v.cs, v.cam
+    ep = np.array([0.0, 0.0, cam.entrance_pupil_z])
+    if led[2] >= ep[2]:
+        return None
+    n = (ep - led) / np.linalg.norm(ep - led)
+    g1, g2 = _basis(n)
+
+    def residual(s):
+        return _miss(_chief_ray(cs, cam, s[0], s[1]), led, n, g1, g2)
+
+    # first guess: the pinhole image through the entrance pupil's centre
+    m = -(cs.image_z - ep[2]) / (ep[2] - led[2])
+    s = _solve(residual, m * led[:2])
+    if s is None:
+        return None
+    c, r = sensor_to_pixel(cs, *s)
+    if not (-0.5 <= c < cs.picture.cols - 0.5 and -0.5 <= r < cs.picture.rows - 0.5):
+        return None
+    p, d = _chief_ray(cs, cam, *s)
+    hit, t = G.nearest_hit(cs.sf, cs.si, *p, *d)
+    clear = hit < 0 or t >= (led - p) @ d - 1e-4  # nothing before the emission point
+    intensity = float(radiant_intensity(cs.led, k, *(-d)))
+    return {
+        "led": k,
+        "centre_px": [c, r],
+        "visible": bool(clear and intensity > 0.0),
+        "radiant_intensity_toward_lens_w_sr": intensity,
+    }
+
+
 def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     """The true gaze, apparent pupil (centre and edge) and glints of a compiled scene.
 
@@ -244,12 +282,16 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     its apparent centre in pixels, the pixel positions of 72 points of its edge, the share of
     them visible (not under a lid); per LED its glint's pixel position, whether its reflection
     lies on the cornea's cap (``on_cornea``) and is seen (``visible``), or why there is none;
-    the counts ``glints_on_cornea`` and ``glints_visible``.
+    the counts ``glints_on_cornea`` and ``glints_visible``; ``leds_in_view``: each LED the
+    camera sees directly (a wide lens beside the ring), its pixel, whether it is seen and
+    its radiant intensity toward the lens — a bright spot that is not a glint.
     """
     v = _view(cs, cam or cs.camera)
     eye = cs.scene.eye
     depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
     glints = [_glint_truth(v, k, led) for k, led in enumerate(cs.led.points)]
+    in_view = [_led_in_view(v, k, led) for k, led in enumerate(cs.led.points)]
+    in_view = [e for e in in_view if e is not None]
     return {
         "gaze_deg": {
             "horizontal": eye.gaze_horizontal_deg,
@@ -262,6 +304,7 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
         "glints": glints,
         "glints_on_cornea": sum(g["on_cornea"] for g in glints),
         "glints_visible": sum(g["visible"] for g in glints),
+        "leds_in_view": in_view,
     }
 
 
