@@ -28,6 +28,7 @@ from typing import NamedTuple
 from numba import njit
 
 from eyelume.kernels import sequential as Q
+from eyelume.kernels.jit import per_ray
 
 __all__ = [
     "into_scene",
@@ -128,7 +129,7 @@ def into_scene(cam, xs, ys, qx, qy):
     return SceneRay(passed, x, y, -z, ex, ey, -ez, g)
 
 
-@njit(cache=True)
+@per_ray
 def _stop_crossing(cam, xs, ys, qx, qy):
     """Where the ray from sensor point (xs, ys) toward (qx, qy, rear_z) meets the stop (surface
     ``k_stop`` of the reversed lens, apertures open); NaN if it fails before."""
@@ -160,7 +161,7 @@ def paraxial_crossing(cam, xs, ys, tx, ty):
     return xs * (1.0 - s) + s * m * tx, ys * (1.0 - s) + s * m * ty
 
 
-@njit(cache=True)
+@per_ray
 def stop_jacobian(cam, xs, ys, qx, qy):
     """Stop point (sx, sy) of the ray toward (qx, qy) and the Jacobian ∂(s)/∂(q) by forward
     differences (step 1e-4 mm). Returns (sx, sy, Mat2); NaN if the ray fails."""
@@ -168,7 +169,7 @@ def stop_jacobian(cam, xs, ys, qx, qy):
     return sx, sy, _jacobian_at(cam, xs, ys, qx, qy, sx, sy)
 
 
-@njit(cache=True)
+@per_ray
 def _jacobian_at(cam, xs, ys, qx, qy, sx, sy):
     """:func:`stop_jacobian`'s Mat2 when the stop point (sx, sy) of the ray toward (qx, qy) is
     already known (two traces instead of three)."""
@@ -178,7 +179,7 @@ def _jacobian_at(cam, xs, ys, qx, qy, sx, sy):
     return Mat2((s1x - sx) / h, (s2x - sx) / h, (s1y - sy) / h, (s2y - sy) / h)
 
 
-@njit(cache=True)
+@per_ray
 def aim_at_stop(cam, xs, ys, tx, ty, qx, qy, a):
     """Crossing (qx, qy) of the last vertex plane by the ray from sensor point (xs, ys) through
     stop point (tx, ty), from the guess (qx, qy), and the Jacobian ∂(stop point)/∂(q) there.
@@ -207,7 +208,7 @@ def aim_at_stop(cam, xs, ys, tx, ty, qx, qy, a):
     return StopAim(False, qx, qy, 0.0)
 
 
-@njit(cache=True)
+@per_ray
 def aim_chief(cam, xs, ys):
     """The chief ray of sensor point (xs, ys) — through the stop's centre — by Newton's method
     from the paraxial guess. Returns a :class:`ChiefRay`."""

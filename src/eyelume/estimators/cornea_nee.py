@@ -27,6 +27,7 @@ from numba import njit
 
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import interface_at, refract
+from eyelume.kernels.jit import per_ray
 from eyelume.kernels.sampling import led_cos_alpha, radiant_intensity
 from eyelume.kernels.tables import Ray
 
@@ -77,7 +78,7 @@ def _transmit(surfaces, s, ray):
     return ok, tx, ty, tz, 1.0 - f.reflectance - f.absorptance
 
 
-@njit(cache=True)
+@per_ray
 def _through(surfaces, cornea, led, ax, ay, rc):
     """The ray from LED point ``led`` (px, py, pz) toward (ax, ay, 0) through both cornea
     surfaces, met with the receiver's tangent plane. Returns a :class:`CorneaHit`."""
@@ -107,7 +108,7 @@ def _through(surfaces, cornea, led, ax, ay, rc):
     return CorneaHit(t > 0.0, u, v, trans, dx, dy, dz)
 
 
-@njit(cache=True)
+@per_ray
 def _path_is_clear(surfaces, cornea, target, ray, rc):
     """Whether the refracted path from the LED (``ray``) meets, in turn, the anterior cornea,
     the posterior cornea and surface ``target`` at the receiver point with nothing else in
@@ -129,7 +130,7 @@ def _path_is_clear(surfaces, cornea, target, ray, rc):
     return ex * ex + ey * ey + ez * ez < 1e-6
 
 
-@njit(cache=True)
+@per_ray
 def irradiance_through_cornea(surfaces, cornea, target, leds, rc):
     """Irradiance (W/mm²) at receiver point ``rc`` (a :class:`Receiver`) on surface ``target``
     from every LED (:class:`~eyelume.kernels.tables.LedTable`), along paths refracted by the

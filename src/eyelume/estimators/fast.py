@@ -55,6 +55,7 @@ from numba import njit, prange
 from eyelume.kernels import geometry as G
 from eyelume.kernels.bins import bin_of, from_grid
 from eyelume.kernels.interact import interface_at, reflect, refract
+from eyelume.kernels.jit import per_ray
 from eyelume.kernels.rng import mix64, next_uniform, stream_start
 from eyelume.kernels.sampling import (
     about_axis,
@@ -132,7 +133,7 @@ class Specular(NamedTuple):
     dz: float
 
 
-@njit(cache=True)
+@per_ray
 def led_irradiance(surfaces, leds, k, facet):
     """Irradiance (W/mm²) at a :class:`~eyelume.kernels.tables.Facet` (a world point on a face
     and its unit normal toward the light's side) from LED k of ``leds``
@@ -154,7 +155,7 @@ def led_irradiance(surfaces, leds, k, facet):
     return radiant_intensity(leds, k, -ux, -uy, -uz) * cos_s / d2
 
 
-@njit(cache=True)
+@per_ray
 def direct_irradiance(surfaces, leds, facet):
     """Irradiance (W/mm²) at a :class:`~eyelume.kernels.tables.Facet` from every LED that sees
     it along a straight unoccluded segment."""
@@ -182,7 +183,7 @@ def _specular(state, f, dx, dy, dz, nx, ny, nz):
     return Specular(state, True, True, tx, ty, tz)
 
 
-@njit(cache=True)
+@per_ray
 def _camera_branch(state, scene, cam, ray, beta, split, first_vertex):
     """Follow one camera path along ``ray`` with throughput ``beta``.
 
@@ -273,7 +274,7 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex):
 IRIS_SPLIT = 8
 
 
-@njit(cache=True)
+@per_ray
 def _path_radiance(state, scene, cam, ray, beta, split):
     """A camera path with its first Lambertian vertex's continuation(s); see _camera_branch.
     Returns (state, radiance, has_branch, branch)."""
@@ -295,7 +296,7 @@ def _path_radiance(state, scene, cam, ray, beta, split):
     return state, radiance, out.has_branch, out.branch
 
 
-@njit(cache=True)
+@per_ray
 def _camera_radiance(state, scene, cam, ray):
     """Radiance (W/(mm²·sr)) arriving at the lens along −d from the origin of ``ray``.
 
@@ -407,7 +408,7 @@ def _camera_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139
             out_sq[i] += mean * mean
 
 
-@njit(cache=True)
+@per_ray
 def _scatter(state, aim_row, x, y, z, nx, ny, nz):
     """A direction from the aim/cosine mixture about unit normal n
     (:func:`~eyelume.kernels.sampling.aimed_mixture`).
@@ -448,7 +449,7 @@ class Tally(NamedTuple):
     q2: float
 
 
-@njit(cache=True)
+@per_ray
 def _follow(state, w, ray, scene, cam, tally, glint, chain):
     """Carry a light path of weight ``w`` (W per unit path) until it ends; deposit at the
     sensor. ``glint`` ≥ 0 while the path has met no Lambertian face (LED index). ``chain`` is 1
@@ -535,7 +536,7 @@ def _follow(state, w, ray, scene, cam, tally, glint, chain):
     return state
 
 
-@njit(cache=True)
+@per_ray
 def _light_path(i, seed, scene, cam, tally):
     """Light path ``i``: LED i mod N toward the cornea, split there (see module docstring)."""
     sf, si = scene.surfaces.sf, scene.surfaces.si

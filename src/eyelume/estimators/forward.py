@@ -36,6 +36,7 @@ from eyelume.estimators.interrupt import interrupt_between_batches
 from eyelume.kernels import geometry as G
 from eyelume.kernels.bins import bin_of
 from eyelume.kernels.interact import interface_at, reflect, refract
+from eyelume.kernels.jit import per_ray
 from eyelume.kernels.rng import next_uniform, stream_start
 from eyelume.kernels.sampling import about_axis, cosine_hemisphere, led_direction
 from eyelume.kernels.sequential import LENS_PASSED, LENS_TIR, trace_lens
@@ -85,7 +86,7 @@ class Counts(NamedTuple):
     tallies: np.ndarray
 
 
-@njit(cache=True)
+@per_ray
 def emit_ray(i, seed, leds):
     """Birth of ray ``i``: an LED of ``leds`` (:class:`~eyelume.kernels.tables.LedTable`) drawn
     uniformly (equal powers), a direction from its angular profile about its axis
@@ -102,7 +103,7 @@ def emit_ray(i, seed, leds):
     )
 
 
-@njit(cache=True)
+@per_ray
 def trace_ray(i, seed, scene, counts, path, record):
     """Trace ray ``i`` of ``scene`` (the compiled scene's
     :class:`~eyelume.kernels.tables.SceneTables`) from birth to its end, adding to ``counts``

@@ -18,6 +18,8 @@ import math
 
 from numba import njit
 
+from eyelume.kernels.jit import per_ray
+
 # --- float columns of the surface table -------------------------------------------------------
 OX, OY, OZ = 0, 1, 2
 R00, R01, R02, R10, R11, R12, R20, R21, R22 = 3, 4, 5, 6, 7, 8, 9, 10, 11
@@ -120,7 +122,7 @@ def _valid(sf, s, shape, x, y, z):
     return True
 
 
-@njit(cache=True)
+@per_ray
 def intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max):
     """Nearest valid hit of a world ray with surface ``s`` beyond T_MIN and before ``t_max``.
 
@@ -149,7 +151,7 @@ def intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max):
     return -1.0
 
 
-@njit(cache=True)
+@per_ray
 def surface_normal(sf, si, s, x, y, z):
     """World unit normal (toward side B) of surface ``s`` at world point (x, y, z) on it."""
     px, py, pz = to_local(sf, s, x, y, z)
@@ -165,7 +167,7 @@ def surface_normal(sf, si, s, x, y, z):
     return dir_to_world(sf, s, nx, ny, nz)
 
 
-@njit(cache=True)
+@per_ray
 def nearest_hit(sf, si, x, y, z, dx, dy, dz):
     """Non-sequential search: (surface, t) of the nearest hit along the ray, or (-1, inf).
 

@@ -30,6 +30,7 @@ from eyelume.kernels.geometry import (
     quadratic_roots,
 )
 from eyelume.kernels.interact import refract
+from eyelume.kernels.jit import per_ray
 
 L_Z, L_CURV, L_CONIC, L_SD, L_N0, L_N1, L_POWER, L_K1, L_K2, L_WAY = range(10)
 N_LENS_COL = 10
@@ -98,7 +99,7 @@ def ideal_lens(row, x, y, dx, dy, dz):
     return True, sx * inv, sy * inv, inv
 
 
-@njit(cache=True)
+@per_ray
 def trace_lens(lf, x, y, z, dx, dy, dz, path, n_path, record):
     """Trace a world ray (unit direction, dz > 0) through all lens surfaces.
 
