@@ -149,8 +149,7 @@ def led_irradiance(surfaces, leds, k, facet):
         return 0.0
     if led_cos_alpha(leds, k, -ux, -uy, -uz) <= 0.0:
         return 0.0
-    s, t = G.nearest_hit(surfaces.sf, surfaces.si, x, y, z, ux, uy, uz)
-    if s >= 0 and t < d * (1.0 - 1e-9) - 1e-6:
+    if G.occluded(surfaces.sf, surfaces.si, x, y, z, ux, uy, uz, d * (1.0 - 1e-9) - 1e-6):
         return 0.0
     return radiant_intensity(leds, k, -ux, -uy, -uz) * cos_s / d2
 

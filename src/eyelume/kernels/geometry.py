@@ -187,3 +187,21 @@ def nearest_hit(sf, si, x, y, z, dx, dy, dz):
             best_t = t
             best_s = s
     return best_s, best_t
+
+
+@per_ray
+def occluded(sf, si, x, y, z, dx, dy, dz, t_max):
+    """Whether any surface meets the ray at a distance in (T_MIN, ``t_max``): the shadow-ray
+    test of next-event estimation. The same answer as ``nearest_hit``'s ``t < t_max`` (a hit
+    before ``t_max`` exists exactly when the nearest one is before it), but it prunes every
+    bounding sphere that lies beyond ``t_max`` from the start and stops at the first hit."""
+    for s in range(sf.shape[0]):
+        cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
+        tc = cx * dx + cy * dy + cz * dz
+        br = sf[s, BR]
+        d2 = cx * cx + cy * cy + cz * cz - tc * tc
+        if d2 > br * br or tc + br < 0.0 or tc - br > t_max:
+            continue
+        if intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max) > 0.0:
+            return True
+    return False
