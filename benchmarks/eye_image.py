@@ -28,6 +28,11 @@ target_87x65    ``render(cs, RenderOptions(estimator="fast", rel_error=0.01))`` 
                 default ``render(cs)``. Target: ≤ 1 % in ≤ 1 s.
 target_640x480  the same at 640 × 480 with ``rel_error=0.02``. Target: ≤ 2 % in ≤ 20 s. With
                 ``--quick``: a 120 × 90 check instead (not the target; no PASS/FAIL).
+target_vr_offaxis  the same on the preset ``vr-offaxis`` at its 400 × 400 with
+                ``rel_error=0.01`` (issue 11: ≤ 1 % in the median skin pixel in ≤ 3 s). With
+                ``--quick``: 100 × 100 (a smaller picture of the same 3 µm pixels, not the target).
+                Every target section also reports peak memory: the worker's max RSS and the
+                tracemalloc peak of one more (untimed) rel_error render.
 noise_check     fast at 87 × 65, ``--seeds`` renders (seeds seed…seed+K−1) at 32 samples/pixel
                 and at the budgets the rel_error runs chose: the reported median skin (iris)
                 pixel error against the one from the scatter between the seeds, and
@@ -71,7 +76,15 @@ SCENE = "paper2005"
 RESULT_TAG = "RESULT "
 DEFAULT_SIZE = (87, 65)
 MEMORY_LIMIT_MIB = 1024.0
-SECTIONS = ("target_87x65", "target_640x480", "noise_check", "efficiency", "memory", "curve")
+SECTIONS = (
+    "target_87x65",
+    "target_640x480",
+    "target_vr_offaxis",
+    "noise_check",
+    "efficiency",
+    "memory",
+    "curve",
+)
 REGIONS = ("skin", "iris", "pupil", "sclera")
 
 
@@ -80,21 +93,21 @@ REGIONS = ("skin", "iris", "pupil", "sclera")
 # ------------------------------------------------------------------------------------------------
 
 
-def _compiled(cols: int | None = None, rows: int | None = None):
+def _compiled(cols: int | None = None, rows: int | None = None, scene: str = SCENE):
     import eyelume
     from eyelume.compile import compile_scene
 
     over = {} if cols is None else {"sensor.cols": cols, "sensor.rows": rows}
-    return compile_scene(eyelume.load_scene(SCENE, over))
+    return compile_scene(eyelume.load_scene(scene, over))
 
 
-def _warm_up(seed: int) -> float:
+def _warm_up(seed: int, scene: str = SCENE) -> float:
     """A tiny render of each estimator on a 16 × 12 sensor: loads the Numba kernels from the cache
     (or compiles them) and starts the thread pool. Returns the time it took."""
     import eyelume
 
     t0 = time.perf_counter()
-    cs = _compiled(16, 12)
+    cs = _compiled(16, 12, scene)
     eyelume.render(cs, eyelume.RenderOptions(estimator="fast", samples_per_pixel=1, seed=seed))
     eyelume.render(cs, eyelume.RenderOptions(estimator="forward", rays=20_000, seed=seed))
     return time.perf_counter() - t0
@@ -185,8 +198,8 @@ def worker_target(a: argparse.Namespace) -> dict:
     import eyelume
 
     threads = numba.get_num_threads()
-    warm = _warm_up(a.seed)
-    cs = _compiled(a.cols, a.rows)
+    warm = _warm_up(a.seed, a.scene)
+    cs = _compiled(a.cols, a.rows, a.scene)
     rounds: list[str] = []
 
     def with_target():
@@ -203,8 +216,18 @@ def worker_target(a: argparse.Namespace) -> dict:
         lambda: eyelume.render(cs, eyelume.RenderOptions(seed=a.seed)), a.repeats, a.budget, threads
     )
     r_def = t_def.pop("last")
+    # peak memory of one more rel_error render, untimed (tracemalloc slows Python allocations):
+    # the Python-side allocations (NumPy arrays included) at their peak during the call
+    import tracemalloc
+
+    tracemalloc.start()
+    with_target()
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
     return {
+        "scene": a.scene,
         "threads": threads,
+        "tracemalloc_peak_mib": peak / 2**20,
         "cols": int(cs.scene.sensor.cols),
         "rows": int(cs.scene.sensor.rows),
         "rel_error": a.rel_error,
@@ -520,12 +543,16 @@ class Summary:
             self.disturbed.append(what + C.disturbed(t))
 
 
-def bench_target(a, out, S: Summary, key: str, size, rel: float, max_s: float | None) -> None:
+def bench_target(  # noqa: PLR0913 - one figure's whole description
+    a, out, S: Summary, key: str, size, rel: float, max_s: float | None, scene: str = SCENE
+) -> None:
     cols, rows = size
-    label = f"{cols}×{rows}"
+    label = f"{cols}×{rows}" + ("" if scene == SCENE else f" {scene}")
     call = f"render(cs, RenderOptions(estimator='fast', rel_error={rel}))"
     print(f"\n-- {key}: {call} at {label}, warm")
     args = [
+        "--scene",
+        scene,
         "--cols",
         str(cols),
         "--rows",
@@ -556,7 +583,10 @@ def bench_target(a, out, S: Summary, key: str, size, rel: float, max_s: float | 
         f"   default render(cs) [{rd['estimator']}, {rd['samples_per_pixel']} samples/pixel]: "
         f"{_timing(td)}; median skin pixel error {_pct(err_d)}"
     )
-    print(f"      [{cmd}]   (worker max RSS {r['max_rss_mib']:.0f} MiB)")
+    print(
+        f"      [{cmd}]   (worker max RSS {r['max_rss_mib']:.0f} MiB; tracemalloc peak of one "
+        f"rel_error render {r['tracemalloc_peak_mib']:.1f} MiB)"
+    )
     S.timing(f"{key} rel_error call", tr)
     S.timing(f"{key} default call", td)
     if max_s is None:
@@ -580,6 +610,14 @@ def bench_target(a, out, S: Summary, key: str, size, rel: float, max_s: float | 
             f"{tr['spread_pct']:.0f} %), error {_pct(err)}, {rr['samples_per_pixel']} spp",
             f"≤ {rel:.0%} in ≤ {max_s:g} s",
             ok,
+            cmd,
+        )
+        S.add(
+            f"{key}: peak memory at {label}",
+            f"worker max RSS {r['max_rss_mib']:.0f} MiB (imports and kernels included), "
+            f"tracemalloc peak of one rel_error render {r['tracemalloc_peak_mib']:.1f} MiB",
+            "flat (issue 11)",
+            None,
             cmd,
         )
         S.add(
@@ -971,6 +1009,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", type=int, default=16, help="noise_check: renders per budget")
     # worker arguments
     p.add_argument("--worker", choices=sorted(WORKERS), help=argparse.SUPPRESS)
+    p.add_argument("--scene", default=SCENE, help=argparse.SUPPRESS)
     p.add_argument("--cols", type=int, default=None, help=argparse.SUPPRESS)
     p.add_argument("--rows", type=int, default=None, help=argparse.SUPPRESS)
     p.add_argument("--rel-error", type=float, default=0.01, help=argparse.SUPPRESS)
@@ -1019,6 +1058,10 @@ def _run_sections(a, only: list[str], out: dict, S: Summary, big: tuple[int, int
         bench_target(a, out, S, "target_87x65", DEFAULT_SIZE, 0.01, 1.0)
     if "target_640x480" in only:
         bench_target(a, out, S, "target_640x480", big, 0.02, None if a.quick else 20.0)
+    if "target_vr_offaxis" in only:
+        size = (100, 100) if a.quick else (400, 400)
+        t = None if a.quick else 3.0
+        bench_target(a, out, S, "target_vr_offaxis", size, 0.01, t, "vr-offaxis")
     if "noise_check" in only:
         bench_noise(a, out, S)
     if "efficiency" in only:
