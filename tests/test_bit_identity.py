@@ -1,14 +1,15 @@
 """The default render is the same, sample for sample, across refactors (issue 10).
 
 ``tests/reference/default_render_seed1.npz`` holds ``eyelume.render(load_scene("paper2005"),
-RenderOptions(seed=1))`` (before issue 10's options struct: ``seed=1`` as a keyword) as rendered
-by the commit that closed the eye with the iris root (issue 12: a deliberate physics change, 357
-of the 5655 eye-image pixels moved, the eye plane unchanged); the record before it was made at
-commit 3b58b61, before the kernels took named tables. On that machine the arrays are
-bit-identical (their SHA-256 are in ``benchmarks/results/bit_identity.json``, checked exactly by
-``python benchmarks/bit_identity.py``); here the comparison allows 1e-9 relative so a CPU whose
-libm rounds a last bit differently still passes, while any change of a sample, a stream or a
-weight (which moves pixels by 1e-3 or more) fails.
+RenderOptions(seed=1))`` as rendered by the commit that made the fast camera paths continue
+from their first vertex in stratified directions (``run.continuation_grid``) and draw the LED
+of a later vertex's NEE by its unshadowed irradiance (a deliberate change of the samples, not of
+what they estimate: the estimator agreement tests hold); before it, by the commit that closed
+the eye with the iris root (issue 12), and before that at commit 3b58b61. On that machine the
+arrays are bit-identical (their SHA-256 are in ``benchmarks/results/bit_identity.json``,
+checked exactly by ``python benchmarks/bit_identity.py``); here the comparison allows 1e-9
+relative so a CPU whose libm rounds a last bit differently still passes, while any change of a
+sample, a stream or a weight (which moves pixels by 1e-3 or more) fails.
 """
 
 from __future__ import annotations

@@ -1027,6 +1027,7 @@ def _camera_tables(
         aim,
         through,
         names.index(scene.eye.surfaces[0].name),
+        int(scene.run.continuation_grid),
     )
 
 

@@ -136,6 +136,49 @@ def test_direct_irradiance_is_inverse_square_with_both_cosines():
 
 
 @njit
+def _sampled(surfaces, leds, facet, n):
+    out = np.empty(n)
+    state = stream_start(7, 0)
+    for i in range(n):
+        state, out[i] = F.sampled_irradiance(state, surfaces, leds, facet)
+    return out
+
+
+def test_sampled_irradiance_is_the_sum_over_leds_on_average():
+    """One shadow ray to an LED drawn in proportion to its unshadowed irradiance, weighted by
+    1/p: its mean is direct_irradiance (the sum over every LED that sees the point) when a
+    sphere hides one of four LEDs, and every draw is that sum when none is hidden."""
+    m = cos_power_exponent(30.0)
+    ag, cdf, _ = cos_power_tables(m)
+    ig = np.cos(ag) ** m
+    pts = np.array([[12.0, 0.0, 30.0], [0.0, 12.0, 30.0], [-12.0, 0.0, 30.0], [0.0, -9.0, 25.0]])
+    axes = -pts / np.linalg.norm(pts, axis=1)[:, None]
+    leds = LedTable(pts, axes, 0.01, ag, cdf, ig)
+    # an opaque sphere of radius 2 mm halfway to LED 0 (columns of kernels/geometry.py)
+    sf = np.zeros((1, G.N_FLOAT))
+    centre = np.array([6.0, 0.0, 15.0])
+    sf[0, G.OX : G.OZ + 1] = centre
+    sf[0, [G.R00, G.R11, G.R22]] = 1.0
+    sf[0, G.RADIUS] = 2.0
+    sf[0, G.RMAX2] = np.inf
+    sf[0, G.ZLO], sf[0, G.ZHI] = -np.inf, np.inf
+    sf[0, G.BX : G.BZ + 1] = centre
+    sf[0, G.BR] = 2.0
+    si = np.zeros((1, G.N_INT), dtype=np.int64)
+    si[0, G.SHAPE], si[0, G.ACTION] = G.SHAPE_SPHERE, G.ACT_OPAQUE
+    shadowed = SurfaceTable(sf, si)
+    empty = SurfaceTable(np.zeros((0, G.N_FLOAT)), np.zeros((0, G.N_INT), dtype=np.int64))
+    facet = Facet(0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+    want = F.direct_irradiance(shadowed, leds, facet)
+    free = F.direct_irradiance(empty, leds, facet)
+    assert 0.0 < want < 0.9 * free  # LED 0 is hidden, the others are not
+    draws = _sampled(shadowed, leds, facet, 200_000)
+    sem = draws.std(ddof=1) / math.sqrt(draws.size)
+    assert abs(draws.mean() - want) < 4 * sem
+    assert np.all(_sampled(empty, leds, facet, 1000) == pytest.approx(free, rel=1e-12))
+
+
+@njit
 def _scatter_weights(aim, nx, ny, nz, n):
     w = np.empty(n)
     state = stream_start(99, 0)

@@ -120,7 +120,8 @@ class CameraTables(NamedTuple):
     1 = B) the disk to aim scattered light at and the probability of aiming;
     ``through_cornea`` (n_surfaces,) int64: 1 where next-event estimation goes through the
     cornea (the iris); ``cornea``: the surface index of the anterior cornea (``cornea + 1`` is
-    the posterior one)."""
+    the posterior one); ``split_grid``: a camera path continues from its first Lambertian
+    vertex in split_grid² stratified directions (``run.continuation_grid``)."""
 
     lf_rev: np.ndarray
     lf_open: np.ndarray
@@ -134,6 +135,7 @@ class CameraTables(NamedTuple):
     aim: np.ndarray
     through_cornea: np.ndarray
     cornea: int
+    split_grid: int
 
 
 class SceneTables(NamedTuple):

@@ -511,13 +511,19 @@ class Run(_Model):
     ``estimator`` picks the method: ``forward`` (plain forward Monte Carlo, ``rays`` rays) or
     ``fast`` (camera-side paths with next-event estimation, ``samples_per_pixel`` per pixel, plus
     ``light_paths_per_pixel`` × pixels × samples_per_pixel / 16 light paths aimed at the cornea;
-    see :mod:`eyelume.estimators.fast`).
+    see :mod:`eyelume.estimators.fast`). A fast camera path continues from its first Lambertian
+    vertex in ``continuation_grid``² cosine-weighted directions, one per stratum, for the light
+    the faces send each other (the noisy part of a skin pixel; at least 3² on the iris): 1
+    where aiming through a real prescription dominates a sample's cost (paper2005), 4 (16 rays)
+    for a thin-lens camera, whose samples are cheap (vr-offaxis: per-sample noise in the median
+    skin pixel 20.6 % → 3.6 % for about 2 × the cost; ``benchmarks/eye_image.py``).
     """
 
     estimator: Literal["forward", "fast"] = "fast"
     rays: int = Field(1_500_000, ge=1)
     samples_per_pixel: int = Field(32, ge=1, le=1_000_000)
     light_paths_per_pixel: float = Field(16.0, ge=0.0, le=1e6)
+    continuation_grid: int = Field(2, ge=1, le=8)
     seed: int = Field(0, ge=0, lt=2**63)
     batch_size: int = Field(1 << 18, ge=1)
     max_events: int = Field(64, ge=2, le=10_000)
