@@ -632,7 +632,7 @@ def _light_path(i, seed, scene, cam, tally):
     _follow(state, w * tau, Ray(x, y, z, tx, ty, tz), scene, cam, tally, k, 1)
 
 
-@njit(cache=True)
+@per_ray
 def _direct_path(i, seed, scene, cam, tally, port):
     """Light path ``i``'s second leg: LED i mod N straight into the lens (its first surface,
     table row ``port``), the light of an LED the camera sees directly (a wide lens beside the
