@@ -113,6 +113,11 @@ class DetectParams:
     ladder_max_growth : largest MSER stability q = (A₊ − A₋) / A of the pupil's blob over the
         neighbouring levels (1: at 32 levels the pupil's blurred edge band is crossed in one or
         two steps; a merge with the iris multiplies the area).
+    ladder_fine, ladder_fine_span : when the first ladder gives no whole pupil, its first
+        ``ladder_fine_span`` (3) levels again ``ladder_fine`` (4) times finer (steps ≥ 1): a
+        pupil near the black level whose step to the iris the ladder crosses in one or two
+        levels (an off-axis view, where bright skin sets the levels' spacing) is then
+        resolved. The finer fit replaces the first only when whole. (1 = off.)
     max_candidates : stable blobs fitted in turn, darkest first, before giving up (3).
     pupil_min_area_px, pupil_max_area_frac : area bounds of the dark blob (px; fraction of the
         picture, 10 %: an iris seen without a pupil is larger at the framing of an eye tracker);
@@ -200,6 +205,8 @@ class DetectParams:
     ladder_levels: int = 32
     ladder_top_percentile: float = 60.0
     ladder_max_growth: float = 1.0
+    ladder_fine: int = 4
+    ladder_fine_span: int = 3
     max_candidates: int = 3
     pupil_min_area_px: int = 30
     pupil_tiny_area_px: int = 6

@@ -16,7 +16,10 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    level the compact dark blobs off the picture's border and the invalid area are kept (box
    fill ≥ 0.5, aspect ≤ 3, centroid inside), nested blobs of successive levels form a chain,
    and each blob's stability is MSER's q = (A₊ − A₋) / A over the neighbouring levels (Matas
-   et al. 2002). The ladder stops once the darkest chain has settled.
+   et al. 2002). The ladder stops once the darkest chain has settled. When the fits of step
+   4–7 give no whole pupil, the ladder's first three levels are walked again four times finer:
+   a pupil near the black level, with bright skin setting the levels' spacing (an off-axis
+   view), is otherwise crossed into the iris in one or two levels.
 3. **Choice** (:func:`choose`): chains darkest first; a chain's blob is its first level with
    q ≤ 1 walked on to the local minimum of q — the pupil's area holds while the threshold
    crosses its edge band, then jumps when it merges with the iris. Refusals: "no pupil (merged
@@ -30,7 +33,9 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    notch; refused when not compact (solidity < 0.8).
 5. **Contrast and edge** (:func:`blob_contrast`, :func:`edge_points`, :func:`_refine_smoothed`):
    the pupil's median against its own surround (a ring 0.05–0.1 × its diameter outside), at
-   least 5 σ of the pixel noise and 3 % of the robust range, else "pupil merged with iris";
+   least 5 σ of the pixel noise there (:func:`_local_noise`: shot noise grows with the signal,
+   so the picture's own σ, set by bright skin, overstates it between a dark pupil and iris)
+   and 3 % of the robust range, else "pupil merged with iris";
    the outline points less those on glints (grown by their own radius: a glint's skirt
    brightens the edge under it), the picture's border and invalid pixels; each point moves
    along the normal of a first ellipse fit to where the profile (the mean of three parallel
@@ -493,7 +498,9 @@ def _level_candidates(lab, stats, cent, min_area, max_area, touch):
     return out
 
 
-def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, tuple]:
+def ladder(
+    wp: WorkPicture, params, reduced=None, fine: int = 1
+) -> tuple[list[list[Candidate]], int, tuple]:
     """Step 2 (module doc): chains of nested compact dark blobs over a ladder of thresholds.
 
     The picture is reduced by f = max(1, round(min(rows, cols) / ``ladder_rows``)) (area
@@ -503,11 +510,13 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, tuple]:
     (:func:`_level_candidates`) are kept; a blob holding an earlier chain's seed continues that
     chain (blobs only grow up the ladder). Returns the chains (darkest level first), f and, for
     the refusals, (the (level, area in full-resolution px) of blobs too small to be a pupil,
-    :func:`_edge_dark`'s darkest pupil-sized region on the border or missing pixels)."""
-    small, inv, f = _reduced(wp, params)
-    p_lo, top = percentile(small, 0.5), percentile(small, params.ladder_top_percentile)
-    step = max(1.0, (top - p_lo) / params.ladder_levels)
-    lo = p_lo - step * math.ceil((p_lo - float(small.min())) / step)  # down to the darkest
+    :func:`_edge_dark`'s darkest pupil-sized region on the border or missing pixels).
+
+    ``reduced``: :func:`_reduced`'s triple when already made. ``fine`` > 1: the ladder's dark
+    end again, ``fine`` times finer (steps ≥ 1 level), over the first ``ladder_fine_span``
+    levels (:func:`find_pupil`)."""
+    small, inv, f = reduced if reduced is not None else _reduced(wp, params)
+    lo, top, step = _levels(small, params, fine)
     min_area = max(2, int(params.pupil_min_area_px / f**2))
     tiny_area = max(2, int(params.pupil_tiny_area_px / f**2))
     max_area = params.pupil_max_area_frac * small.size
@@ -542,6 +551,19 @@ def ladder(wp: WorkPicture, params) -> tuple[list[list[Candidate]], int, tuple]:
         if ch[-1].index == len(areas) - 1:
             ch[-1].q = _growth(areas, ch[-1])
     return chains, f, (tiny, edge_dark)
+
+
+def _levels(small: np.ndarray, params, fine: int) -> tuple[float, float, float]:
+    """The ladder's (lo, top, step): from its darkest pixel (lo + step the first level) to its
+    ``ladder_top_percentile`` in steps of (P60 − P0.5) / ``ladder_levels`` (≥ 1); with
+    ``fine`` > 1, only the first ``ladder_fine_span`` steps, ``fine`` times finer (≥ 1)."""
+    p_lo, top = percentile(small, 0.5), percentile(small, params.ladder_top_percentile)
+    step = max(1.0, (top - p_lo) / params.ladder_levels)
+    lo = p_lo - step * math.ceil((p_lo - float(small.min())) / step)  # down to the darkest
+    if fine > 1:
+        top = min(top, lo + params.ladder_fine_span * step)
+        step = max(1.0, step / fine)
+    return lo, top, step
 
 
 def _edge_dark(lab, stats, touch, min_area: int, f: int, level: float) -> tuple:
@@ -813,6 +835,19 @@ def _largest_radius(bright: np.ndarray) -> float:
     )
 
 
+_IMMERKAER = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
+
+
+def _local_noise(u8: np.ndarray, inside: np.ndarray, ring: np.ndarray) -> float:
+    """The pixel noise σ (``u8`` units) where the contrast is judged: Immerkær's estimate
+    (:func:`noise_sigma`) over the pupil's pixels and over its surround's, the larger of the
+    two. Shot noise grows with the signal, so a picture's noise — set by its brightest large
+    area, the skin of an off-axis view or a Monte Carlo render's sparse samples there — can be
+    several times that between a pupil and an iris near the black level."""
+    r = np.abs(cv2.filter2D(u8.astype(np.float32), -1, _IMMERKAER, borderType=cv2.BORDER_REFLECT))
+    return max(1.4826 * median(r[m]) / 6.0 for m in (inside, ring))
+
+
 def blob_contrast(img: np.ndarray, wp: WorkPicture, blob: Blob, params):
     """Step 5a (module doc): the pupil's level (median inside, off glints) and its surround's (a
     ring 0.05–0.1 × the diameter outside, ≥ 2 px each, off glints and invalid pixels), input
@@ -844,7 +879,8 @@ def blob_contrast(img: np.ndarray, wp: WorkPicture, blob: Blob, params):
     surround = median(sub[ring])
     span = wp.hi - wp.lo
     step = surround - pupil_level
-    noise = wp.noise * span / 255.0
+    noise = _local_noise(wp.u8[blob.y0 : blob.y0 + h, blob.x0 : blob.x0 + w], inside, ring)
+    noise = max(noise, 0.5) * span / 255.0
     if step < params.pupil_min_contrast_sigma * noise or step < params.pupil_min_contrast * span:
         return Refusal(
             f"pupil merged with iris: the darkest compact blob ({int(blob.area)} px) is only "
@@ -1014,20 +1050,9 @@ def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, p
     )
 
 
-def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit:
-    """Find and fit the pupil (module doc, steps 1–7). ``img`` (rows, cols) float32/float64 or
-    integer, the input's own units, with invalid pixels (``invalid``, bool or None) holding any
-    finite value; ``bright`` the glint mask (uint8, 0/255). The first of the chosen candidates
-    (darkest first, at most ``max_candidates``) whose fit succeeds is returned; otherwise a
-    :class:`PupilFit` with ``ellipse`` None and the first candidate's refusal."""
-    wp = work_picture(img, invalid, bright, params)
-    if not wp:
-        return PupilFit(None, reason=wp.reason)
-    chains, f, tiny = ladder(wp, params)
-    picks = choose(chains, f, tiny, wp, params)
-    if not picks:
-        return PupilFit(None, reason=picks.reason)
-    reasons = []
+def _fit_candidates(img, wp, picks, f: int, bright, params, reasons: list[str]):
+    """Steps 4–7 on the chosen candidates in turn (at most ``max_candidates``): the first
+    fit, or None with each candidate's refusal appended to ``reasons``."""
     for cand in picks[: params.max_candidates]:
         blob = full_res_blob(wp, cand, f, bright, params)
         if not blob:
@@ -1037,6 +1062,47 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit
         if fit.ellipse is not None:
             return fit
         reasons.append(fit.reason)
+    return None
+
+
+def _whole(fit: PupilFit, params) -> bool:
+    """Whether a fit's outline is backed enough to be trusted (``detect``'s support check)."""
+    return fit.support >= params.min_boundary_support and fit.gap <= params.max_boundary_gap
+
+
+def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit:
+    """Find and fit the pupil (module doc, steps 1–7). ``img`` (rows, cols) float32/float64 or
+    integer, the input's own units, with invalid pixels (``invalid``, bool or None) holding any
+    finite value; ``bright`` the glint mask (uint8, 0/255). The first of the chosen candidates
+    (darkest first, at most ``max_candidates``) whose fit succeeds is returned; otherwise a
+    :class:`PupilFit` with ``ellipse`` None and the first candidate's refusal."""
+    wp = work_picture(img, invalid, bright, params)
+    if not wp:
+        return PupilFit(None, reason=wp.reason)
+    reduced = _reduced(wp, params)
+    chains, f, tiny = ladder(wp, params, reduced)
+    picks = choose(chains, f, tiny, wp, params)
+    reasons: list[str] = []
+    fit = _fit_candidates(img, wp, picks, f, bright, params, reasons) if picks else None
+    if fit is not None and _whole(fit, params):
+        return fit
+    # Nothing whole: the ladder's dark end again, finer; its fit replaces the first only when
+    # whole. The first pass misses a pupil near the black level whose step to the iris it
+    # crosses in one or two levels (an off-axis view, where bright skin sets the levels'
+    # spacing): its chain's stable blob is then the iris, or the pupil is unstable at the first
+    # level, joined at the next to the iris or to a dark fold. (The ladder again at full
+    # resolution, for a pupil a few px across once reduced, gave wrong answers on real
+    # close-ups: not done.)
+    if params.ladder_fine > 1:
+        again, _, _ = ladder(wp, params, reduced, fine=params.ladder_fine)
+        picks2 = choose(again, f, ([], ()), wp, params)
+        fit2 = _fit_candidates(img, wp, picks2, f, bright, params, []) if picks2 else None
+        if fit2 is not None and (fit is None or _whole(fit2, params)):
+            return fit2
+    if fit is not None:
+        return fit
+    if not picks:
+        return PupilFit(None, reason=picks.reason)
     edge_dark = tiny[1]
     if edge_dark and edge_dark[0] <= picks[0].level:
         return PupilFit(

@@ -1,0 +1,102 @@
+"""The pupil on the off-axis presets' renders (issue 11 item 6, issue 13): found, and within
+0.5 px of the renderer's truth.
+
+The pictures are small renders (the presets' optics with a coarser chip, so the eye fills the
+same field): ``vr-offaxis`` at 100 × 100 (12 µm pixels) and 200 × 200 (6 µm, the setting of
+``eyelume evaluate-tracking --scene vr-offaxis --samples 4 --set sensor.cols=200 --set
+sensor.rows=200 --set sensor.pixel_pitch_um=6 --set sensor.exposure_ms=1``), and
+``glasses-frame`` at 160 × 120 (12 µm). The eye is seen 40–50° off its axis: the pupil is an
+ellipse of axis ratio ~0.7, at the sensor's black level, in a near-black iris, while the
+lit skin around the eye fills most of the picture and sets the noise and the grey scale.
+Before, the detector answered none of the 200 × 200 frames ("pupil merged with iris": the picture's
+noise σ, set by the skin's shot noise and the sparse Monte Carlo samples there, was ~10× that
+between pupil and iris; and the ladder's levels, spaced by the skin, crossed the pupil–iris
+step in one or two levels).
+
+Tolerance: 0.5 px between the detected ellipse's centre and the centre of the ellipse fitted
+to the truth's apparent pupil outline (the same definition, :mod:`.evaluate`) — issue 13's
+bound for eyelume's renders ("still within 0.5 px of the truth"). The pupils are 16–40 px
+across, so 0.5 px is 1–3 % of the diameter; the detector's errors on these frames are
+0.02–0.2 px.
+
+Glints are not asserted: at these sizes a corneal glint of the presets' LEDs is one pixel or
+less and a 4-sample render draws some of them and not others (see the README's tracking
+section); ``ok`` is then False for "glint lost".
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+import eyelume
+from eyelume.analysis.tracking import detect
+from eyelume.analysis.tracking.evaluate import _truth_ellipse_centre, led_picture_azimuths
+from eyelume.analysis.truth import eye_truth
+from eyelume.compile import compile_scene
+from eyelume.detectors.sensor import digitize
+from eyelume.render import RenderOptions, render
+
+TOL_PX = 0.5
+
+VR_100 = {
+    "sensor.cols": 100,
+    "sensor.rows": 100,
+    "sensor.pixel_pitch_um": 12.0,
+    "sensor.exposure_ms": 1.0,
+}
+VR_200 = {**VR_100, "sensor.cols": 200, "sensor.rows": 200, "sensor.pixel_pitch_um": 6.0}
+GLASSES = {"sensor.cols": 160, "sensor.rows": 120, "sensor.pixel_pitch_um": 12.0}
+
+
+def _pupil_check(preset: str, sets: dict, h: float, v: float, seed: int = 0, samples: int = 4):
+    sc = eyelume.load_scene(
+        preset, {"eye.gaze_horizontal_deg": h, "eye.gaze_vertical_deg": v, **sets}
+    )
+    cs = compile_scene(sc)
+    r = render(cs, RenderOptions(estimator="fast", samples_per_pixel=samples, seed=seed))
+    counts = digitize(r.eye_image, sc.sensor, sc.wavelength_nm, seed=seed).counts
+    truth = eye_truth(cs)
+    d = detect(counts, led_azimuths_deg=led_picture_azimuths(cs))
+    pupil_errors = [
+        f for f in d.failures if not f.startswith("warning") and not f.startswith("glint")
+    ]
+    assert d.pupil is not None and not pupil_errors, d.failures
+    cx, cy = _truth_ellipse_centre(truth)
+    err = math.hypot(d.pupil.centre_px[0] - cx, d.pupil.centre_px[1] - cy)
+    assert err <= TOL_PX, (d.pupil, (cx, cy), err)
+    # The pupil, not the iris (2.5× its size): the major axis within 15 % of the truth's (the
+    # detected axes are those of the edge's ¼ iso-line, narrower by ~1 px for the optics'
+    # blur, 3–6 % of these pupils).
+    edge = np.asarray(truth["pupil"]["edge_px"], np.float32)
+    major = max(cv2.fitEllipse(edge)[1])
+    assert abs(d.pupil.axes_px[0] / major - 1.0) < 0.15, (d.pupil.axes_px, major)
+
+
+def test_vr_offaxis_pupil_at_the_evaluation_size():
+    """Failed before (the frames evaluate-tracking renders for vr-offaxis)."""
+    _pupil_check("vr-offaxis", VR_200, 0.0, 0.0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("h", "v"), [(20.0, -20.0), (30.0, 20.0), (-20.0, -20.0), (-30.0, 10.0)])
+def test_vr_offaxis_pupil_over_gazes(h, v):
+    """Failed before, each; at (−30°, 10°) the upper lid hides a quarter of the pupil."""
+    _pupil_check("vr-offaxis", VR_200, h, v)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("h", "v", "seed"), [(0.0, 0.0, 0), (20.0, -20.0, 1), (-20.0, 10.0, 2)])
+def test_vr_offaxis_pupil_small(h, v, seed):
+    """At 100 × 100 (a pupil of 16–20 px; the detector found these before too)."""
+    _pupil_check("vr-offaxis", VR_100, h, v, seed)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("h", "v"), [(0.0, 0.0), (30.0, 20.0)])
+def test_glasses_frame_pupil(h, v):
+    """The skin saturates (full scale over most of the picture); the pupil and iris do not."""
+    _pupil_check("glasses-frame", GLASSES, h, v)
