@@ -117,7 +117,10 @@ class DetectParams:
         ``ladder_fine_span`` (3) levels again ``ladder_fine`` (4) times finer (steps ≥ 1): a
         pupil near the black level whose step to the iris the ladder crosses in one or two
         levels (an off-axis view, where bright skin sets the levels' spacing) is then
-        resolved. The finer fit replaces the first only when whole. (1 = off.)
+        resolved. The finer fit replaces the first only when whole, by a stricter measure:
+        ``ladder_fine_support`` (0.75) of its outline backed, no unbacked arc over 0.25 (a
+        finer level can pick a lid-cut pupil's darkest core, whose outline passes the usual
+        0.45 with the centre over a pixel off: paper2005 at (−30°, −20°)). (1 = off.)
     max_candidates : stable blobs fitted in turn, darkest first, before giving up (3).
     pupil_min_area_px, pupil_max_area_frac : area bounds of the dark blob (px; fraction of the
         picture, 10 %: an iris seen without a pupil is larger at the framing of an eye tracker);
@@ -207,6 +210,7 @@ class DetectParams:
     ladder_max_growth: float = 1.0
     ladder_fine: int = 4
     ladder_fine_span: int = 3
+    ladder_fine_support: float = 0.75
     max_candidates: int = 3
     pupil_min_area_px: int = 30
     pupil_tiny_area_px: int = 6

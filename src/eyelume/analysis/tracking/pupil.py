@@ -8,9 +8,10 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
 
 1. **Working picture** (:func:`work_picture`): 8 bits from the darkest valid pixel to the 99th
    percentile (saturated glints and stuck pixels, a small share of any eye picture, are
-   clipped instead of stretching the scale); glint pixels take the darkest value around them
-   (a glint inside the pupil would punch a hole in it); invalid pixels (NaN, outside the
-   valid-area mask) are bright. The pixel noise σ (:func:`noise_sigma`, Immerkær 1996).
+   clipped instead of stretching the scale); glint pixels take the darkest value around them,
+   each within its own radius (a glint inside the pupil would punch a hole in it); invalid
+   pixels (NaN, outside the valid-area mask) are bright. The pixel noise σ
+   (:func:`noise_sigma`, Immerkær 1996).
 2. **Threshold ladder** (:func:`ladder`): the picture reduced to ~80 rows and thresholded at
    levels (P60 − P0.5) / 32 apart from its darkest pixel to its 60th percentile; at each
    level the compact dark blobs off the picture's border and the invalid area are kept (box
@@ -63,6 +64,7 @@ angles in degrees from +x toward +y (down the picture, clockwise as displayed).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -418,14 +420,32 @@ def _stride(n: int) -> int:
     return max(1, int(math.sqrt(n / 2e4)))
 
 
+def _fill_glints(roi: np.ndarray, bright: np.ndarray, params) -> None:
+    """Each glint of ``bright`` (grown by its own radius r, ≥ ``glint_margin_px``, + 2 px) takes
+    the darkest value of ``roi`` within r + 2 px, in place: glints of one size class (⌈r⌉) at
+    a time, so a large bright blob (a saturated patch of skin taken for a glint) does not make
+    every small glint reach as far."""
+    _, lab, stats, _ = cv2.connectedComponentsWithStats(bright, connectivity=8)
+    radius = np.ceil(np.sqrt(stats[:, cv2.CC_STAT_AREA] / math.pi)).astype(int)
+    radius[0] = -1
+    src = roi.copy()
+    for rc in np.unique(radius[1:]):
+        own = np.where(radius[lab] == rc, 255, 0).astype(np.uint8)
+        g = int(math.ceil(max(params.glint_margin_px, rc))) + 2
+        grown = cv2.dilate(own, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2))
+        k = 2 * (int(rc) + 2) + 1
+        eroded = cv2.erode(src, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
+        np.copyto(roi, np.minimum(roi, eroded), where=grown > 0)
+
+
 def work_picture(
     img: np.ndarray, invalid: np.ndarray | None, bright: np.ndarray | None, params
 ) -> WorkPicture | Refusal:
     """Step 1 (module doc): the 8-bit working picture, or a refusal for a featureless one.
 
-    Glint pixels (``bright``, uint8 0/255, grown by 2 px) take the darkest value within the
-    largest glint's radius + 2 px around them (a grey erosion): a glint inside the pupil would
-    otherwise punch a hole in the dark blob and move its centroid off it."""
+    Glint pixels (``bright``, uint8 0/255) take the darkest value around them
+    (:func:`_fill_glints`): a glint inside the pupil would otherwise punch a hole in the dark
+    blob and move its centroid off it."""
     step = _stride(img.size)
     sub = img[::step, ::step]
     vals = sub[~invalid[::step, ::step]] if invalid is not None else sub.ravel()
@@ -445,15 +465,11 @@ def work_picture(
         # erosion reach): the same pixels as on the whole picture, a fraction of the work.
         bx, by, bw, bh = cv2.boundingRect(bright)
         glint_r = _largest_radius(bright[by : by + bh, bx : bx + bw])
-        r = int(math.ceil(glint_r)) + 2
-        g = int(math.ceil(max(params.glint_margin_px, glint_r))) + 2
-        x0, y0 = max(0, bx - g - r - 1), max(0, by - g - r - 1)
-        x1 = min(img.shape[1], bx + bw + g + r + 1)
-        y1 = min(img.shape[0], by + bh + g + r + 1)
-        grown = _grown_glints(bright[y0:y1, x0:x1], params, extra=2, radius=glint_r)
-        roi = u8[y0:y1, x0:x1]
-        eroded = cv2.erode(roi, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1,) * 2))
-        np.copyto(roi, eroded, where=grown > 0)
+        big = math.ceil(max(glint_r, math.sqrt(cv2.countNonZero(bright) / math.pi)))
+        pad = int(big + 2 + math.ceil(max(params.glint_margin_px, big)) + 2) + 1
+        x0, y0 = max(0, bx - pad), max(0, by - pad)
+        x1, y1 = min(img.shape[1], bx + bw + pad), min(img.shape[0], by + bh + pad)
+        _fill_glints(u8[y0:y1, x0:x1], bright[y0:y1, x0:x1], params)
     if invalid is not None:
         u8[invalid] = 255
     return WorkPicture(u8, invalid, float(lo), float(hi), max(0.5, noise_sigma(u8)), glint_r)
@@ -1094,10 +1110,18 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit
     # resolution, for a pupil a few px across once reduced, gave wrong answers on real
     # close-ups: not done.)
     if params.ladder_fine > 1:
+        # Held to a stricter support than the first pass (``ladder_fine_support``): a finer
+        # level can pick a lid-cut pupil's darkest core, whose outline passes the usual
+        # support with the centre over a pixel off (paper2005 at (−30°, −20°)).
+        strict = dataclasses.replace(
+            params,
+            min_boundary_support=params.ladder_fine_support,
+            max_boundary_gap=1.0 - params.ladder_fine_support,
+        )
         again, _, _ = ladder(wp, params, reduced, fine=params.ladder_fine)
         picks2 = choose(again, f, ([], ()), wp, params)
         fit2 = _fit_candidates(img, wp, picks2, f, bright, params, []) if picks2 else None
-        if fit2 is not None and (fit is None or _whole(fit2, params)):
+        if fit2 is not None and _whole(fit2, strict):
             return fit2
     if fit is not None:
         return fit
