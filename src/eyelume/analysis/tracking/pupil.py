@@ -67,6 +67,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -378,14 +379,19 @@ class WorkPicture:
     share of any eye picture, are clipped instead of stretching the scale. Invalid pixels (NaN,
     outside the valid-area mask) are set to 255 and listed in ``invalid`` (bool). ``noise`` is
     the pixel noise σ in ``u8`` units (:func:`noise_sigma`), ≥ 0.5 (8-bit quantisation, 1/√12 ≈
-    0.29, with margin)."""
+    0.29, with margin), computed on first use."""
 
     u8: np.ndarray
     invalid: np.ndarray | None
     lo: float
     hi: float
-    noise: float
     glint_radius: float = 0.0
+
+    @cached_property
+    def noise(self) -> float:
+        """The pixel noise σ of ``u8`` (:func:`noise_sigma`, ≥ 0.5), computed when first asked
+        (only a refusal's wording needs it)."""
+        return max(0.5, noise_sigma(self.u8))
 
     def to_input(self, v8: float) -> float:
         """An 8-bit level in the input's units."""
@@ -472,7 +478,7 @@ def work_picture(
         _fill_glints(u8[y0:y1, x0:x1], bright[y0:y1, x0:x1], params)
     if invalid is not None:
         u8[invalid] = 255
-    return WorkPicture(u8, invalid, float(lo), float(hi), max(0.5, noise_sigma(u8)), glint_r)
+    return WorkPicture(u8, invalid, float(lo), float(hi), glint_r)
 
 
 # --- Step 2: the threshold ladder ------------------------------------------------------------
@@ -682,16 +688,18 @@ def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, 
     # A chain that never settles counts as a pupil merged with the iris only when it starts
     # well below the picture's typical level (5 σ of the noise under the median); dark noise
     # blobs of a featureless picture do not.
-    deep = median(wp.u8[:: _stride(wp.u8.size), :: _stride(wp.u8.size)])
-    deep -= params.pupil_min_contrast_sigma * wp.noise
     for ch in sorted(chains, key=lambda ch: ch[0].level):
         i = _pick(ch, params)
         if i is not None:
             picks.append(ch[i])
-        elif ch[0].level <= deep:
+        else:
             unstable.append(ch[0].level)
     if picks:
         return picks
+    if unstable:
+        deep = median(wp.u8[:: _stride(wp.u8.size), :: _stride(wp.u8.size)])
+        deep -= params.pupil_min_contrast_sigma * wp.noise
+        unstable = [level for level in unstable if level <= deep]
     tiny, edge_dark = tiny
     if tiny and edge_dark and edge_dark[0] <= min(tiny)[0]:
         return Refusal(
