@@ -66,7 +66,7 @@ def main() -> None:
     y, z, t = product_grid(*PAPER_GRID)
     emit, axes = led_emitters(scene.leds, y, z, t)
     xe, ye = plane_edges(scene.eye_plane)
-    order = auto_order(xe, ye, emit, axes, scene.leds.profile)
+    order = auto_order(xe, ye, emit, axes, scene.leds.profiles())
     n_int = len(y) * scene.leds.count * scene.eye_plane.rows * scene.eye_plane.cols * order**2
 
     t0 = time.perf_counter()

@@ -51,7 +51,7 @@ def test_set_overrides_a_field(tmp_path):
     emitted_two = json.loads((out / "summary.json").read_text())["power_w"]["emitted"]
     res = runner.invoke(app, ["info", "--json"])
     data = json.loads(res.stdout)["leds"]
-    assert data["count"] == 4 and data["height_mm"] == 30.0
+    assert data["count"] == 4 and data["ring"]["height_mm"] == 30.0
     # two LEDs of the same intensity emit half the power of four
     assert emitted_two == pytest.approx(data["total_power_w"] / 2, rel=1e-12)
 

@@ -9,13 +9,14 @@ The compiled scene holds, at the scene's wavelength, the named tables of
   :func:`_add_lens_entrance`;
 * ``lens`` (:class:`LensTable`): the sequential lens table, columns in
   :mod:`eyelume.kernels.sequential` — :func:`_compile_lens`;
-* ``led`` (:class:`LedTable`): the LED emission points, axes, I₀ and angular-profile tables —
+* ``led`` (:class:`LedTable`): the LED emission points, axes, and each LED's I₀ and
+  angular-profile tables —
   :func:`_led_table`;
 * ``picture``, ``eye_plane`` (:class:`~eyelume.kernels.bins.PlaneGrid`): the sensor's pixels and
   the eye-plane receiver's bins — :func:`_grids`;
 * ``camera`` (:class:`CameraTables`): the lens traced backwards, its pupils and the aim table of
   the camera-side estimator — :func:`_camera_tables`;
-* the power per LED and the names of the surfaces and of the ledger's entries.
+* Ω_eff per LED (its power over I₀) and the names of the surfaces and of the ledger's entries.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ from eyelume.scene.eye import (
 )
 from eyelume.scene.focus import check_focus
 from eyelume.scene.glass import Glass, load_catalog
-from eyelume.scene.model import Scene
+from eyelume.scene.model import LedProfile, Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
 from eyelume.scene.pose import Frame, camera_frame
 from eyelume.scene.sources import cos_power_exponent, led_poses, relative_intensity
@@ -140,7 +141,7 @@ class CompiledScene:
     lens_indices: list[float]
     stop_index: int
     led_centres: np.ndarray  # (N, 3) LED body centres, camera frame mm
-    omega_eff: float  # sr: Φ_LED = I₀ · omega_eff
+    omega_eff: np.ndarray  # (N,) sr: Φₖ = I₀ₖ · omega_eff[k]
     tallies: list[str]
     frame: Frame  # world → camera frame (eyelume.scene.pose); every table is in the camera frame
     first_order: FirstOrder  # the camera's first-order optics (camera frame)
@@ -184,14 +185,17 @@ class CompiledScene:
         return self.tables.lens.image_z
 
     @property
-    def led_power_w(self) -> float:
-        """Radiant power of one LED (W): Φ = I₀ ∫ I/I₀ dΩ."""
-        return self.scene.leds.radiant_intensity_w_sr * self.omega_eff
+    def led_powers_w(self) -> np.ndarray:
+        """Radiant power of every LED (N,) (W): Φₖ = I₀ₖ ∫ Iₖ/I₀ₖ dΩ."""
+        return self.tables.leds.i0 * self.omega_eff
 
     @property
     def emitted_w(self) -> float:
         """Radiant power of all LEDs (W)."""
-        return self.led_power_w * self.tables.leds.points.shape[0]
+        p = self.led_powers_w
+        if self.tables.leds.equal_power:
+            return float(p[0]) * p.shape[0]  # the same floats as before LEDs could differ
+        return float(p.sum())
 
 
 @dataclass
@@ -534,6 +538,55 @@ def _check_leds_in_head(
                 )
 
 
+class LedAimWarning(EyelumeWarning):
+    """An LED whose cone, per its profile, misses the eye: it lights no part of the eye."""
+
+
+def _check_leds_light_the_eye(
+    scene: Scene, centres: np.ndarray, axes: np.ndarray, led: LedTable
+) -> None:
+    """Warn (:class:`LedAimWarning`) for each LED whose cone misses the eye entirely; refuse
+    (GeometryError) when every LED's does: the render would be dark and say nothing.
+
+    LED k's cone is the directions within αₖ,max of its axis, αₖ,max the largest angle at which
+    its profile (the compiled grid ``intensity_grid[k]``, the one I(α)) is above 0: 90° for
+    cosᵐ, where a table reaches 0 for a table. The eye is the sphere about the eyeball's centre
+    c (gaze and head offset applied) through its farthest point, R = max(sclera radius, the
+    corneal vertex's distance from c). The cone misses it when the angle γ between the axis
+    and the direction to c, less the sphere's angular radius asin(R / |c − p|), is ≥ αₖ,max
+    (p the emission point). World frame."""
+    eye = scene.eye
+    _, _, z_c = limbus_geometry(eye)
+    eyeball = eye_point(scene, [0.0, 0.0, -z_c])
+    radius = max(
+        eye.sclera_radius_mm, float(np.linalg.norm(eye_point(scene, np.zeros(3)) - eyeball))
+    )
+    emit = centres + axes * scene.leds.body_diameter_mm / 2
+    step = led.alpha_grid[1] - led.alpha_grid[0]
+    misses = []
+    for k in range(len(emit)):
+        lit = np.flatnonzero(led.intensity_grid[k] > 0.0)
+        a_max = min(float(led.alpha_grid[lit[-1]]) + step, math.pi / 2) if lit.size else 0.0
+        v = eyeball - emit[k]
+        dist = float(np.linalg.norm(v))
+        gamma = math.acos(max(-1.0, min(1.0, float(v @ axes[k]) / dist)))
+        off = gamma - math.asin(min(1.0, radius / dist))
+        if off >= a_max:
+            misses.append(
+                f"LED {k} (world {np.round(centres[k], 2).tolist()} mm) aims "
+                f"{math.degrees(gamma):.1f} deg away from the eye's centre and its profile "
+                f"emits only to {math.degrees(a_max):.1f} deg"
+            )
+    if misses and len(misses) == len(emit):
+        raise GeometryError(
+            f"every LED's cone misses the eye, no light would reach it ({misses[0]}): aim the "
+            "LEDs at the eye (leds.aim_at_mm, leds.directions or leds.pitch_deg)",
+            field="leds",
+        )
+    for why in misses:
+        warnings.warn(f"leds: {why}: its cone misses the eye", LedAimWarning, stacklevel=3)
+
+
 def _check_view(scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGrid) -> None:
     """The camera sees the eye: its corneal vertex (gaze and head offset applied) lies in front
     of the entrance pupil and is imaged inside the picture. Raises SceneError."""
@@ -868,12 +921,9 @@ def _add_led_bodies(t: _Table, scene: Scene, centres: np.ndarray, axes: np.ndarr
         )
 
 
-def _led_table(scene: Scene, centres: np.ndarray, axes: np.ndarray) -> tuple[LedTable, float]:
-    """The LEDs as point sources on the front of their bodies, with the profile's sampling and
-    evaluation tables; and Ω_eff (sr). Raises SceneError for a profile that cannot be used."""
-    rb = scene.leds.body_diameter_mm / 2
-    emit = centres + axes * rb * (1.0 + 1e-9)
-    profile = scene.leds.profile
+def _profile_grids(profile: LedProfile) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """One profile's (alpha_grid, cdf_grid, intensity_grid, Ω_eff in sr). Raises SceneError for
+    a profile that cannot be used."""
     try:
         if profile.kind == "cos_power":
             m = cos_power_exponent(profile.half_intensity_angle_deg)
@@ -885,13 +935,33 @@ def _led_table(scene: Scene, centres: np.ndarray, axes: np.ndarray) -> tuple[Led
             intensity_grid = np.asarray(shape(alpha_grid), dtype=float)
     except ValueError as exc:
         raise SceneError(str(exc)) from None
+    return alpha_grid, cdf_grid, intensity_grid, omega
+
+
+def _led_table(scene: Scene, centres: np.ndarray, axes: np.ndarray) -> tuple[LedTable, np.ndarray]:
+    """The LEDs as point sources on the front of their bodies, each with its own I₀ and its
+    profile's sampling and evaluation tables (every profile on the same α grid); and Ω_eff (N,)
+    (sr) of every LED. Raises SceneError for a profile that cannot be used."""
+    rb = scene.leds.body_diameter_mm / 2
+    emit = centres + axes * rb * (1.0 + 1e-9)
+    grids: dict[LedProfile, tuple] = {}
+    rows = []
+    for profile in scene.leds.profiles():
+        if profile not in grids:
+            grids[profile] = _profile_grids(profile)
+        rows.append(grids[profile])
+    i0 = np.array(scene.leds.intensities_w_sr(), dtype=float)
+    omega = np.array([r[3] for r in rows], dtype=float)
+    power = i0 * omega
     table = LedTable(
         np.ascontiguousarray(emit),
         np.ascontiguousarray(axes, dtype=float),
-        float(scene.leds.radiant_intensity_w_sr),
-        np.ascontiguousarray(alpha_grid),
-        np.ascontiguousarray(cdf_grid),
-        np.ascontiguousarray(intensity_grid),
+        np.ascontiguousarray(i0),
+        np.ascontiguousarray(rows[0][0]),
+        np.ascontiguousarray(np.stack([r[1] for r in rows])),
+        np.ascontiguousarray(np.stack([r[2] for r in rows])),
+        np.ascontiguousarray(np.cumsum(power) / power.sum()),
+        bool(np.all(power == power[0])),
     )
     return table, omega
 
@@ -1048,9 +1118,11 @@ def compile_scene(scene: Scene) -> CompiledScene:
     _check_leds(scene, centres, lens.lf, frame)
     _check_leds_in_head(scene, centres)
     _add_led_bodies(t, scene, centres, axes)
+    world = centres, axes
     if not frame.is_identity:
         centres, axes = frame.point(centres), frame.vector(axes)
     led, omega = _led_table(scene, centres, axes)
+    _check_leds_light_the_eye(scene, *world, led)
     _add_lens_entrance(t, lens.lf)
     surfaces = SurfaceTable(
         np.ascontiguousarray(np.stack(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))

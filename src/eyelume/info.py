@@ -15,9 +15,9 @@ from eyelume.compile import (
 from eyelume.kernels import sequential as Q
 from eyelume.scene.eye import LAMBDA_D, eye_indices
 from eyelume.scene.focus import focus
-from eyelume.scene.model import Scene
+from eyelume.scene.model import LedProfile, Scene
 from eyelume.scene.pose import opencv_extrinsics
-from eyelume.scene.sources import cos_power_exponent
+from eyelume.scene.sources import cos_power_exponent, led_poses
 
 __all__ = ["scene_info", "camera_info"]
 
@@ -164,22 +164,57 @@ def _eye_info(scene: Scene) -> dict:
     }
 
 
+def _profile_info(profile: LedProfile) -> dict:
+    if profile.kind == "cos_power":
+        return {
+            "kind": "cos_power",
+            "half_intensity_angle_deg": profile.half_intensity_angle_deg,
+            "cos_power_exponent": cos_power_exponent(profile.half_intensity_angle_deg),
+            "spread_full_angle_deg": 2 * profile.half_intensity_angle_deg,
+        }
+    return {"kind": "table", "table_csv": profile.table_csv}
+
+
 def _led_info(scene: Scene, cs: CompiledScene) -> dict:
+    """Every LED's place (world mm), I₀, profile, wavelength and power; the ring's figures only
+    for a ring (LEDs placed one by one have none)."""
     led = scene.leds
-    return {
+    centres, axes = led_poses(led)
+    out: dict = {
         "count": led.count,
-        "cos_power_exponent": (
-            cos_power_exponent(led.profile.half_intensity_angle_deg)
-            if led.profile.kind == "cos_power"
-            else None
-        ),
-        "power_per_led_w": cs.led_power_w,
+        "placement": "ring" if led.positions_mm is None else "one by one (positions_mm)",
         "total_power_w": cs.emitted_w,
-        "effective_solid_angle_sr": cs.omega_eff,
-        "pitch_deg": led.pitch_deg,
-        "height_mm": led.height_mm,
-        "distance_mm": led.distance_mm,
-        "spread_full_angle_deg": 2 * led.profile.half_intensity_angle_deg
-        if led.profile.kind == "cos_power"
-        else None,
     }
+    if led.positions_mm is None:
+        out["ring"] = {
+            "height_mm": led.height_mm,
+            "distance_mm": led.distance_mm,
+            "azimuths_deg": led.azimuths(),
+            "ring_axis": list(led.ring_axis),
+            "ring_centre_mm": list(led.ring_centre_mm),
+            **(
+                {"pitch_deg": led.pitch_deg}
+                if led.aim_at_mm is None
+                else {"aim_at_mm": list(led.aim_at_mm)}
+            ),
+        }
+    out["per_led"] = [
+        {
+            "position_mm": centres[k].tolist(),
+            "axis": axes[k].tolist(),
+            "radiant_intensity_w_sr": i0,
+            "profile": _profile_info(profile),
+            "wavelength_nm": lam,
+            "effective_solid_angle_sr": float(cs.omega_eff[k]),
+            "power_w": float(cs.led_powers_w[k]),
+        }
+        for k, (i0, profile, lam) in enumerate(
+            zip(
+                led.intensities_w_sr(),
+                led.profiles(),
+                led.wavelengths_nm(scene.wavelength_nm),
+                strict=True,
+            )
+        )
+    ]
+    return out

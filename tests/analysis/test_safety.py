@@ -83,3 +83,43 @@ def test_weighting_follows_the_scene_wavelength():
     assert s["retinal_radiance_w_m2_sr"] == pytest.approx(25_464.79 * 0.331131, rel=1e-5)
     far = eye_safety(one_led(wavelength_nm=1550.0))
     assert far["retinal_radiance_w_m2_sr"] == 0.0 and far["retinal_margin"] == math.inf
+
+
+def test_unequal_leds_sum_each_with_its_own_intensity_and_profile():
+    """Two LEDs placed one by one (body radius 2.5 mm):
+
+    * LED 0, body centre (0, 0, 52.5) aimed along −z: apex 50 mm from the vertex, on its axis;
+      I₀ = 0.02 W/sr, cos^m (22.5°): E₀ = 0.02 / 0.05² = 8 W/m².
+    * LED 1, body centre (30, 0, 40) aimed along −z: apex (30, 0, 37.5), d = √(30² + 37.5²)
+      = 48.0234 mm, cos α = 37.5 / d = 0.780869; I₀ = 0.05 W/sr, cos^m with half angle 30°,
+      m = ln ½ / ln cos 30° = 4.81884: E₁ = 0.05 · 0.780869^4.81884 / 0.0480234² = 6.58286 W/m².
+    * E_IR = 14.58286 W/m², margin 100 / 14.58286 = 6.85737.
+    * Retinal, per LED: L = I₀ / (π (0.5 mm)²) · R(850) (0.501187); α = 1 mm / d. LED 0:
+      L = 12 762.6, limit 6000 / 0.02 = 300 000, margin 23.506. LED 1: L = 31 906.5, α =
+      0.0208232, limit 288 140.6, margin 9.03076 — the worse: LED 1 is reported.
+    """
+    scene = eyelume.load_scene(
+        "paper2005",
+        {
+            "leds.count": 2,
+            "leds.positions_mm": [[0.0, 0.0, 52.5], [30.0, 0.0, 40.0]],
+            "leds.directions": [[0.0, 0.0, -1.0], [0.0, 0.0, -1.0]],
+            "leds.radiant_intensity_w_sr": [0.02, 0.05],
+            "leds.profile": [{"half_intensity_angle_deg": 22.5}, {"half_intensity_angle_deg": 30}],
+            "leds.emitter_diameter_mm": 1.0,
+        },
+    )
+    s = eye_safety(scene)
+    d1 = math.hypot(30.0, 37.5)
+    m1 = math.log(0.5) / math.log(math.cos(math.radians(30)))
+    e1 = 0.05 * (37.5 / d1) ** m1 / (d1 * 1e-3) ** 2
+    assert e1 == pytest.approx(6.58286, rel=1e-5)  # the figure in the docstring
+    assert s["per_led"][0]["corneal_irradiance_w_m2"] == pytest.approx(8.0, rel=1e-9)
+    assert s["per_led"][1]["corneal_irradiance_w_m2"] == pytest.approx(e1, rel=1e-9)
+    assert s["corneal_irradiance_w_m2"] == pytest.approx(8.0 + e1, rel=1e-9)
+    assert s["corneal_margin"] == pytest.approx(6.85737, rel=1e-5)
+    assert s["per_led"][0]["retinal_margin"] == pytest.approx(23.506, rel=1e-4)
+    assert s["retinal_worst_led"] == 1
+    assert s["source_radiance_w_m2_sr"] == pytest.approx(0.05 / (math.pi * 0.0005**2), rel=1e-9)
+    assert s["angular_subtense_rad"] == pytest.approx(1.0 / d1, rel=1e-9)
+    assert s["retinal_margin"] == pytest.approx(9.03076, rel=1e-5)

@@ -119,7 +119,10 @@ def test_direct_irradiance_is_inverse_square_with_both_cosines():
     ig = np.cos(ag) ** m
     axis = np.array([0.3, -0.2, -1.0])
     axis /= np.linalg.norm(axis)
-    leds = LedTable(np.array([[5.0, 8.0, 60.0]]), np.array([axis]), 0.015, ag, cdf, ig)
+    i0, one = np.array([0.015]), np.ones(1)
+    leds = LedTable(
+        np.array([[5.0, 8.0, 60.0]]), np.array([axis]), i0, ag, cdf[None], ig[None], one, True
+    )
     surfaces = SurfaceTable(np.zeros((0, G.N_FLOAT)), np.zeros((0, G.N_INT), dtype=np.int64))
     rng = np.random.default_rng(5)
     for _ in range(20):

@@ -158,7 +158,10 @@ def _led_table(profile: str, axis: np.ndarray) -> tuple[LedTable, float]:
 
         ag, cdf, omega = profile_tables(shape)
         ig = shape(ag)
-    leds = LedTable(np.zeros((1, 3)), np.ascontiguousarray([axis]), 1.0, ag, cdf, ig)
+    one = np.ones(1)
+    leds = LedTable(
+        np.zeros((1, 3)), np.ascontiguousarray([axis]), one, ag, cdf[None], ig[None], one, True
+    )
     return leds, omega
 
 

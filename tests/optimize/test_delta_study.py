@@ -122,3 +122,16 @@ def test_direct_optimisation_over_led_count_spread_and_azimuths():
     assert all(abs(a) <= 90.0 / found.leds + 1e-9 for a in found.azimuth_shifts_deg)
     assert 10.0 <= found.half_angle_deg <= 40.0
     assert np.isfinite(found.merit)
+
+
+def test_the_direct_search_refuses_one_intensity_per_led():
+    """It varies the LED count: a list of one I₀ per LED cannot follow (every count would score
+    +inf as an impossible scene, silently); refused before any render."""
+    from eyelume.errors import SceneError
+
+    scene = eyelume.load_scene(
+        "paper2005", {"leds.radiant_intensity_w_sr": [0.01, 0.02, 0.01, 0.02]}
+    )
+    with pytest.raises(SceneError, match="leds.radiant_intensity_w_sr") as e:
+        optimize_direct(scene, None, (30.0, 70.0, 20.0))  # type: ignore[arg-type]
+    assert "one value for every LED" in str(e.value)

@@ -11,10 +11,13 @@ exposure 1000 s; the same values as ANSI/IESNA RP-27.3):
 
 Here E_IR is the irradiance at the corneal vertex from all LEDs together, each on a surface
 facing it (the standard's worst case: the sum of the LEDs' normal irradiances
-I(α_k) / d_k², d_k the distance from LED k's emission point). L_IR is one LED's mean radiance
-over its apparent emitting disc, I₀ / (π (D/2)²), D = ``leds.emitter_diameter_mm``, weighted by
-the burn-hazard function R(λ) at the scene's wavelength (:func:`burn_hazard_weight`; 0.501 at
-850 nm), and α = D / d at the nearest LED's distance. The LEDs are taken as monochromatic at the
+I₀ₖ fₖ(α_k) / d_k², each LED with its own on-axis intensity and profile, d_k the distance from
+LED k's emission point). L_IR is each LED's mean radiance over its apparent emitting disc,
+I₀ₖ / (π (D/2)²), D = ``leds.emitter_diameter_mm`` (the on-axis value: the worst direction, as
+the eye may look into any LED), weighted by the burn-hazard function R(λ) at the scene's
+wavelength (:func:`burn_hazard_weight`; 0.501 at 850 nm), against the limit at α = D / d_k at
+that LED's distance; the retinal margin is the smallest over the LEDs (each LED is its own
+source on the retina). The LEDs are taken as monochromatic at the
 scene wavelength: for a real LED's spectrum of σ nm about it (Gaussian), the exponential R(λ)
 averages to R(λ₀) · exp((σ ln 10 / 500)² / 2), +0.3 % for a 40 nm wide (FWHM) 850 nm LED.
 A margin is limit / value (> 1: within the exempt group; ∞ where the value is 0, written as
@@ -95,27 +98,45 @@ def retinal_thermal_limit(alpha_rad: float) -> float:
 def eye_safety(scene: Scene) -> dict:
     """Corneal IR irradiance and retinal thermal radiance of the scene's LEDs against the
     exempt-group limits (module docstring), JSON-ready. Positions in world mm: the corneal
-    vertex of primary gaze is the origin (moved by ``head_offset_mm``)."""
+    vertex of primary gaze is the origin (moved by ``head_offset_mm``).
+
+    Every LED counts with its own I₀ₖ and profile fₖ: E_IR = Σₖ I₀ₖ fₖ(αₖ) / dₖ² (LEDs whose
+    axis looks away from the vertex, αₖ ≥ 90°, add 0). The retinal hazard is per source (each
+    LED images to its own spot): Lₖ = I₀ₖ / (π (D/2)²) R(λ) against the limit at αₖ = D / dₖ;
+    the reported retinal figures are those of the LED with the smallest margin
+    (``retinal_worst_led``). ``per_led`` lists each LED's share."""
     leds = scene.leds
     centres, axes = led_poses(leds)
     emit = centres + axes * leds.body_diameter_mm / 2
     eye = np.asarray(scene.head_offset_mm, dtype=float)
-    f = relative_intensity(leds.profile)
+    profiles = leds.profiles()
+    shapes = {p: relative_intensity(p) for p in set(profiles)}
+    r_m = leds.emitter_diameter_mm / 2 * 1e-3
+    weight = burn_hazard_weight(scene.wavelength_nm)
     irr = 0.0
-    for p, a in zip(emit, axes, strict=True):
+    per_led = []
+    for p, a, i0, prof in zip(emit, axes, leds.intensities_w_sr(), profiles, strict=True):
         v = eye - p
         d = float(np.linalg.norm(v))  # mm
         cos_a = float(v @ a) / d
+        e = 0.0
         if cos_a > 0:
-            irr += (
-                leds.radiant_intensity_w_sr * float(f(math.acos(min(cos_a, 1.0)))) / (d * 1e-3) ** 2
-            )
-    nearest = float(np.min(np.linalg.norm(emit - eye, axis=1)))
-    r_m = leds.emitter_diameter_mm / 2 * 1e-3
-    source_radiance = leds.radiant_intensity_w_sr / (math.pi * r_m * r_m)
-    weight = burn_hazard_weight(scene.wavelength_nm)
+            e = i0 * float(shapes[prof](math.acos(min(cos_a, 1.0)))) / (d * 1e-3) ** 2
+            irr += e
+        radiance = i0 / (math.pi * r_m * r_m) * weight
+        limit = retinal_thermal_limit(leds.emitter_diameter_mm / d)
+        per_led.append(
+            {
+                "distance_mm": d,
+                "corneal_irradiance_w_m2": e,
+                "retinal_radiance_w_m2_sr": radiance,
+                "retinal_margin": limit / radiance if radiance > 0 else math.inf,
+            }
+        )
+    worst = min(range(len(per_led)), key=lambda k: per_led[k]["retinal_margin"])
+    source_radiance = leds.intensities_w_sr()[worst] / (math.pi * r_m * r_m)
     radiance = source_radiance * weight
-    alpha = leds.emitter_diameter_mm / nearest
+    alpha = leds.emitter_diameter_mm / per_led[worst]["distance_mm"]
     l_limit = retinal_thermal_limit(alpha)
     return {
         "source": SOURCE,
@@ -129,5 +150,7 @@ def eye_safety(scene: Scene) -> dict:
         "angular_subtense_rad": alpha,
         "retinal_limit_w_m2_sr": l_limit,
         "retinal_margin": l_limit / radiance if radiance > 0 else math.inf,
+        "retinal_worst_led": worst,
         "within_exempt_group": irr <= E_IR_LIMIT_W_M2 and radiance <= l_limit,
+        "per_led": per_led,
     }

@@ -2,9 +2,9 @@
 
 The paper's generator traces "the simple LED–eye plane system": the LEDs and the eye-plane
 receiver, nothing else (no eye, no face, no lens). Its irradiance needs no rays. A point source of
-radiant intensity I(α) = I₀ f(α) at the emission point **e** (the apex of the LED body,
-``centre + axis · body_radius``, where the tracers emit) lights a point **p** of the plane z = 0
-with
+radiant intensity I(α) = I₀ f(α) (each LED its own I₀ and f) at the emission point **e** (the
+apex of the LED body, ``centre + axis · body_radius``, where the tracers emit) lights a point
+**p** of the plane z = 0 with
 
     E(p) = I₀ f(α) cos β / r²,      r = |p − e|,  cos α = (p − e)·a / r,  cos β = e_z / r,
 
@@ -319,7 +319,7 @@ def auto_order(
     y_edges: np.ndarray,
     emitters: np.ndarray,
     axes: np.ndarray,
-    profile: LedProfile,
+    profile: LedProfile | Sequence[LedProfile],
     rtol: float = AUTO_RTOL,
 ) -> int:
     """The Gauss–Legendre order :func:`bin_irradiance` uses when none is given.
@@ -329,7 +329,10 @@ def auto_order(
     whose nearest emitter is closest to the plane, and the closest among the most pitched ones);
     the rule converges geometrically, so the other configurations are closer still. A tabulated
     profile: :data:`TABLE_ORDER` (its kinks converge only algebraically, see the module docstring).
+    LEDs of different profiles (a sequence, one per LED): the largest order any of them needs.
     """
+    if not isinstance(profile, LedProfile):
+        return max(auto_order(x_edges, y_edges, emitters, axes, p, rtol) for p in set(profile))
     if profile.kind != "cos_power":
         return TABLE_ORDER
     emit = np.asarray(emitters, dtype=float).reshape(-1, *np.shape(emitters)[-2:])
@@ -356,8 +359,8 @@ def bin_irradiance(
     y_edges: np.ndarray,
     emitters: np.ndarray,
     axes: np.ndarray,
-    intensity_w_sr: float,
-    profile: LedProfile,
+    intensity_w_sr: float | Sequence[float],
+    profile: LedProfile | Sequence[LedProfile],
     order: int | None = None,
 ) -> np.ndarray:
     """Mean irradiance (W/mm²) over the bins of the plane z = 0 from point LEDs in free space.
@@ -371,16 +374,22 @@ def bin_irradiance(
         (n, N, 3) emission points (z > 0) and unit axes of N LEDs at n configurations, or (N, 3)
         for one configuration.
     intensity_w_sr
-        On-axis radiant intensity I₀ of each LED.
+        On-axis radiant intensity I₀ (W/sr): one for every LED, or (N,) one per LED.
     profile
-        The LEDs' angular profile f(α) = I(α)/I₀.
+        The angular profile f(α) = I(α)/I₀: one for every LED, or N, one per LED. The integral
+        is linear in the LEDs: LEDs alike are integrated together, each group × its I₀.
     order
         Gauss–Legendre points per bin along each axis; None chooses it (:func:`auto_order`).
 
     Returns
     -------
     (n, rows, cols) array, or (rows, cols) for (N, 3) inputs:
-    (1/A_bin) ∫∫_bin Σ_LEDs I₀ f(α) cos β / r² dA.
+    (1/A_bin) ∫∫_bin Σ_LEDs I₀ₖ fₖ(α) cos β / r² dA.
+
+    Raises
+    ------
+    ValueError
+        Shapes that do not match, an emission point on or below the plane, a bad order.
     """
     emitters = np.asarray(emitters, dtype=float)
     single = emitters.ndim == 2
@@ -392,13 +401,32 @@ def bin_irradiance(
     if np.any(emit[..., 2] <= 0):
         raise ValueError("every emission point must lie above the plane (z > 0)")
     xe, ye = np.asarray(x_edges, dtype=float), np.asarray(y_edges, dtype=float)
+    groups = _led_groups(intensity_w_sr, profile, emit.shape[1])
     if order is None:
-        order = auto_order(xe, ye, emit, ax, profile)
+        order = auto_order(xe, ye, emit, ax, [g[1] for g in groups])
     if not (isinstance(order, int | np.integer) and 1 <= order <= 256):
         raise ValueError(f"order = {order!r}: must be an integer in 1 … 256")
-    out = _means(xe, ye, emit, ax, _profile_args(profile), int(order))
-    out *= intensity_w_sr
+    if len(groups) == 1:  # every LED alike: one integral (the paper's floats)
+        out = _means(xe, ye, emit, ax, _profile_args(groups[0][1]), int(order))
+        out *= groups[0][0]
+    else:
+        out = np.zeros((emit.shape[0], len(ye) - 1, len(xe) - 1))
+        for i0, prof, idx in groups:
+            sub = (np.ascontiguousarray(emit[:, idx]), np.ascontiguousarray(ax[:, idx]))
+            out += i0 * _means(xe, ye, *sub, _profile_args(prof), int(order))
     return out[0] if single else out
+
+
+def _led_groups(intensity_w_sr, profile, n_leds: int) -> list[tuple[float, LedProfile, list]]:
+    """The LEDs grouped by (I₀, profile): [(I₀, profile, LED indices)], in first-seen order."""
+    i0 = np.broadcast_to(np.asarray(intensity_w_sr, dtype=float), (n_leds,))
+    profiles = [profile] * n_leds if isinstance(profile, LedProfile) else list(profile)
+    if len(profiles) != n_leds:
+        raise ValueError(f"{len(profiles)} profiles for {n_leds} LEDs")
+    groups: dict[tuple[float, LedProfile], list[int]] = {}
+    for k in range(n_leds):
+        groups.setdefault((float(i0[k]), profiles[k]), []).append(k)
+    return [(a, p, idx) for (a, p), idx in groups.items()]
 
 
 # --- the public entry points ---------------------------------------------------------------------
@@ -443,9 +471,7 @@ def configuration_irradiance(
                 )
     emit, axes = led_emitters(sc.leds, y, z, t)
     xe, ye = plane_edges(sc.eye_plane)
-    return bin_irradiance(
-        xe, ye, emit, axes, sc.leds.radiant_intensity_w_sr, sc.leds.profile, order
-    )
+    return bin_irradiance(xe, ye, emit, axes, sc.leds.intensities_w_sr(), sc.leds.profiles(), order)
 
 
 def sweep_irradiance(

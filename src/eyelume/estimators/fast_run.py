@@ -92,7 +92,7 @@ class _Run:
         self.covered = 0  # first round stopped: pixels (flat, row-major) it finished
         self.covered_sets = 0
         sf, cornea = cs.sf, cs.camera.cornea
-        i0 = cs.led.i0
+        i0 = float(np.max(cs.led.i0))  # the brightest LED's: a bound on every deposit's scale
         centre, rb = sf[cornea, G.BX : G.BZ + 1], sf[cornea, G.BR]
         dist = np.linalg.norm(cs.led.points - centre, axis=1)
         if np.any(dist <= rb):

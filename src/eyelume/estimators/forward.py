@@ -1,6 +1,7 @@
 """The plain forward Monte Carlo estimator: what LightTools does, and the unbiased reference.
 
-Every ray leaves an LED with the same power w = Φ_total / N and keeps it: at a partial reflector
+Every ray leaves an LED with the same power w = Φ_total / N and keeps it (LED k is drawn with
+probability Φₖ / Φ_total, its own share): at a partial reflector
 it reflects with probability R (else refracts, or is absorbed with probability A), at a Lambertian
 face it scatters with probability ρ into a cosine-weighted direction (else is absorbed). Each ray
 thus ends in exactly one ledger entry, every bin counts whole rays, and a result is an integer
@@ -38,7 +39,7 @@ from eyelume.kernels.bins import bin_of
 from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.jit import per_ray
 from eyelume.kernels.rng import next_uniform, stream_start
-from eyelume.kernels.sampling import about_axis, cosine_hemisphere, led_direction
+from eyelume.kernels.sampling import about_axis, cosine_hemisphere, led_direction, led_index
 from eyelume.kernels.sequential import LENS_PASSED, LENS_TIR, trace_lens
 from eyelume.kernels.tables import SceneTables, scene_parts
 
@@ -89,12 +90,12 @@ class Counts(NamedTuple):
 @per_ray
 def emit_ray(i, seed, leds):
     """Birth of ray ``i``: an LED of ``leds`` (:class:`~eyelume.kernels.tables.LedTable`) drawn
-    uniformly (equal powers), a direction from its angular profile about its axis
+    with probability its share of the emitted power (:func:`~eyelume.kernels.sampling.led_index`,
+    so every ray carries the same power), a direction from its angular profile about its axis
     (:func:`~eyelume.kernels.sampling.led_direction`). Returns an :class:`Emission`."""
     state = stream_start(seed, i)
     state, u = next_uniform(state)
-    n = leds.points.shape[0]
-    led = min(int(u * n), n - 1)
+    led = led_index(leds, u)
     state, u1 = next_uniform(state)
     state, u2 = next_uniform(state)
     dx, dy, dz = led_direction(leds, led, u1, u2)

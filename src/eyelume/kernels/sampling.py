@@ -162,11 +162,24 @@ def aimed_mixture_pdf(aim_row, x, y, z, nx, ny, nz, dx, dy, dz):
 
 
 @njit(cache=True, inline="always")
+def led_index(leds, u):
+    """The LED a forward ray of uniform ``u`` leaves: LED k with probability Φₖ / Σ Φ (its
+    share of the emitted power, ``leds.power_cdf``); ⌊u N⌋ when all emit alike."""
+    n = leds.points.shape[0]
+    if leds.equal_power:
+        return min(int(u * n), n - 1)
+    for k in range(n - 1):
+        if u < leds.power_cdf[k]:
+            return k
+    return n - 1
+
+
+@njit(cache=True, inline="always")
 def led_direction(leds, k, u1, u2):
     """Emission direction of LED ``k`` (an :class:`~.tables.LedTable`): polar angle from its
     profile (:func:`profile_polar_angle`), azimuth uniform, about its axis. Density
     :func:`led_direction_pdf`."""
-    alpha = profile_polar_angle(u1, leds.alpha_grid, leds.cdf_grid)
+    alpha = profile_polar_angle(u1, leds.alpha_grid, leds.cdf_grid[k])
     phi = 2.0 * math.pi * u2
     sa = math.sin(alpha)
     return about_axis(
@@ -187,10 +200,11 @@ def led_cos_alpha(leds, k, dx, dy, dz):
 
 @njit(cache=True, inline="always")
 def radiant_intensity(leds, k, dx, dy, dz):
-    """Radiant intensity I(α) = I₀ · I(α)/I₀ (W/sr) of LED ``k`` toward unit direction d (from
-    the LED): the one evaluator of the LEDs' angular profile in the kernels. 0 behind."""
-    return leds.i0 * relative_intensity_at(
-        led_cos_alpha(leds, k, dx, dy, dz), leds.alpha_grid, leds.intensity_grid
+    """Radiant intensity I(α) = I₀ₖ · Iₖ(α)/I₀ₖ (W/sr) of LED ``k`` toward unit direction d
+    (from the LED), with that LED's own I₀ and profile: the one evaluator of the LEDs' angular
+    profiles in the kernels. 0 behind."""
+    return leds.i0[k] * relative_intensity_at(
+        led_cos_alpha(leds, k, dx, dy, dz), leds.alpha_grid, leds.intensity_grid[k]
     )
 
 
@@ -251,7 +265,8 @@ def profile_pdf(alpha, relative_intensity, omega_eff: float):
 
 @njit(cache=True, inline="always")
 def led_direction_pdf(leds, k, omega_eff, dx, dy, dz):
-    """Density per steradian of :func:`led_direction`: I(α)/I₀ / Ω_eff (Ω_eff in sr, the
-    compiled scene's ``omega_eff``), with I(α)/I₀ interpolated on the profile grid."""
+    """Density per steradian of :func:`led_direction` for LED ``k``: Iₖ(α)/I₀ₖ / Ω_eff,k
+    (Ω_eff,k in sr, the compiled scene's ``omega_eff[k]``), with Iₖ(α)/I₀ₖ interpolated on the
+    profile grid."""
     cos_a = led_cos_alpha(leds, k, dx, dy, dz)
-    return relative_intensity_at(cos_a, leds.alpha_grid, leds.intensity_grid) / omega_eff
+    return relative_intensity_at(cos_a, leds.alpha_grid, leds.intensity_grid[k]) / omega_eff

@@ -93,20 +93,24 @@ class LensTable(NamedTuple):
 
 
 class LedTable(NamedTuple):
-    """The LEDs as point sources with one angular profile.
+    """The LEDs as point sources, each with its own I₀ and angular profile.
 
     ``points`` (N, 3) emission points (world mm, on the body's front), ``axes`` (N, 3) unit
-    axes, ``i0`` the on-axis radiant intensity I₀ (W/sr), and the profile on a uniform grid
-    ``alpha_grid`` (rad, [0, π/2]): ``cdf_grid`` the normalised ∫₀^α I sin α' dα' (for
-    sampling), ``intensity_grid`` I(α)/I₀ (for evaluating,
-    :func:`eyelume.kernels.sampling.radiant_intensity`)."""
+    axes, ``i0`` (N,) the on-axis radiant intensities I₀ (W/sr), and each LED's profile on the
+    uniform grid ``alpha_grid`` (n,) (rad, [0, π/2]): ``cdf_grid`` (N, n) the normalised
+    ∫₀^α I sin α' dα' (for sampling), ``intensity_grid`` (N, n) I(α)/I₀ (for evaluating,
+    :func:`eyelume.kernels.sampling.radiant_intensity`). ``power_cdf`` (N,) the cumulative
+    share of the emitted power Φₖ = I₀ₖ Ω_eff,k (the last 1), by which a forward ray picks its
+    LED; ``equal_power`` True when every LED emits the same power (then LED ⌊u N⌋)."""
 
     points: np.ndarray
     axes: np.ndarray
-    i0: float
+    i0: np.ndarray
     alpha_grid: np.ndarray
     cdf_grid: np.ndarray
     intensity_grid: np.ndarray
+    power_cdf: np.ndarray
+    equal_power: bool
 
 
 class CameraTables(NamedTuple):

@@ -111,6 +111,7 @@ def optimize_direct(
     ``search`` (:class:`DirectSearch`), its merit re-rendered with the next seed.
     """
     search = search or DirectSearch()
+    _check_leds_alike(scene, search.vary_spread)
     best: DirectResult | None = None
     for n in search.led_counts:
         for offset in (0.0, 180.0 / n) if search.try_rotated else (0.0,):
@@ -131,6 +132,28 @@ def optimize_direct(
     return best
 
 
+def _check_leds_alike(scene: Scene, vary_spread: bool) -> None:
+    """The search varies the LED count (and with ``vary_spread`` a cosᵐ spread angle): it
+    needs one I₀, one profile and one wavelength for every LED. Raises SceneError naming a
+    per-LED list (or a table profile whose spread cannot vary)."""
+    leds = scene.leds
+    for name in ("radiant_intensity_w_sr", "profile", "wavelength_nm"):
+        value = getattr(leds, name)
+        if isinstance(value, list):
+            raise SceneError(
+                "the direct search varies the LED count and spread: give one value for every "
+                "LED, not one per LED",
+                field=f"leds.{name}",
+                value=value,
+            )
+    if vary_spread and leds.profile.kind != "cos_power":  # type: ignore[union-attr]
+        raise SceneError(
+            "the direct search varies the spread angle of a cos_power profile",
+            field="leds.profile.kind",
+            value=leds.profile.kind,  # type: ignore[union-attr]
+        )
+
+
 def _search_one(
     scene: Scene,
     mask: IdealMask,
@@ -140,7 +163,7 @@ def _search_one(
     offset: float,
 ) -> DirectResult:
     """One bounded Nelder–Mead search with ``n`` LEDs from azimuth ``offset`` (degrees)."""
-    half0 = scene.leds.profile.half_intensity_angle_deg
+    half0 = scene.leds.profiles()[0].half_intensity_angle_deg
     spread, azimuths = search.vary_spread, search.vary_azimuths
     history: list[tuple[float, ...]] = []
 

@@ -248,12 +248,12 @@ def refine(
     xe, ye = plane_edges(scene.eye_plane)
     if order is None:  # one order for the whole search, or the merit would jump between orders
         emit, axes = led_emitters(leds, *corners)
-        order = auto_order(xe, ye, emit, axes, leds.profile)
+        order = auto_order(xe, ye, emit, axes, leds.profiles())
     span = np.where(hi > lo, hi - lo, 1.0)
 
     def merit_at(v: np.ndarray) -> float:
         emit, axes = led_emitters(leds, [v[0]], [v[1]], [v[2]])
-        e = bin_irradiance(xe, ye, emit, axes, leds.radiant_intensity_w_sr, leds.profile, order)
+        e = bin_irradiance(xe, ye, emit, axes, leds.intensities_w_sr(), leds.profiles(), order)
         return float(generator_merit(e[0], t))
 
     def objective(u: np.ndarray) -> float:

@@ -18,7 +18,7 @@ from pydantic import ValidationError
 
 from eyelume.errors import GeometryError, SceneError
 from eyelume.scene.eye import check_eye_geometry
-from eyelume.scene.model import Scene
+from eyelume.scene.model import RING_FIELDS, Scene
 from eyelume.scene.textfile import decode_text
 
 __all__ = ["SceneError", "apply_overrides", "load_scene", "preset_names", "save_scene"]
@@ -52,6 +52,9 @@ def _resolve_paths(data: dict[str, Any], base: Path) -> None:
     profile = leds.get("profile") if isinstance(leds, dict) else None
     if isinstance(profile, dict) and isinstance(profile.get("table_csv"), str):
         profile["table_csv"] = _resolved(base, profile["table_csv"], "leds.profile.table_csv")
+    for k, item in enumerate(profile if isinstance(profile, list) else []):
+        if isinstance(item, dict) and isinstance(item.get("table_csv"), str):
+            item["table_csv"] = _resolved(base, item["table_csv"], f"leds.profile.{k}.table_csv")
     lens = data.get("lens")
     if isinstance(lens, dict) and isinstance(lens.get("glass_catalogs"), list):
         lens["glass_catalogs"] = [
@@ -91,12 +94,14 @@ def validate_scene(data: dict[str, Any], origin: str = "scene") -> Scene:
         err = exc.errors()[0]
         loc = tuple(err["loc"])
         field = _format_loc(loc) or "(top level)"
-        msg = err["msg"]
+        msg = err["msg"].removeprefix("Value error, ")
         if err["type"] == "extra_forbidden":
             raise SceneError("unknown field", file=origin, field=field) from None
         if err["type"] == "missing":
             raise SceneError("is required", file=origin, field=field) from None
         value = err.get("input", _lookup(data, loc))
+        if not loc:
+            raise SceneError(f"{origin}: {msg}") from None
         if isinstance(value, dict):
             raise SceneError(f"{origin}: {field}: {msg}") from None
         raise SceneError(msg, file=origin, field=field, value=value) from None
@@ -155,8 +160,18 @@ def _parse_value(text: Any) -> Any:
         return text
 
 
+def _drop_ring_for_positions(data: dict[str, Any], overrides: dict[str, Any]) -> None:
+    """LEDs placed one by one by an override replace the ring: its fields go, unless overridden
+    too (then they are refused beside positions_mm, as in a file)."""
+    leds = data.get("leds")
+    if "leds.positions_mm" in overrides and isinstance(leds, dict):
+        for name in RING_FIELDS:
+            leds.pop(name, None)
+
+
 def _override_data(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
     data = copy.deepcopy(data)
+    _drop_ring_for_positions(data, overrides)
     for key, raw in overrides.items():
         parts = key.split(".")
         if not key or any(p == "" for p in parts):

@@ -12,7 +12,16 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 
 __all__ = [
     "Camera",
@@ -25,6 +34,7 @@ __all__ = [
     "LedArray",
     "LedProfile",
     "LensSurface",
+    "RING_FIELDS",
     "Run",
     "Scene",
     "Sensor",
@@ -70,6 +80,17 @@ class LedProfile(_Model):
         return self
 
 
+#: The ring's fields (:class:`LedArray`): refused beside ``positions_mm``, where they place nothing.
+RING_FIELDS = (
+    "azimuths_deg",
+    "height_mm",
+    "distance_mm",
+    "pitch_deg",
+    "ring_centre_mm",
+    "ring_axis",
+)
+
+
 class LedArray(_Model):
     """N identical LEDs: a ring (paper Fig. 8) about any axis, or placed one by one.
 
@@ -82,6 +103,15 @@ class LedArray(_Model):
     the ring's Y, Z, θ and azimuths are then not used). Aim: ``aim_at_mm``, a point every LED's
     axis points at (instead of the pitch θ), or, for LEDs placed one by one, ``directions``
     (N, 3).
+    Per LED: ``radiant_intensity_w_sr`` (on-axis I₀), ``profile`` and ``wavelength_nm`` are
+    each either one value for every LED or a list of ``count`` values, LED k taking item k (in
+    the order of ``positions_mm``, or of the ring's azimuths); in TOML a list of profiles is an
+    array of tables, ``[[leds.profile]]`` once per LED. ``wavelength_nm`` (default: the scene's)
+    must equal the scene's ``wavelength_nm``, the one wavelength every index, reflectance and
+    safety weight is taken at: an LED of another wavelength is refused, not traced at the wrong
+    one. The ring's fields (``height_mm``, ``distance_mm``, ``pitch_deg``, ``azimuths_deg``,
+    ``ring_centre_mm``, ``ring_axis``) given beside ``positions_mm`` are refused (they would
+    place nothing).
     Light leaves from the apex of the spherical body (a point source at centre + r·axis).
     ``emitter_diameter_mm`` is the apparent size of the emitting area (the die as the dome
     lens shows it), used only for the retinal thermal hazard (its radiance and angular
@@ -96,13 +126,82 @@ class LedArray(_Model):
     pitch_deg: float = Field(20.0, gt=-90, lt=90)
     body_diameter_mm: Positive = 5.0
     emitter_diameter_mm: Positive = 1.0
-    radiant_intensity_w_sr: Positive = 0.015
-    profile: LedProfile = LedProfile()
+    radiant_intensity_w_sr: Positive | list[Positive] = 0.015
+    profile: LedProfile | list[LedProfile] = LedProfile()
+    wavelength_nm: float | list[float] | None = None
     ring_centre_mm: Vector3 = (0.0, 0.0, 0.0)
     ring_axis: Vector3 = (0.0, 0.0, 1.0)
     positions_mm: list[Vector3] | None = None
     aim_at_mm: Vector3 | None = None
     directions: list[Vector3] | None = None
+
+    @field_validator("radiant_intensity_w_sr", "wavelength_nm", mode="before")
+    @classmethod
+    def _numbers_one_by_one(cls, value, info):
+        """A list is checked item by item, so a bad item is named by its index."""
+        if isinstance(value, list | tuple):
+            if not value:
+                raise ValueError(f"{info.field_name} = []: give a number or one per LED")
+            for k, v in enumerate(value):
+                if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                    raise ValueError(f"{info.field_name}[{k}] = {v!r}: must be a finite number")
+                if v <= 0:
+                    raise ValueError(f"{info.field_name}[{k}] = {v!r}: must be > 0")
+        return value
+
+    @field_validator("profile", mode="before")
+    @classmethod
+    def _profiles_one_by_one(cls, value):
+        """A list of profiles is checked item by item, so a bad one is named by its index."""
+        if isinstance(value, list | tuple):
+            if not value:
+                raise ValueError("profile = []: give one profile or one per LED")
+            out = []
+            for k, v in enumerate(value):
+                try:
+                    out.append(LedProfile.model_validate(v))
+                except ValidationError as exc:
+                    err = exc.errors()[0]
+                    where = ".".join(str(p) for p in err["loc"])
+                    what = f"profile[{k}]" + (f".{where}" if where else "")
+                    msg = err["msg"].removeprefix("Value error, ")
+                    raise ValueError(f"{what} = {err.get('input')!r}: {msg}") from None
+            return out
+        return value
+
+    @model_validator(mode="after")
+    def _per_led_lengths(self) -> LedArray:
+        for name in ("radiant_intensity_w_sr", "profile", "wavelength_nm"):
+            v = getattr(self, name)
+            if isinstance(v, list) and len(v) != self.count:
+                raise ValueError(
+                    f"{name} has {len(v)} entries but there are {self.count} LEDs (count): give "
+                    "one value for every LED or one per LED"
+                )
+        return self
+
+    @model_validator(mode="after")
+    def _no_ring_beside_positions(self) -> LedArray:
+        if self.positions_mm is None:
+            return self
+        for name in RING_FIELDS:
+            if name in self.model_fields_set:
+                raise ValueError(
+                    f"{name} = {getattr(self, name)!r} given beside positions_mm: the LEDs are "
+                    "placed one by one, so the ring's fields place nothing; remove it"
+                )
+        return self
+
+    @model_serializer(mode="wrap")
+    def _dump_without_unused_ring(self, handler):
+        """LEDs placed one by one are written without the ring's fields they do not use (so a
+        written scene reads back: those fields are refused beside ``positions_mm``)."""
+        data = handler(self)
+        if self.positions_mm is not None and isinstance(data, dict):
+            for name in RING_FIELDS:
+                if name not in self.model_fields_set:
+                    data.pop(name, None)
+        return data
 
     @model_validator(mode="after")
     def _azimuths_match_count(self) -> LedArray:
@@ -139,6 +238,31 @@ class LedArray(_Model):
             if self.aim_at_mm is not None and tuple(c) == tuple(self.aim_at_mm):
                 raise ValueError(f"aim_at_mm equals positions_mm[{k}]: no direction")
         return self
+
+    def intensities_w_sr(self) -> list[float]:
+        """On-axis radiant intensity I₀ of every LED (W/sr), ``count`` values."""
+        v = self.radiant_intensity_w_sr
+        return [float(x) for x in v] if isinstance(v, list) else [float(v)] * self.count
+
+    def profiles(self) -> list[LedProfile]:
+        """The angular profile of every LED, ``count`` profiles."""
+        v = self.profile
+        return list(v) if isinstance(v, list) else [v] * self.count
+
+    def wavelengths_nm(self, scene_wavelength_nm: float) -> list[float]:
+        """The wavelength of every LED (nm), ``count`` values; the scene's where not given."""
+        v = self.wavelength_nm
+        if v is None:
+            return [float(scene_wavelength_nm)] * self.count
+        return [float(x) for x in v] if isinstance(v, list) else [float(v)] * self.count
+
+    @property
+    def all_alike(self) -> bool:
+        """True when every LED has the same I₀ and profile (one value given for all, or a list
+        of equal ones)."""
+        return len(set(self.intensities_w_sr())) == 1 and all(
+            p == self.profiles()[0] for p in self.profiles()
+        )
 
     @property
     def is_paper_ring(self) -> bool:
@@ -548,6 +672,19 @@ class Scene(_Model):
     sensor: Sensor = Sensor()
     eye_plane: EyePlane = EyePlane()
     run: Run = Run()
+
+    @model_validator(mode="after")
+    def _one_wavelength(self) -> Scene:
+        for k, lam in enumerate(self.leds.wavelengths_nm(self.wavelength_nm)):
+            if lam != self.wavelength_nm:
+                which = f"[{k}]" if isinstance(self.leds.wavelength_nm, list) else ""
+                raise ValueError(
+                    f"leds.wavelength_nm{which} = {lam:g} differs from wavelength_nm = "
+                    f"{self.wavelength_nm:g}: eyelume traces one wavelength (indices, "
+                    "reflectances and safety weights are taken at the scene's); set "
+                    "wavelength_nm to the LEDs' or render each wavelength as its own scene"
+                )
+        return self
 
     @model_validator(mode="after")
     def _optics_given(self) -> Scene:
