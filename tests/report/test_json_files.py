@@ -52,14 +52,18 @@ def test_write_json_is_strict(tmp_path):
 
 @pytest.mark.slow
 def test_render_summary_with_an_infinite_margin_is_strict_json(tmp_path):
-    """LEDs pitched 80° away from the eye send it nothing: the corneal margin is infinite,
-    written as null; summary.json and truth.json parse with a strict parser."""
+    """An LED that faces sideways (+x) above the eye sends the corneal vertex nothing (it lies
+    behind the LED's front) though its cone still grazes the eyeball (LEDs whose cones miss the
+    eye entirely are refused): the corneal margin is infinite, written as null; summary.json
+    and truth.json parse with a strict parser."""
     out = tmp_path / "r"
     result = CliRunner().invoke(
         app,
         [
             "render", "--samples", "1", "--seed", "1", "--out", str(out),
-            "--set", "sensor.cols=16", "--set", "sensor.rows=12", "--set", "leds.pitch_deg=-80",
+            "--set", "sensor.cols=16", "--set", "sensor.rows=12", "--set", "leds.count=1",
+            "--set", "leds.positions_mm=[[0.0, 25.0, 40.0]]",
+            "--set", "leds.directions=[[1.0, 0.0, 0.0]]",
         ],
     )  # fmt: skip
     assert result.exit_code == 0, result.output
