@@ -215,7 +215,7 @@ def worker_anatomy(a: argparse.Namespace) -> dict:
         cs = compile_scene(eyelume.load_scene(SCENE, _overrides(face)))
         n = a.rays
         uu = np.random.default_rng(a.seed).random(n)
-        polar_only(uu[:1000], cs.led.alpha_grid, cs.led.cdf_grid)
+        polar_only(uu[:1000], cs.led.alpha_grid, cs.led.cdf_grid[0])
         t_polar = []
         rays = np.empty((n, 6))
         hits = np.empty(n, dtype=np.int64)
@@ -234,7 +234,7 @@ def worker_anatomy(a: argparse.Namespace) -> dict:
             search_all(cs.sf, cs.si, rays, hits)
             t_search.append(time.perf_counter() - t0)
             t0 = time.perf_counter()
-            polar_only(uu, cs.led.alpha_grid, cs.led.cdf_grid)
+            polar_only(uu, cs.led.alpha_grid, cs.led.cdf_grid[0])
             t_polar.append(time.perf_counter() - t0)
         counts = np.bincount(hits + 1, minlength=cs.sf.shape[0] + 1)
         first = {"(escape)": int(counts[0])}
@@ -259,7 +259,7 @@ def worker_anatomy(a: argparse.Namespace) -> dict:
             "ns_per_emission": 1e9 * min(t_emit) / n,
             "ns_per_search": 1e9 * min(t_search) / n,
             "ns_per_polar_search": 1e9 * min(t_polar) / n,
-            "cdf_grid_size": int(cs.led.cdf_grid.shape[0]),
+            "cdf_grid_size": int(cs.led.cdf_grid.shape[1]),
             "spread_pct": {
                 "render": spread(t_render),
                 "emission": spread(t_emit),

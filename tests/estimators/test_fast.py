@@ -156,7 +156,9 @@ def test_sampled_irradiance_is_the_sum_over_leds_on_average():
     ig = np.cos(ag) ** m
     pts = np.array([[12.0, 0.0, 30.0], [0.0, 12.0, 30.0], [-12.0, 0.0, 30.0], [0.0, -9.0, 25.0]])
     axes = -pts / np.linalg.norm(pts, axis=1)[:, None]
-    leds = LedTable(pts, axes, 0.01, ag, cdf, ig)
+    i0 = np.array([0.01, 0.02, 0.005, 0.01])  # each LED its own I₀ (issue 11)
+    four = np.ones((4, 1))
+    leds = LedTable(pts, axes, i0, ag, cdf * four, ig * four, np.cumsum(i0) / i0.sum(), False)
     # an opaque sphere of radius 2 mm halfway to LED 0 (columns of kernels/geometry.py)
     sf = np.zeros((1, G.N_FLOAT))
     centre = np.array([6.0, 0.0, 15.0])
