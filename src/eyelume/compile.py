@@ -464,15 +464,16 @@ def real_best_focus(lf: np.ndarray) -> tuple[float, float] | None:
 
 def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame) -> None:
     """LED bodies (world ``centres``) in front of the eye, apart, and clear of the lens."""
-    rb = scene.leds.body_diameter_mm / 2
+    radii = scene.leds.body_radii_mm()
     for i, c in enumerate(centres):
+        rb = radii[i]
         if c[2] - rb <= 0:
             raise SceneError(
                 f"leds: LED {i} body (centre z = {c[2]:.2f} mm, radius {rb}) crosses the "
                 "eye plane z = 0"
             )
         for j in range(i):
-            if np.linalg.norm(c - centres[j]) < 2 * rb:
+            if np.linalg.norm(c - centres[j]) < rb + radii[j]:
                 raise SceneError(
                     f"leds: LED {i} and LED {j} bodies overlap (centres {c}, {centres[j]})"
                 )
@@ -497,7 +498,7 @@ def _check_leds_in_head(
     """No LED body (or, with ``what``, the camera's lens: radius ``rb``) inside the eyeball
     (with the cornea's bulge) or inside a face tissue's solid (a sphere or cylinder within its
     clip ranges, or behind a disk within its ring)."""
-    rb = scene.leds.body_diameter_mm / 2 if rb is None else rb
+    radii = scene.leds.body_radii_mm() if rb is None else [rb] * len(centres)
     eye = scene.eye
     _, _, z_c = limbus_geometry(eye)
     head = np.asarray(scene.head_offset_mm, dtype=float)
@@ -505,6 +506,7 @@ def _check_leds_in_head(
     vertex = eye_point(scene, np.zeros(3))
     axis = gaze_rotation(eye)[0] @ np.array([0.0, 0.0, 1.0])
     for i, c in enumerate(centres):
+        rb = radii[i]
         d = c - eyeball
         # the eyeball sphere, and the cornea standing proud of it up to the vertex
         if np.linalg.norm(d) < eye.sclera_radius_mm + rb or (
@@ -561,7 +563,7 @@ def _check_leds_light_the_eye(
     radius = max(
         eye.sclera_radius_mm, float(np.linalg.norm(eye_point(scene, np.zeros(3)) - eyeball))
     )
-    emit = centres + axes * scene.leds.body_diameter_mm / 2
+    emit = centres + axes * np.asarray(scene.leds.body_radii_mm())[:, None]
     step = led.alpha_grid[1] - led.alpha_grid[0]
     misses = []
     for k in range(len(emit)):
@@ -906,9 +908,8 @@ def _add_face(t: _Table, scene: Scene) -> None:
 
 
 def _add_led_bodies(t: _Table, scene: Scene, centres: np.ndarray, axes: np.ndarray) -> None:
-    """Each LED's body: an absorbing sphere (the ledger's "LED bodies")."""
-    rb = scene.leds.body_diameter_mm / 2
-    for i, c in enumerate(centres):
+    """Each LED's body: an absorbing sphere of its own radius (the ledger's "LED bodies")."""
+    for i, (c, rb) in enumerate(zip(centres, scene.leds.body_radii_mm(), strict=True)):
         t.add(
             f"LED {i} body",
             G.SHAPE_SPHERE,
@@ -942,7 +943,7 @@ def _led_table(scene: Scene, centres: np.ndarray, axes: np.ndarray) -> tuple[Led
     """The LEDs as point sources on the front of their bodies, each with its own I₀ and its
     profile's sampling and evaluation tables (every profile on the same α grid); and Ω_eff (N,)
     (sr) of every LED. Raises SceneError for a profile that cannot be used."""
-    rb = scene.leds.body_diameter_mm / 2
+    rb = np.asarray(scene.leds.body_radii_mm())[:, None]
     emit = centres + axes * rb * (1.0 + 1e-9)
     grids: dict[LedProfile, tuple] = {}
     rows = []

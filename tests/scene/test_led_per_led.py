@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -152,3 +153,27 @@ def test_info_shows_every_leds_own_figures_and_no_ring_for_positions():
     assert leds["total_power_w"] == pytest.approx(a["power_w"] + b["power_w"], rel=1e-12)
     ring = json.loads(runner.invoke(app, ["info", "--json"]).stdout)["leds"]
     assert ring["ring"]["height_mm"] == 30.0 and ring["ring"]["pitch_deg"] == 20.0
+
+
+def test_each_led_its_own_body():
+    """bodies of 5 mm and 2 mm: each LED emits from its own body's apex (centre + r·axis),
+    each body is a sphere of its own radius, and the overlap test adds the two radii."""
+    from eyelume.compile import compile_scene
+    from eyelume.kernels import geometry as G
+    from eyelume.scene.sources import led_poses
+
+    scene = load_scene("paper2005", {**TWO_BY_POSITION, "leds.body_diameter_mm": [5.0, 2.0]})
+    assert scene.leds.body_radii_mm() == [2.5, 1.0]
+    cs = compile_scene(scene)
+    c, a = led_poses(scene.leds)
+    assert np.allclose(cs.led.points, c + a * np.array([[2.5], [1.0]]), atol=1e-8)
+    for k, r in enumerate((2.5, 1.0)):
+        row = cs.surface_names.index(f"LED {k} body")
+        assert cs.sf[row, G.RADIUS] == r
+    # centres 4 mm apart: radii 2.5 + 1.0 = 3.5 clear them; 2.5 + 1.6 = 4.1 do not
+    near = {"leds.positions_mm": [[20.0, 0.0, 60.0], [20.0, 4.0, 60.0]]}
+    compile_scene(apply_overrides(scene, near))
+    with pytest.raises(SceneError, match="bodies overlap"):
+        compile_scene(apply_overrides(scene, {**near, "leds.body_diameter_mm": [5.0, 3.2]}))
+    with pytest.raises(SceneError, match="body_diameter_mm has 3 entries"):
+        apply_overrides(scene, {"leds.body_diameter_mm": [5.0, 2.0, 1.0]})

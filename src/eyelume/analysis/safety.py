@@ -107,7 +107,7 @@ def eye_safety(scene: Scene) -> dict:
     (``retinal_worst_led``). ``per_led`` lists each LED's share."""
     leds = scene.leds
     centres, axes = led_poses(leds)
-    emit = centres + axes * leds.body_diameter_mm / 2
+    emit = centres + axes * np.asarray(leds.body_radii_mm())[:, None]
     eye = np.asarray(scene.head_offset_mm, dtype=float)
     profiles = leds.profiles()
     shapes = {p: relative_intensity(p) for p in set(profiles)}

@@ -99,7 +99,7 @@ def geometry_problems(
     pitch must lie in the scene model's range (−90°, 90°). The full scene also rejects a body
     inside the imaging lens; the free-space system has no lens, so that is left to compile.
     """
-    rb = leds.body_diameter_mm / 2
+    rb = max(leds.body_radii_mm())  # the largest body: a bound for unlike bodies
     phi = np.radians(np.asarray(leds.azimuths(), dtype=float))
     chord = math.inf  # the smallest distance between two LED centres at Y = 1 mm
     if len(phi) > 1:
@@ -121,7 +121,7 @@ def geometry_problems(
         elif y * chord < 2 * rb:
             out.append(
                 f"LED bodies overlap at height Y = {y} mm (centres {y * chord:.2f} mm apart, "
-                f"body diameter {leds.body_diameter_mm} mm)"
+                f"body diameter up to {2 * rb} mm)"
             )
         else:
             out.append(None)
@@ -149,7 +149,7 @@ def led_emitters(
     fixed positions at every configuration); the emission point is the apex of the body,
     centre + axis · body_diameter/2, as in :mod:`eyelume.compile`.
     """
-    rb = leds.body_diameter_mm / 2
+    rb = np.asarray(leds.body_radii_mm())[:, None]  # (N, 1): each LED's own body
     if leds.positions_mm is not None:  # one by one: nothing to vary
         centres, axes = led_poses(leds)
         n = np.asarray(heights).size

@@ -137,7 +137,7 @@ def _check_leds_alike(scene: Scene, vary_spread: bool) -> None:
     needs one I₀, one profile and one wavelength for every LED. Raises SceneError naming a
     per-LED list (or a table profile whose spread cannot vary)."""
     leds = scene.leds
-    for name in ("radiant_intensity_w_sr", "profile", "wavelength_nm"):
+    for name in ("radiant_intensity_w_sr", "profile", "wavelength_nm", "body_diameter_mm"):
         value = getattr(leds, name)
         if isinstance(value, list):
             raise SceneError(

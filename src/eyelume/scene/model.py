@@ -103,19 +103,20 @@ class LedArray(_Model):
     the ring's Y, Z, θ and azimuths are then not used). Aim: ``aim_at_mm``, a point every LED's
     axis points at (instead of the pitch θ), or, for LEDs placed one by one, ``directions``
     (N, 3).
-    Per LED: ``radiant_intensity_w_sr`` (on-axis I₀), ``profile`` and ``wavelength_nm`` are
-    each either one value for every LED or a list of ``count`` values, LED k taking item k (in
-    the order of ``positions_mm``, or of the ring's azimuths); in TOML a list of profiles is an
-    array of tables, ``[[leds.profile]]`` once per LED. ``wavelength_nm`` (default: the scene's)
-    must equal the scene's ``wavelength_nm``, the one wavelength every index, reflectance and
-    safety weight is taken at: an LED of another wavelength is refused, not traced at the wrong
-    one. The ring's fields (``height_mm``, ``distance_mm``, ``pitch_deg``, ``azimuths_deg``,
-    ``ring_centre_mm``, ``ring_axis``) given beside ``positions_mm`` are refused (they would
-    place nothing).
-    Light leaves from the apex of the spherical body (a point source at centre + r·axis).
-    ``emitter_diameter_mm`` is the apparent size of the emitting area (the die as the dome
-    lens shows it), used only for the retinal thermal hazard (its radiance and angular
-    subtense): the tracers emit from a point at the body's apex.
+    Per LED: ``radiant_intensity_w_sr`` (on-axis I₀), ``profile``, ``wavelength_nm`` and
+    ``body_diameter_mm`` are each either one value for every LED or a list of ``count`` values,
+    LED k taking item k (in the order of ``positions_mm``, or of the ring's azimuths); in TOML a
+    list of profiles is an array of tables, ``[[leds.profile]]`` once per LED.
+    ``wavelength_nm`` (default: the scene's) must equal the scene's ``wavelength_nm``, the one
+    wavelength every index, reflectance and safety weight is taken at: an LED of another
+    wavelength is refused, not traced at the wrong one. The ring's fields (``height_mm``,
+    ``distance_mm``, ``pitch_deg``, ``azimuths_deg``, ``ring_centre_mm``, ``ring_axis``) given
+    beside ``positions_mm`` are refused (they would place nothing).
+    Light leaves from the apex of the spherical body (a point source at centre + r·axis, r each
+    LED's own body radius; the body absorbs what comes back to it). ``emitter_diameter_mm`` is
+    the apparent size of the emitting area (the die as the dome lens shows it), used only for
+    the retinal thermal hazard (its radiance and angular subtense): the tracers emit from a
+    point at the body's apex.
     """
 
     part: str = "American Bright BIR-BO07J4Q-1"
@@ -124,7 +125,7 @@ class LedArray(_Model):
     height_mm: NonNegative = 30.0
     distance_mm: Positive = 70.0
     pitch_deg: float = Field(20.0, gt=-90, lt=90)
-    body_diameter_mm: Positive = 5.0
+    body_diameter_mm: Positive | list[Positive] = 5.0
     emitter_diameter_mm: Positive = 1.0
     radiant_intensity_w_sr: Positive | list[Positive] = 0.015
     profile: LedProfile | list[LedProfile] = LedProfile()
@@ -135,7 +136,7 @@ class LedArray(_Model):
     aim_at_mm: Vector3 | None = None
     directions: list[Vector3] | None = None
 
-    @field_validator("radiant_intensity_w_sr", "wavelength_nm", mode="before")
+    @field_validator("radiant_intensity_w_sr", "wavelength_nm", "body_diameter_mm", mode="before")
     @classmethod
     def _numbers_one_by_one(cls, value, info):
         """A list is checked item by item, so a bad item is named by its index."""
@@ -171,7 +172,7 @@ class LedArray(_Model):
 
     @model_validator(mode="after")
     def _per_led_lengths(self) -> LedArray:
-        for name in ("radiant_intensity_w_sr", "profile", "wavelength_nm"):
+        for name in ("radiant_intensity_w_sr", "profile", "wavelength_nm", "body_diameter_mm"):
             v = getattr(self, name)
             if isinstance(v, list) and len(v) != self.count:
                 raise ValueError(
@@ -243,6 +244,11 @@ class LedArray(_Model):
         """On-axis radiant intensity I₀ of every LED (W/sr), ``count`` values."""
         v = self.radiant_intensity_w_sr
         return [float(x) for x in v] if isinstance(v, list) else [float(v)] * self.count
+
+    def body_radii_mm(self) -> list[float]:
+        """The radius of every LED's spherical body (mm), ``count`` values."""
+        v = self.body_diameter_mm
+        return [x / 2 for x in v] if isinstance(v, list) else [v / 2] * self.count
 
     def profiles(self) -> list[LedProfile]:
         """The angular profile of every LED, ``count`` profiles."""
