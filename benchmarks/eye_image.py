@@ -101,13 +101,14 @@ def _compiled(cols: int | None = None, rows: int | None = None, scene: str = SCE
     return compile_scene(eyelume.load_scene(scene, over))
 
 
-def _warm_up(seed: int, scene: str = SCENE) -> float:
-    """A tiny render of each estimator on a 16 × 12 sensor: loads the Numba kernels from the cache
-    (or compiles them) and starts the thread pool. Returns the time it took."""
+def _warm_up(seed: int) -> float:
+    """A tiny render of each estimator on a 16 × 12 sensor of ``paper2005`` (the kernels are the
+    same for every scene): loads the Numba kernels from the cache (or compiles them) and starts
+    the thread pool. Returns the time it took."""
     import eyelume
 
     t0 = time.perf_counter()
-    cs = _compiled(16, 12, scene)
+    cs = _compiled(16, 12)
     eyelume.render(cs, eyelume.RenderOptions(estimator="fast", samples_per_pixel=1, seed=seed))
     eyelume.render(cs, eyelume.RenderOptions(estimator="forward", rays=20_000, seed=seed))
     return time.perf_counter() - t0
@@ -198,7 +199,7 @@ def worker_target(a: argparse.Namespace) -> dict:
     import eyelume
 
     threads = numba.get_num_threads()
-    warm = _warm_up(a.seed, a.scene)
+    warm = _warm_up(a.seed)
     cs = _compiled(a.cols, a.rows, a.scene)
     rounds: list[str] = []
 
