@@ -60,6 +60,11 @@ __all__ = [
     "scene_frame",
     "gaze_rotation",
     "eye_point",
+    "eye_direction",
+    "eye_plane_origin",
+    "as_world",
+    "camera_pose",
+    "led_world_poses",
     "lens_paraxial",
     "lens_indices",
 ]
@@ -101,12 +106,63 @@ def gaze_rotation(eye, share_vertical: float = 1.0, share_horizontal: float = 1.
     return _rot_y(h) @ _rot_x(-v), np.array([0.0, 0.0, -eye.rotation_centre_mm])
 
 
-def eye_point(scene: Scene, point) -> np.ndarray:
-    """A primary-gaze world point of the eye (mm), turned with the gaze about the centre of
-    rotation and moved with the head offset: C + h + R (p − C) (:func:`gaze_rotation`)."""
-    gaze, c0 = gaze_rotation(scene.eye)
-    head = np.asarray(scene.head_offset_mm, dtype=float)
-    return head + c0 + gaze @ (np.asarray(point, dtype=float) - c0)
+_MIRROR_X = np.array([-1.0, 1.0, 1.0])
+
+
+def as_world(scene: Scene, p) -> np.ndarray:
+    """Points or directions (…, 3) as the scene file writes them (a right eye's headset) in
+    the world frame: unchanged for a right eye; a left eye's scene is the mirror image,
+    x → −x (:class:`eyelume.scene.model.EyePose`)."""
+    p = np.asarray(p, dtype=float)
+    return p if scene.eye_pose.which == "right" else p * _MIRROR_X
+
+
+def eye_point(
+    scene: Scene, point, share_vertical: float = 1.0, share_horizontal: float = 1.0
+) -> np.ndarray:
+    """A point of the eye or its face (mm, written relative to the eye's nominal vertex in
+    primary gaze, as the scene file writes it) in the world frame: turned with the gaze about
+    the centre of rotation C, moved by the eye's pose V (:class:`EyePose`: relief, lateral
+    offset) and the head offset h, then mirrored for a left eye (:func:`as_world`):
+    M (V + h + C + R (p − C)) (:func:`gaze_rotation`; ``share_*`` as there)."""
+    gaze, c0 = gaze_rotation(scene.eye, share_vertical, share_horizontal)
+    head = np.asarray(scene.eye_pose.vertex_mm, dtype=float) + np.asarray(
+        scene.head_offset_mm, dtype=float
+    )
+    return as_world(scene, head + c0 + gaze @ (np.asarray(point, dtype=float) - c0))
+
+
+def eye_direction(scene: Scene, v) -> np.ndarray:
+    """A direction of the eye in primary gaze (eye-relative, as written) in the world frame:
+    turned with the gaze and mirrored for a left eye, M R v."""
+    return as_world(scene, gaze_rotation(scene.eye)[0] @ np.asarray(v, dtype=float))
+
+
+def eye_plane_origin(scene: Scene) -> np.ndarray:
+    """The eye-plane receiver's centre in the world frame (mm): the eye's nominal corneal
+    vertex (its pose, no gaze, no slip), M V."""
+    return as_world(scene, scene.eye_pose.vertex_mm)
+
+
+def camera_pose(scene: Scene) -> tuple[np.ndarray, np.ndarray, float]:
+    """The camera's (position mm, viewing direction, roll °) in the world frame: the file's
+    pose (:meth:`eyelume.scene.model.Camera.pose`), mirrored for a left eye (a mirror turns the
+    roll the other way). Raises SceneError when the view has no direction."""
+    try:
+        pos, view = scene.camera.pose(scene.object_distance_mm)
+    except ValueError as exc:
+        raise SceneError(f"camera: {exc}") from None
+    roll = scene.camera.roll_deg
+    if scene.eye_pose.which == "left":
+        roll = -roll
+    return as_world(scene, pos), as_world(scene, view), roll
+
+
+def led_world_poses(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """The LEDs' body centres (N, 3) mm and unit axes (N, 3) in the world frame
+    (:func:`eyelume.scene.sources.led_poses`, mirrored for a left eye)."""
+    centres, axes = led_poses(scene.leds)
+    return as_world(scene, centres), as_world(scene, axes)
 
 
 @dataclass(frozen=True)
@@ -465,12 +521,13 @@ def real_best_focus(lf: np.ndarray) -> tuple[float, float] | None:
 def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame) -> None:
     """LED bodies (world ``centres``) in front of the eye, apart, and clear of the lens."""
     radii = scene.leds.body_radii_mm()
+    plane_z = float(eye_plane_origin(scene)[2])
     for i, c in enumerate(centres):
         rb = radii[i]
-        if c[2] - rb <= 0:
+        if c[2] - rb <= plane_z:
             raise SceneError(
                 f"leds: LED {i} body (centre z = {c[2]:.2f} mm, radius {rb}) crosses the "
-                "eye plane z = 0"
+                f"eye plane z = {plane_z:g}"
             )
         for j in range(i):
             if np.linalg.norm(c - centres[j]) < rb + radii[j]:
@@ -501,10 +558,9 @@ def _check_leds_in_head(
     radii = scene.leds.body_radii_mm() if rb is None else [rb] * len(centres)
     eye = scene.eye
     _, _, z_c = limbus_geometry(eye)
-    head = np.asarray(scene.head_offset_mm, dtype=float)
     eyeball = eye_point(scene, [0.0, 0.0, -z_c])
     vertex = eye_point(scene, np.zeros(3))
-    axis = gaze_rotation(eye)[0] @ np.array([0.0, 0.0, 1.0])
+    axis = eye_direction(scene, [0.0, 0.0, 1.0])
     for i, c in enumerate(centres):
         rb = radii[i]
         d = c - eyeball
@@ -521,8 +577,8 @@ def _check_leds_in_head(
         if not scene.face.enabled:
             continue
         for tis in scene.face.tissues:
-            o = head + np.asarray(tis.center_mm, dtype=float)
-            local = _frame(tis.axis) @ (c - o)
+            o = eye_point(scene, tis.center_mm, share_vertical=0.0, share_horizontal=0.0)
+            local = _frame(as_world(scene, tis.axis)) @ (c - o)
             r = math.hypot(local[0], local[1])
             in_clip = tis.clip_z_mm[0] <= local[2] <= tis.clip_z_mm[1] and (
                 tis.clip_r_mm[0] <= r <= tis.clip_r_mm[1]
@@ -594,7 +650,7 @@ def _check_view(scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGri
     of the entrance pupil and is imaged inside the picture. Raises SceneError."""
     p = frame.point(eye_point(scene, np.zeros(3)))
     ep = first.entrance_pupil_z
-    pos, view = scene.camera.pose(scene.object_distance_mm)
+    pos, view, _ = camera_pose(scene)
     _check_leds_in_head(scene, np.array([pos], dtype=float), rb=0.0, what="camera: the lens")
     where = f"camera at {list(pos)} mm looking along {np.round(view, 3).tolist()}"
     if p[2] >= ep - 1e-9:
@@ -785,14 +841,15 @@ def _add_eye(t: _Table, scene: Scene) -> None:
     for s in eye.surfaces:
         surf_z.append(zprime)
         zprime += s.thickness_mm
-    gaze, centre_rot = gaze_rotation(eye)
+    gaze, _ = gaze_rotation(eye)
     eye_rot = EYE_AXIS_ROT @ gaze.T  # world → eye frame, gaze included
-    head = np.asarray(scene.head_offset_mm, dtype=float)
+    if scene.eye_pose.which == "left":  # mirrored (improper): the eye's shapes are symmetric
+        eye_rot = eye_rot * _MIRROR_X
 
     def on_eye(z_eye: float) -> np.ndarray:
-        """World point of the eye axis at depth z_eye behind the vertex, gaze and head offset
-        included."""
-        return head + centre_rot + gaze @ (np.array([0.0, 0.0, -z_eye]) - centre_rot)
+        """World point of the eye axis at depth z_eye behind the vertex, gaze, pose and head
+        offset included."""
+        return eye_point(scene, np.array([0.0, 0.0, -z_eye]))
 
     refracting = eye.surfaces[:-1]
     for j, s in enumerate(refracting):
@@ -878,14 +935,12 @@ def _add_face(t: _Table, scene: Scene) -> None:
     if not scene.face.enabled:
         return
     eye = scene.eye
-    _, centre_rot = gaze_rotation(eye)
-    head = np.asarray(scene.head_offset_mm, dtype=float)
     for tis in scene.face.tissues:
         rho = scene.face.skin_reflectance if tis.reflectance is None else tis.reflectance
         # a lid takes its share of the eye's vertical rotation, about the same centre
         turn, _ = gaze_rotation(eye, share_vertical=tis.follows_gaze, share_horizontal=0.0)
-        rot = _frame(turn @ np.asarray(tis.axis, dtype=float))
-        o = head + centre_rot + turn @ (np.asarray(tis.center_mm, dtype=float) - centre_rot)
+        rot = _frame(as_world(scene, turn @ np.asarray(tis.axis, dtype=float)))
+        o = eye_point(scene, tis.center_mm, share_vertical=tis.follows_gaze, share_horizontal=0.0)
         zlo, zhi = tis.clip_z_mm
         if tis.shape == "sphere":
             shape, bound = G.SHAPE_SPHERE, (o, tis.radius_mm * 1.000001)
@@ -987,12 +1042,17 @@ def _add_lens_entrance(t: _Table, lf: np.ndarray) -> None:
     )
 
 
-def _grids(scene: Scene) -> tuple[PlaneGrid, PlaneGrid]:
-    """The picture's pixels on the sensor and the eye-plane receiver's bins."""
+def _grids(scene: Scene, frame: Frame) -> tuple[PlaneGrid, PlaneGrid]:
+    """The picture's pixels on the sensor and the eye-plane receiver's bins, the latter in
+    the world plane through the eye's nominal vertex normal to the headset's z axis
+    (:func:`eye_plane_origin`; x̂, ŷ, n̂ = world +x, +y, +z), turned into the camera frame."""
     sn, ep = scene.sensor, scene.eye_plane
+    origin, axes = eye_plane_origin(scene), np.eye(3)
+    if not frame.is_identity or any(origin):
+        origin, axes = frame.point(origin), frame.vector(axes)
     return (
         picture_grid(*sn.field_mm, sn.cols, sn.rows),
-        eye_plane_grid(ep.width_mm, ep.height_mm, ep.cols, ep.rows),
+        eye_plane_grid(ep.width_mm, ep.height_mm, ep.cols, ep.rows, origin, axes),
     )
 
 
@@ -1034,7 +1094,7 @@ def _cornea_image(
     centre), at depth z′ behind that line's vertex C + R û."""
     eye = eye_paraxial(scene)
     cornea = ParaxialSystem(eye.curvatures[:2], eye.gaps[:1], eye.indices[:3])
-    if frame.is_identity:
+    if frame.is_identity and not any(eye_plane_origin(scene)):  # the paper's rig
         distance, centre = pupil_z, None
     else:
         radius = scene.eye.surfaces[0].radius_mm
@@ -1115,7 +1175,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
     first = _first_order(scene, lens, idx, stop)
     _add_eye(t, scene)
     _add_face(t, scene)
-    centres, axes = led_poses(scene.leds)
+    centres, axes = led_world_poses(scene)
     _check_leds(scene, centres, lens.lf, frame)
     _check_leds_in_head(scene, centres)
     _add_led_bodies(t, scene, centres, axes)
@@ -1128,7 +1188,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
     surfaces = SurfaceTable(
         np.ascontiguousarray(np.stack(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))
     )
-    picture, eye_plane = _grids(scene)
+    picture, eye_plane = _grids(scene, frame)
     _check_view(scene, frame, first, picture)
     tables = SceneTables(surfaces, lens, led, picture, eye_plane, int(scene.run.max_events))
     return CompiledScene(
@@ -1149,8 +1209,5 @@ def compile_scene(scene: Scene) -> CompiledScene:
 def scene_frame(scene: Scene) -> Frame:
     """The world → camera-frame transform of ``scene`` (:mod:`eyelume.scene.pose`). Raises
     SceneError when the camera's view has no direction."""
-    try:
-        pos, view = scene.camera.pose(scene.object_distance_mm)
-    except ValueError as exc:
-        raise SceneError(f"camera: {exc}") from None
-    return camera_frame(pos, view, scene.camera.roll_deg, scene.object_distance_mm)
+    pos, view, roll = camera_pose(scene)
+    return camera_frame(pos, view, roll, scene.object_distance_mm)

@@ -6,8 +6,11 @@ import math
 
 from eyelume.compile import (
     CompiledScene,
+    camera_pose,
     compile_scene,
+    eye_direction,
     eye_paraxial,
+    eye_point,
     lens_indices,
     lens_paraxial,
     real_best_focus,
@@ -36,13 +39,13 @@ def camera_info(cs: CompiledScene) -> dict:
     pitch = width / scene.sensor.cols
     pinhole = abs(fo.magnification) * fo.entrance_pupil_z
     r, t = opencv_extrinsics(cs.frame, fo.entrance_pupil_z)
-    pos, view = scene.camera.pose(scene.object_distance_mm)
+    pos, view, roll = camera_pose(scene)  # world: a left eye's mirrored
     ideal = scene.camera.ideal if scene.camera.optics == "ideal" else None
     return {
         "optics": scene.camera.optics,
-        "position_mm": list(pos),
-        "view_direction": list(view),
-        "roll_deg": scene.camera.roll_deg,
+        "position_mm": pos.tolist(),
+        "view_direction": view.tolist(),
+        "roll_deg": roll,
         "object_distance_mm": fo.object_distance,
         "opencv": {
             "K": [
@@ -152,6 +155,11 @@ def _eye_info(scene: Scene) -> dict:
     eye_d = eye_paraxial(scene, LAMBDA_D)
     return {
         "model": scene.eye.model,
+        "which": scene.eye_pose.which,
+        # world mm: the eye's pose with the head offset, gaze turned (a left eye mirrored)
+        "corneal_vertex_mm": eye_point(scene, [0.0, 0.0, 0.0]).tolist(),
+        "rotation_centre_mm": eye_point(scene, [0.0, 0.0, -scene.eye.rotation_centre_mm]).tolist(),
+        "optical_axis": eye_direction(scene, [0.0, 0.0, 1.0]).tolist(),
         "power_d": eye_wl.power * 1000.0,
         "power_d_at_587nm": eye_d.power * 1000.0,
         "indices": dict(

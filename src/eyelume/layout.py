@@ -1,11 +1,12 @@
 """Sections of a compiled scene in the world (headset) frame, as polylines for layout drawings.
 
-Two orthogonal views: ``"yz"``, the section by the plane x = 0 (z across, y up), and ``"xz"``,
-the section by y = 0 (z across, x up). The eye, the face and the LED bodies are cut by the
-plane; the camera — its lens surfaces, stop and sensor, drawn in the camera's meridional plane
-closest to the view — and its field of view (from the entrance pupil to the edges of the imaged
-field) are projected onto it, so a camera anywhere shows where it is and what it sees. LEDs
-show their axes.
+Two orthogonal views: ``"yz"``, the section by the plane x = x₀ (z across, y up), and ``"xz"``,
+the section by y = y₀ (z across, x up), through the eye's nominal corneal vertex (x₀, y₀, z₀)
+(its pose, :class:`eyelume.scene.model.EyePose`; 0 for the paper's rig). The eye, the face and
+the LED bodies are cut by the plane; the camera — its lens surfaces, stop and sensor, drawn in
+the camera's meridional plane closest to the view — and its field of view (from the entrance
+pupil to the edges of the imaged field) are projected onto it, so a camera anywhere shows where
+it is and what it sees. LEDs show their axes.
 
 Reads the compiled surface tables (camera frame, :mod:`eyelume.scene.pose`) and turns them to
 the world frame, so it sits beside :mod:`eyelume.compile`. Curves are cut where a surface's
@@ -19,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eyelume.compile import CompiledScene
+from eyelume.compile import CompiledScene, eye_plane_origin
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
 from eyelume.scene.optics import sag
@@ -183,9 +184,14 @@ def _camera_sections(cs: CompiledScene, cut: int, vertical: int) -> list[Section
 def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -> list[Section]:
     """Every part of the system in one view (module docstring), world mm: the eye and face
     surfaces and LED bodies cut by the view's plane, the LEDs' axes (10 mm), the camera, its
-    field of view, and the eye-plane receiver (world z = 0)."""
+    field of view, and the eye-plane receiver (the world plane z = z₀ through the eye's nominal
+    vertex)."""
     cut, vertical = VIEWS[view]
     sf = world_table(cs)
+    plane_o = eye_plane_origin(cs.scene)  # the eye's nominal vertex: the cut passes through it
+    if plane_o[cut]:
+        sf[:, G.OX + cut] -= plane_o[cut]
+        sf[:, G.BX + cut] -= plane_o[cut]
     out: list[Section] = []
     for s, name in enumerate(cs.surface_names):
         if cs.si[s, G.ACTION] == G.ACT_LENS:
@@ -204,5 +210,12 @@ def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -
         out.append(Section(f"LED {k} axis", "led", line[:, 2], line[:, vertical]))
     out.extend(_camera_sections(cs, cut, vertical))
     half = (cs.eye_plane.height_mm if vertical == 1 else cs.eye_plane.width_mm) / 2
-    out.append(Section("eye plane", "receiver", np.zeros(2), np.array([-half, half])))
+    out.append(
+        Section(
+            "eye plane",
+            "receiver",
+            np.full(2, plane_o[2]),
+            plane_o[vertical] + np.array([-half, half]),
+        )
+    )
     return out

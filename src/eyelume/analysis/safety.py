@@ -30,8 +30,9 @@ import math
 
 import numpy as np
 
+from eyelume.compile import as_world, led_world_poses
 from eyelume.scene.model import Scene
-from eyelume.scene.sources import led_poses, relative_intensity
+from eyelume.scene.sources import relative_intensity
 
 __all__ = [
     "E_IR_LIMIT_W_M2",
@@ -98,7 +99,7 @@ def retinal_thermal_limit(alpha_rad: float) -> float:
 def eye_safety(scene: Scene) -> dict:
     """Corneal IR irradiance and retinal thermal radiance of the scene's LEDs against the
     exempt-group limits (module docstring), JSON-ready. Positions in world mm: the corneal
-    vertex of primary gaze is the origin (moved by ``head_offset_mm``).
+    vertex of primary gaze sits at the eye's pose (``eye_pose``), moved by ``head_offset_mm``.
 
     Every LED counts with its own I₀ₖ and profile fₖ: E_IR = Σₖ I₀ₖ fₖ(αₖ) / dₖ² (LEDs whose
     axis looks away from the vertex, αₖ ≥ 90°, add 0). The retinal hazard is per source (each
@@ -106,9 +107,12 @@ def eye_safety(scene: Scene) -> dict:
     the reported retinal figures are those of the LED with the smallest margin
     (``retinal_worst_led``). ``per_led`` lists each LED's share."""
     leds = scene.leds
-    centres, axes = led_poses(leds)
+    centres, axes = led_world_poses(scene)
     emit = centres + axes * np.asarray(leds.body_radii_mm())[:, None]
-    eye = np.asarray(scene.head_offset_mm, dtype=float)
+    # the corneal vertex of primary gaze: the eye's pose and the head offset (world)
+    eye = as_world(
+        scene, np.add(scene.eye_pose.vertex_mm, np.asarray(scene.head_offset_mm, dtype=float))
+    )
     profiles = leds.profiles()
     shapes = {p: relative_intensity(p) for p in set(profiles)}
     r_m = leds.emitter_diameter_mm / 2 * 1e-3

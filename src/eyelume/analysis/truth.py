@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eyelume.compile import CompiledScene, gaze_rotation
+from eyelume.compile import CompiledScene, eye_direction, eye_point
 from eyelume.detectors.receivers import BinnedPlane
 from eyelume.estimators.camera import aim_chief, into_scene
 from eyelume.kernels import geometry as G
@@ -127,15 +127,12 @@ def _clear(cs: CompiledScene, start: np.ndarray, d: np.ndarray, expect: int) -> 
 @dataclass
 class _View:
     """What every truth query shares: the compiled scene, the camera, the cornea's surface
-    index, and the eye's pose (gaze rotation about ``c0``, head offset, optical axis with a
-    basis ``e1``, ``e2`` across it)."""
+    index, and the eye's optical axis (camera frame) with a basis ``e1``, ``e2`` across it; the
+    eye's pose, gaze and slip come from :func:`eyelume.compile.eye_point`."""
 
     cs: CompiledScene
     cam: CameraTables
     cornea: int
-    rot: np.ndarray
-    c0: np.ndarray
-    head: np.ndarray
     axis: np.ndarray
     e1: np.ndarray
     e2: np.ndarray
@@ -144,7 +141,7 @@ class _View:
     def turned(self, p: np.ndarray) -> np.ndarray:
         """A primary-gaze eye point (world mm), turned with the gaze and moved with the head,
         in the camera frame (where the compiled scene is traced)."""
-        return self.cs.frame.point(self.head + self.c0 + self.rot @ (p - self.c0))
+        return self.cs.frame.point(eye_point(self.cs.scene, p))
 
     def image_of(self, point: np.ndarray):
         """The sensor point (mm) whose chief ray, refracted by the cornea, passes through
@@ -162,16 +159,13 @@ class _View:
 
 def _view(cs: CompiledScene, cam: CameraTables) -> _View:
     eye = cs.scene.eye
-    rot, c0 = gaze_rotation(eye)
-    axis = cs.frame.vector(rot @ np.array([0.0, 0.0, 1.0]))  # the optical axis, out of the eye
+    # the optical axis, out of the eye (gaze, and a left eye's mirror)
+    axis = cs.frame.vector(eye_direction(cs.scene, [0.0, 0.0, 1.0]))
     e1, e2 = _basis(axis)
     return _View(
         cs=cs,
         cam=cam,
         cornea=cs.surface_names.index(eye.surfaces[0].name),
-        rot=rot,
-        c0=c0,
-        head=np.asarray(cs.scene.head_offset_mm, dtype=float),
         axis=axis,
         e1=e1,
         e2=e2,
@@ -297,6 +291,7 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
             "horizontal": eye.gaze_horizontal_deg,
             "vertical": eye.gaze_vertical_deg,
         },
+        "eye": cs.scene.eye_pose.which,
         "optical_axis": cs.frame.world_vector(v.axis).tolist(),
         "pixel_convention": "OpenCV: pixel (column c, row r) centred at (x, y) = (c, r); row 0 "
         "at the top of the upright picture",

@@ -447,6 +447,11 @@ def configuration_irradiance(
     """Eye-plane irradiance (n, rows, cols) in W/mm² of the scene's LEDs at n configurations
     (Y[i], Z[i], θ[i]) given as three equal-length sequences (mm, mm, degrees).
 
+    The plane is the eye plane the tracers bin: through the eye's nominal corneal vertex
+    (``eye_pose``) normal to the headset's z axis, its x, y measured from that vertex; a left
+    eye's LEDs are mirrored (x → −x) as :func:`eyelume.compile.as_world` does. The geometry
+    checks (:func:`geometry_problems`) stay in the ring's own frame (the eye at its centre).
+
     Raises GeometryError (a ValueError) naming the first configuration whose geometry is
     impossible (:func:`geometry_problem`).
     """
@@ -470,6 +475,12 @@ def configuration_irradiance(
                     f"configuration {i} (Y, Z, θ) = ({y[i]}, {z[i]}, {t[i]}): {why}"
                 )
     emit, axes = led_emitters(sc.leds, y, z, t)
+    pose = sc.eye_pose
+    if any(pose.vertex_mm):  # the eye plane is centred on the eye's nominal vertex
+        emit = np.ascontiguousarray(emit - np.asarray(pose.vertex_mm, dtype=float))
+    if pose.which == "left":  # a left eye's scene is the mirror image (x → −x)
+        flip = np.array([-1.0, 1.0, 1.0])
+        emit, axes = np.ascontiguousarray(emit * flip), np.ascontiguousarray(axes * flip)
     xe, ye = plane_edges(sc.eye_plane)
     return bin_irradiance(xe, ye, emit, axes, sc.leds.intensities_w_sr(), sc.leds.profiles(), order)
 

@@ -57,7 +57,7 @@ import numpy as np
 from numba import njit, prange
 
 from eyelume.kernels import geometry as G
-from eyelume.kernels.bins import bin_of, from_grid
+from eyelume.kernels.bins import bin_of, from_grid, plane_point
 from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.jit import per_ray
 from eyelume.kernels.rng import mix64, next_uniform, stream_start
@@ -767,5 +767,6 @@ def _plane_direct(seed, surfaces, leds, g, n_sub, out):
                 state, u1 = next_uniform(state)
                 state, u2 = next_uniform(state)
                 x, y = from_grid(g, col + (a + u1) / n_sub, row + (b + u2) / n_sub)
-                acc += direct_irradiance(surfaces, leds, Facet(x, y, 0.0, 0.0, 0.0, 1.0))
+                px, py, pz = plane_point(g, x, y)
+                acc += direct_irradiance(surfaces, leds, Facet(px, py, pz, g.nx, g.ny, g.nz))
         out[row, col] = acc / (n_sub * n_sub)

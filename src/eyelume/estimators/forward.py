@@ -35,7 +35,7 @@ from eyelume.compile import (
 from eyelume.errors import BudgetError
 from eyelume.estimators.interrupt import interrupt_between_batches
 from eyelume.kernels import geometry as G
-from eyelume.kernels.bins import bin_of
+from eyelume.kernels.bins import bin_of, plane_coordinates
 from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.jit import per_ray
 from eyelume.kernels.rng import next_uniform, stream_start
@@ -117,10 +117,14 @@ def trace_ray(i, seed, scene, counts, path, record):
     interactions = 0
     for _ in range(scene.max_events):
         s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
-        if dz < 0.0 and z > 0.0:  # crosses the eye plane toward the eye before its next hit?
-            t0 = -z / dz
+        ep = scene.eye_plane
+        _, _, h = plane_coordinates(ep, x, y, z)
+        hd = ep.nx * dx + ep.ny * dy + ep.nz * dz
+        if hd < 0.0 and h > 0.0:  # crosses the eye plane toward the eye before its next hit?
+            t0 = -h / hd
             if t0 < t:
-                col, row, inside = bin_of(scene.eye_plane, x + t0 * dx, y + t0 * dy)
+                px, py, _ = plane_coordinates(ep, x + t0 * dx, y + t0 * dy, z + t0 * dz)
+                col, row, inside = bin_of(ep, px, py)
                 if inside:
                     counts.plane[row, col] += 1
         if s < 0:

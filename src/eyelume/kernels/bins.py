@@ -14,6 +14,15 @@ with the orientation signs s_x, s_y = ±1 of the grid:
 * the **eye plane** (:func:`eye_plane_grid`, the paper's receiver at z = 0, Section 4.1.2):
   column 0 at −x, row 0 at +y: s_x = +1, s_y = −1.
 
+A grid also has a **pose**: its plane's origin (``ox, oy, oz``) and unit axes (x̂ = ``ux, uy,
+uz`` along the grid's x, ŷ = ``vx, vy, vz``, the normal n̂ = ``nx, ny, nz``) in the frame the
+kernels trace in (the camera frame, :mod:`eyelume.scene.pose`). The eye plane's is the world's
+plane through the eye's nominal corneal vertex normal to the headset's z axis (n̂ = world +z,
+toward the headset), turned into the camera frame by :mod:`eyelume.compile`, so the receiver is
+the same world plane for a camera anywhere; :func:`plane_coordinates` and :func:`plane_point`
+map between it and the traced frame. The default is the identity (the paper's rig; the picture's
+pose is not used).
+
 These are Numba kernels (the tracers bin with them) and plain functions: ``f.py_func`` works on
 NumPy arrays elementwise, which is how :mod:`eyelume.detectors.receivers` (the Python side used
 by analysis) evaluates the very same expressions. Layer decision: the grid lives at the kernels
@@ -35,11 +44,14 @@ __all__ = [
     "to_grid",
     "from_grid",
     "bin_of",
+    "plane_coordinates",
+    "plane_point",
 ]
 
 
 class PlaneGrid(NamedTuple):
-    """A binned rectangle (see the module docstring): size (mm), bins, orientation signs."""
+    """A binned rectangle (see the module docstring): size (mm), bins, orientation signs, and
+    its plane's pose in the traced frame (origin mm, unit axes x̂, ŷ, n̂; identity by default)."""
 
     width_mm: float
     height_mm: float
@@ -47,6 +59,18 @@ class PlaneGrid(NamedTuple):
     rows: int
     x_sign: float
     y_sign: float
+    ox: float = 0.0
+    oy: float = 0.0
+    oz: float = 0.0
+    ux: float = 1.0
+    uy: float = 0.0
+    uz: float = 0.0
+    vx: float = 0.0
+    vy: float = 1.0
+    vz: float = 0.0
+    nx: float = 0.0
+    ny: float = 0.0
+    nz: float = 1.0
 
 
 def picture_grid(width_mm: float, height_mm: float, cols: int, rows: int) -> PlaneGrid:
@@ -54,9 +78,39 @@ def picture_grid(width_mm: float, height_mm: float, cols: int, rows: int) -> Pla
     return PlaneGrid(float(width_mm), float(height_mm), int(cols), int(rows), -1.0, 1.0)
 
 
-def eye_plane_grid(width_mm: float, height_mm: float, cols: int, rows: int) -> PlaneGrid:
-    """The eye-plane receiver's bins (column 0 at −x, row 0 at +y)."""
-    return PlaneGrid(float(width_mm), float(height_mm), int(cols), int(rows), 1.0, -1.0)
+def eye_plane_grid(
+    width_mm: float, height_mm: float, cols: int, rows: int, origin=None, axes=None
+) -> PlaneGrid:
+    """The eye-plane receiver's bins (column 0 at −x, row 0 at +y), in the plane through
+    ``origin`` (3,) mm with unit ``axes`` (3, 3), rows x̂, ŷ, n̂ (the traced frame; default:
+    the plane z = 0 about the origin)."""
+    pose = ()
+    if origin is not None:
+        a = [[float(c) for c in row] for row in axes]
+        pose = (*(float(c) for c in origin), *a[0], *a[1], *a[2])
+    return PlaneGrid(float(width_mm), float(height_mm), int(cols), int(rows), 1.0, -1.0, *pose)
+
+
+@njit(cache=True, inline="always")
+def plane_coordinates(g, x, y, z):
+    """A point (x, y, z) mm of the traced frame → (x′, y′, h): its coordinates in the grid's
+    plane and its height above the plane along n̂ (exact for the identity pose)."""
+    px, py, pz = x - g.ox, y - g.oy, z - g.oz
+    return (
+        g.ux * px + g.uy * py + g.uz * pz,
+        g.vx * px + g.vy * py + g.vz * pz,
+        g.nx * px + g.ny * py + g.nz * pz,
+    )
+
+
+@njit(cache=True, inline="always")
+def plane_point(g, x, y):
+    """The point (mm, traced frame) of the grid's plane at plane coordinates (x, y)."""
+    return (
+        g.ox + x * g.ux + y * g.vx,
+        g.oy + x * g.uy + y * g.vy,
+        g.oz + x * g.uz + y * g.vz,
+    )
 
 
 @njit(cache=True, inline="always")

@@ -1,10 +1,11 @@
 """The scene: plain validated data describing LEDs, eye, face, imaging lens, sensor and receivers.
 
 No physics happens here. Every length is in millimetres, every angle in degrees, wavelength in
-nanometres, radiant intensity in W/sr (ARCHITECTURE.md §2). The world frame has its origin at the
-anterior corneal vertex of the eye in primary gaze, +z along the camera's optical axis from the eye
-toward the camera and LEDs, +y up; the eye's prescription is written in its own lens-design frame
-(z' into the eye, z' = −z in primary gaze).
+nanometres, radiant intensity in W/sr (ARCHITECTURE.md §2). The world (headset) frame has +z from
+the eye toward the camera and LEDs, +y up, and the anterior corneal vertex of the eye in primary
+gaze at the eye's pose (:class:`EyePose`; the origin by default), as written for a right eye;
+the eye's prescription is written in its own lens-design frame (z' into the eye, z' = −z in
+primary gaze).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ __all__ = [
     "Camera",
     "Eye",
     "EyePlane",
+    "EyePose",
     "EyeSurface",
     "Face",
     "IdealLens",
@@ -383,6 +385,43 @@ class Eye(_Model):
         return self
 
 
+_Offset = Annotated[float, Field(ge=-200.0, le=200.0)]
+
+
+class EyePose(_Model):
+    """Where the eye sits in the headset (the world frame), and which eye it is.
+
+    ``relief_mm``: the eye relief, from the anterior corneal vertex (primary gaze) to the
+    headset's reference plane z = 0 along the headset's z axis: the vertex sits at
+    z = −``relief_mm`` (0, the default: the reference plane touches the cornea, the frame of
+    ``paper2005`` and of every preset written before the eye had a pose).
+    ``lateral_offset_mm``: the vertex's (x, y) in the headset frame (0, 0: on its z axis).
+    The eye, its face and its eye-plane receiver move with this pose; gaze turns the eye about
+    its centre of rotation there, and ``head_offset_mm`` (slip) adds to it for the eye and face
+    (the eye plane stays where the pose puts it).
+
+    ``which``: a scene file is written for a **right** eye, +x toward its nose. ``"left"``
+    mirrors the whole scene as written about the headset's sagittal plane x = 0 (every
+    position, direction, ring, face tissue, offset and the camera's roll: x → −x), which is how
+    a headset's left eye station mirrors its right one; so the same file describes either eye,
+    nasal stays nasal (the presets' "nasal-below" camera), a positive horizontal gaze is toward
+    the nose for both eyes, and everything reported in world coordinates (truth, layout,
+    ``eyelume info``) is in the mirrored, physical headset frame. The schematic eye is
+    rotationally symmetric, so the eye model itself needs no mirroring.
+    """
+
+    which: Literal["right", "left"] = "right"
+    relief_mm: float = Field(0.0, ge=-200.0, le=200.0)
+    lateral_offset_mm: tuple[_Offset, _Offset] = (0.0, 0.0)
+
+    @property
+    def vertex_mm(self) -> Vector3:
+        """The anterior corneal vertex in primary gaze without slip, as the file writes it
+        (before a left eye's mirror): (x, y, −relief) mm."""
+        x, y = self.lateral_offset_mm
+        return (x, y, -self.relief_mm)
+
+
 class Tissue(_Model):
     """A Lambertian face or eyelid structure built from a sphere, cylinder or disk.
 
@@ -624,7 +663,9 @@ class Sensor(_Model):
 
 
 class EyePlane(_Model):
-    """The eye-plane receiver (paper §4.1.2): the plane z = 0 tangent to the corneal vertex.
+    """The eye-plane receiver (paper §4.1.2): the world plane through the eye's nominal
+    corneal vertex (its :class:`EyePose`; not moved by gaze or slip) normal to the headset's z
+    axis, tangent to the cornea in primary gaze; x, y measured from the vertex.
 
     It records the flux crossing it toward the eye (−z) and does not disturb rays.
     """
@@ -662,8 +703,10 @@ class Run(_Model):
 class Scene(_Model):
     """A complete eye illumination and imaging system.
 
-    ``head_offset_mm`` moves the eye and the face together relative to the headset (LEDs, lens,
-    sensor, eye plane): a headset that slips by −d on the head is a head offset of +d.
+    ``eye_pose`` places the eye (and its face and eye plane) in the headset and says which
+    eye it is (:class:`EyePose`). ``head_offset_mm`` moves the eye and the face together
+    relative to the headset (LEDs, lens, sensor, eye plane): a headset that slips by −d on the
+    head is a head offset of +d.
     """
 
     name: str
@@ -672,6 +715,7 @@ class Scene(_Model):
     leds: LedArray = LedArray()
     eye: Eye
     face: Face = Face()
+    eye_pose: EyePose = EyePose()
     head_offset_mm: Vector3 = (0.0, 0.0, 0.0)
     lens: ImagingLens | None = None
     camera: Camera = Camera()

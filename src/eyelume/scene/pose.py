@@ -1,7 +1,9 @@
 """The camera's pose: the rigid transform from the world frame to the camera's frame.
 
-The world frame (ARCHITECTURE.md §2) is the headset's: origin at the anterior corneal vertex of
-the eye in primary gaze, +z out of the eye toward the headset, +y up. The camera is placed in it
+The world frame (ARCHITECTURE.md §2) is the headset's: +z out of the eye toward the headset, +y
+up, the eye's anterior corneal vertex in primary gaze at its pose (the origin by default;
+:class:`eyelume.scene.model.EyePose`; a left eye's camera pose is mirrored first,
+:func:`eyelume.compile.camera_pose`). The camera is placed in it
 by ``[camera]`` (:class:`eyelume.scene.model.Camera`): the position of its lens (the first
 vertex of a prescription), the point it looks at (or a direction) and a roll about its viewing
 axis.

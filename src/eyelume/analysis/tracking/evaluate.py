@@ -99,12 +99,15 @@ def led_picture_azimuths(cs) -> list[float]:
     entrance pupil E, **g**ₖ = **c** + R · unit(unit(Lₖ − **c**) + unit(E − **c**)) (the law of
     reflection for a glint seen from E, in the small-glint limit); each is projected by the
     pinhole camera of :func:`pinhole_camera` and its direction taken from their mean."""
+    from eyelume.compile import eye_point
+
     scene = cs.scene
-    if cs.frame.is_identity and scene.leds.is_paper_ring:
+    paper_eye = scene.eye_pose.which == "right" and not any(scene.eye_pose.vertex_mm)
+    if cs.frame.is_identity and scene.leds.is_paper_ring and paper_eye:
         return list(scene.leds.azimuths())
     cam = pinhole_camera(scene)
     radius = scene.eye.surfaces[0].radius_mm
-    c = cs.frame.point(np.asarray(scene.head_offset_mm, float) + np.array([0.0, 0.0, -radius]))
+    c = cs.frame.point(eye_point(scene, [0.0, 0.0, -radius], 0.0, 0.0))
     e = np.array([0.0, 0.0, cs.first_order.entrance_pupil_z]) - c
     e /= np.linalg.norm(e)
     pts = []
@@ -184,6 +187,10 @@ def analyse_frames(
         if pccr is not None and f.pg_vector is not None:
             f.pccr = tuple(float(x) for x in pccr.predict(np.array([f.pg_vector]))[0])
         f.geometric = _geometric(geometric, f, len(leds_mm))
+        if f.geometric is not None and scene.eye_pose.which == "left":
+            # the model's angles are the world's (h toward +x); a left eye's scene gaze is
+            # anatomical (h toward the nose, world −x): mirror to compare
+            f.geometric = (-f.geometric[0], f.geometric[1])
     mm_per_px = camera.scale_mm  # mm per pixel on the plane in focus
     report = TrackingReport(frames, calibration, mm_per_px)
     report.summary = summarise(report, pccr_calibrated=pccr is not None)

@@ -16,10 +16,11 @@ Two estimators, and the forward model that makes their test data:
 - :func:`simulate_eye_features` — the exact pupil and glint picture positions of that same eye
   model rotated to a given gaze (the test truth).
 
-Frames and units (ARCHITECTURE.md §2): world frame in mm, origin at the anterior corneal vertex in
-primary gaze, +z from the eye toward the camera, +y up, +x toward the nose. Picture positions
-are (col, row) in pixels, continuous, pixel centres at integers, row 0 at the top of the upright
-picture. Gaze angles are in degrees:
+Frames and units (ARCHITECTURE.md §2): world frame in mm, the headset's (the anterior corneal vertex
+in primary gaze at the eye's pose, the origin by default), +z from the eye toward the camera, +y
+up, +x toward the nose of a right eye (a left eye's scene is mirrored: there +x is temporal).
+Picture positions are (col, row) in pixels, continuous, pixel centres at integers, row 0 at the
+top of the upright picture. Gaze angles are in degrees:
 
     horizontal h = atan2(ω_x, ω_z),   vertical v = atan2(ω_y, hypot(ω_x, ω_z)),
 
