@@ -4,9 +4,9 @@ The compiled scene holds, at the scene's wavelength, the named tables of
 :mod:`eyelume.kernels.tables`, each built once here by one function per scene part:
 
 * ``surfaces`` (:class:`SurfaceTable` ``sf``, ``si``): the non-sequential surfaces (eye, iris,
-  sclera, retina, face tissues, LED bodies and the imaging lens's entrance), columns in
-  :mod:`eyelume.kernels.geometry` — :func:`_add_eye`, :func:`_add_face`, :func:`_add_led_bodies`,
-  :func:`_add_lens_entrance`;
+  sclera, retina, face tissues, LED bodies, the imaging lens's entrance and the camera's body),
+  columns in :mod:`eyelume.kernels.geometry` — :func:`_add_eye`, :func:`_add_face`,
+  :func:`_add_led_bodies`, :func:`_add_lens_entrance`, :func:`_add_camera_body`;
 * ``lens`` (:class:`LensTable`): the sequential lens table, columns in
   :mod:`eyelume.kernels.sequential` — :func:`_compile_lens`;
 * ``led`` (:class:`LedTable`): the LED emission points, axes, and each LED's I₀ and
@@ -1042,6 +1042,57 @@ def _add_lens_entrance(t: _Table, lf: np.ndarray) -> None:
     )
 
 
+def _add_camera_body(t: _Table, scene: Scene, lf: np.ndarray) -> None:
+    """The camera's body (:class:`eyelume.scene.model.CameraBody`), camera frame: an absorbing
+    annulus in the plane of the lens's first vertex from its clear aperture to the body's
+    radius, a cylinder to ``length_mm`` behind it and a back disk (the ledger's "camera
+    body"). Raises SceneError for a body narrower than the lens's clear aperture."""
+    body = scene.camera.body_used
+    if body is None:
+        return
+    z0, sd, rb = float(lf[0, Q.L_Z]), float(lf[0, Q.L_SD]), body.diameter_mm / 2
+    if rb <= sd:
+        raise SceneError(
+            f"camera.body.diameter_mm = {body.diameter_mm} must exceed the lens's clear "
+            f"aperture ({2 * sd:.3g} mm across)"
+        )
+    back = z0 + body.length_mm
+    rot = np.eye(3)
+    common = {"tally_a": "camera body", "tally_b": "camera body", "world": False}
+    front_o, back_o = np.array([0.0, 0.0, z0]), np.array([0.0, 0.0, back])
+    t.add("camera body (front)", G.SHAPE_CONIC, front_o, rot, (front_o, rb * 1.000001),
+          clip_r=(sd, rb), **common)  # fmt: skip
+    mid = np.array([0.0, 0.0, (z0 + back) / 2])
+    t.add("camera body (side)", G.SHAPE_CYLINDER, front_o, rot,
+          (mid, math.hypot(rb, body.length_mm / 2) * 1.000001), radius=rb,
+          clip_z=(0.0, body.length_mm), **common)  # fmt: skip
+    t.add("camera body (back)", G.SHAPE_CONIC, back_o, rot, (back_o, rb * 1.000001),
+          clip_r=(0.0, rb), **common)  # fmt: skip
+
+
+def _check_leds_outside_camera_body(
+    scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame
+) -> None:
+    """No LED body (a sphere about its world centre) reaches into the camera's body (a solid
+    cylinder, :func:`_add_camera_body`): the distance from its centre to the solid must be at
+    least its radius. Raises SceneError naming the LED and the body."""
+    body = scene.camera.body_used
+    if body is None:
+        return
+    rb, rc = scene.leds.body_diameter_mm / 2, body.diameter_mm / 2
+    z0 = float(lf[0, Q.L_Z])
+    for i, c in enumerate(centres):
+        p = frame.point(c)
+        dz = max(0.0, z0 - p[2], p[2] - (z0 + body.length_mm))
+        dr = max(0.0, math.hypot(p[0], p[1]) - rc)
+        if math.hypot(dz, dr) < rb:
+            raise SceneError(
+                f"leds: LED {i} body (world centre {np.round(c, 2).tolist()} mm, radius {rb}) "
+                f"is inside the camera body (camera.body: {body.diameter_mm} mm across, "
+                f"{body.length_mm} mm deep behind the lens)"
+            )
+
+
 def _grids(scene: Scene, frame: Frame) -> tuple[PlaneGrid, PlaneGrid]:
     """The picture's pixels on the sensor and the eye-plane receiver's bins, the latter in
     the world plane through the eye's nominal vertex normal to the headset's z axis
@@ -1165,7 +1216,7 @@ def _camera_tables(
 def compile_scene(scene: Scene) -> CompiledScene:
     """Turn a validated scene into the tables the kernels read, one scene part at a time.
     Raises SceneError on geometry that cannot exist (crossing lens surfaces, LEDs inside the
-    lens, a missing glass)."""
+    lens, the eye, the face or the camera body, a missing glass)."""
     frame = scene_frame(scene)
     t = _Table(frame)
     if scene.camera.optics == "ideal":
@@ -1178,6 +1229,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
     centres, axes = led_world_poses(scene)
     _check_leds(scene, centres, lens.lf, frame)
     _check_leds_in_head(scene, centres)
+    _check_leds_outside_camera_body(scene, centres, lens.lf, frame)
     _add_led_bodies(t, scene, centres, axes)
     world = centres, axes
     if not frame.is_identity:
@@ -1185,6 +1237,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
     led, omega = _led_table(scene, centres, axes)
     _check_leds_light_the_eye(scene, *world, led)
     _add_lens_entrance(t, lens.lf)
+    _add_camera_body(t, scene, lens.lf)
     surfaces = SurfaceTable(
         np.ascontiguousarray(np.stack(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))
     )

@@ -45,7 +45,7 @@ class Section:
 def _category(name: str, action: int) -> str:
     if name.startswith("LED"):
         return "led"
-    if action == G.ACT_LENS:
+    if action == G.ACT_LENS or name.startswith("camera body"):
         return "lens"
     if action == G.ACT_REFRACT or name in ("iris", "iris root", "retina", "sclera"):
         return "eye"

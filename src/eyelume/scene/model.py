@@ -26,6 +26,7 @@ from pydantic import (
 
 __all__ = [
     "Camera",
+    "CameraBody",
     "Eye",
     "EyePlane",
     "EyePose",
@@ -554,6 +555,24 @@ class IdealLens(_Model):
         return self.efl_mm / (2.0 * self.f_number)
 
 
+class CameraBody(_Model):
+    """The camera's body: a closed, absorbing cylinder coaxial with the lens, its front face in
+    the plane of the lens's first vertex (an ideal lens: the lens, its entrance pupil) with the
+    lens's clear aperture as its only opening, reaching ``length_mm`` behind it (away from the
+    scene). It shadows light in both estimators (the ledger's "camera body") and no LED may
+    sit inside it.
+
+    ``enabled``: unset, an ideal (module) lens has its body and a prescription lens none (the
+    paper's rig models the lens mount only); ``true`` or ``false`` decides. Default size: 6 mm
+    across, 5 mm deep — ASSUMPTION: an OV6211/OV7251-class board camera with an M6-or-smaller
+    lens barrel (such modules are 5–8 mm); replace with your module's.
+    """
+
+    enabled: bool | None = None
+    diameter_mm: float = Field(6.0, gt=0.0, le=1000.0)
+    length_mm: float = Field(5.0, gt=0.0, le=1000.0)
+
+
 class Camera(_Model):
     """The camera's optics and where it is and looks, in the world (headset) frame (mm, °).
 
@@ -567,7 +586,8 @@ class Camera(_Model):
     about its viewing axis (right-handed about the axis from the scene to the camera: a positive
     roll turns the camera's right axis toward its up axis). The transform and its conventions are in
     :mod:`eyelume.scene.pose`: everything is traced in the camera's frame, whose z axis is the
-    lens axis.
+    lens axis. ``body``: the camera's body behind the lens (:class:`CameraBody`; an ideal lens
+    has a default one).
     """
 
     optics: Literal["prescription", "ideal"] = "prescription"
@@ -576,6 +596,16 @@ class Camera(_Model):
     look_at_mm: Vector3 | None = None
     direction: Vector3 | None = None
     roll_deg: float = Field(0.0, ge=-180.0, le=180.0)
+    body: CameraBody = CameraBody()
+
+    @property
+    def body_used(self) -> CameraBody | None:
+        """The camera's body, or None: ``body.enabled``, unset, is true for an ideal lens and
+        false for a prescription (:class:`CameraBody`)."""
+        enabled = self.body.enabled
+        if enabled is None:
+            enabled = self.optics == "ideal"
+        return self.body if enabled else None
 
     @model_validator(mode="after")
     def _one_view(self) -> Camera:
