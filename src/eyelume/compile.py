@@ -50,8 +50,9 @@ from eyelume.scene.focus import check_focus
 from eyelume.scene.glass import Glass, load_catalog
 from eyelume.scene.model import LedProfile, Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
-from eyelume.scene.pose import Frame, camera_frame
-from eyelume.scene.sources import cos_power_exponent, led_poses, relative_intensity
+from eyelume.scene.pose import MIRROR_X as _MIRROR_X
+from eyelume.scene.pose import Frame, as_world, camera_frame, led_world_poses
+from eyelume.scene.sources import cos_power_exponent, relative_intensity
 
 __all__ = [
     "CompiledScene",
@@ -106,17 +107,6 @@ def gaze_rotation(eye, share_vertical: float = 1.0, share_horizontal: float = 1.
     return _rot_y(h) @ _rot_x(-v), np.array([0.0, 0.0, -eye.rotation_centre_mm])
 
 
-_MIRROR_X = np.array([-1.0, 1.0, 1.0])
-
-
-def as_world(scene: Scene, p) -> np.ndarray:
-    """Points or directions (…, 3) as the scene file writes them (a right eye's headset) in
-    the world frame: unchanged for a right eye; a left eye's scene is the mirror image,
-    x → −x (:class:`eyelume.scene.model.EyePose`)."""
-    p = np.asarray(p, dtype=float)
-    return p if scene.eye_pose.which == "right" else p * _MIRROR_X
-
-
 def eye_point(
     scene: Scene, point, share_vertical: float = 1.0, share_horizontal: float = 1.0
 ) -> np.ndarray:
@@ -156,13 +146,6 @@ def camera_pose(scene: Scene) -> tuple[np.ndarray, np.ndarray, float]:
     if scene.eye_pose.which == "left":
         roll = -roll
     return as_world(scene, pos), as_world(scene, view), roll
-
-
-def led_world_poses(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """The LEDs' body centres (N, 3) mm and unit axes (N, 3) in the world frame
-    (:func:`eyelume.scene.sources.led_poses`, mirrored for a left eye)."""
-    centres, axes = led_poses(scene.leds)
-    return as_world(scene, centres), as_world(scene, axes)
 
 
 @dataclass(frozen=True)

@@ -30,8 +30,8 @@ import math
 
 import numpy as np
 
-from eyelume.compile import as_world, led_world_poses
 from eyelume.scene.model import Scene
+from eyelume.scene.pose import as_world, led_world_poses
 from eyelume.scene.sources import relative_intensity
 
 __all__ = [

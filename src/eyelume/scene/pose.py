@@ -1,5 +1,8 @@
 """The camera's pose: the rigid transform from the world frame to the camera's frame.
 
+A left eye's scene is the mirror image of the file (x → −x, :func:`as_world`,
+:func:`led_world_poses`; :class:`eyelume.scene.model.EyePose`).
+
 The world frame (ARCHITECTURE.md §2) is the headset's: +z out of the eye toward the headset, +y
 up, the eye's anterior corneal vertex in primary gaze at its pose (the origin by default;
 :class:`eyelume.scene.model.EyePose`; a left eye's camera pose is mirrored first,
@@ -39,8 +42,28 @@ from typing import NamedTuple
 import numpy as np
 
 from eyelume.errors import GeometryError
+from eyelume.scene.sources import led_poses
 
-__all__ = ["Frame", "camera_frame", "opencv_extrinsics"]
+__all__ = ["MIRROR_X", "Frame", "as_world", "camera_frame", "led_world_poses", "opencv_extrinsics"]
+
+#: A left eye's mirror about the headset's sagittal plane: x → −x (elementwise factors).
+MIRROR_X = np.array([-1.0, 1.0, 1.0])
+
+
+def as_world(scene, p) -> np.ndarray:
+    """Points or directions (…, 3) as the scene file writes them (a right eye's headset) in
+    the world frame: unchanged for a right eye; a left eye's scene is the mirror image,
+    x → −x (:class:`eyelume.scene.model.EyePose`)."""
+    p = np.asarray(p, dtype=float)
+    return p if scene.eye_pose.which == "right" else p * MIRROR_X
+
+
+def led_world_poses(scene) -> tuple[np.ndarray, np.ndarray]:
+    """The LEDs' body centres (N, 3) mm and unit axes (N, 3) in the world frame
+    (:func:`eyelume.scene.sources.led_poses`, mirrored for a left eye)."""
+    centres, axes = led_poses(scene.leds)
+    return as_world(scene, centres), as_world(scene, axes)
+
 
 _PARALLEL = 1e-9  # |d̂ × ŷ| below this: the view is along ±y
 
