@@ -163,3 +163,35 @@ def test_an_led_behind_the_moved_eye_plane_is_refused():
     bad = apply_overrides(ok, {"leds.distance_mm": 0.5, "leds.ring_centre_mm": [0, 0, -16.0]})
     with pytest.raises(SceneError, match="crosses the eye plane z = -16"):
         compile_scene(bad)
+
+
+def test_a_camera_that_sees_no_eye_follows_the_pose():
+    """The camera is fixed in the headset; the eye moved 40 mm sideways leaves its view."""
+    scene = apply_overrides(load_scene("vr-offaxis"), {"eye_pose.lateral_offset_mm": [-40.0, 0.0]})
+    with pytest.raises(SceneError) as err:
+        compile_scene(scene)
+    assert "sees no eye" in str(err.value) and "\n" not in str(err.value)
+
+
+def test_layout_and_info_follow_the_pose():
+    """The layout's eye plane and cornea sit at the posed vertex; ``eyelume info`` reports it
+    (mirrored for a left eye)."""
+    from eyelume.info import scene_info
+    from eyelume.layout import system_sections
+
+    pose = {"eye_pose.lateral_offset_mm": [1.0, 2.0], "eye_pose.relief_mm": 3.0}
+    scene = apply_overrides(load_scene("vr-offaxis"), pose)
+    cs = compile_scene(scene)
+    sections = {s.name: s for s in system_sections(cs, view="yz")}
+    np.testing.assert_allclose(sections["eye plane"].z, [-3.0, -3.0])
+    np.testing.assert_allclose(np.mean(sections["eye plane"].y), 2.0)
+    cornea = sections["anterior cornea"]
+    apex = np.argmax(cornea.z)
+    assert cornea.z[apex] == pytest.approx(-3.0, abs=1e-3)
+    assert cornea.y[apex] == pytest.approx(2.0, abs=0.05)
+    eye = scene_info(scene)["eye"]
+    np.testing.assert_allclose(eye["corneal_vertex_mm"], [1.0, 2.0, -3.0], atol=1e-12)
+    left = scene_info(apply_overrides(scene, {"eye_pose.which": "left"}))
+    np.testing.assert_allclose(left["eye"]["corneal_vertex_mm"], [-1.0, 2.0, -3.0], atol=1e-12)
+    cam_r, cam_l = scene_info(scene)["camera"], left["camera"]
+    np.testing.assert_allclose(cam_l["position_mm"], np.multiply(cam_r["position_mm"], [-1, 1, 1]))
