@@ -59,7 +59,8 @@ class RenderResult:
         Forward only: where the emitted power ended (W), summing to ``emitted_w``.
     picture_extent_mm, plane_extent_mm : (left, right, bottom, top)
         Millimetre coordinates of the picture (the sensor plane turned by 180°, so x_picture =
-        −x_sensor and y_picture = −y_sensor) and of the eye plane (world x, y).
+        −x_sensor and y_picture = −y_sensor) and of the eye plane (world x, y measured from
+        the eye's nominal corneal vertex, :class:`eyelume.scene.model.EyePose`).
     """
 
     scene: Scene
