@@ -1062,9 +1062,10 @@ def _check_leds_outside_camera_body(
     body = scene.camera.body_used
     if body is None:
         return
-    rb, rc = scene.leds.body_diameter_mm / 2, body.diameter_mm / 2
+    radii, rc = scene.leds.body_radii_mm(), body.diameter_mm / 2
     z0 = float(lf[0, Q.L_Z])
     for i, c in enumerate(centres):
+        rb = radii[i]
         p = frame.point(c)
         dz = max(0.0, z0 - p[2], p[2] - (z0 + body.length_mm))
         dr = max(0.0, math.hypot(p[0], p[1]) - rc)
