@@ -171,3 +171,14 @@ def test_automatic_apertures_cover_a_sensor_larger_than_the_eye_plane():
             ep.entrance_pupil_radius / stop_sd, ep.entrance_pupil_z,
         )  # fmt: skip
         assert found == 72, (x0, y0, found)
+
+
+@pytest.mark.parametrize(
+    "overrides", [{"camera.direction": [0.0, 0.0, 1.0]}, {"camera.look_at_mm": [0.0, 0.0, 500.0]}]
+)
+def test_the_paper_lens_turned_away_from_the_eye_is_refused(overrides):
+    """The paper's Double Gauss turned to look away (its entrance pupil lies 105 mm behind its
+    first vertex, so the eye 70 mm behind the lens was still 'in front of' the pupil): one line,
+    not a black picture (a fresh-user finding)."""
+    with pytest.raises(SceneError, match="camera: sees no eye: the corneal vertex is behind"):
+        compile_scene(load_scene("paper2005", overrides))

@@ -636,7 +636,9 @@ def _check_view(scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGri
     pos, view, _ = camera_pose(scene)
     _check_leds_in_head(scene, np.array([pos], dtype=float), rb=0.0, what="camera: the lens")
     where = f"camera at {list(pos)} mm looking along {np.round(view, 3).tolist()}"
-    if p[2] >= ep - 1e-9:
+    # behind the lens's first vertex (camera-frame z = L) or its entrance pupil (which for a
+    # long lens can lie far behind the first vertex)
+    if p[2] >= min(ep, scene.object_distance_mm) - 1e-9:
         raise SceneError(f"camera: sees no eye: the corneal vertex is behind the {where}")
     # where the vertex's line to the entrance pupil meets the plane in focus, in picture units
     xy = p[:2] * ep / (ep - p[2])
