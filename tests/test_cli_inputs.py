@@ -65,3 +65,11 @@ def test_help_still_exits_0():
         res = runner.invoke(app, args)
         assert res.exit_code == 0, res.output
         assert "Usage:" in res.stdout
+
+
+def test_no_command_prints_the_help_and_no_empty_error_line():
+    """``eyelume`` alone prints the help (exit 2, a usage error) and no empty 'error:' line."""
+    res = runner.invoke(app, [], prog_name="eyelume")
+    assert res.exit_code == 2
+    assert "Usage:" in res.output
+    assert "error:" not in res.output

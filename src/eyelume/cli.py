@@ -69,6 +69,8 @@ class _OneLineErrors(TyperGroup):
         try:
             rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except _UsageError as exc:
+            if not exc.format_message():  # no command given: the help is already printed
+                sys.exit(exc.exit_code)
             where = exc.ctx.command_path if getattr(exc, "ctx", None) is not None else "eyelume"
             err.print(
                 f"[bold red]error:[/] {escape(where)}: {escape(exc.format_message())} "
