@@ -77,6 +77,8 @@ def test_a_table_ending_near_zero_or_at_90_is_accepted(tmp_path):
         (b"angle,rel\n0,1\n45\n", "row 3"),
         (b"\x00\x01\x02\xff" * 10, "led.csv"),
         (b"0,1e-320\n45,1e300\n90,0\n", "overflow"),
+        (b"0,1\n10,1e308\n20,0.5\n90,0\n", "at 10 deg is 1e+308 times the on-axis value"),
+        (b"0,1\n10,150\n90,0\n", "not a plausible LED profile"),
     ],
 )
 def test_bad_tables_name_the_file(tmp_path, content, fragment):

@@ -42,6 +42,10 @@ _FIELD = "leds.profile.table_csv"
 #: value: beyond its last row the LED is taken to emit nothing, which then misses at most
 #: about this share of the power per steradian at those angles.
 TABLE_END_FRACTION = 0.01
+#: Largest relative intensity I(α)/I(0) a profile table may reach: off-axis peaks of real LEDs
+#: (batwing and side-emitting packages) are a few times the on-axis value; far more is a typo
+#: or a unit mix-up (and 1e308 overflowed the power integral).
+MAX_PROFILE_PEAK = 100.0
 
 
 def read_profile_table(path: str) -> tuple[np.ndarray, np.ndarray]:
@@ -86,14 +90,24 @@ def read_profile_table(path: str) -> tuple[np.ndarray, np.ndarray]:
         )
     if v[0] <= 0:
         raise InputFileError(
-            f"the on-axis (0 deg) intensity is {v[0]!r}, must be > 0", file=where, field=_FIELD
+            f"the on-axis (0 deg) intensity is {float(v[0])!r}, must be > 0",
+            file=where,
+            field=_FIELD,
         )
     with np.errstate(over="ignore"):
         rel = v / v[0]
     if not np.all(np.isfinite(rel)):
         raise InputFileError(
-            f"the intensities relative to the on-axis value {v[0]!r} overflow (up to "
-            f"{v.max()!r}): not a usable profile",
+            f"the intensities relative to the on-axis value {float(v[0])!r} overflow (up to "
+            f"{float(v.max())!r}): not a usable profile",
+            file=where,
+            field=_FIELD,
+        )
+    if rel.max() > MAX_PROFILE_PEAK:
+        k = int(np.argmax(rel))
+        raise InputFileError(
+            f"the intensity at {a[k]:g} deg is {rel[k]:.3g} times the on-axis value (more than "
+            f"{MAX_PROFILE_PEAK:g}): not a plausible LED profile",
             file=where,
             field=_FIELD,
         )
