@@ -55,6 +55,11 @@ def test_overrides_are_typed_and_leave_the_original_alone():
         ({"run.rays": "0"}, ["run.rays", "0"]),
         ({"leds.azimuths_deg": "[0.0]"}, ["azimuths_deg", "count"]),
         ({"eye.iris_outer_diameter_mm": "13"}, ["iris_outer_diameter_mm", "13"]),
+        # absurd magnitudes (they overflowed squares into raw NumPy warnings and NaN variances)
+        ({"leds.height_mm": "1e300"}, ["field 'leds.height_mm' = 1e+300", "1000000"]),
+        ({"leds.radiant_intensity_w_sr": "1e300"}, ["field 'leds.radiant_intensity_w_sr' ="]),
+        ({"eye_plane.height_mm": "1e300"}, ["field 'eye_plane.height_mm' = 1e+300"]),
+        ({"head_offset_mm": "[0, 0, 1e300]"}, ["field 'head_offset_mm.2' = 1e+300"]),
     ],
 )
 def test_errors_name_the_field_and_value(overrides, words):

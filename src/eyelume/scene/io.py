@@ -72,7 +72,15 @@ def _resolved(base: Path, name: str, field: str) -> str:
 
 
 def _format_loc(loc: tuple[Any, ...]) -> str:
-    return ".".join(str(p) for p in loc if not (isinstance(p, str) and p.startswith("function-")))
+    """A pydantic error location as a dotted scene path, without pydantic's own tags (validator
+    functions, and the member of a union such as ``float | list[float]`` that was tried)."""
+    return ".".join(str(p) for p in loc if not _is_tag(p))
+
+
+def _is_tag(part: Any) -> bool:
+    return isinstance(part, str) and (
+        part.startswith("function-") or part.startswith("constrained-") or part.startswith("list[")
+    )
 
 
 def _lookup(data: Any, loc: tuple[Any, ...]) -> Any:

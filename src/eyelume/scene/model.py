@@ -53,10 +53,15 @@ def _not_nan(value: float) -> float:
 
 #: A radius of curvature: finite and non-zero, or ±inf for a plane.
 Radius = Annotated[float, Field(allow_inf_nan=True), AfterValidator(_not_nan)]
-Positive = Annotated[float, Field(gt=0)]
-NonNegative = Annotated[float, Field(ge=0)]
+#: Largest magnitude of a scene quantity (mm, W/sr, ...): nothing in a head-mounted eye tracker
+#: comes near 10⁶ of its unit; larger is a typo, and 1e300 overflowed squares in the geometry and
+#: the statistics (raw NumPy warnings, a NaN variance) instead of a one-line refusal.
+MAX_MAGNITUDE = 1e6
+Positive = Annotated[float, Field(gt=0, le=MAX_MAGNITUDE)]
+NonNegative = Annotated[float, Field(ge=0, le=MAX_MAGNITUDE)]
 Fraction = Annotated[float, Field(ge=0, le=1)]
-Vector3 = tuple[float, float, float]
+_Coordinate = Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
+Vector3 = tuple[_Coordinate, _Coordinate, _Coordinate]
 
 
 class _Model(BaseModel):
