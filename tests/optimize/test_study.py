@@ -86,6 +86,9 @@ def test_latin_hypercube_covers_each_stratum(tmp_path):
          ["exactly one"]),
         (lambda t: t.replace('metrics = ["eye_plane_merit", "safety"]', 'metrics = ["magic"]'),
          ["metrics"]),
+        # 10⁸ runs: refused at once (it used to build the list of runs silently for minutes)
+        (lambda t: t.replace("grid = [20.0, 40.0, 3]", "grid = [20.0, 40.0, 100000000]"),
+         ["field 'vary'", "200,000,000 runs", "more than 100,000"]),
     ],
 )  # fmt: skip
 def test_bad_study_files_name_the_problem(tmp_path, edit, words):

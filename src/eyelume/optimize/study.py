@@ -138,11 +138,40 @@ def load_study(path: str | Path) -> Study:
     return study
 
 
+#: Most runs a study may plan: at seconds to minutes a run, 10⁵ runs is already days of work;
+#: more is a typo (a grid count of 10⁸ ran silently for minutes building its list of runs).
+MAX_RUNS = 100_000
+
+
+def run_count(study: Study) -> int:
+    """How many runs :func:`plan_runs` makes, without making them: the product of the grid,
+    values and random axes' sizes, times the Latin-hypercube draws (their largest ``samples``)
+    when there are any."""
+    n = 1
+    latin = [v.samples for v in study.vary if v.latin is not None]
+    for v in study.vary:
+        if v.grid is not None:
+            n *= int(v.grid[2])
+        elif v.values is not None:
+            n *= len(v.values)
+        elif v.random is not None:
+            n *= v.samples
+    return n * max(latin) if latin else n
+
+
 def _check_runs(study: Study, base: Scene, path: Path) -> None:
     """Every value a study would run, checked before anything is written: each varied value
     alone (the error names ``vary[i].<kind>`` and the value), then every planned run's
     overrides together (a scene the values make only in combination). SceneError naming the
-    study file."""
+    study file, also for a study of more than :data:`MAX_RUNS` runs."""
+    count = run_count(study)
+    if count > MAX_RUNS:
+        raise SceneError(
+            f"{count:,} runs (the product of the varied parameters' sizes): more than "
+            f"{MAX_RUNS:,}; vary fewer values",
+            file=f"study {path}",
+            field="vary",
+        )
     runs = plan_runs(study)
     for i, v in enumerate(study.vary):
         kind = next(k for k in ("grid", "values", "random", "latin") if getattr(v, k) is not None)
