@@ -1032,6 +1032,10 @@ def study(
     if not 0 <= lock_timeout <= 86400:
         _fail(f"--lock-timeout {lock_timeout}: must be 0 to 86400 s")
     _check_out(out)
+    if (Path(out) / "results.sqlite").exists():
+        from eyelume.optimize.store import read_rows
+
+        read_rows(out)  # a damaged store is one line before the banner, not after it
     total = len(plan_runs(st))
     err.print(f"study {st.name}: {total} runs into {out} (Ctrl-C, then --resume, loses nothing)")
     with _progress_bar("[bold]runs", "{task.completed}/{task.total}") as bar:

@@ -235,6 +235,8 @@ def test_a_damaged_store_is_one_line_and_exit_2(tmp_path, damage):
         assert "Traceback" not in res.output
         lines = [ln for ln in res.stderr.splitlines() if ln.startswith("error:")]
         assert len(lines) == 1 and "results.sqlite" in lines[0], res.stderr
+        # the one line only: no study banner before it
+        assert [ln for ln in res.stderr.splitlines() if ln.strip()] == lines, res.stderr
     with pytest.raises(StoreError):
         read_rows(out)
 
