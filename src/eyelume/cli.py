@@ -1101,6 +1101,9 @@ def report(
         if out.is_dir():
             _fail(f"--out {out}: is a folder; give the page's file name, e.g. {out}/report.html")
         _check_out(out.parent)
+    if scene is not None and folder.is_dir():
+        # --scene stores the best run in FOLDER: a read-only folder is refused before the work
+        _check_out(folder, option="--scene stores the best run in")
     try:
         if scene is not None:
             from eyelume.optimize.best_run import save_best_run

@@ -266,10 +266,15 @@ def test_report_of_a_really_read_only_folder(tmp_path):
     env = {**os.environ}
     script = (f"mount --bind -o ro {out} {out} && {sys.executable} -c 'from eyelume.cli import "
               f"app; app()' report {out} --out {page}; echo rc=$?; {sys.executable} -c 'from "
-              f"eyelume.cli import app; app()' report {out}; echo rc=$?")  # fmt: skip
+              f"eyelume.cli import app; app()' report {out}; echo rc=$?; {sys.executable} -c "
+              f"'from eyelume.cli import app; app()' report {out} --scene paper2005 --out {page}; "
+              f"echo rc=$?")  # fmt: skip
     res = subprocess.run(["unshare", "-rm", "sh", "-c", script], capture_output=True, text=True,
                          timeout=300, env=env)  # fmt: skip
     assert "rc=0" in res.stdout.splitlines()[0], res.stderr
     assert "rc=2" in res.stdout.splitlines()[1], res.stderr
     assert "3 runs committed" in page.read_text(encoding="utf-8")
     assert "--out" in res.stderr and "Traceback" not in res.stderr
+    # --scene would store the best run in the read-only folder: refused before evaluating it
+    assert "rc=2" in res.stdout.splitlines()[2], res.stderr
+    assert "--scene stores the best run in" in res.stderr and "evaluating" not in res.stderr
