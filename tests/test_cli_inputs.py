@@ -73,3 +73,33 @@ def test_no_command_prints_the_help_and_no_empty_error_line():
     assert res.exit_code == 2
     assert "Usage:" in res.output
     assert "error:" not in res.output
+
+
+def test_a_glass_used_outside_its_catalog_range_warns_once(tmp_path):
+    """A glass whose catalog's LD range stops short of the scene's wavelength: its index is an
+    extrapolation of its formula; one warning naming the first surface, the glass and the range
+    (surfaces 3 and 6 are both made of it), and the command goes on (a fresh-user finding: only
+    the JSON's wavelength_in_catalog_range said so)."""
+    cat = tmp_path / "mine.agf"
+    cat.write_text(
+        "NM MYF5 2 603380.347 1.60342 38.03 0 0 0\n"
+        "CD 1.3104463 0.00958633048 0.19603426 0.0457627627 0.96612977 115.011883 0 0 0 0\n"
+        "LD 0.3126 0.5\n",
+        encoding="utf-8",
+    )
+    scene = eyelume.load_scene(
+        "paper2005",
+        {
+            "lens.glass_catalogs": [str(cat), str(SHIPPED_CATALOG)],
+            "lens.surfaces.3.glass": "MYF5",
+            "lens.surfaces.6.glass": "MYF5",
+        },
+    )
+    path = tmp_path / "scene.toml"
+    eyelume.save_scene(scene, path)
+    res = runner.invoke(app, ["info", "--scene", str(path), "--json"])
+    assert res.exit_code == 0, res.output
+    warnings = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert len(warnings) == 1, res.stderr
+    assert warnings[0].startswith("warning: lens.surfaces.3.glass = 'MYF5': 850 nm")
+    assert "312.6–500 nm" in warnings[0] and "extrapolated" in warnings[0]

@@ -355,8 +355,23 @@ def lens_indices(scene: Scene) -> tuple[list[float], dict[str, Glass]]:
             used[s.glass] = catalog[s.glass]
         except GlassError as exc:
             raise SceneError(f"field 'lens.surfaces.{j}.glass' = {s.glass!r}: {exc}") from None
-        indices.append(used[s.glass].index(scene.wavelength_nm))
+        g = used[s.glass]
+        indices.append(g.index(scene.wavelength_nm))
+        if g.in_range(scene.wavelength_nm) is False and j == _first_use(lens.surfaces, s.glass):
+            lo, hi = g.wavelength_range_nm  # type: ignore[misc]
+            warnings.warn(
+                f"lens.surfaces.{j}.glass = {s.glass!r}: {scene.wavelength_nm:g} nm lies outside "
+                f"its catalog's stated range {lo:g}–{hi:g} nm: its index "
+                f"{indices[-1]:.5f} is extrapolated by its dispersion formula",
+                EyelumeWarning,
+                stacklevel=2,
+            )
     return indices, used
+
+
+def _first_use(surfaces, glass: str) -> int:
+    """The first surface made of ``glass`` (a glass used twice warns once)."""
+    return next(j for j, s in enumerate(surfaces) if s.glass == glass)
 
 
 def lens_paraxial(scene: Scene, indices: list[float]) -> ParaxialSystem:
