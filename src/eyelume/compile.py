@@ -650,7 +650,11 @@ def _check_view(scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGri
     ep = first.entrance_pupil_z
     pos, view, _ = camera_pose(scene)
     _check_leds_in_head(scene, np.array([pos], dtype=float), rb=0.0, what="camera: the lens")
-    where = f"camera at {list(pos)} mm looking along {np.round(view, 3).tolist()}"
+    unit = np.asarray(view, dtype=float) / np.linalg.norm(view)
+    where = (
+        f"camera at {[round(float(x), 3) for x in pos]} mm looking along "
+        f"{np.round(unit, 3).tolist()}"
+    )
     # behind the lens's first vertex (camera-frame z = L) or its entrance pupil (which for a
     # long lens can lie far behind the first vertex)
     if p[2] >= min(ep, scene.object_distance_mm) - 1e-9:
