@@ -175,3 +175,20 @@ def test_the_units_drive_a_progress_bar_with_an_eta(tmp_path, monkeypatch):
     (task,) = bar.tasks
     assert task.total == 29 and task.completed == 29
     assert any(isinstance(c, TimeRemainingColumn) for c in bar.columns)
+
+
+def test_without_a_terminal_the_progress_is_plain_lines(tmp_path, monkeypatch):
+    """Where stderr is no terminal (a log, CI) Rich draws no bar: plain lines carry the count,
+    the first at once and one when the work is done (the 10 s spacing is not waited for)."""
+
+    def score(scene, y, z, th, samples, seed, label=""):
+        return tr.PlacementScore(label, y, z, th, 1.0 + y / 100, 1.0, 1.0)
+
+    monkeypatch.setattr(tr, "score_placement", score)
+    out = tmp_path / "o"
+    res = runner.invoke(app, ["optimize-tracking", "--samples", "1", *TINY, "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    lines = [ln for ln in res.output.splitlines() if "/29 " in ln]
+    assert lines[0].split("/29")[0].endswith(" 1"), lines
+    assert " 29/29 " in lines[-1] and lines[-1].rstrip().endswith(" s"), lines
+    assert len(lines) < 29  # rate-limited, not a line per unit

@@ -189,9 +189,43 @@ def _refuse_gaze(sets: list[str] | None, command: str) -> None:
             )
 
 
+#: Without a terminal (a log file, CI, ``nohup``) Rich draws no bar: a plain progress line is
+#: written at most this often (seconds), and at the end.
+_LINE_EVERY_S = 10.0
+
+
+class _Progress(Progress):
+    """Rich's progress bar; where stderr is no terminal, also plain lines (label, count, elapsed,
+    remaining) at most every :data:`_LINE_EVERY_S` s and when a task finishes, so a long run in a
+    log still shows its progress."""
+
+    def __init__(self, label: str, count: str, *columns, **kwargs) -> None:
+        super().__init__(*columns, **kwargs)
+        self._line = f"{label} {count}"
+        self._last_line = -math.inf
+
+    def update(self, task_id, **kwargs) -> None:  # type: ignore[override]
+        super().update(task_id, **kwargs)
+        if self.console.is_terminal:
+            return
+        task = self._tasks[task_id]
+        now = time.monotonic()
+        if now - self._last_line < _LINE_EVERY_S and not task.finished:
+            return
+        self._last_line = now
+        left = None if task.finished else task.time_remaining
+        when = f", {task.elapsed or 0.0:.0f} s" + (
+            f", about {left:.0f} s left" if left is not None else ""
+        )
+        self.console.print(self._line.format(task=task) + when, highlight=False, soft_wrap=True)
+
+
 def _progress_bar(label: str, count: str) -> Progress:
-    """The one progress bar of every long command, on stderr: label, bar, count, elapsed, ETA."""
-    return Progress(
+    """The one progress bar of every long command, on stderr: label, bar, count, elapsed, ETA
+    (plain lines instead where stderr is no terminal: :class:`_Progress`)."""
+    return _Progress(
+        label,
+        count,
         TextColumn(label),
         BarColumn(),
         TextColumn(count),
