@@ -232,6 +232,34 @@ def test_nan_pixels_through_the_pupil():
     assert_pupil(d)
 
 
+@pytest.mark.parametrize("pad", [160, 480])
+def test_missing_pixels_do_not_move_the_threshold_ladder(monkeypatch, pad):
+    """Missing pixels (NaN, outside a lens) are 255 in the pupil's working picture; the
+    ladder's levels (P0.5 to P60, issue 13) must come from the valid pixels only. The same
+    close-up with 50 % and 75 % of the frame NaN beside it gets the ladder it gets alone (it
+    had P60 = 255 and a coarser step), and the same pupil."""
+    from eyelume.analysis.tracking import pupil as pupil_mod
+
+    seen = []
+    levels = pupil_mod._levels
+
+    def spy(small, params, fine):
+        seen.append(levels(small, params, fine))
+        return seen[-1]
+
+    monkeypatch.setattr(pupil_mod, "_levels", spy)
+    img = closeup(skin=200.0, iris=100.0, pupil=20.0)
+    alone = detect(img)
+    ladder_alone = seen[0]
+    padded = np.full((SIZE, SIZE + pad), np.nan)
+    padded[:, :SIZE] = img
+    seen.clear()
+    d = detect(padded)
+    assert seen[0] == ladder_alone
+    assert_pupil(d)
+    assert err(d, alone.pupil.centre_px) < 0.01
+
+
 def test_a_noise_speck_is_never_a_glint():
     """Specks of 2–4 px a few σ of the noise above their background (Gaussian noise σ 2 and a
     few 3 σ clusters): no glint is reported; a real glint beside them is."""

@@ -538,7 +538,7 @@ def ladder(
     end again, ``fine`` times finer (steps ≥ 1 level), over the first ``ladder_fine_span``
     levels (:func:`find_pupil`)."""
     small, inv, f = reduced if reduced is not None else _reduced(wp, params)
-    lo, top, step = _levels(small, params, fine)
+    lo, top, step = _levels(small if inv is None else small[~inv], params, fine)
     min_area = max(2, int(params.pupil_min_area_px / f**2))
     tiny_area = max(2, int(params.pupil_tiny_area_px / f**2))
     max_area = params.pupil_max_area_frac * small.size
@@ -576,9 +576,12 @@ def ladder(
 
 
 def _levels(small: np.ndarray, params, fine: int) -> tuple[float, float, float]:
-    """The ladder's (lo, top, step): from its darkest pixel (lo + step the first level) to its
-    ``ladder_top_percentile`` in steps of (P60 − P0.5) / ``ladder_levels`` (≥ 1); with
-    ``fine`` > 1, only the first ``ladder_fine_span`` steps, ``fine`` times finer (≥ 1)."""
+    """The ladder's (lo, top, step) from ``small``'s valid pixels (any shape; the caller leaves
+    out the missing ones, which the working picture holds at 255 and which would otherwise
+    push the percentiles up: with 40 % of a headset frame outside its lens, P60 was 255): from
+    the darkest pixel (lo + step the first level) to the ``ladder_top_percentile`` in steps of
+    (P60 − P0.5) / ``ladder_levels`` (≥ 1); with ``fine`` > 1, only the first
+    ``ladder_fine_span`` steps, ``fine`` times finer (≥ 1)."""
     p_lo, top = percentile(small, 0.5), percentile(small, params.ladder_top_percentile)
     step = max(1.0, (top - p_lo) / params.ladder_levels)
     lo = p_lo - step * math.ceil((p_lo - float(small.min())) / step)  # down to the darkest
@@ -697,7 +700,11 @@ def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, 
     if picks:
         return picks
     if unstable:
-        deep = median(wp.u8[:: _stride(wp.u8.size), :: _stride(wp.u8.size)])
+        k = _stride(wp.u8.size)
+        typical = wp.u8[::k, ::k]
+        if wp.invalid is not None:  # missing pixels are 255 in u8: not the typical level
+            typical = typical[~wp.invalid[::k, ::k]]
+        deep = median(typical)
         deep -= params.pupil_min_contrast_sigma * wp.noise
         unstable = [level for level in unstable if level <= deep]
     tiny, edge_dark = tiny
