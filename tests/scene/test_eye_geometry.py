@@ -7,6 +7,10 @@ import pytest
 from typer.testing import CliRunner
 
 import eyelume
+import eyelume.analysis.masks
+import eyelume.optimize.delta_study
+import eyelume.optimize.tracking
+import eyelume.render  # noqa: F401  (bound compile_scene at import, before any test patches it)
 from eyelume.cli import app
 from eyelume.errors import GeometryError
 
