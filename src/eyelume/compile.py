@@ -57,7 +57,10 @@ from eyelume.scene.sources import cos_power_exponent, relative_intensity
 __all__ = [
     "CompiledScene",
     "FirstOrder",
+    "WavelengthGroup",
     "compile_scene",
+    "single_wavelength",
+    "wavelength_groups",
     "scene_frame",
     "gaze_rotation",
     "eye_point",
@@ -184,6 +187,14 @@ class CompiledScene:
     tallies: list[str]
     frame: Frame  # world → camera frame (eyelume.scene.pose); every table is in the camera frame
     first_order: FirstOrder  # the camera's first-order optics (camera frame)
+    # a wavelength group's compile: the scene index of each LED table row (None: all, in order)
+    led_ids: tuple[int, ...] | None = None
+
+    @property
+    def led_indices(self) -> list[int]:
+        """The scene index of every row of the LED table (all LEDs, or a group's)."""
+        n = self.tables.leds.points.shape[0]
+        return list(range(n)) if self.led_ids is None else list(self.led_ids)
 
     @property
     def surfaces(self) -> SurfaceTable:
@@ -671,18 +682,30 @@ def _check_view(scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGri
         )
 
 
-def _compile_lens(scene: Scene) -> tuple[LensTable, list[float], int]:
+def _compile_lens(
+    scene: Scene, semi_fixed: list[float] | None = None
+) -> tuple[LensTable, list[float], int]:
     """The imaging lens (sequential): its table with clear semi-diameters from a real-ray trace
     of the eye-plane field, its indices and the stop's row. Raises SceneError for a lens with no
-    positive power, crossing surfaces or one that blocks the field."""
+    positive power, crossing surfaces or one that blocks the field.
+
+    ``semi_fixed``: the clear semi-diameters (stop included) of the lens as built, from its
+    compile at the scene's wavelength — given when the lens is traced at another wavelength
+    (a wavelength group, :func:`compile_scene`): the glass disperses, the apertures stay."""
     idx, _ = lens_indices(scene)
     stop = next(j for j, s in enumerate(scene.lens.surfaces) if s.stop)
     par = lens_paraxial(scene, idx)
     if not par.power > 0:
         raise SceneError(f"lens: the prescription has no positive power (EFL {par.efl:.3g} mm)")
-    stop_sd = par.stop_semi_diameter_for_epd(stop, par.efl / scene.lens.f_number)
+    if semi_fixed is None:
+        stop_sd = par.stop_semi_diameter_for_epd(stop, par.efl / scene.lens.f_number)
+    else:
+        stop_sd = semi_fixed[stop]
     check_focus(scene, par, stop, stop_sd, warn=False)  # a real image of the eye plane
-    semi, rim_fraction = _auto_semi_diameters(scene, idx, par, stop, stop_sd)
+    if semi_fixed is None:
+        semi, rim_fraction = _auto_semi_diameters(scene, idx, par, stop, stop_sd)
+    else:
+        semi, rim_fraction = list(semi_fixed), 1.0
     lf, image_z = _lens_table(scene, idx, semi)
     _check_lens_geometry(lf)
     if rim_fraction < 0.9:
@@ -801,8 +824,13 @@ def _compile_ideal(scene: Scene) -> tuple[LensTable, list[float], int]:
     return LensTable(lf, float(ideal.focus_distance_mm + v)), [1.0, 1.0], 0
 
 
-def _first_order(scene: Scene, lens: LensTable, idx: list[float], stop: int) -> FirstOrder:
-    """The camera's first-order optics (:class:`FirstOrder`)."""
+def _first_order(
+    scene: Scene, lens: LensTable, idx: list[float], stop: int, fixed_stop: bool = False
+) -> FirstOrder:
+    """The camera's first-order optics (:class:`FirstOrder`). ``fixed_stop``: the stop's
+    semi-diameter in ``lens`` is that of the lens as built (a wavelength group): the entrance
+    pupil is then its paraxial image at the scene's wavelength, radius = stop semi-diameter /
+    (stop height per unit entrance height), and the F-number EFL / its diameter."""
     s_obj = scene.object_distance_mm
     if scene.camera.optics == "ideal":
         ideal = scene.camera.ideal
@@ -814,12 +842,17 @@ def _first_order(scene: Scene, lens: LensTable, idx: list[float], stop: int) -> 
         )  # fmt: skip
     par = lens_paraxial(scene, idx)
     xp_z, xp_m = _exit_pupil(scene, idx, stop, lens.lf)
+    f_number = scene.lens.f_number  # type: ignore[union-attr]
+    ep_radius = par.efl / f_number / 2.0
+    if fixed_stop:
+        ep_radius = float(lens.lf[stop, Q.L_SD]) / abs(float(par.trace(1.0, 0.0)[0][stop]))
+        f_number = par.efl / (2.0 * ep_radius)
     return FirstOrder(
         efl=par.efl,
-        f_number=scene.lens.f_number,  # type: ignore[union-attr]
+        f_number=f_number,
         object_distance=s_obj,
         entrance_pupil_z=s_obj + par.entrance_pupil_position(stop),
-        entrance_pupil_radius=par.efl / scene.lens.f_number / 2.0,  # type: ignore[union-attr]
+        entrance_pupil_radius=ep_radius,
         exit_pupil_z=xp_z,
         exit_pupil_magnification=xp_m,
         image_z=lens.image_z,
@@ -998,19 +1031,27 @@ def _profile_grids(profile: LedProfile) -> tuple[np.ndarray, np.ndarray, np.ndar
     return alpha_grid, cdf_grid, intensity_grid, omega
 
 
-def _led_table(scene: Scene, centres: np.ndarray, axes: np.ndarray) -> tuple[LedTable, np.ndarray]:
+def _led_table(
+    scene: Scene, centres: np.ndarray, axes: np.ndarray, emitting: tuple[int, ...] | None = None
+) -> tuple[LedTable, np.ndarray]:
     """The LEDs as point sources on the front of their bodies, each with its own I₀ and its
     profile's sampling and evaluation tables (every profile on the same α grid); and Ω_eff (N,)
-    (sr) of every LED. Raises SceneError for a profile that cannot be used."""
+    (sr) of every LED. ``emitting``: only these LEDs (their indices, in order; default all).
+    Raises SceneError for a profile that cannot be used."""
     rb = np.asarray(scene.leds.body_radii_mm())[:, None]
     emit = centres + axes * rb * (1.0 + 1e-9)
+    profiles = scene.leds.profiles()
+    i0 = np.array(scene.leds.intensities_w_sr(), dtype=float)
+    if emitting is not None:
+        keep = list(emitting)
+        emit, axes, i0 = emit[keep], axes[keep], i0[keep]
+        profiles = [profiles[k] for k in keep]
     grids: dict[LedProfile, tuple] = {}
     rows = []
-    for profile in scene.leds.profiles():
+    for profile in profiles:
         if profile not in grids:
             grids[profile] = _profile_grids(profile)
         rows.append(grids[profile])
-    i0 = np.array(scene.leds.intensities_w_sr(), dtype=float)
     omega = np.array([r[3] for r in rows], dtype=float)
     power = i0 * omega
     table = LedTable(
@@ -1218,17 +1259,71 @@ def _camera_tables(
     )
 
 
-def compile_scene(scene: Scene) -> CompiledScene:
+@dataclass(frozen=True)
+class WavelengthGroup:
+    """The LEDs of one wavelength: ``index`` (0, 1, … in order of increasing wavelength),
+    ``wavelength_nm`` and ``leds``, their indices in the scene (increasing)."""
+
+    index: int
+    wavelength_nm: float
+    leds: tuple[int, ...]
+
+
+def wavelength_groups(scene: Scene) -> list[WavelengthGroup]:
+    """The scene's LEDs grouped by wavelength (each LED's ``leds.wavelength_nm``, the scene's
+    ``wavelength_nm`` where not given), in order of increasing wavelength.
+
+    >>> from eyelume.scene.io import load_scene
+    >>> s = load_scene("paper2005", {"leds.wavelength_nm": [940, 850, 940, 850]})
+    >>> [(g.wavelength_nm, g.leds) for g in wavelength_groups(s)]
+    [(850.0, (1, 3)), (940.0, (0, 2))]
+    """
+    lams = scene.leds.wavelengths_nm(scene.wavelength_nm)
+    return [
+        WavelengthGroup(g, lam, tuple(k for k, x in enumerate(lams) if x == lam))
+        for g, lam in enumerate(sorted(set(lams)))
+    ]
+
+
+def single_wavelength(scene: Scene) -> bool:
+    """True when every LED shines at the scene's ``wavelength_nm``: the scene compiles and
+    renders as one (:func:`compile_scene` without a group)."""
+    return set(scene.leds.wavelengths_nm(scene.wavelength_nm)) == {float(scene.wavelength_nm)}
+
+
+def compile_scene(
+    scene: Scene, group: WavelengthGroup | None = None, *, nominal: CompiledScene | None = None
+) -> CompiledScene:
     """Turn a validated scene into the tables the kernels read, one scene part at a time.
     Raises SceneError on geometry that cannot exist (crossing lens surfaces, LEDs inside the
-    lens, the eye, the face or the camera body, a missing glass)."""
+    lens, the eye, the face or the camera body, a missing glass).
+
+    Without ``group``: the scene at its ``wavelength_nm`` with every LED emitting — for a scene
+    whose LEDs have several wavelengths, the nominal compile that geometry, truth, masks and the
+    layout use; :func:`eyelume.render.render` renders such a scene group by group.
+
+    With ``group`` (:func:`wavelength_groups`): the scene traced at the group's wavelength (the
+    eye's and the lens's indices, the cornea's Fresnel reflection; ``scene`` of the result
+    carries that ``wavelength_nm``) with only the group's LEDs emitting (the LED table's rows,
+    ``led_ids`` their indices in the scene); every LED's body is still there (an absorber,
+    whichever LEDs emit). A prescription lens keeps the clear apertures of the lens as built,
+    sized at the scene's wavelength (from ``nominal``, that compile, made here if not given).
+    """
+    if group is not None:
+        if scene.camera.optics == "prescription" and nominal is None:
+            nominal = compile_scene(scene)
+        scene = scene.model_copy(update={"wavelength_nm": float(group.wavelength_nm)})
     frame = scene_frame(scene)
     t = _Table(frame)
     if scene.camera.optics == "ideal":
         lens, idx, stop = _compile_ideal(scene)
+    elif group is not None:
+        assert nominal is not None
+        lens, idx, stop = _compile_lens(scene, nominal.lf[:, Q.L_SD].tolist())
     else:
         lens, idx, stop = _compile_lens(scene)
-    first = _first_order(scene, lens, idx, stop)
+    fixed_stop = group is not None and scene.camera.optics == "prescription"
+    first = _first_order(scene, lens, idx, stop, fixed_stop)
     _add_eye(t, scene)
     _add_face(t, scene)
     centres, axes = led_world_poses(scene)
@@ -1239,8 +1334,9 @@ def compile_scene(scene: Scene) -> CompiledScene:
     world = centres, axes
     if not frame.is_identity:
         centres, axes = frame.point(centres), frame.vector(axes)
-    led, omega = _led_table(scene, centres, axes)
-    _check_leds_light_the_eye(scene, *world, led)
+    led, omega = _led_table(scene, centres, axes, None if group is None else group.leds)
+    if group is None:  # a group's LEDs were looked at in the nominal compile
+        _check_leds_light_the_eye(scene, *world, led)
     _add_lens_entrance(t, lens.lf)
     _add_camera_body(t, scene, lens.lf)
     surfaces = SurfaceTable(
@@ -1261,6 +1357,7 @@ def compile_scene(scene: Scene) -> CompiledScene:
         tallies=t.tallies,
         frame=frame,
         first_order=first,
+        led_ids=None if group is None else group.leds,
     )
 
 

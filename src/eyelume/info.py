@@ -184,7 +184,8 @@ def _profile_info(profile: LedProfile) -> dict:
 
 
 def _led_info(scene: Scene, cs: CompiledScene) -> dict:
-    """Every LED's place (world mm), I₀, profile, wavelength and power; the ring's figures only
+    """Every LED's place (world mm), I₀, profile, wavelength, body and emitter diameters and
+    power; the ring's figures only
     for a ring (LEDs placed one by one have none)."""
     led = scene.leds
     centres, axes = led_poses(led)
@@ -213,14 +214,18 @@ def _led_info(scene: Scene, cs: CompiledScene) -> dict:
             "radiant_intensity_w_sr": i0,
             "profile": _profile_info(profile),
             "wavelength_nm": lam,
+            "body_diameter_mm": 2 * body,
+            "emitter_diameter_mm": emitter,
             "effective_solid_angle_sr": float(cs.omega_eff[k]),
             "power_w": float(cs.led_powers_w[k]),
         }
-        for k, (i0, profile, lam) in enumerate(
+        for k, (i0, profile, lam, body, emitter) in enumerate(
             zip(
                 led.intensities_w_sr(),
                 led.profiles(),
                 led.wavelengths_nm(scene.wavelength_nm),
+                led.body_radii_mm(),
+                led.emitter_diameters_mm(),
                 strict=True,
             )
         )

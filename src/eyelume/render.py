@@ -10,10 +10,19 @@ This is the Python API behind ``eyelume render``::
     result = eyelume.render(scene, RenderOptions(estimator="forward", rays=2_000_000))  # forward MC
     result.eye_image          # (rows, cols) W/mm², row 0 at the top of the picture
     result.ledger             # forward only: {"sensor": W, "iris": W, ..., "escaped": W}
+
+LEDs of several wavelengths (``leds.wavelength_nm`` a list) are rendered as a sum over
+wavelength groups (:func:`eyelume.compile.wavelength_groups`): each group is compiled at its own
+wavelength with only its LEDs emitting (:func:`eyelume.compile.compile_scene`) and rendered
+with its own seed (:func:`group_seed`); the images, eye planes, variances (the groups are
+independent), ledgers and glints add up, and the sensor's photo-electrons are the groups'
+sum (:attr:`RenderResult.eye_image_at_scene_wavelength`). A scene whose LEDs all shine at its
+``wavelength_nm`` renders as one, exactly as before groups existed.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -23,14 +32,71 @@ import numpy as np
 from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
-from eyelume.compile import CompiledScene, compile_scene
+from eyelume.compile import CompiledScene, compile_scene, single_wavelength, wavelength_groups
 from eyelume.detectors.receivers import BinnedPlane
 from eyelume.estimators.fast_run import RunControl, direct_eye_plane, trace_fast, warm_up
 from eyelume.estimators.forward import trace_forward, trace_paths
+from eyelume.estimators.statistics import median_pixel_rel_error
 from eyelume.layout import VIEWS, Section, system_sections
 from eyelume.scene.model import Scene
 
-__all__ = ["RenderExtras", "RenderOptions", "RenderResult", "render", "render_extras"]
+__all__ = [
+    "GroupRender",
+    "RenderExtras",
+    "RenderOptions",
+    "RenderResult",
+    "group_seed",
+    "render",
+    "render_extras",
+]
+
+
+#: Mixed into a wavelength group's seed (:func:`group_seed`) so its stream is apart from any
+#: other use of the scene's seed.
+_GROUP_SEED_TAG = 0x57A7E1E6
+
+
+def group_seed(seed: int, index: int) -> int:
+    """The seed of wavelength group ``index`` (0, 1, … in order of increasing wavelength) of a
+    render with ``seed``, in a scene whose LEDs have several wavelengths: the first 63 bits of
+    ``numpy.random.SeedSequence([seed, 0x57A7E1E6, index])``'s first 64-bit word — distinct,
+    independent streams for the groups, the same for the same seed on any machine. (A scene of
+    one wavelength group uses ``seed`` itself.)
+
+    >>> group_seed(1, 0) == group_seed(1, 0) != group_seed(1, 1)
+    True
+    """
+    state = np.random.SeedSequence([int(seed), _GROUP_SEED_TAG, int(index)])
+    return int(state.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
+
+
+@dataclass
+class GroupRender:
+    """One wavelength group's share of a render (:func:`render`): its ``wavelength_nm``, its
+    LEDs (``leds``, scene indices), the ``seed`` it was rendered with, its LEDs' power
+    ``emitted_w`` (W), its eye image and that image's variance ((rows, cols), W/mm² and
+    (W/mm²)²), and the rays (forward) or camera samples plus light paths (fast) it took."""
+
+    wavelength_nm: float
+    leds: tuple[int, ...]
+    seed: int
+    emitted_w: float
+    eye_image: np.ndarray
+    eye_image_variance: np.ndarray
+    rays: int
+    samples_per_pixel: int | None = None
+
+    def summary(self) -> dict:
+        out = {
+            "wavelength_nm": self.wavelength_nm,
+            "leds": list(self.leds),
+            "seed": self.seed,
+            "emitted_w": self.emitted_w,
+            "rays": self.rays,
+        }
+        if self.samples_per_pixel is not None:
+            out["samples_per_pixel"] = self.samples_per_pixel
+        return out
 
 
 @dataclass
@@ -88,6 +154,22 @@ class RenderResult:
     target_reached: bool | None = None
     rel_error_achieved: float | None = None
     covered_pixels: int | None = None  # fast, first round interrupted: pixels finished
+    groups: list[GroupRender] | None = None  # LEDs of several wavelengths: each group's share
+
+    @property
+    def eye_image_at_scene_wavelength(self) -> np.ndarray:
+        """The eye image as the sensor counts it: the irradiance at the scene's
+        ``wavelength_nm`` that gives the same mean photo-electrons, (rows, cols) W/mm².
+
+        A pixel's mean photo-electrons are Σ_g E_g p² t QE / (h c / λ_g) over the wavelength
+        groups g (:mod:`eyelume.detectors.sensor`), so this is Σ_g E_g λ_g / λ, ready for
+        :func:`eyelume.detectors.sensor.digitize` at the scene's wavelength. The sensor's
+        ``quantum_efficiency`` is one number, taken at every group's wavelength alike (the
+        scene gives no QE curve). One wavelength: ``eye_image`` itself."""
+        if not self.groups:
+            return self.eye_image
+        lam = float(self.scene.wavelength_nm)
+        return sum(g.eye_image * (g.wavelength_nm / lam) for g in self.groups)
 
     @property
     def missing_pixels(self) -> int:
@@ -147,6 +229,8 @@ class RenderResult:
                 out["rel_error_achieved"] = self.rel_error_achieved
         else:
             out["surface_interactions"] = self.interactions
+        if self.groups:
+            out["wavelength_groups"] = [g.summary() for g in self.groups]
         power = {"emitted": self.emitted_w, "sensor": float(self.eye_image.sum())}  # NaN: partial
         power["sensor"] *= self.pixel_area_mm2
         if self.ledger is not None:
@@ -263,6 +347,10 @@ def render(
     sc = cs.scene
     seed = sc.run.seed if seed is None else int(seed)
     estimator = opt.estimator or ("forward" if rays is not None else sc.run.estimator)
+    if cs.led_ids is None and not single_wavelength(sc):
+        if estimator not in ("fast", "forward"):
+            raise ValueError(f"estimator = {estimator!r}: must be 'fast' or 'forward'")
+        return _render_groups(cs, opt, estimator, seed, (progress, status, advance))
     picture, eye_plane = BinnedPlane(cs.picture), BinnedPlane(cs.eye_plane)
     extents = {"picture_extent_mm": picture.extent_mm, "plane_extent_mm": eye_plane.extent_mm}
     px_area = picture.bin_area_mm2
@@ -334,6 +422,189 @@ def render(
         interactions=fc.interactions,
         kernel_load_s=kernel_s,
         **extents,
+    )
+
+
+class _Groups:
+    """A render's wavelength groups (:func:`_render_groups`): each one's compile and seed,
+    the nominal compile's region masks and the result's extents."""
+
+    def __init__(self, cs: CompiledScene, seed: int) -> None:
+        self.cs, self.seed = cs, seed
+        self.list = wavelength_groups(cs.scene)
+        self.compiled = [compile_scene(cs.scene, g, nominal=cs) for g in self.list]
+        many = len(self.list) > 1
+        self.seeds = [group_seed(seed, g.index) if many else seed for g in self.list]
+        picture, plane = BinnedPlane(cs.picture), BinnedPlane(cs.eye_plane)
+        self.extents = {"picture_extent_mm": picture.extent_mm, "plane_extent_mm": plane.extent_mm}
+        self.areas = picture.bin_area_mm2, plane.bin_area_mm2
+        self.regions = region_masks(cs)
+        self.shape = (cs.picture.rows, cs.picture.cols)
+        self.plane_shape = (cs.eye_plane.rows, cs.eye_plane.cols)
+
+    def __iter__(self):
+        return iter(zip(self.list, self.compiled, self.seeds, strict=True))
+
+    def check_whole(self, group, interrupted: bool) -> None:
+        """KeyboardInterrupt when a group before the last was interrupted."""
+        if interrupted and group.index < len(self.list) - 1:
+            raise KeyboardInterrupt(
+                f"interrupted in wavelength group {group.index + 1} of {len(self.list)} "
+                f"({group.wavelength_nm:g} nm): the later groups' light is missing, no usable "
+                "picture"
+            )
+
+
+def _render_groups(
+    cs: CompiledScene, opt: RenderOptions, estimator: str, seed: int, callbacks: tuple
+) -> RenderResult:
+    """:func:`render` of a scene whose LEDs have several wavelengths: the sum over wavelength
+    groups (module docstring). ``cs`` is the nominal compile (the scene's wavelength, every
+    LED): its region masks are the result's.
+
+    Each group gets the whole budget (``samples_per_pixel`` and light paths, or ``rel_error``,
+    each on its own; the forward ``rays`` are shared in proportion to the groups' power, so
+    every ray carries about the same power): G groups cost about G renders. A run interrupted
+    (Ctrl-C, SIGTERM) before the last group has none of the later groups' light: it raises
+    KeyboardInterrupt rather than return a picture without them; interrupted in the last
+    group, the groups finished and that group's partial (unbiased) estimate are summed."""
+    groups = _Groups(cs, seed)
+    if estimator == "fast":
+        return _groups_fast(groups, opt, callbacks[1], callbacks[2])
+    return _groups_forward(groups, opt, callbacks[0])
+
+
+def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> RenderResult:
+    """The fast estimator over the wavelength groups (:func:`_render_groups`)."""
+    sc = groups.cs.scene
+    kernel_s = warm_up(groups.compiled[0]) or None
+    t0 = time.perf_counter()
+    spp = int(sc.run.samples_per_pixel if opt.samples_per_pixel is None else opt.samples_per_pixel)
+    pixels = sc.sensor.cols * sc.sensor.rows
+    light = int(round(sc.run.light_paths_per_pixel * pixels * spp / 16))
+    plane = np.zeros(groups.plane_shape)
+    glints = np.zeros((sc.leds.count, *groups.shape))
+    skin = groups.regions["skin"]
+    ests, parts, done = [], [], [0]
+
+    def advance_in(d: int, planned: int) -> None:
+        if advance:
+            left = len(groups.list) - len(ests) - 1
+            advance(done[0] + d, done[0] + planned * (1 + left))
+
+    for g, cg, sg in groups:
+        if status:
+            status(f"wavelength group {g.index + 1} of {len(groups.list)}: {g.wavelength_nm:g} nm")
+        control = RunControl(advance_in, opt.max_samples_per_pixel)
+        est = trace_fast(cg, spp, light, sg, opt.rel_error, status, skin, control)
+        groups.check_whole(g, est.interrupted)
+        plane += direct_eye_plane(cg, sg)
+        glints[list(g.leds)] = est.glint_images
+        rays = est.samples_per_pixel * pixels + est.light_paths
+        done[0] += rays
+        ests.append(est)
+        parts.append(
+            GroupRender(g.wavelength_nm, g.leds, sg, cg.emitted_w, est.image, est.variance,
+                        rays, est.samples_per_pixel)
+        )  # fmt: skip
+    wall = time.perf_counter() - t0
+    image = sum(e.image for e in ests)
+    variance = sum(e.variance for e in ests)
+    dof = min(e.variance_dof for e in ests)
+    reached = err = None
+    if opt.rel_error is not None:  # the sum's own error, not the groups'
+        m = skin & (image > 0) & np.isfinite(image)
+        e = median_pixel_rel_error(image[m], variance[m], dof) if m.any() else math.inf
+        reached, err = e <= opt.rel_error, (e if math.isfinite(e) else None)
+    return RenderResult(
+        scene=sc,
+        estimator="fast",
+        rays=sum(p.rays for p in parts),
+        seed=groups.seed,
+        wall_time_s=wall,
+        emitted_w=float(sum(p.emitted_w for p in parts)),
+        eye_image=image,
+        eye_image_variance=variance,
+        eye_plane=plane,
+        regions=with_glints(groups.regions, glints),
+        interrupted=ests[-1].interrupted,
+        samples_per_pixel=min(e.samples_per_pixel for e in ests),
+        light_paths=sum(e.light_paths for e in ests),
+        variance_dof=dof,
+        kernel_load_s=kernel_s,
+        target_reached=reached,
+        rel_error_achieved=err,
+        covered_pixels=ests[-1].covered_pixels,
+        groups=parts,
+        **groups.extents,
+    )
+
+
+def _forward_shares(rays: int, compiled: list[CompiledScene]) -> list[int]:
+    """Forward rays per wavelength group, in proportion to its LEDs' power (at least one)."""
+    power = np.array([cg.emitted_w for cg in compiled])
+    share = [max(1, int(rays * p / power.sum())) for p in power[:-1]]
+    return [*share, max(1, rays - sum(share))]
+
+
+def _groups_forward(groups: _Groups, opt: RenderOptions, progress) -> RenderResult:
+    """Forward Monte Carlo over the wavelength groups (:func:`_render_groups`)."""
+    sc = groups.cs.scene
+    rays = sc.run.rays if opt.rays is None else int(opt.rays)
+    shares = _forward_shares(rays, groups.compiled)
+    kernel_s = warm_up_forward(groups.compiled[0]) or None
+    t0 = time.perf_counter()
+    image, variance = np.zeros(groups.shape), np.zeros(groups.shape)
+    plane = np.zeros(groups.plane_shape)
+    image_counts = np.zeros(groups.shape, dtype=np.int64)
+    plane_counts = np.zeros(groups.plane_shape, dtype=np.int64)
+    ledger: dict[str, float] = {}
+    parts, interactions, traced, interrupted = [], 0, 0, False
+    px_area, pl_area = groups.areas
+    for (g, cg, sg), n in zip(groups, shares, strict=True):
+
+        def progress_in(d: int, _total: int, before: int = traced) -> None:
+            if progress:
+                progress(before + d, rays)
+
+        fc = trace_forward(cg, n, sg, opt.batch_size, progress_in)
+        groups.check_whole(g, fc.interrupted)
+        interrupted = fc.interrupted
+        w = cg.emitted_w / fc.rays
+        part, part_var = fc.image * (w / px_area), fc.image * (w / px_area) ** 2
+        image += part
+        variance += part_var
+        plane += fc.plane * (w / pl_area)
+        for name, k in zip(cg.tallies, fc.tallies, strict=True):
+            ledger[name] = ledger.get(name, 0.0) + float(k) * w
+        image_counts += fc.image
+        plane_counts += fc.plane
+        interactions += fc.interactions
+        traced += fc.rays
+        parts.append(
+            GroupRender(g.wavelength_nm, g.leds, sg, cg.emitted_w, part, part_var, fc.rays)
+        )
+    wall = time.perf_counter() - t0
+    return RenderResult(
+        scene=sc,
+        estimator="forward",
+        rays=traced,
+        seed=groups.seed,
+        wall_time_s=wall,
+        emitted_w=float(sum(p.emitted_w for p in parts)),
+        eye_image=image,
+        eye_image_variance=variance,
+        eye_plane=plane,
+        regions=groups.regions,
+        interrupted=interrupted,
+        ray_power_w=None,  # the groups' rays carry about, not exactly, the same power
+        image_counts=image_counts,
+        plane_counts=plane_counts,
+        ledger=ledger,
+        interactions=interactions,
+        kernel_load_s=kernel_s,
+        groups=parts,
+        **groups.extents,
     )
 
 

@@ -1,4 +1,4 @@
-"""Each LED its own radiant intensity, profile and wavelength (issue 11, part 2): the scene
+"""Each LED its own radiant intensity, profile, wavelength and body (issue 11, part 2): the scene
 syntax (one value for every LED, or a list of one per LED) and every ambiguous input refused in
 one line naming the field and the value."""
 
@@ -83,8 +83,8 @@ def test_profile_tables_in_a_list_are_found_beside_the_scene(tmp_path):
         ({"leds.profile": [{}, {}, {}]}, "profile has 3 entries"),
         ({"leds.profile": [{}, {"half_intensity_angle_deg": 95}, {}, {}]}, "profile[1]"),
         ({"leds.profile": [{}, {}, {"kind": "table"}, {}]}, "needs table_csv"),
-        ({"leds.wavelength_nm": 940}, "leds.wavelength_nm = 940 differs"),
-        ({"leds.wavelength_nm": [850, 850, 940, 850]}, "leds.wavelength_nm[2] = 940"),
+        ({"leds.wavelength_nm": -940}, "'leds.wavelength_nm' = -940: must be > 0"),
+        ({"leds.wavelength_nm": [850, 850, 0, 850]}, "wavelength_nm[2] = 0: must be > 0"),
         ({"leds.wavelength_nm": [850, 850, 850]}, "wavelength_nm has 3 entries"),
         ({**TWO_BY_POSITION, "leds.height_mm": 40}, "height_mm = 40.0 given beside"),
         ({**TWO_BY_POSITION, "leds.pitch_deg": 10}, "pitch_deg = 10.0 given beside"),
@@ -111,10 +111,13 @@ def test_a_ring_field_beside_positions_in_a_file_is_refused_with_exit_2(tmp_path
     assert len(lines) == 1 and "height_mm = 25.0 given beside positions_mm" in lines[0], lines
 
 
-def test_a_wavelength_unlike_the_scenes_is_refused_with_exit_2():
-    res = runner.invoke(app, ["info", "--set", "leds.wavelength_nm=[850, 850, 850, 940]"])
-    assert res.exit_code == 2
-    assert "leds.wavelength_nm[3] = 940 differs from wavelength_nm = 850" in res.output
+def test_a_wavelength_unlike_the_scenes_is_rendered_as_its_own_group():
+    """Once refused (one wavelength traced); now each LED its own wavelength
+    (tests/test_wavelength_groups.py renders it)."""
+    res = runner.invoke(app, ["info", "--json", "--set", "leds.wavelength_nm=[850, 850, 850, 940]"])
+    assert res.exit_code == 0, res.output
+    per = json.loads(res.stdout)["leds"]["per_led"]
+    assert [e["wavelength_nm"] for e in per] == [850.0, 850.0, 850.0, 940.0]
 
 
 def test_info_shows_every_leds_own_figures_and_no_ring_for_positions():

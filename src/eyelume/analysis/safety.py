@@ -13,12 +13,14 @@ Here E_IR is the irradiance at the corneal vertex from all LEDs together, each o
 facing it (the standard's worst case: the sum of the LEDs' normal irradiances
 I₀ₖ fₖ(α_k) / d_k², each LED with its own on-axis intensity and profile, d_k the distance from
 LED k's emission point). L_IR is each LED's mean radiance over its apparent emitting disc,
-I₀ₖ / (π (D/2)²), D = ``leds.emitter_diameter_mm`` (the on-axis value: the worst direction, as
-the eye may look into any LED), weighted by the burn-hazard function R(λ) at the scene's
-wavelength (:func:`burn_hazard_weight`; 0.501 at 850 nm), against the limit at α = D / d_k at
-that LED's distance; the retinal margin is the smallest over the LEDs (each LED is its own
-source on the retina). The LEDs are taken as monochromatic at the
-scene wavelength: for a real LED's spectrum of σ nm about it (Gaussian), the exponential R(λ)
+I₀ₖ / (π (Dₖ/2)²), Dₖ = ``leds.emitter_diameter_mm`` of LED k (the on-axis value: the worst
+direction, as the eye may look into any LED), weighted by the burn-hazard function R(λₖ) at that
+LED's own wavelength λₖ (``leds.wavelength_nm``; :func:`burn_hazard_weight`; 0.501 at 850 nm),
+against the limit at αₖ = Dₖ / dₖ at that LED's distance; the retinal margin is the smallest
+over the LEDs (each LED is its own source on the retina). The corneal irradiance E_IR sums every
+LED whatever its wavelength (the infrared hazard's band is 780–3000 nm: a visible LED's share
+is counted too, on the safe side). Each LED is taken as monochromatic at its wavelength:
+for a real LED's spectrum of σ nm about it (Gaussian), the exponential R(λ)
 averages to R(λ₀) · exp((σ ln 10 / 500)² / 2), +0.3 % for a 40 nm wide (FWHM) 850 nm LED.
 A margin is limit / value (> 1: within the exempt group; ∞ where the value is 0, written as
 ``null`` in JSON files).
@@ -105,7 +107,8 @@ def eye_safety(scene: Scene) -> dict:
     axis looks away from the vertex, αₖ ≥ 90°, add 0). The retinal hazard is per source (each
     LED images to its own spot): Lₖ = I₀ₖ / (π (D/2)²) R(λ) against the limit at αₖ = D / dₖ;
     the reported retinal figures are those of the LED with the smallest margin
-    (``retinal_worst_led``). ``per_led`` lists each LED's share."""
+    (``retinal_worst_led``). ``per_led`` lists each LED's share, wavelength and weight R(λₖ);
+    ``burn_hazard_weight`` at the top is the worst LED's."""
     leds = scene.leds
     centres, axes = led_world_poses(scene)
     emit = centres + axes * np.asarray(leds.body_radii_mm())[:, None]
@@ -115,11 +118,13 @@ def eye_safety(scene: Scene) -> dict:
     )
     profiles = leds.profiles()
     shapes = {p: relative_intensity(p) for p in set(profiles)}
-    r_m = leds.emitter_diameter_mm / 2 * 1e-3
-    weight = burn_hazard_weight(scene.wavelength_nm)
+    diameters = leds.emitter_diameters_mm()
+    lams = leds.wavelengths_nm(scene.wavelength_nm)
     irr = 0.0
     per_led = []
-    for p, a, i0, prof in zip(emit, axes, leds.intensities_w_sr(), profiles, strict=True):
+    for p, a, i0, prof, dia, lam in zip(
+        emit, axes, leds.intensities_w_sr(), profiles, diameters, lams, strict=True
+    ):
         v = eye - p
         d = float(np.linalg.norm(v))  # mm
         cos_a = float(v @ a) / d
@@ -127,20 +132,27 @@ def eye_safety(scene: Scene) -> dict:
         if cos_a > 0:
             e = i0 * float(shapes[prof](math.acos(min(cos_a, 1.0)))) / (d * 1e-3) ** 2
             irr += e
+        r_m = dia / 2 * 1e-3
+        weight = burn_hazard_weight(lam)
         radiance = i0 / (math.pi * r_m * r_m) * weight
-        limit = retinal_thermal_limit(leds.emitter_diameter_mm / d)
+        limit = retinal_thermal_limit(dia / d)
         per_led.append(
             {
                 "distance_mm": d,
+                "wavelength_nm": lam,
+                "burn_hazard_weight": weight,
+                "emitter_diameter_mm": dia,
                 "corneal_irradiance_w_m2": e,
                 "retinal_radiance_w_m2_sr": radiance,
                 "retinal_margin": limit / radiance if radiance > 0 else math.inf,
             }
         )
     worst = min(range(len(per_led)), key=lambda k: per_led[k]["retinal_margin"])
+    r_m = diameters[worst] / 2 * 1e-3
     source_radiance = leds.intensities_w_sr()[worst] / (math.pi * r_m * r_m)
+    weight = per_led[worst]["burn_hazard_weight"]
     radiance = source_radiance * weight
-    alpha = leds.emitter_diameter_mm / per_led[worst]["distance_mm"]
+    alpha = diameters[worst] / per_led[worst]["distance_mm"]
     l_limit = retinal_thermal_limit(alpha)
     return {
         "source": SOURCE,

@@ -24,7 +24,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eyelume.compile import CompiledScene, eye_direction, eye_point
+from eyelume.compile import (
+    CompiledScene,
+    compile_scene,
+    eye_direction,
+    eye_point,
+    single_wavelength,
+    wavelength_groups,
+)
 from eyelume.detectors.receivers import BinnedPlane
 from eyelume.estimators.camera import aim_chief, into_scene
 from eyelume.kernels import geometry as G
@@ -233,12 +240,13 @@ def _glint_truth(v: _View, k: int, led: np.ndarray) -> dict:
     return entry
 
 
-def _led_in_view(v: _View, k: int, led: np.ndarray) -> dict | None:
-    """LED ``k`` seen directly (no cornea): the pixel whose chief ray passes through its
-    emission point, if it falls inside the picture; ``visible`` when nothing lies between the
-    lens and the LED and the LED sends light toward the lens (I(α) > 0, its radiant intensity
-    that way given in W/sr). None when the LED is behind the entrance pupil or imaged outside
-    the picture."""
+def _led_in_view(v: _View, k: int, led: np.ndarray, row: int | None = None) -> dict | None:
+    """LED ``k`` (row ``row`` of the LED table, default ``k``) seen directly (no cornea): the pixel
+    whose chief ray passes through its emission point, if it falls inside the picture;
+    ``visible`` when nothing lies between the lens and the LED and the LED sends light
+    toward the lens (I(α) > 0, its radiant intensity that way given in W/sr). None when the
+    LED is behind the entrance pupil or imaged outside the picture.
+    """
     cs, cam = v.cs, v.cam
     ep = np.array([0.0, 0.0, cam.entrance_pupil_z])
     if led[2] >= ep[2]:
@@ -260,7 +268,7 @@ def _led_in_view(v: _View, k: int, led: np.ndarray) -> dict | None:
     p, d = _chief_ray(cs, cam, *s)
     hit, t = G.nearest_hit(cs.sf, cs.si, *p, *d)
     clear = hit < 0 or t >= (led - p) @ d - 1e-4  # nothing before the emission point
-    intensity = float(radiant_intensity(cs.led, k, *(-d)))
+    intensity = float(radiant_intensity(cs.led, k if row is None else row, *(-d)))
     return {
         "led": k,
         "centre_px": [c, r],
@@ -278,13 +286,21 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     lies on the cornea's cap (``on_cornea``) and is seen (``visible``), or why there is none;
     the counts ``glints_on_cornea`` and ``glints_visible``; ``leds_in_view``: each LED the
     camera sees directly (a wide lens beside the ring), its pixel, whether it is seen and
-    its radiant intensity toward the lens — a bright spot that is not a glint.
+    its radiant intensity toward the lens — a bright spot that is not a glint. LEDs of several
+    wavelengths: each LED's entries at its own wavelength, marked with it
+    (:func:`_truth_by_wavelength`); the pupil at the scene's.
     """
+    if cs.led_ids is None and cam is None and not single_wavelength(cs.scene):
+        return _truth_by_wavelength(cs)
     v = _view(cs, cam or cs.camera)
     eye = cs.scene.eye
     depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
-    glints = [_glint_truth(v, k, led) for k, led in enumerate(cs.led.points)]
-    in_view = [_led_in_view(v, k, led) for k, led in enumerate(cs.led.points)]
+    ids = cs.led_indices  # a wavelength group's compile: its LEDs' scene indices
+    glints = [_glint_truth(v, k, led) for k, led in zip(ids, cs.led.points, strict=True)]
+    in_view = [
+        _led_in_view(v, k, led, row)
+        for row, (k, led) in enumerate(zip(ids, cs.led.points, strict=True))
+    ]
     in_view = [e for e in in_view if e is not None]
     return {
         "gaze_deg": {
@@ -303,6 +319,32 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     }
 
 
+def _truth_by_wavelength(cs: CompiledScene) -> dict:
+    """:func:`eye_truth` of a scene whose LEDs have several wavelengths: the gaze and the pupil
+    of the nominal compile ``cs`` (the scene's ``wavelength_nm``), each LED's glint and direct
+    view from its wavelength group's compile (:func:`eyelume.compile.compile_scene`: the eye's
+    and the lens's indices at that wavelength), the union over the groups in LED order, each
+    entry with its ``wavelength_nm``."""
+    out = eye_truth(compile_scene(cs.scene, wavelength_groups(cs.scene)[0], nominal=cs))
+    base = _view(cs, cs.camera)
+    eye = cs.scene.eye
+    depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
+    out["pupil"] = _pupil_truth(base, base.turned(np.array([0.0, 0.0, -depth])))
+    out["optical_axis"] = cs.frame.world_vector(base.axis).tolist()
+    glints: dict[int, dict] = {}
+    in_view: list[dict] = []
+    for g in wavelength_groups(cs.scene):
+        t = out if g.index == 0 else eye_truth(compile_scene(cs.scene, g, nominal=cs))
+        for e in t["glints"]:
+            glints[e["led"]] = {**e, "wavelength_nm": g.wavelength_nm}
+        in_view += [{**e, "wavelength_nm": g.wavelength_nm} for e in t["leds_in_view"]]
+    out["glints"] = [glints[k] for k in sorted(glints)]
+    out["glints_on_cornea"] = sum(e["on_cornea"] for e in out["glints"])
+    out["glints_visible"] = sum(e["visible"] for e in out["glints"])
+    out["leds_in_view"] = sorted(in_view, key=lambda e: e["led"])
+    return out
+
+
 #: The gaze grid of :func:`glint_counts` (degrees): ±20° horizontally, ±15° vertically.
 COUNT_GAZE_H = (-20.0, -10.0, 0.0, 10.0, 20.0)
 COUNT_GAZE_V = (-15.0, -7.5, 0.0, 7.5, 15.0)
@@ -315,7 +357,6 @@ def glint_counts(scene, gaze_h=COUNT_GAZE_H, gaze_v=COUNT_GAZE_V) -> dict:
 
     Returns ``{"gaze_h_deg": [...], "gaze_v_deg": [...], "on_cornea": (nv, nh) list,
     "visible": (nv, nh) list, "leds": N}`` (rows: vertical gaze, columns: horizontal)."""
-    from eyelume.compile import compile_scene
     from eyelume.scene.io import apply_overrides
 
     on, seen = [], []

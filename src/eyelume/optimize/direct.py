@@ -25,7 +25,7 @@ from eyelume.errors import SceneError
 from eyelume.estimators.interrupt import run_unit
 from eyelume.optimize.delta_study import evaluate_placement
 from eyelume.scene.io import apply_overrides
-from eyelume.scene.model import Scene
+from eyelume.scene.model import PER_LED_NUMBERS, Scene
 
 __all__ = ["DirectResult", "DirectSearch", "optimize_direct"]
 
@@ -137,7 +137,7 @@ def _check_leds_alike(scene: Scene, vary_spread: bool) -> None:
     needs one I₀, one profile and one wavelength for every LED. Raises SceneError naming a
     per-LED list (or a table profile whose spread cannot vary)."""
     leds = scene.leds
-    for name in ("radiant_intensity_w_sr", "profile", "wavelength_nm", "body_diameter_mm"):
+    for name in (*PER_LED_NUMBERS, "profile"):
         value = getattr(leds, name)
         if isinstance(value, list):
             raise SceneError(

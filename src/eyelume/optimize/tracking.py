@@ -65,7 +65,7 @@ def render_frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> F
     sc = apply_overrides(scene, {"eye.gaze_horizontal_deg": h, "eye.gaze_vertical_deg": v})
     cs = compile_scene(sc)
     result = render(cs, RenderOptions(estimator="fast", samples_per_pixel=samples, seed=seed))
-    digital = digitize(result.eye_image, sc.sensor, sc.wavelength_nm, seed=seed)
+    digital = digitize(result.eye_image_at_scene_wavelength, sc.sensor, sc.wavelength_nm, seed)
     azimuths = led_picture_azimuths(cs)
     frame = analyse_frame(
         (h, v), digital.counts, eye_truth(cs), azimuths, render_s=result.wall_time_s

@@ -52,7 +52,13 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
     save_grey_png(shown, path("eye_image.png"))
     save_grey_png(result.eye_plane, path("eye_plane.png"), clip_percentile=100.0)
     sc = result.scene
-    digital = digitize(shown, sc.sensor, sc.wavelength_nm, result.seed)
+    # LEDs of several wavelengths: the photo-electrons are the wavelength groups' sum
+    counted = (
+        shown
+        if result.groups is None
+        else np.where(missing, 0.0, result.eye_image_at_scene_wavelength)
+    )
+    digital = digitize(counted, sc.sensor, sc.wavelength_nm, result.seed)
     digital.counts[missing] = 0
     np.save(path("eye_image_digital.npy"), digital.counts)
     save_grey_png(digital.counts, path("eye_image_digital.png"), white=digital.full_scale_dn)

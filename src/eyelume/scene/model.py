@@ -37,11 +37,13 @@ __all__ = [
     "LedArray",
     "LedProfile",
     "LensSurface",
+    "PER_LED_NUMBERS",
     "RING_FIELDS",
     "Run",
     "Scene",
     "Sensor",
     "Tissue",
+    "WAVELENGTH_RANGE_NM",
 ]
 
 
@@ -62,6 +64,35 @@ NonNegative = Annotated[float, Field(ge=0, le=MAX_MAGNITUDE)]
 Fraction = Annotated[float, Field(ge=0, le=1)]
 _Coordinate = Annotated[float, Field(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
 Vector3 = tuple[_Coordinate, _Coordinate, _Coordinate]
+
+
+#: The wavelengths a scene and its LEDs may have (nm): the near ultraviolet to the short-wave
+#: infrared. The eye's indices (from its d, F, C values) and a glass's (its catalog formula) are
+#: evaluated anywhere in it; a glass whose catalog range is narrower gets a warning at compile.
+WAVELENGTH_RANGE_NM = (300.0, 2500.0)
+
+#: The per-LED numeric fields of :class:`LedArray`: one value for every LED, or one per LED.
+PER_LED_NUMBERS = (
+    "radiant_intensity_w_sr",
+    "wavelength_nm",
+    "body_diameter_mm",
+    "emitter_diameter_mm",
+)
+
+
+def _check_wavelengths(value) -> None:
+    """Each LED wavelength (one number or a list) a finite number in WAVELENGTH_RANGE_NM;
+    ValueError naming the item (``wavelength_nm[k] = …``) and the value otherwise."""
+    items = list(enumerate(value)) if isinstance(value, list | tuple) else [(None, value)]
+    lo, hi = WAVELENGTH_RANGE_NM
+    for k, v in items:
+        name = "" if k is None else f"wavelength_nm[{k}] = {v!r}: "  # one value: named outside
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise ValueError(f"{name}must be a finite number of nanometres")
+        if v <= 0:
+            raise ValueError(f"{name}must be > 0 (nm)")
+        if not lo <= v <= hi:
+            raise ValueError(f"{name}must lie in {lo:g} … {hi:g} nm")
 
 
 class _Model(BaseModel):
@@ -111,20 +142,24 @@ class LedArray(_Model):
     the ring's Y, Z, θ and azimuths are then not used). Aim: ``aim_at_mm``, a point every LED's
     axis points at (instead of the pitch θ), or, for LEDs placed one by one, ``directions``
     (N, 3).
-    Per LED: ``radiant_intensity_w_sr`` (on-axis I₀), ``profile``, ``wavelength_nm`` and
-    ``body_diameter_mm`` are each either one value for every LED or a list of ``count`` values,
-    LED k taking item k (in the order of ``positions_mm``, or of the ring's azimuths); in TOML a
-    list of profiles is an array of tables, ``[[leds.profile]]`` once per LED.
-    ``wavelength_nm`` (default: the scene's) must equal the scene's ``wavelength_nm``, the one
-    wavelength every index, reflectance and safety weight is taken at: an LED of another
-    wavelength is refused, not traced at the wrong one. The ring's fields (``height_mm``,
+    Per LED: ``radiant_intensity_w_sr`` (on-axis I₀), ``profile``, ``wavelength_nm``,
+    ``body_diameter_mm`` and ``emitter_diameter_mm`` are each either one value for every LED or
+    a list of ``count`` values, LED k taking item k (in the order of ``positions_mm``, or of the
+    ring's azimuths); in TOML a list of profiles is an array of tables, ``[[leds.profile]]`` once
+    per LED.
+    ``wavelength_nm`` (default: the scene's ``wavelength_nm``) is each LED's own, within the
+    scene wavelength's range (:data:`WAVELENGTH_RANGE_NM`): LEDs of several wavelengths are
+    rendered as a sum over wavelength groups, each group traced at its own wavelength (indices of
+    the eye and the lens, the cornea's Fresnel reflection) with only its LEDs emitting, and each
+    LED's eye-safety weight taken at its own wavelength (:func:`eyelume.render.render`,
+    :func:`eyelume.compile.wavelength_groups`). The ring's fields (``height_mm``,
     ``distance_mm``, ``pitch_deg``, ``azimuths_deg``, ``ring_centre_mm``, ``ring_axis``) given
     beside ``positions_mm`` are refused (they would place nothing).
     Light leaves from the apex of the spherical body (a point source at centre + r·axis, r each
-    LED's own body radius; the body absorbs what comes back to it). ``emitter_diameter_mm`` is
-    the apparent size of the emitting area (the die as the dome lens shows it), used only for
-    the retinal thermal hazard (its radiance and angular subtense): the tracers emit from a
-    point at the body's apex.
+    LED's own body radius; the body absorbs what comes back to it, whichever LEDs emit).
+    ``emitter_diameter_mm`` is the apparent size of each LED's emitting area (the die as the dome
+    lens shows it), used only for the retinal thermal hazard (its radiance and angular
+    subtense): the tracers emit from a point at the body's apex.
     """
 
     part: str = "American Bright BIR-BO07J4Q-1"
@@ -134,7 +169,7 @@ class LedArray(_Model):
     distance_mm: Positive = 70.0
     pitch_deg: float = Field(20.0, gt=-90, lt=90)
     body_diameter_mm: Positive | list[Positive] = 5.0
-    emitter_diameter_mm: Positive = 1.0
+    emitter_diameter_mm: Positive | list[Positive] = 1.0
     radiant_intensity_w_sr: Positive | list[Positive] = 0.015
     profile: LedProfile | list[LedProfile] = LedProfile()
     wavelength_nm: float | list[float] | None = None
@@ -144,10 +179,13 @@ class LedArray(_Model):
     aim_at_mm: Vector3 | None = None
     directions: list[Vector3] | None = None
 
-    @field_validator("radiant_intensity_w_sr", "wavelength_nm", "body_diameter_mm", mode="before")
+    @field_validator(*PER_LED_NUMBERS, mode="before")
     @classmethod
     def _numbers_one_by_one(cls, value, info):
-        """A list is checked item by item, so a bad item is named by its index."""
+        """A list is checked item by item, so a bad item is named by its index; a wavelength,
+        one or each, must also lie in :data:`WAVELENGTH_RANGE_NM`."""
+        if info.field_name == "wavelength_nm" and value is not None:
+            _check_wavelengths(value)
         if isinstance(value, list | tuple):
             if not value:
                 raise ValueError(f"{info.field_name} = []: give a number or one per LED")
@@ -180,7 +218,7 @@ class LedArray(_Model):
 
     @model_validator(mode="after")
     def _per_led_lengths(self) -> LedArray:
-        for name in ("radiant_intensity_w_sr", "profile", "wavelength_nm", "body_diameter_mm"):
+        for name in (*PER_LED_NUMBERS, "profile"):
             v = getattr(self, name)
             if isinstance(v, list) and len(v) != self.count:
                 raise ValueError(
@@ -257,6 +295,11 @@ class LedArray(_Model):
         """The radius of every LED's spherical body (mm), ``count`` values."""
         v = self.body_diameter_mm
         return [x / 2 for x in v] if isinstance(v, list) else [v / 2] * self.count
+
+    def emitter_diameters_mm(self) -> list[float]:
+        """The apparent diameter of every LED's emitting area (mm), ``count`` values."""
+        v = self.emitter_diameter_mm
+        return [float(x) for x in v] if isinstance(v, list) else [float(v)] * self.count
 
     def profiles(self) -> list[LedProfile]:
         """The angular profile of every LED, ``count`` profiles."""
@@ -659,7 +702,9 @@ class Sensor(_Model):
     then Poisson shot noise, the well clipped at ``full_well_e``, Gaussian read noise
     ``read_noise_e`` (electrons rms), conversion at ``gain_e_per_dn`` electrons per digital
     number plus ``black_level_dn``, rounding, and the ADC range 0 … 2^``adc_bits`` − 1
-    (see :mod:`eyelume.detectors.sensor`). ``quantum_efficiency`` is at the scene's wavelength.
+    (see :mod:`eyelume.detectors.sensor`). ``quantum_efficiency`` is at the scene's wavelength;
+    with LEDs of several wavelengths it is taken the same at each (the photo-electrons are the
+    groups' sum, :attr:`eyelume.render.RenderResult.eye_image_at_scene_wavelength`).
     """
 
     width_mm: Positive | None = None
@@ -746,7 +791,7 @@ class Scene(_Model):
 
     name: str
     description: str = ""
-    wavelength_nm: float = Field(850.0, ge=300, le=2500)
+    wavelength_nm: float = Field(850.0, ge=WAVELENGTH_RANGE_NM[0], le=WAVELENGTH_RANGE_NM[1])
     leds: LedArray = LedArray()
     eye: Eye
     face: Face = Face()
@@ -757,19 +802,6 @@ class Scene(_Model):
     sensor: Sensor = Sensor()
     eye_plane: EyePlane = EyePlane()
     run: Run = Run()
-
-    @model_validator(mode="after")
-    def _one_wavelength(self) -> Scene:
-        for k, lam in enumerate(self.leds.wavelengths_nm(self.wavelength_nm)):
-            if lam != self.wavelength_nm:
-                which = f"[{k}]" if isinstance(self.leds.wavelength_nm, list) else ""
-                raise ValueError(
-                    f"leds.wavelength_nm{which} = {lam:g} differs from wavelength_nm = "
-                    f"{self.wavelength_nm:g}: eyelume traces one wavelength (indices, "
-                    "reflectances and safety weights are taken at the scene's); set "
-                    "wavelength_nm to the LEDs' or render each wavelength as its own scene"
-                )
-        return self
 
     @model_validator(mode="after")
     def _optics_given(self) -> Scene:
