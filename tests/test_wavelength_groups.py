@@ -311,3 +311,36 @@ def test_emitter_diameter_per_led():
     rad = [e["retinal_radiance_w_m2_sr"] for e in s["per_led"]]
     assert rad[1] == pytest.approx(4 * rad[0], rel=1e-12) and rad[3] == pytest.approx(rad[0] / 4)
     assert s["retinal_worst_led"] == 1
+
+
+def test_info_lists_the_groups_at_their_wavelengths():
+    """paper2005 at 850 and 940 nm: glass indices fall with wavelength (normal dispersion), so
+    the Double Gauss's EFL grows; each group names its LEDs."""
+    res = runner.invoke(app, ["info", "--json", "--set", "leds.wavelength_nm=[850, 940, 850, 940]"])
+    assert res.exit_code == 0, res.output
+    groups = json.loads(res.stdout)["wavelength_groups"]
+    assert [(g["wavelength_nm"], g["leds"]) for g in groups] == [(850.0, [0, 2]), (940.0, [1, 3])]
+    a, b = groups
+    assert b["effective_focal_length_mm"] > a["effective_focal_length_mm"]
+    for name, glass in b["glasses"].items():
+        assert glass["index"] < a["glasses"][name]["index"], name
+    assert b["eye_indices"][1] < a["eye_indices"][1]  # the cornea disperses too
+    assert "wavelength_groups" not in json.loads(runner.invoke(app, ["info", "--json"]).stdout)
+
+
+def test_interrupted_before_the_last_group_keeps_no_picture(vr_two, monkeypatch):
+    """Ctrl-C in the first of two groups: KeyboardInterrupt naming the group, not a picture
+    missing the second group's light."""
+    import sys
+
+    R = sys.modules["eyelume.render"]  # the module (eyelume.render is also the function)
+    real = R.trace_fast
+
+    def stopped(*args, **kwargs):
+        est = real(*args, **kwargs)
+        est.interrupted = True
+        return est
+
+    monkeypatch.setattr(R, "trace_fast", stopped)
+    with pytest.raises(KeyboardInterrupt, match="wavelength group 1 of 2"):
+        render(vr_two, RenderOptions(estimator="fast", samples_per_pixel=4, seed=1))

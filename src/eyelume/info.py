@@ -6,6 +6,7 @@ import math
 
 from eyelume.compile import (
     CompiledScene,
+    WavelengthGroup,
     camera_pose,
     compile_scene,
     eye_direction,
@@ -14,6 +15,8 @@ from eyelume.compile import (
     lens_indices,
     lens_paraxial,
     real_best_focus,
+    single_wavelength,
+    wavelength_groups,
 )
 from eyelume.kernels import sequential as Q
 from eyelume.scene.eye import LAMBDA_D, eye_indices
@@ -98,12 +101,43 @@ def scene_info(scene: Scene) -> dict:
         out["imaging_lens"], out["glasses"] = _prescription_info(scene, cs)
     out["eye"] = _eye_info(scene)
     out["leds"] = _led_info(scene, cs)
+    if not single_wavelength(scene):
+        out["wavelength_groups"] = [_group_info(scene, cs, g) for g in wavelength_groups(scene)]
     if scene.camera.optics == "prescription":
         out["reading_of_the_paper"] = (
             "The F-number is read as EFL / entrance-pupil diameter at infinite conjugate (the "
             "paper's F/2.51); the stop is sized for it. The working F-number above is that of "
             "the finite eye-plane conjugate."
         )
+    return out
+
+
+def _group_info(scene: Scene, nominal: CompiledScene, group: WavelengthGroup) -> dict:
+    """One wavelength group as rendered (:func:`eyelume.compile.compile_scene` with the group):
+    its LEDs and power, the camera's first-order figures and the eye's indices at its
+    wavelength, and for a prescription each glass's index there and whether the wavelength lies
+    in the glass's catalog range (beyond it, the compile warns)."""
+    cg = compile_scene(scene, group, nominal=nominal)
+    fo = cg.first_order
+    out = {
+        "wavelength_nm": group.wavelength_nm,
+        "leds": list(group.leds),
+        "power_w": cg.emitted_w,
+        "effective_focal_length_mm": fo.efl,
+        "entrance_pupil_diameter_mm": 2.0 * fo.entrance_pupil_radius,
+        "magnification": fo.magnification,
+        "eye_indices": eye_indices(scene.eye, group.wavelength_nm),
+    }
+    if scene.camera.optics == "prescription":
+        _, used = lens_indices(cg.scene)
+        out["glasses"] = {
+            s.glass: {
+                "index": cg.lens_indices[j + 1],
+                "wavelength_in_catalog_range": used[s.glass].in_range(group.wavelength_nm),
+            }
+            for j, s in enumerate(scene.lens.surfaces)  # type: ignore[union-attr]
+            if s.glass in used
+        }
     return out
 
 
