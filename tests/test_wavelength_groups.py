@@ -344,3 +344,37 @@ def test_interrupted_before_the_last_group_keeps_no_picture(vr_two, monkeypatch)
     monkeypatch.setattr(R, "trace_fast", stopped)
     with pytest.raises(KeyboardInterrupt, match="wavelength group 1 of 2"):
         render(vr_two, RenderOptions(estimator="fast", samples_per_pixel=4, seed=1))
+
+
+@pytest.mark.slow
+def test_forward_and_fast_agree_with_three_wavelengths():
+    """Both estimators through the wavelength groups: ``glasses-frame``'s six LEDs at 810, 850
+    and 940 nm, its lens opened to F/0.6 and binned 8 × 6 (as the six-unlike-LEDs agreement
+    test): per-bin z over bins with ≥ 25 forward rays, Σz² inside the central 99.8 % of χ²."""
+    from scipy import stats
+
+    scene = apply_overrides(
+        load_scene("glasses-frame"),
+        {
+            "camera.ideal.f_number": 0.6,
+            "sensor.cols": 8,
+            "sensor.rows": 6,
+            "sensor.width_mm": 1.92,
+            "sensor.height_mm": 1.44,
+            "leds.wavelength_nm": [850.0, 940.0, 810.0, 850.0, 940.0, 850.0],
+        },
+    )
+    cs = compile_scene(scene)
+    fwd = render(cs, RenderOptions(rays=10_000_000, seed=11))
+    fast = render(cs, RenderOptions(estimator="fast", samples_per_pixel=256, seed=12))
+    assert len(fwd.groups) == len(fast.groups) == 3
+    assert sum(fwd.ledger.values()) == pytest.approx(cs.emitted_w, rel=1e-9)
+    keep = fwd.image_counts >= 25
+    n = int(keep.sum())
+    assert n > 25
+    z = (fast.eye_image - fwd.eye_image)[keep] / np.sqrt(
+        (fast.eye_image_variance + fwd.eye_image_variance)[keep]
+    )
+    chi2 = float((z**2).sum())
+    lo, hi = stats.chi2.ppf([0.001, 0.999], n)
+    assert lo < chi2 < hi, f"Σz² = {chi2:.0f} over {n} bins, outside [{lo:.0f}, {hi:.0f}]"
