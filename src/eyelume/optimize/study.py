@@ -40,11 +40,12 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
 
 from eyelume.errors import EyelumeError
 from eyelume.scene.io import SceneError, apply_overrides, load_scene, preset_names
 from eyelume.scene.model import Scene
+from eyelume.scene.model import _Model as _Table  # extra keys, NaN and true-for-a-number refused
 from eyelume.scene.textfile import decode_text
 
 __all__ = ["METRICS", "Study", "Vary", "load_study", "plan_runs", "run_key", "run_metrics"]
@@ -59,14 +60,13 @@ METRICS = (
 )
 
 
-class Vary(BaseModel):
-    """One varied parameter: exactly one of grid, values, random, latin (finite numbers)."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+class Vary(_Table):
+    """One varied parameter: exactly one of grid, values, random, latin (finite numbers; the
+    values may be true/false for a switch such as ``camera.body.enabled``)."""
 
     path: str
     grid: tuple[float, float, int] | None = None
-    values: list[float | int | str] | None = None
+    values: list[bool | int | float | str] | None = None
     random: tuple[float, float] | None = None
     latin: tuple[float, float] | None = None
     samples: int = Field(0, ge=0)
@@ -83,10 +83,8 @@ class Vary(BaseModel):
         return self
 
 
-class Study(BaseModel):
+class Study(_Table):
     """A study file (module docstring)."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     name: str
     scene: str = "paper2005"

@@ -11,7 +11,7 @@ primary gaze).
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, Literal, get_args
 
 from pydantic import (
     AfterValidator,
@@ -95,8 +95,27 @@ def _check_wavelengths(value) -> None:
             raise ValueError(f"{name}must lie in {lo:g} … {hi:g} nm")
 
 
+def _holds_bool(annotation) -> bool:
+    """Whether a field's type admits ``bool`` (``bool``, ``bool | None``, …)."""
+    return annotation is bool or any(_holds_bool(a) for a in get_args(annotation))
+
+
 class _Model(BaseModel):
+    """Every scene table: unknown keys, NaN and ±inf refused; ``true``/``false`` refused where
+    a number is asked (pydantic's lax mode would read ``count = true`` as 1)."""
+
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_bool_for_a_number(cls, v, info):
+        items = v if isinstance(v, list | tuple) else [v]
+        flat = [x for it in items for x in (it if isinstance(it, list | tuple) else [it])]
+        if any(isinstance(x, bool) for x in flat) and not _holds_bool(
+            cls.model_fields[info.field_name].annotation
+        ):
+            raise ValueError("true/false is not a value this field takes")
+        return v
 
 
 class LedProfile(_Model):
