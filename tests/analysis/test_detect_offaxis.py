@@ -21,7 +21,7 @@ across, so 0.5 px is 1–3 % of the diameter; the detector's errors on these fra
 
 Glints are not asserted: at these sizes a corneal glint of the presets' LEDs is one pixel or
 less and a 4-sample render draws some of them and not others (see the README's tracking
-section); ``ok`` is then False for "glint lost".
+section); ``ok`` is then False for "glint lost" when fewer than two are matched.
 """
 
 from __future__ import annotations

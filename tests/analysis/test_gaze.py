@@ -21,6 +21,7 @@ from eyelume.analysis.tracking.gaze import (
     PinholeCamera,
     angles_from_axis,
     axis_from_angles,
+    glint_offsets,
     pupil_glint_vector,
     refraction_point,
     simulate_eye_features,
@@ -220,6 +221,63 @@ def test_pccr_on_the_eye_model(camera, leds, grid_features, rng):
     slope_lo = (means[3] - means[2]) / 0.1
     slope_hi = (means[4] - means[3]) / 0.3
     assert slope_hi == pytest.approx(slope_lo, rel=0.3), means
+
+
+def test_glint_offsets_from_frames_with_glints_missing():
+    """g_fk = C_f + o_k exactly (a pattern moved between frames): the offsets come back from
+    frames each missing a different glint, and an LED seen in no frame gets NaN."""
+    o = np.array([[3.0, 0.0], [0.0, -3.0], [-3.0, 0.0], [0.0, 3.0], [9.0, 9.0]])
+    o[:4] -= o[:4].mean(axis=0)
+    centres = np.array([[10.0, 20.0], [11.5, 19.0], [13.0, 22.0], [9.0, 18.5]])
+    g = centres[:, None, :] + o[None, :, :]
+    for f in range(4):
+        g[f, f] = np.nan  # frame f misses LED f
+    g[:, 4] = np.nan  # LED 4 never seen
+    got = glint_offsets(g)
+    assert np.allclose(got[:4], o[:4], atol=1e-12)
+    assert np.isnan(got[4]).all()
+    for f in range(4):
+        assert np.allclose(pupil_glint_vector(np.zeros(2), g[f], offsets=got), -centres[f])
+
+
+def test_pccr_with_a_glint_missing_keeps_the_pattern_centre(camera, leds, grid_features):
+    """Calibrated on frames with every glint, tested with one LED's glint dropped (as off the
+    cornea or under a lid): with the LEDs' calibration offsets (:func:`glint_offsets`) the
+    reference stays the pattern's centre. Its shift from the full pattern's mean is the mean of
+    the found glints' offset changes since calibration (≤ the largest, d), so the gaze moves by
+    at most G d, G the polynomial's largest Jacobian norm. The mean of the found glints alone
+    moves by ~r / 3 (r the pattern radius, ~3 px) and the gaze by several degrees."""
+    cal_h, cal_v = H_GRID[::3], V_GRID[::2]
+    is_cal = np.array([h in cal_h and v in cal_v for h, v, _ in grid_features])
+    pupil, glints, gaze = _features_arrays(grid_features)
+    off = glint_offsets(glints[is_cal])
+    model = PccrModel.fit(
+        pupil_glint_vector(pupil[is_cal], glints[is_cal], offsets=off), gaze[is_cal]
+    )
+    pt, gt, zt = pupil[~is_cal], glints[~is_cal], gaze[~is_cal]
+    pg_full = pupil_glint_vector(pt, gt)
+    full = model.predict(pg_full)
+    # d per frame: the largest change of an LED's offset from its calibration value.
+    d = np.linalg.norm(gt - gt.mean(axis=1, keepdims=True) - off, axis=-1).max(axis=1)
+    h = 1e-4
+    jac = np.stack(
+        [
+            (model.predict(pg_full + h * e) - model.predict(pg_full - h * e)) / (2 * h)
+            for e in np.eye(2)
+        ],
+        axis=-1,
+    )
+    g_norm = np.linalg.norm(jac, ord=2, axis=(1, 2))
+    for k in range(len(leds)):
+        g = gt.copy()
+        g[:, k] = np.nan
+        pg = pupil_glint_vector(pt, g, offsets=off)
+        assert (np.linalg.norm(pg - pg_full, axis=1) <= d + 1e-9).all()
+        shift = np.linalg.norm(model.predict(pg) - full, axis=1)
+        # first order in d: the polynomial's curvature over d adds ≲ 1 % of G d here
+        assert (shift <= 1.05 * g_norm * d + 1e-9).all(), (k, shift.max())
+        plain = np.hypot(*(model.predict(pupil_glint_vector(pt, g)) - zt).T)
+        assert plain.mean() > 3.0 + np.hypot(*(full - zt).T).mean()
 
 
 # --- geometric model ---------------------------------------------------------------------------

@@ -32,6 +32,7 @@ from eyelume.analysis.tracking.evaluate import (
     analyse_frames,
     failure_reason,
     led_picture_azimuths,
+    led_picture_pattern,
     mean_deg,
     tracking_score,
 )
@@ -68,7 +69,12 @@ def render_frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> F
     digital = digitize(result.eye_image_at_scene_wavelength, sc.sensor, sc.wavelength_nm, seed)
     azimuths = led_picture_azimuths(cs)
     frame = analyse_frame(
-        (h, v), digital.counts, eye_truth(cs), azimuths, render_s=result.wall_time_s
+        (h, v),
+        digital.counts,
+        eye_truth(cs),
+        azimuths,
+        render_s=result.wall_time_s,
+        led_pattern_px=led_picture_pattern(cs),
     )
     frame.saturated_share = digital.saturated_pixels / max(digital.counts.size, 1)
     return frame

@@ -23,7 +23,7 @@ Conventions
 
 Pipeline (each step's choices are explained in :mod:`.pupil` and :mod:`.glints`)
 ----------------------------------------------------------------------------------
-1. :func:`_prepare`: the array, its missing pixels, the 8-bit picture for the glints.
+1. :func:`_prepare`: the array, its missing pixels, its range and pixel noise.
 2. Glints (:func:`~.glints.find_glints`): pixels above the 99th percentile and halfway from
    their neighbourhood's mean to the maximum; bright blobs; a blob must stand above its local
    background by ``glint_min_snr`` × the pixel noise; intensity-weighted centroids. In an
@@ -44,10 +44,14 @@ Which failures make ``ok`` False
 (45 %) backed by edge points or has an unbacked arc over ``max_boundary_gap`` (45 %) of it (cut
 by an eyelid or the image border, or hidden); a pupil outline
 that is not an ellipse (RMS residual of its edge points above max(``max_fit_residual_px``,
-``max_fit_residual_frac`` × the semi-minor axis)); a glint lost (LED azimuths
-given and an LED has no glint). Messages starting ``"warning: "`` leave ``ok`` True: a glint on
-the pupil's edge (its outline points there were dropped, so the centre stands, but that glint's
-centroid may be biased), a glint matched to no LED, no glints when no LEDs were given.
+``max_fit_residual_frac`` × the semi-minor axis)); too few glints (LED azimuths given and
+fewer than ``min_matched_glints`` (2; all of them with a single LED) matched to an LED). Messages
+starting ``"warning: "`` leave ``ok`` True: LEDs without a glint when enough others have one
+(listed in ``Detection.missing_leds`` too: on a headset with 6–8 LEDs around an eye seen off its
+axis some glints routinely fall off the cornea or under a lid; the gaze models use the matched
+glints only), a glint on the pupil's edge (its outline points there were dropped, so the centre
+stands, but that glint's centroid may be biased), a glint matched to no LED, no glints when no
+LEDs were given.
 
 When ``ok`` is False ``pupil`` may still hold the rejected candidate, for diagnosis: use its
 numbers only when ``ok`` is True.
@@ -201,6 +205,16 @@ class DetectParams:
         fitted pupil outline is "on the pupil edge".
     match_max_angle_deg : largest glint–LED direction difference for a match (``None`` = half
         the smallest gap between LED azimuths: 45° for four LEDs 90° apart).
+    min_matched_glints : fewest glints matched to LEDs for ``ok`` (2, or every LED when fewer
+        are given): the geometric gaze model needs two glints to place the centre of corneal
+        curvature (Guestrin & Eizenman 2006, :class:`~.gaze.GeometricGaze`), and a glint
+        pattern of two or more fixes the PCCR reference (:func:`~.gaze.glint_offsets`). Fewer
+        is a failure naming the missing LEDs; more missing LEDs than that are a warning.
+        With LEDs missing, the matched glints must also fit the LEDs' glint pattern
+        (:func:`_pattern_misfit`): direction alone lets two stray reflections pass for glints.
+    pattern_min_scale : with ``led_pattern_px`` given, the fitted pattern's scale must be within
+        [this, 1 / this] of the prediction (0.5: a guess — the glints' spread changes with gaze
+        and with the eye's distance by far less than 2×; strays beside the pupil do not keep it).
     """
 
     scale_percentile: float = 99.0
@@ -252,6 +266,8 @@ class DetectParams:
     glint_search_radius: float = 2.0
     glint_edge_margin_px: float = 1.0
     match_max_angle_deg: float | None = None
+    min_matched_glints: int = 2
+    pattern_min_scale: float = 0.5
 
 
 @dataclass
@@ -293,7 +309,8 @@ class Detection:
     """One frame's result: ``ok`` (trust it), ``failures`` (reasons; ``"warning: …"`` ones do
     not clear ``ok``), ``pupil``, ``glints`` (LED order first, then unmatched by peak),
     ``timings_ms`` per stage, ``glint_threshold`` the floor glint pixels are above (the 99th
-    percentile, input units; None when nothing stood out)."""
+    percentile, input units; None when nothing stood out), ``missing_leds`` the LEDs (indices
+    into ``led_azimuths_deg``) left without a glint (empty when no LEDs were given)."""
 
     ok: bool
     failures: list[str]
@@ -301,6 +318,7 @@ class Detection:
     glints: list[Glint]
     timings_ms: dict[str, float] = field(default_factory=dict)
     glint_threshold: float | None = None
+    missing_leds: list[int] = field(default_factory=list)
 
 
 def _missing(img: np.ndarray, valid: np.ndarray | None) -> np.ndarray | None:
@@ -351,7 +369,11 @@ def _mend_hot_pixels(img: np.ndarray, noise: float) -> int:
     thr = percentile(img[::step, ::step], 99.9)
     # I > t ⇔ I > ⌊t⌋ for integers; cv2.compare and a flat index are ~10× np.nonzero here.
     t = float(math.floor(thr)) if img.dtype.kind in "iu" else float(thr)
-    ys, xs = np.divmod(np.flatnonzero(cv2.compare(img, t, cv2.CMP_GT) > 0), cols)
+    nz = cv2.findNonZero(cv2.compare(img, t, cv2.CMP_GT))  # (x, y) pairs in row order
+    if nz is None:
+        return 0
+    nz = nz.reshape(-1, 2).astype(np.intp)
+    xs, ys = nz[:, 0], nz[:, 1]
     inner = (ys > 0) & (xs > 0) & (ys < rows - 1) & (xs < cols - 1)
     ys, xs = ys[inner], xs[inner]
     if len(ys) == 0 or len(ys) > 0.01 * img.size:
@@ -369,8 +391,9 @@ def _mend_hot_pixels(img: np.ndarray, noise: float) -> int:
 def _prepare(image: np.ndarray, valid: np.ndarray | None):
     """Step 1: the picture as a contiguous array (uint8/uint16/int16/float32 kept, other reals
     converted), its invalid pixels (non-finite, or outside ``valid``; ``None`` when none) set to
-    the darkest valid value, and its 8-bit version u8 = 255 (I − min) / (max − min) for the
-    glints. Raises ValueError for a picture that is not 2-D, empty, or has no valid pixel."""
+    the darkest valid value, its range (min, max) and its pixel noise. (The glints' 8-bit
+    picture is made by :func:`~.glints.find_glints`, from the smoothed picture when it smooths.)
+    Raises ValueError for a picture that is not 2-D, empty, or has no valid pixel."""
     img = np.asarray(image)
     if img.ndim != 2:
         raise ValueError(f"detect needs a 2-D grey picture, got shape {img.shape}")
@@ -392,11 +415,7 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None):
     noise = max(noise_sigma(img), 0.5 if img.dtype.kind in "iu" else 0.0)
     n_hot = _mend_hot_pixels(img, noise)
     lo, hi, _, _ = cv2.minMaxLoc(img)
-    extra = (n_hot, noise, n_black)
-    if hi <= lo:
-        return img, invalid, np.zeros(img.shape, np.uint8), float(lo), float(hi), extra
-    u8 = cv2.normalize(img, None, 0, 255, cv2.NORM_MINMAX, dtype=cv2.CV_8U)
-    return img, invalid, u8, float(lo), float(hi), extra
+    return img, invalid, float(lo), float(hi), (n_hot, noise, n_black)
 
 
 def _pupil_result(fit, params) -> tuple[Pupil | None, list[str]]:
@@ -469,24 +488,143 @@ def _broken_glints(glints: list[Glint], specks: list[Glint], params) -> list[str
     return out
 
 
-def _match_glints(glints: list[Glint], led_azimuths_deg, params) -> list[str]:
-    """Step 5b: each glint's LED (in place); the error for LEDs left without a glint."""
+def _pattern_misfit(glints: list[Glint], led_azimuths_deg, pattern, max_ang: float, params) -> str:
+    """Why the matched glints do not fit the LEDs' glint pattern, or "" when they do.
+
+    The pattern p_k (px, relative to its centre) is ``pattern`` when given (the glints'
+    predicted layout, :func:`~.evaluate.led_picture_pattern`), else the unit vectors of the LED
+    azimuths (a ring). The matched glints are fitted as g_k = t + s p_k (least squares in the
+    shift t and the scale s): each must lie within s |p_k| sin(max_ang / 2) of t + s p_k —
+    farther, and its direction from the pattern's centre could be a neighbour LED's (max_ang
+    is the matching's own limit) — and s must be > 0 and, with a predicted pattern, within
+    [``pattern_min_scale``, 1 / ``pattern_min_scale``]."""
+    pairs = [(g.centre_px, g.led) for g in glints if g.led is not None]
+    if pattern is None:
+        az = np.radians(np.asarray(led_azimuths_deg, float))
+        p_all = np.column_stack([np.cos(az), -np.sin(az)])
+    else:
+        p_all = np.asarray(pattern, float)
+    g = np.array([c for c, _ in pairs], float)
+    p = p_all[[k for _, k in pairs]]
+    a = np.zeros((2 * len(pairs), 3))
+    a[0::2, 0] = 1.0
+    a[1::2, 1] = 1.0
+    a[0::2, 2] = p[:, 0]
+    a[1::2, 2] = p[:, 1]
+    sol = np.linalg.lstsq(a, g.reshape(-1), rcond=None)[0]
+    s = float(sol[2])
+    if not (s > 0 and math.isfinite(s)):
+        return "the matched glints lie in the reverse order of their LEDs'"
+    if pattern is not None and not (params.pattern_min_scale <= s <= 1 / params.pattern_min_scale):
+        return (
+            f"the matched glints spread {s:.2f} × the predicted pattern (allowed "
+            f"{params.pattern_min_scale:g}–{1 / params.pattern_min_scale:g})"
+        )
+    res = np.hypot(*(g - (sol[:2] + s * p)).T)
+    tol = s * np.hypot(*p.T) * math.sin(math.radians(0.5 * max_ang))
+    worst = int(np.argmax(res - tol))
+    if res[worst] > tol[worst]:
+        return (
+            f"LED {pairs[worst][1]}'s glint lies {res[worst]:.1f} px from where the other "
+            f"glints put it (tolerance {tol[worst]:.1f} px)"
+        )
+    return ""
+
+
+def _direction_off(centres: np.ndarray, leds, ref, led_azimuths_deg) -> np.ndarray:
+    """Each glint's angle (degrees) from its LED's azimuth, seen from ``ref`` (∞ unmatched)."""
+    rel = centres - np.asarray(ref, float)
+    psi = np.degrees(np.arctan2(-rel[:, 1], rel[:, 0]))
+    az = np.asarray(led_azimuths_deg, float)
+    return np.array(
+        [
+            abs((p - az[k] + 180.0) % 360.0 - 180.0) if k is not None else math.inf
+            for p, k in zip(psi, leds, strict=True)
+        ]
+    )
+
+
+def _assign_leds(centres: np.ndarray, led_azimuths_deg, max_ang: float):
+    """Each glint's LED or None, and notes on glints left out (module doc of :func:`detect`).
+
+    Directions are taken from the glints' own centre: one glint alone has none (it is left
+    unmatched unless there is one LED), and two have opposite ones, which tell their LEDs
+    apart only when the LEDs are nearly opposite too — two neighbours of a ring lie exactly
+    between two LEDs each, a tie (at max_ang) that is refused, not guessed: a pair's match
+    must be within max_ang / 2 of its LEDs. With more glints and an LED left without one, a
+    glint matched more than max_ang / 2 off its LED's direction lies between two LEDs' — two
+    glints merged into one blob (at 87 × 65 two neighbours of the paper's ring are 4–5 px
+    apart) or a stray, which also pulls the pattern's centre and so the others' directions —
+    and the frame is refused (the notes returned)."""
+    n, n_led = len(centres), len(led_azimuths_deg)
+    if n < 2 and n_led > 1:
+        return [None] * n, "", []
+    ref = tuple(np.median(centres, axis=0)) if n else (0.0, 0.0)
+    leds, ref = match_leds(centres, led_azimuths_deg, ref, max_ang, with_reference=True)
+    leds = list(leds)
+    if n == 2 and n_led > 2:
+        off = _direction_off(centres, leds, centres.mean(axis=0), led_azimuths_deg)
+        if off.max() <= 0.5 * max_ang:
+            return leds, "", []
+        if math.isinf(off.max()):
+            return [None, None], "; of the two glints found one matches no LED", []
+        return (
+            [None, None],
+            (
+                f"; the two glints found lie {off.max():.0f}° from their LEDs' directions (tie at "
+                f"{max_ang:.0f}°): which LEDs they are is ambiguous"
+            ),
+            [],
+        )
+    between = []
+    if n > 2 and len(set(leds) - {None}) < n_led:
+        off = _direction_off(centres, leds, ref, led_azimuths_deg)
+        for i in np.flatnonzero(np.isfinite(off) & (off > 0.5 * max_ang)):
+            x, y = centres[i]
+            between.append(
+                f"the glint at ({x:.1f}, {y:.1f}) lies {off[i]:.0f}° off LED {leds[i]}'s "
+                f"direction (at most {0.5 * max_ang:.0f}° with LEDs missing), between two "
+                "LEDs' (two glints merged, or a stray?)"
+            )
+    return leds, "", between
+
+
+def _match_glints(
+    glints: list[Glint], led_azimuths_deg, params, pattern=None
+) -> tuple[list[str], list[int]]:
+    """Step 5b: each glint's LED (in place, :func:`_assign_leds`); the messages and the LEDs
+    left without a glint: an error when fewer than ``min_matched_glints`` (or, with fewer
+    LEDs, all of them) are matched or when the matched do not fit the LEDs' pattern
+    (:func:`_pattern_misfit`), else a warning."""
     n_led = len(led_azimuths_deg)
     centres = np.array([g.centre_px for g in glints]).reshape(-1, 2)
-    ref = tuple(np.median(centres, axis=0)) if len(glints) else (0.0, 0.0)
     max_ang = params.match_max_angle_deg
     if max_ang is None:
         max_ang = default_max_angle(led_azimuths_deg)
-    for g, k in zip(glints, match_leds(centres, led_azimuths_deg, ref, max_ang), strict=True):
+    leds, ambiguous, between = _assign_leds(centres, led_azimuths_deg, max_ang)
+    for g, k in zip(glints, leds, strict=True):
         g.led = k
     matched = {g.led for g in glints if g.led is not None}
     missing = [k for k in range(n_led) if k not in matched]
     if not missing:
-        return []
+        return [], []
+    need = min(params.min_matched_glints, n_led)
+    which = f"no glint for LED {', '.join(str(k) for k in missing)}"
+    if len(matched) < need:
+        lost = f"glint lost: {len(matched)} of {n_led} LEDs have a glint, {need} needed ({which})"
+        return [lost + ambiguous], missing
+    misfit = "; ".join(between) or _pattern_misfit(
+        glints, led_azimuths_deg, pattern, max_ang, params
+    )
+    if misfit:
+        return [
+            f"glint lost: {len(matched)} of {n_led} LEDs have a glint ({which}) and {misfit}: "
+            "strays taken for glints?"
+        ], missing
     return [
-        f"glint lost: {len(matched)} of {n_led} LEDs have a glint "
-        f"(no glint for LED {', '.join(str(k) for k in missing)})"
-    ]
+        f"warning: {len(missing)} of {n_led} LEDs without a glint ({which}); the "
+        f"{len(matched)} matched are used"
+    ], missing
 
 
 def _glint_warnings(glints, fit, led_azimuths_deg, params) -> list[str]:
@@ -514,6 +652,7 @@ def detect(
     *,
     led_azimuths_deg: Sequence[float] | None = None,
     valid: np.ndarray | None = None,
+    led_pattern_px: np.ndarray | None = None,
     params: DetectParams = DetectParams(),  # noqa: B008 - frozen, never mutated
 ) -> Detection:
     """Find the pupil and glints in a grey eye picture (module doc: conventions, pipeline).
@@ -523,22 +662,35 @@ def detect(
     image : (rows, cols) uint8, uint16 or float — DN or irradiance; any other real dtype is
         converted. Non-finite pixels (NaN, inf) are missing pixels.
     led_azimuths_deg : the LEDs' azimuths (0° = picture +x, 90° = up); when given, each glint
-        is matched to its LED and a missing one is a failure.
+        is matched to its LED; LEDs left without one are listed in ``missing_leds``, a failure
+        when fewer than ``params.min_matched_glints`` (2) are matched, else a warning.
     valid : optional (rows, cols) bool, True where the picture shows the eye (e.g. inside a
         headset's lens); dark regions touching the rest are never the pupil.
+    led_pattern_px : optional (k, 2) px, each LED's glint relative to the glints' centre as
+        predicted (:func:`~.evaluate.led_picture_pattern`); with LEDs missing the matched
+        glints must fit it (:func:`_pattern_misfit`), else a ring of the azimuths.
     params : :class:`DetectParams`.
 
     Raises
     ------
     ValueError
         If the picture is not 2-D, is empty, or has no valid (finite, unmasked) pixel; if
-        ``valid`` has another shape; if an LED azimuth is not finite.
+        ``valid`` has another shape; if an LED azimuth is not finite; if ``led_pattern_px`` is
+        not one finite (x, y) per LED.
     """
     if led_azimuths_deg is not None and not np.isfinite(np.asarray(led_azimuths_deg, float)).all():
         raise ValueError(f"LED azimuths must be finite degrees, got {list(led_azimuths_deg)}")
+    if led_pattern_px is not None:
+        led_pattern_px = np.asarray(led_pattern_px, float)
+        n_led = 0 if led_azimuths_deg is None else len(led_azimuths_deg)
+        if led_pattern_px.shape != (n_led, 2) or not np.isfinite(led_pattern_px).all():
+            raise ValueError(
+                f"LED glint pattern must be finite ({n_led}, 2) px, one row per LED azimuth; "
+                f"got shape {led_pattern_px.shape}"
+            )
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    img, invalid, u8, lo, hi, (n_hot, noise, n_black) = _prepare(image, valid)
+    img, invalid, lo, hi, (n_hot, noise, n_black) = _prepare(image, valid)
     if hi <= lo:
         timings["total"] = 1e3 * (time.perf_counter() - t_start)
         return Detection(
@@ -546,7 +698,7 @@ def detect(
         )
     t1 = time.perf_counter()
     timings["normalise"] = 1e3 * (t1 - t_start)
-    blobs, bright, tg_value = find_glints(u8, img, (lo, hi), noise, params)
+    blobs, bright, tg_value = find_glints(img, (lo, hi), noise, params)
     t2 = time.perf_counter()
     timings["glints"] = 1e3 * (t2 - t1)
     fit = find_pupil(img, invalid, bright, params)
@@ -560,11 +712,15 @@ def detect(
             b for b in blobs if math.hypot(b["centre_px"][0] - cx, b["centre_px"][1] - cy) <= r_max
         ]
     glints, specks = _split_specks(blobs, params)
+    missing_leds: list[int] = []
+    lost_note: list[str] = []
     if led_azimuths_deg is not None and len(led_azimuths_deg) > 0:
-        errors += _match_glints(glints, led_azimuths_deg, params)
+        lost, missing_leds = _match_glints(glints, led_azimuths_deg, params, led_pattern_px)
+        errors += [m for m in lost if not m.startswith("warning: ")]
+        lost_note = [m for m in lost if m.startswith("warning: ")]
     glints.sort(key=lambda g: (g.led is None, g.led if g.led is not None else 0, -g.peak))
     errors += _broken_glints(glints, specks, params)
-    warnings = _glint_warnings(glints, fit, led_azimuths_deg, params)
+    warnings = lost_note + _glint_warnings(glints, fit, led_azimuths_deg, params)
     if n_hot:
         warnings.append(f"warning: {n_hot} isolated hot pixel(s) replaced by their neighbours")
     if n_black:
@@ -582,6 +738,7 @@ def detect(
         glints=glints,
         timings_ms=timings,
         glint_threshold=tg_value,
+        missing_leds=missing_leds,
     )
 
 
@@ -637,6 +794,7 @@ def detection_to_dict(d: Detection) -> dict:
         "pupil": asdict(d.pupil) if d.pupil is not None else None,
         "glints": [asdict(g) for g in d.glints],
         "glint_threshold": d.glint_threshold,
+        "missing_leds": list(d.missing_leds),
         "timings_ms": dict(d.timings_ms),
         "convention": PIXEL_CONVENTION,
     }

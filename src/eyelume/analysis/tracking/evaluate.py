@@ -7,7 +7,11 @@ ellipse's centre against the centre of the ellipse through the true apparent pup
 found and matched. :func:`analyse_frames` estimates gaze with two estimators (:mod:`.gaze`): the
 PCCR polynomial, calibrated on a 3 × 3 grid of calibration frames and evaluated on the held-out
 test frames, and the Guestrin–Eizenman geometric model from the glints, which needs no
-calibration. Rendering the frames over a gaze grid is :mod:`eyelume.optimize.tracking`'s.
+calibration. Both use the glints matched to LEDs only: a frame with some LEDs' glints missing
+(off the cornea, under a lid) but ≥ 2 matched is answered (:func:`~.detect.detect`); its PCCR
+reference is the glint pattern's centre from the found glints and each LED's offset in the
+calibration frames (:func:`~.gaze.glint_offsets`), not the mean of the found glints, which
+moves toward them. Rendering the frames over a gaze grid is :mod:`eyelume.optimize.tracking`'s.
 """
 
 from __future__ import annotations
@@ -20,7 +24,13 @@ import numpy as np
 
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.tracking.detect import Detection, detect
-from eyelume.analysis.tracking.gaze import GeometricGaze, PccrModel, PinholeCamera
+from eyelume.analysis.tracking.gaze import (
+    GeometricGaze,
+    PccrModel,
+    PinholeCamera,
+    glint_offsets,
+    pupil_glint_vector,
+)
 from eyelume.scene.model import Scene
 
 __all__ = [
@@ -32,6 +42,7 @@ __all__ = [
     "error_map_rows",
     "pinhole_camera",
     "led_picture_azimuths",
+    "led_picture_pattern",
     "tracking_score",
 ]
 
@@ -45,7 +56,8 @@ TEST_V = (-20.0, -10.0, 0.0, 10.0, 20.0)
 
 @dataclass
 class Frame:
-    """One rendered gaze: detection against truth, and the gaze estimates (degrees)."""
+    """One rendered gaze: detection against truth, and the gaze estimates (degrees).
+    ``glints_px`` holds one entry per LED: its matched glint (x, y) px or None."""
 
     gaze: tuple[float, float]
     detection: Detection
@@ -59,6 +71,7 @@ class Frame:
     render_s: float = 0.0
     detect_ms: float = 0.0
     saturated_share: float = 0.0  # of the frame's pixels at the full well or full scale
+    glints_px: list | None = None
 
 
 @dataclass
@@ -99,12 +112,22 @@ def led_picture_azimuths(cs) -> list[float]:
     entrance pupil E, **g**ₖ = **c** + R · unit(unit(Lₖ − **c**) + unit(E − **c**)) (the law of
     reflection for a glint seen from E, in the small-glint limit); each is projected by the
     pinhole camera of :func:`pinhole_camera` and its direction taken from their mean."""
-    from eyelume.compile import eye_point
-
     scene = cs.scene
     paper_eye = scene.eye_pose.which == "right" and not any(scene.eye_pose.vertex_mm)
     if cs.frame.is_identity and scene.leds.is_paper_ring and paper_eye:
         return list(scene.leds.azimuths())
+    g = led_picture_pattern(cs)
+    return [math.degrees(math.atan2(-dy, dx)) % 360.0 for dx, dy in g]
+
+
+def led_picture_pattern(cs) -> np.ndarray:
+    """(k, 2) px: where each LED's glint lies relative to the glints' mean in the picture, the
+    eye in primary gaze — the small-glint reflection points of :func:`led_picture_azimuths`
+    projected by the pinhole camera of :func:`pinhole_camera`. The detector checks the matched
+    glints against this layout when some are missing (``detect(led_pattern_px=…)``)."""
+    from eyelume.compile import eye_point
+
+    scene = cs.scene
     cam = pinhole_camera(scene)
     radius = scene.eye.surfaces[0].radius_mm
     c = cs.frame.point(eye_point(scene, [0.0, 0.0, -radius], 0.0, 0.0))
@@ -115,8 +138,7 @@ def led_picture_azimuths(cs) -> list[float]:
         d = led - c
         n = d / np.linalg.norm(d) + e
         pts.append(cam.project(c + radius * n / np.linalg.norm(n)))
-    g = np.asarray(pts) - np.mean(pts, axis=0)
-    return [math.degrees(math.atan2(-dy, dx)) % 360.0 for dx, dy in g]
+    return np.asarray(pts, float) - np.mean(pts, axis=0)
 
 
 def _truth_ellipse_centre(truth: dict) -> tuple[float, float] | None:
@@ -135,11 +157,14 @@ def analyse_frame(
     truth: dict,
     led_azimuths_deg: Sequence[float],
     render_s: float = 0.0,
+    led_pattern_px: np.ndarray | None = None,
 ) -> Frame:
     """Detect the pupil and glints on one digital picture ``counts`` (rows, cols) of the eye at
     ``gaze`` (h, v degrees) and compare with its ``truth`` (:func:`eyelume.analysis.truth.
-    eye_truth`): pupil-centre error (px), glints found and matched, the pupil–glint vector."""
-    det = detect(counts, led_azimuths_deg=list(led_azimuths_deg))
+    eye_truth`): pupil-centre error (px), glints found and matched, the pupil–glint vector.
+    ``led_pattern_px``: the glints' predicted layout (:func:`led_picture_pattern`), checked
+    when some are missing."""
+    det = detect(counts, led_azimuths_deg=list(led_azimuths_deg), led_pattern_px=led_pattern_px)
     f = Frame(tuple(gaze), det, truth, render_s=render_s)
     f.detect_ms = float(det.timings_ms.get("total", math.nan))
     f.glints_true = sum(1 for g in truth["glints"] if g["visible"])
@@ -147,15 +172,41 @@ def analyse_frame(
     centre = _truth_ellipse_centre(truth)
     if det.pupil is not None and centre is not None:
         f.pupil_error_px = float(np.hypot(*(np.subtract(det.pupil.centre_px, centre))))
-    if det.ok and det.pupil is not None:
-        matched = [g.centre_px for g in det.glints if g.led is not None]
-        if matched:
-            mean = np.mean(np.asarray(matched), axis=0)
-            f.pg_vector = (det.pupil.centre_px[0] - mean[0], det.pupil.centre_px[1] - mean[1])
+    glints: list = [None] * len(led_azimuths_deg)
+    for g in det.glints:
+        if g.led is not None:
+            glints[g.led] = g.centre_px
+    f.glints_px = glints
+    _set_pg_vector(f, None)
     return f
 
 
+def _set_pg_vector(f: Frame, offsets: np.ndarray | None) -> None:
+    """The frame's pupil–glint vector from its matched glints (None when the detection is not
+    ok or no usable glint): with ``offsets`` (:func:`~.gaze.glint_offsets`) from the glint
+    pattern's centre, else from the mean of the matched glints."""
+    det = f.detection
+    f.pg_vector = None
+    if not det.ok or det.pupil is None or not f.glints_px:
+        return
+    v = pupil_glint_vector(np.asarray(det.pupil.centre_px), f.glints_px, offsets=offsets)
+    if np.isfinite(v).all():
+        f.pg_vector = (float(v[0]), float(v[1]))
+
+
+def _calibration_offsets(calibration: list[Frame]) -> np.ndarray | None:
+    """Each LED's glint offset from the pattern's centre over the calibration frames answered
+    ``ok`` (:func:`~.gaze.glint_offsets`), or None when there are none."""
+    rows = [
+        [[np.nan, np.nan] if g is None else g for g in f.glints_px]
+        for f in calibration
+        if f.detection.ok and f.glints_px
+    ]
+    return glint_offsets(np.asarray(rows, dtype=float)) if rows else None
+
+
 def _geometric(model: GeometricGaze, frame: Frame, n_leds: int) -> tuple[float, float] | None:
+    """The geometric model's gaze from the frame's matched glints only (None for the others)."""
     det = frame.detection
     if not det.ok or det.pupil is None:
         return None
@@ -174,7 +225,14 @@ def analyse_frames(
     ``calibration`` frames (when at least 6 have a pupil–glint vector) and the geometric model
     of ``scene``'s camera with the LEDs at ``leds_mm`` (n, 3) in the camera frame (mm: the
     compiled scene's LED table, :mod:`eyelume.scene.pose`; the world frame for the paper's
-    rig)."""
+    rig).
+
+    The pupil–glint vectors of both are taken from the glint pattern's centre with the LEDs'
+    offsets of the calibration frames (:func:`_calibration_offsets`), so a frame missing some
+    glints keeps the reference of one with all."""
+    offsets = _calibration_offsets(calibration)
+    for f in [*calibration, *frames]:
+        _set_pg_vector(f, offsets)
     usable = [f for f in calibration if f.pg_vector is not None]
     pccr = None
     if len(usable) >= 6:

@@ -47,6 +47,7 @@ __all__ = [
     "PinholeCamera",
     "axis_from_angles",
     "angles_from_axis",
+    "glint_offsets",
     "pupil_glint_vector",
     "simulate_eye_features",
 ]
@@ -188,8 +189,71 @@ def _refract(u: np.ndarray, normal: np.ndarray, eta: float) -> np.ndarray | None
 # --- PCCR polynomial ------------------------------------------------------------------------------
 
 
+def _glint_array(glints_xy: np.ndarray | Sequence) -> np.ndarray:
+    if isinstance(glints_xy, np.ndarray):
+        return glints_xy.astype(float)
+    return np.array([[np.nan, np.nan] if q is None else q for q in glints_xy], dtype=float)
+
+
+def glint_offsets(glints_xy: np.ndarray) -> np.ndarray:
+    """Each LED's glint offset from the glint pattern's centre, px, from frames with some
+    glints missing: the least-squares solution of g_fk = C_f + o_k over the found glints
+    (frame f's pattern centre C_f, LED k's offset o_k), with Σ_k o_k = 0 — so a frame with
+    every glint found has C_f = the mean of its glints, the classic PCCR reference.
+
+    With o_k, the centre of a frame missing some glints is the mean over its found ones of
+    g_k − o_k (:func:`pupil_glint_vector` with ``offsets``): unbiased, where the mean of the
+    found glints alone moves toward them by up to the pattern's radius (on a headset with 6–8
+    LEDs around an eye seen off its axis, some glints fall off the cornea at most gazes). The
+    offsets change a little with gaze (the cornea turns under the LEDs); the calibration grid's
+    frames give their mean.
+
+    Parameters
+    ----------
+    glints_xy : (n, k, 2) glint centres of n frames and k LEDs, NaN where not found.
+
+    Returns
+    -------
+    (k, 2) offsets, NaN for an LED found in no frame (its glint cannot be used) or in no frame
+    that shares a found glint with the others.
+
+    >>> g = np.array([[[0., 0.], [2., 0.], [1., 3.]], [[5., 5.], [np.nan, np.nan], [6., 8.]]])
+    >>> glint_offsets(g).round(6).tolist()
+    [[-1.0, -1.0], [1.0, -1.0], [0.0, 2.0]]
+    """
+    g = np.asarray(glints_xy, dtype=float).reshape(-1, np.shape(glints_xy)[-2], 2)
+    n, k, _ = g.shape
+    found = np.all(np.isfinite(g), axis=-1)
+    frames, leds = np.nonzero(found)
+    out = np.full((k, 2), np.nan)
+    if len(frames) == 0:
+        return out
+    # Unknowns: C_f (n) then o_k (k); one row per found glint and the gauge row Σ o_k = 0 over
+    # the LEDs seen (the model's one free direction, C_f + t, o_k − t, leaves the data's
+    # residual unchanged, so the gauge row holds exactly).
+    seen = np.unique(leds)
+    a = np.zeros((len(frames) + 1, n + k))
+    a[np.arange(len(frames)), frames] = 1.0
+    a[np.arange(len(frames)), n + leds] = 1.0
+    a[-1, n + seen] = 1.0
+    b = np.zeros((len(frames) + 1, 2))
+    b[:-1] = g[frames, leds]
+    sol, *_ = np.linalg.lstsq(a, b, rcond=None)
+    # An LED is determined when the frames it is seen in share glints with the others: the
+    # design's rank is then n_used + k_seen − 1 (+ 1 for the gauge row).
+    used = np.unique(frames)
+    sub = a[:, np.r_[used, n + seen]]
+    if np.linalg.matrix_rank(sub) == len(used) + len(seen):
+        out[seen] = sol[n + seen]
+    return out
+
+
 def pupil_glint_vector(
-    pupil_xy: np.ndarray, glints_xy: np.ndarray | Sequence, which: int | None = None
+    pupil_xy: np.ndarray,
+    glints_xy: np.ndarray | Sequence,
+    which: int | None = None,
+    *,
+    offsets: np.ndarray | None = None,
 ) -> np.ndarray:
     """The pupil–glint vector: pupil centre minus the mean of the matched glints, pixels.
 
@@ -201,6 +265,10 @@ def pupil_glint_vector(
         Glint centres, NaN (or ``None`` in a single frame's list) for a glint not found.
     which : int, optional
         Use glint ``which`` alone instead of the mean of the found ones.
+    offsets : (k, 2), optional
+        Each LED's glint offset from the pattern's centre (:func:`glint_offsets`): the
+        reference is then the mean over the found glints of g_k − o_k, the pattern's centre
+        whichever glints are missing (glints of LEDs with a NaN offset are not used).
 
     Returns
     -------
@@ -208,12 +276,14 @@ def pupil_glint_vector(
 
     >>> pupil_glint_vector(np.array([10.0, 5.0]), [[8.0, 4.0], None, [10.0, 4.0]])
     array([1., 1.])
+    >>> o = np.array([[-1.0, 0.0], [0.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
+    >>> pupil_glint_vector(np.array([10.0, 5.0]), [[8.0, 4.0], [9.0, 3.0], None, None], offsets=o)
+    array([1., 1.])
     """
     pupil = np.asarray(pupil_xy, dtype=float)
-    if isinstance(glints_xy, np.ndarray):
-        g = glints_xy.astype(float)
-    else:
-        g = np.array([[np.nan, np.nan] if q is None else q for q in glints_xy], dtype=float)
+    g = _glint_array(glints_xy)
+    if offsets is not None:
+        g = g - np.asarray(offsets, dtype=float)
     if which is not None:
         ref = g[..., which, :]
     else:

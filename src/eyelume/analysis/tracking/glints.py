@@ -88,11 +88,13 @@ def saturated_floor(hist: np.ndarray, min_contrast: float) -> int | None:
     return floor
 
 
-def find_glints(u8: np.ndarray, img: np.ndarray, value_range, noise: float, params):
+def find_glints(img: np.ndarray, value_range, noise: float, params):
     """Step 2 of :func:`~eyelume.analysis.tracking.detect.detect`: the glint blobs (dicts), the
     bright mask (uint8 0/255) and the glint floor in the input's units (``None`` when nothing
-    stands out). ``u8`` is the picture scaled by its own range, ``img`` the input (missing
-    pixels filled), ``noise`` its pixel noise σ (input units)."""
+    stands out). ``img`` is the input (missing pixels filled), ``value_range`` its (min, max),
+    ``noise`` its pixel noise σ (input units). The bright mask is taken from the picture
+    scaled by its own range to 8 bits, u8 = 255 (I − min) / (max − min), after smoothing by
+    ``glint_smooth_px`` (when ≥ 0.5 px)."""
     sig = params.glint_smooth_px
     if sig is None:
         sig = min(img.shape) / 480.0
@@ -103,6 +105,8 @@ def find_glints(u8: np.ndarray, img: np.ndarray, value_range, noise: float, para
         smooth = cv2.GaussianBlur(img.astype(np.float32), (0, 0), sig)
         u8 = cv2.normalize(smooth, None, 0, 255, cv2.NORM_MINMAX, dtype=cv2.CV_8U)
         lo, hi = (float(v) for v in cv2.minMaxLoc(smooth)[:2])
+    else:
+        u8 = cv2.normalize(img, None, 0, 255, cv2.NORM_MINMAX, dtype=cv2.CV_8U)
     hist = cv2.calcHist([u8], [0], None, [256], [0, 256]).ravel()
     tg8 = glint_threshold(hist, params.glint_percentile, params.glint_min_contrast)
     min_rise = 0.0
@@ -168,9 +172,8 @@ def _bright_mask(u8: np.ndarray, floor8: int, params) -> tuple[np.ndarray, np.nd
         w = w if w % 2 else w + 1
     lv = params.glint_level
     local = cv2.addWeighted(cv2.blur(u8, (w, w)), 1.0 - lv, u8, 0.0, 255.0 * lv)
-    above = cv2.bitwise_and(
-        cv2.compare(u8, local, cv2.CMP_GE), cv2.threshold(u8, floor8, 255, cv2.THRESH_BINARY)[1]
-    )
+    # u8 ≥ local and u8 > floor8, i.e. u8 ≥ max(local, floor8 + 1): one comparison
+    above = cv2.compare(u8, cv2.max(local, float(floor8 + 1)), cv2.CMP_GE)
     k = params.glint_close_px
     if k is None:
         k = int(round(min(rows, cols) / 160.0))
@@ -234,7 +237,8 @@ def match_leds(
     reference: tuple[float, float],
     max_angle_deg: float,
     iterations: int = 4,
-) -> list[int | None]:
+    with_reference: bool = False,
+):
     """LED index for each glint centre (n, 2) px, or ``None``; one glint per LED at most.
 
     Each glint's direction from a reference point — atan2(−(y − y_ref), x − x_ref), degrees,
@@ -244,6 +248,7 @@ def match_leds(
     matched glints fit, g_k ≈ c + r (cos φ_k, −sin φ_k) (least squares in c and r): with every
     glint found that is their centroid; with one lost it is still the pattern's centre, where
     the centroid of the others would be pulled toward them. Repeated until the matching stands.
+    With ``with_reference`` the final reference (x, y) is returned too.
 
     >>> match_leds(np.array([[10.0, 5.0], [5.0, 0.0], [0.0, 5.0], [5.0, 10.0]]),
     ...            [0, 90, 180, 270], (5.0, 5.0), 45.0)
@@ -252,10 +257,10 @@ def match_leds(
     centres = np.asarray(centres, float).reshape(-1, 2)
     az = np.asarray(led_azimuths_deg, float)
     out: list[int | None] = [None] * len(centres)
-    if len(centres) == 0 or len(az) == 0:
-        return out
-    u = np.column_stack([np.cos(np.radians(az)), -np.sin(np.radians(az))])
     ref = np.asarray(reference, float)
+    if len(centres) == 0 or len(az) == 0:
+        return (out, ref) if with_reference else out
+    u = np.column_stack([np.cos(np.radians(az)), -np.sin(np.radians(az))])
     for _ in range(iterations):
         rel = centres - ref
         psi = np.degrees(np.arctan2(-rel[:, 1], rel[:, 0]))
@@ -281,4 +286,4 @@ def match_leds(
         if not (sol[2] > 0 and np.isfinite(sol).all()):
             break
         ref = sol[:2]
-    return out
+    return (out, ref) if with_reference else out

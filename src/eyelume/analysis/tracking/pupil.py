@@ -242,13 +242,11 @@ def _refine_edge(
     px = x[:, None] + nx[:, None] * t[None, :]
     py = y[:, None] + ny[:, None] * t[None, :]
     # The profile and its parallels ± off px along the tangent, sampled in one remap.
-    offs = [0] + [s for off in range(1, tangential + 1) for s in (-off, off)]
+    offs = np.array([0] + [s for off in range(1, tangential + 1) for s in (-off, off)], float)
     n = len(x)
-    v = _bilinear(
-        img,
-        np.concatenate([px - s * ny[:, None] for s in offs]),
-        np.concatenate([py + s * nx[:, None] for s in offs]),
-    )
+    sx = (px[None] - offs[:, None, None] * ny[None, :, None]).reshape(len(offs) * n, -1)
+    sy = (py[None] + offs[:, None, None] * nx[None, :, None]).reshape(len(offs) * n, -1)
+    v = _bilinear(img, sx, sy)
     v = v.reshape(len(offs), n, -1).sum(axis=0) / len(offs)
     # Each profile's own edge level, from the pupil's level toward its outer half (the iris
     # there), but never above the iris's typical level (the median over the profiles): an
@@ -334,7 +332,7 @@ def _robust_fit(x: np.ndarray, y: np.ndarray, diam: float, params):
     d = np.abs(ds)
     # Point-to-point edge noise, blind to any smooth misfit: the second difference along the
     # outline (var = 1.5 σ² for independent points).
-    hf = ds - 0.5 * (np.roll(ds, 1) + np.roll(ds, -1))
+    hf = ds - 0.5 * (np.r_[ds[-1:], ds[:-1]] + np.r_[ds[1:], ds[:1]])
     sigma = 1.4826 * median(np.abs(hf)) / math.sqrt(1.5)
     tol = max(params.inlier_tol_px, 3.0 * sigma, params.inlier_tol_frac * diam)
     if (d <= tol).mean() >= 0.95:
@@ -408,16 +406,22 @@ def noise_sigma(u8: np.ndarray) -> float:
     if rows < 3 or cols < 3:
         return 0.0
     k = _stride((rows - 2) * (cols - 2))
+    # Integer pictures in int32 (exact), whose |M * I| then fits 16 bits for a ≤ 12-bit
+    # camera and has its median counted (:func:`median`); others in float32.
+    wide = np.int32 if u8.dtype.kind in "iu" and u8.itemsize <= 2 else np.float32
 
     def at(dr: int, dc: int) -> np.ndarray:  # every k-th pixel's neighbour (dr, dc)
-        return u8[1 + dr : rows - 1 + dr : k, 1 + dc : cols - 1 + dc : k].astype(np.float32)
+        return u8[1 + dr : rows - 1 + dr : k, 1 + dc : cols - 1 + dc : k].astype(wide)
 
     r = (
         4 * at(0, 0)
         - 2 * (at(-1, 0) + at(1, 0) + at(0, -1) + at(0, 1))
         + (at(-1, -1) + at(-1, 1) + at(1, -1) + at(1, 1))
     )
-    return 1.4826 * median(np.abs(r)) / 6.0
+    r = np.abs(r)
+    if wide is np.int32 and r.size and int(r.max()) < 65536:
+        r = r.astype(np.uint16)
+    return 1.4826 * median(r) / 6.0
 
 
 def _stride(n: int) -> int:
@@ -511,13 +515,15 @@ def _level_candidates(lab, stats, cent, min_area, max_area, touch):
     idx = np.nonzero(ok)[0] + 1
     if touch is not None and len(idx):
         idx = idx[~np.isin(idx, touch)]
-    out = []
-    for k in idx:
-        cx, cy = int(round(cent[k, 0])), int(round(cent[k, 1]))
-        if lab[cy, cx] != k:  # centroid outside: not convex enough to be a pupil
-            continue
-        out.append(Candidate(0.0, int(a[k - 1]), tuple(int(v) for v in stats[k, :4]), (cx, cy)))
-    return out
+    if not len(idx):
+        return []
+    # round half to even, as Python's round(); a centroid outside its blob: not convex enough
+    cx, cy = np.rint(cent[idx, 0]).astype(np.intp), np.rint(cent[idx, 1]).astype(np.intp)
+    inside = lab[cy, cx] == idx
+    return [
+        Candidate(0.0, int(a[k - 1]), tuple(int(v) for v in stats[k, :4]), (int(x_), int(y_)))
+        for k, x_, y_ in zip(idx[inside], cx[inside], cy[inside], strict=True)
+    ]
 
 
 def ladder(
@@ -807,7 +813,12 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
         joined = np.zeros(n_glab, bool)
         joined[glab[(cv2.dilate(comp, np.ones((3, 3), np.uint8)) > 0) & (glab > 0)]] = True
         if joined.any():
-            comp[joined[glab]] = 255
+            if n_glab <= 256:  # a look-up table over the labels: one pass, no index array
+                lut = np.zeros(256, np.uint8)
+                lut[:n_glab][joined] = 255
+                cv2.bitwise_or(comp, cv2.LUT(glab.astype(np.uint8), lut), dst=comp)
+            else:
+                comp[joined[glab]] = 255
     closed = _closing(comp, k)
     contours, _ = cv2.findContours(closed, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea)
@@ -875,7 +886,9 @@ def _local_noise(u8: np.ndarray, inside: np.ndarray, ring: np.ndarray) -> float:
     two. Shot noise grows with the signal, so a picture's noise — set by its brightest large
     area, the skin of an off-axis view or a Monte Carlo render's sparse samples there — can be
     several times that between a pupil and an iris near the black level."""
-    r = np.abs(cv2.filter2D(u8.astype(np.float32), -1, _IMMERKAER, borderType=cv2.BORDER_REFLECT))
+    # |M * u8| ≤ 16 × 255: exact in 16 bits, and its median is then counted (:func:`median`).
+    r = cv2.filter2D(u8, cv2.CV_16S, _IMMERKAER, borderType=cv2.BORDER_REFLECT)
+    r = np.abs(r).view(np.uint16)
     return max(1.4826 * median(r[m]) / 6.0 for m in (inside, ring))
 
 
