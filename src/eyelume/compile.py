@@ -40,6 +40,14 @@ from eyelume.kernels.tables import (
     SceneTables,
     SurfaceTable,
 )
+from eyelume.scene.elements import (
+    crosses_surfaces,
+    inside_solid,
+    near_element,
+    outline_points,
+    read_reflectance_table,
+    vertex_z_mm,
+)
 from eyelume.scene.eye import (
     check_eye_geometry,
     eye_indices,
@@ -48,7 +56,7 @@ from eyelume.scene.eye import (
 )
 from eyelume.scene.focus import check_focus
 from eyelume.scene.glass import Glass, load_catalog
-from eyelume.scene.model import LedProfile, Scene
+from eyelume.scene.model import Coating, Element, LedProfile, Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
 from eyelume.scene.pose import MIRROR_X as _MIRROR_X
 from eyelume.scene.pose import Frame, as_world, camera_frame, led_world_poses
@@ -66,6 +74,8 @@ __all__ = [
     "eye_point",
     "eye_direction",
     "eye_plane_origin",
+    "element_label",
+    "element_pose",
     "as_world",
     "camera_pose",
     "led_world_poses",
@@ -565,44 +575,56 @@ def _check_leds_in_head(
     (with the cornea's bulge) or inside a face tissue's solid (a sphere or cylinder within its
     clip ranges, or behind a disk within its ring)."""
     radii = scene.leds.body_radii_mm() if rb is None else [rb] * len(centres)
+    for i, c in enumerate(centres):
+        rb = radii[i]
+        where = _in_head(scene, c, rb)
+        if where == "the eye":
+            raise SceneError(
+                f"{what} {i} (world centre {np.round(c, 2).tolist()} mm, radius {rb}) is "
+                "inside the eye"
+            )
+        if where is not None:
+            raise SceneError(
+                f"{what} {i} (world centre {np.round(c, 2).tolist()} mm) is inside {where}"
+            )
+
+
+def _in_head(scene: Scene, c: np.ndarray, rb: float) -> str | None:
+    """What of the head a sphere of radius ``rb`` about the world point ``c`` reaches into:
+    ``"the eye"`` (the eyeball, with the cornea's bulge), ``"the face: face.tissues 'name'"``
+    (a tissue's solid: a sphere or cylinder within its clip ranges, or behind a disk within its
+    ring), or None."""
     eye = scene.eye
     _, _, z_c = limbus_geometry(eye)
     eyeball = eye_point(scene, [0.0, 0.0, -z_c])
     vertex = eye_point(scene, np.zeros(3))
     axis = eye_direction(scene, [0.0, 0.0, 1.0])
-    for i, c in enumerate(centres):
-        rb = radii[i]
-        d = c - eyeball
-        # the eyeball sphere, and the cornea standing proud of it up to the vertex
-        if np.linalg.norm(d) < eye.sclera_radius_mm + rb or (
-            (c - vertex) @ axis < rb
-            and np.linalg.norm(d - (d @ axis) * axis) < eye.surfaces[0].semi_diameter_mm + rb
-            and d @ axis > 0
-        ):
-            raise SceneError(
-                f"{what} {i} (world centre {np.round(c, 2).tolist()} mm, radius {rb}) is "
-                "inside the eye"
-            )
-        if not scene.face.enabled:
-            continue
-        for tis in scene.face.tissues:
-            o = eye_point(scene, tis.center_mm, share_vertical=0.0, share_horizontal=0.0)
-            local = _frame(as_world(scene, tis.axis)) @ (c - o)
-            r = math.hypot(local[0], local[1])
-            in_clip = tis.clip_z_mm[0] <= local[2] <= tis.clip_z_mm[1] and (
-                tis.clip_r_mm[0] <= r <= tis.clip_r_mm[1]
-            )
-            if tis.shape == "sphere":
-                inside = in_clip and np.linalg.norm(c - o) < tis.radius_mm + rb
-            elif tis.shape == "cylinder":
-                inside = in_clip and r < tis.radius_mm + rb
-            else:
-                inside = tis.clip_r_mm[0] <= r <= tis.clip_r_mm[1] and local[2] < rb
-            if inside:
-                raise SceneError(
-                    f"{what} {i} (world centre {np.round(c, 2).tolist()} mm) is inside "
-                    f"the face: face.tissues '{tis.name}'"
-                )
+    d = c - eyeball
+    # the eyeball sphere, and the cornea standing proud of it up to the vertex
+    if np.linalg.norm(d) < eye.sclera_radius_mm + rb or (
+        (c - vertex) @ axis < rb
+        and np.linalg.norm(d - (d @ axis) * axis) < eye.surfaces[0].semi_diameter_mm + rb
+        and d @ axis > 0
+    ):
+        return "the eye"
+    if not scene.face.enabled:
+        return None
+    for tis in scene.face.tissues:
+        o = eye_point(scene, tis.center_mm, share_vertical=0.0, share_horizontal=0.0)
+        local = _frame(as_world(scene, tis.axis)) @ (c - o)
+        r = math.hypot(local[0], local[1])
+        in_clip = tis.clip_z_mm[0] <= local[2] <= tis.clip_z_mm[1] and (
+            tis.clip_r_mm[0] <= r <= tis.clip_r_mm[1]
+        )
+        if tis.shape == "sphere":
+            inside = in_clip and np.linalg.norm(c - o) < tis.radius_mm + rb
+        elif tis.shape == "cylinder":
+            inside = in_clip and r < tis.radius_mm + rb
+        else:
+            inside = tis.clip_r_mm[0] <= r <= tis.clip_r_mm[1] and local[2] < rb
+        if inside:
+            return f"the face: face.tissues '{tis.name}'"
+    return None
 
 
 class LedAimWarning(EyelumeWarning):
@@ -613,7 +635,8 @@ def _check_leds_light_the_eye(
     scene: Scene, centres: np.ndarray, axes: np.ndarray, led: LedTable
 ) -> None:
     """Warn (:class:`LedAimWarning`) for each LED whose cone misses the eye entirely; refuse
-    (GeometryError) when every LED's does: the render would be dark and say nothing.
+    (GeometryError) when every LED's does: the render would be dark and say nothing — unless
+    the scene has elements (a mirror may bring an LED's light to the eye).
 
     LED k's cone is the directions within αₖ,max of its axis, αₖ,max the largest angle at which
     its profile (the compiled grid ``intensity_grid[k]``, the one I(α)) is above 0: 90° for
@@ -644,7 +667,7 @@ def _check_leds_light_the_eye(
                 f"{math.degrees(gamma):.1f} deg away from the eye's centre and its profile "
                 f"emits only to {math.degrees(a_max):.1f} deg"
             )
-    if misses and len(misses) == len(emit):
+    if misses and len(misses) == len(emit) and not scene.elements:
         raise GeometryError(
             f"every LED's cone misses the eye, no light would reach it ({misses[0]}): aim the "
             "LEDs at the eye (leds.aim_at_mm, leds.directions or leds.pitch_deg)",
@@ -1115,6 +1138,133 @@ def _add_camera_body(t: _Table, scene: Scene, lf: np.ndarray) -> None:
           clip_r=(0.0, rb), **common)  # fmt: skip
 
 
+def element_label(k: int, element: Element) -> str:
+    """The ledger entry of element ``k`` (what its coatings and edge absorb):
+    ``element k (name)``, the name defaulting to its kind."""
+    return f"element {k} ({element.name or element.kind})"
+
+
+def element_pose(scene: Scene, element: Element) -> tuple[np.ndarray, np.ndarray]:
+    """(origin, rotation) of an element in the world frame: its first vertex (mm) and the
+    world → local rotation whose third row is its unit axis (a left eye's file mirrored)."""
+    origin = as_world(scene, element.position_mm)
+    axis = np.asarray(as_world(scene, element.axis()), dtype=float)
+    return origin, _frame(axis)
+
+
+def _element_index(scene: Scene, k: int, element: Element) -> float:
+    """The refractive index of element ``k``'s glass at the scene's wavelength, from the glass
+    catalogs the lens prescription uses (``lens.glass_catalogs``, else the shipped one); 1 for
+    a mirror. Raises SceneError naming ``elements.k.glass`` for a glass not in them."""
+    if element.kind == "mirror":
+        return 1.0
+    files = scene.lens.glass_catalogs if scene.lens is not None else []
+    try:
+        catalog = load_catalog(*files) if files else load_catalog()
+        glass = catalog[element.glass]
+    except GlassError as exc:
+        raise SceneError(f"field 'elements.{k}.glass' = {element.glass!r}: {exc}") from None
+    return float(glass.index(scene.wavelength_nm))
+
+
+_SIDES = ("front", "back")
+
+
+def _coating_columns(k: int, j: int, coating: Coating) -> dict:
+    """The surface-table options of a coating: Fresnel flag, or fixed R and A = 1 − R − T.
+    Raises SceneError for an R(θ) table (read and checked, not traced yet)."""
+    if coating.model == "fresnel":
+        return {"fresnel": True}
+    if coating.model == "fixed":
+        r, t = float(coating.reflectance), float(coating.transmittance)  # type: ignore[arg-type]
+        return {"refl": r, "absorb": max(0.0, 1.0 - r - t)}
+    field = f"elements.{k}.{_SIDES[j]}.coating.table_csv"
+    read_reflectance_table(coating.table_csv, field)  # type: ignore[arg-type]
+    raise SceneError(
+        f"field 'elements.{k}.{_SIDES[j]}.coating.model' = 'table': R(angle) tables are read "
+        "and checked but not traced yet; give model 'fixed' (R and T at the scene's wavelength)"
+    )
+
+
+def _add_elements(t: _Table, scene: Scene) -> None:
+    """Each element's optical surfaces (refracting interfaces with their coatings, glass
+    inside a lens or plate) and a lens's or plate's absorbing edge, world frame; each
+    element's absorption is its own ledger entry (:func:`element_label`)."""
+    for k, el in enumerate(scene.elements):
+        n = _element_index(scene, k, el)
+        origin, rot = element_pose(scene, el)
+        sd = el.semi_diameter_mm
+        tally = element_label(k, el)
+        zs = vertex_z_mm(el)
+        media = [(1.0, 1.0)] if el.kind == "mirror" else [(1.0, n), (n, 1.0)]
+        for j, (surf, z0, (n_a, n_b)) in enumerate(zip(el.surfaces, zs, media, strict=True)):
+            c = curvature(surf.radius_mm)
+            o = origin + rot[2] * z0
+            t.add(
+                f"{tally} {_SIDES[j]}",
+                G.SHAPE_CONIC,
+                o,
+                rot,
+                _conic_bound(o, rot, c, surf.conic, sd),
+                curv=c,
+                conic=surf.conic,
+                clip_r=(0.0, sd),
+                action=G.ACT_REFRACT,
+                n_a=n_a,
+                n_b=n_b,
+                tally_a=tally,
+                tally_b=tally,
+                **_coating_columns(k, j, surf.coating),  # type: ignore[arg-type]
+            )
+        if el.kind == "mirror" or el.edge_thickness_mm <= 0.0:
+            continue
+        zlo = zs[0] + el.surfaces[0].sag_mm(sd)
+        zhi = zs[1] + el.surfaces[1].sag_mm(sd)
+        mid = origin + rot[2] * (zlo + zhi) / 2
+        t.add(f"{tally} edge", G.SHAPE_CYLINDER, origin, rot,
+              (mid, math.hypot(sd, (zhi - zlo) / 2) * 1.000001), radius=sd,
+              clip_z=(zlo, zhi), tally_a=tally, tally_b=tally)  # fmt: skip
+
+
+def _check_elements(scene: Scene, led_centres: np.ndarray) -> None:
+    """No element cuts the eye or the face (its sampled boundary, :func:`outline_points`),
+    an LED's body (world ``led_centres``) or another element. Raises SceneError naming the
+    element."""
+    shapes = []
+    radii = scene.leds.body_radii_mm()
+    for k, el in enumerate(scene.elements):
+        origin, rot = element_pose(scene, el)
+        local = outline_points(el)
+        world = local @ rot + origin
+        for p in world.reshape(-1, 3):
+            where = _in_head(scene, p, 0.0)
+            if where is not None:
+                raise SceneError(
+                    f"elements.{k} ({el.name or el.kind} at {list(el.position_mm)} mm) reaches "
+                    f"into {where} (at world {np.round(p, 2).tolist()} mm)"
+                )
+        for i, c in enumerate(led_centres):
+            if near_element(el, (rot @ (c - origin))[None], radii[i])[0]:
+                raise SceneError(
+                    f"elements.{k} ({el.name or el.kind}) overlaps LED {i}'s body (world centre "
+                    f"{np.round(c, 2).tolist()} mm)"
+                )
+        for j, (other, o2, r2, w2) in enumerate(shapes):
+            a_in_b = (world - o2) @ r2.T
+            b_in_a = (w2 - origin) @ rot.T
+            if (
+                crosses_surfaces(other, a_in_b)
+                or crosses_surfaces(el, b_in_a)
+                or inside_solid(other, a_in_b).any()
+                or inside_solid(el, b_in_a).any()
+            ):
+                raise SceneError(
+                    f"elements.{k} ({el.name or el.kind}) intersects elements.{j} "
+                    f"({other.name or other.kind})"
+                )
+        shapes.append((el, origin, rot, world))
+
+
 def _check_leds_outside_camera_body(
     scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame
 ) -> None:
@@ -1339,6 +1489,9 @@ def compile_scene(
         _check_leds_light_the_eye(scene, *world, led)
     _add_lens_entrance(t, lens.lf)
     _add_camera_body(t, scene, lens.lf)
+    if scene.elements:
+        _check_elements(scene, world[0])
+        _add_elements(t, scene)
     surfaces = SurfaceTable(
         np.ascontiguousarray(np.stack(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))
     )

@@ -2,11 +2,12 @@
 
 Two orthogonal views: ``"yz"``, the section by the plane x = x₀ (z across, y up), and ``"xz"``,
 the section by y = y₀ (z across, x up), through the eye's nominal corneal vertex (x₀, y₀, z₀)
-(its pose, :class:`eyelume.scene.model.EyePose`; 0 for the paper's rig). The eye, the face and
-the LED bodies are cut by the plane; the camera — its lens surfaces, stop and sensor, drawn in
-the camera's meridional plane closest to the view — and its field of view (from the entrance
-pupil to the edges of the imaged field) are projected onto it, so a camera anywhere shows where
-it is and what it sees. LEDs show their axes.
+(its pose, :class:`eyelume.scene.model.EyePose`; 0 for the paper's rig). The eye, the face,
+the LED bodies and the optical elements (a lens's or plate's two surfaces and edge: a closed
+outline; a mirror's one surface) are cut by the plane; the camera — its lens surfaces, stop
+and sensor, drawn in the camera's meridional plane closest to the view — and its field of view
+(from the entrance pupil to the edges of the imaged field) are projected onto it, so a camera
+anywhere shows where it is and what it sees. LEDs show their axes.
 
 Reads the compiled surface tables (camera frame, :mod:`eyelume.scene.pose`) and turns them to
 the world frame, so it sits beside :mod:`eyelume.compile`. Curves are cut where a surface's
@@ -43,6 +44,8 @@ class Section:
 
 
 def _category(name: str, action: int) -> str:
+    if name.startswith("element "):  # compile.element_label: an optical element's surfaces
+        return "element"
     if name.startswith("LED"):
         return "led"
     if action == G.ACT_LENS or name.startswith("camera body"):
@@ -117,7 +120,10 @@ def _surface_points(sf: np.ndarray, si: np.ndarray, s: int, extent: float, cut: 
         p = o + rad * (math.cos(ang) * rot[0] + math.sin(ang) * rot[1])
         if abs(p[cut]) < 1e-6:
             lines.append(p + np.outer(h, ax))
-    return np.concatenate(lines) if lines else np.zeros((0, 3))
+    if not lines:
+        return np.zeros((0, 3))
+    gap = np.full((1, 3), np.nan)  # not a point: the caller's clip mask splits the lines there
+    return np.concatenate([x for line in lines for x in (line, gap)][:-1])
 
 
 def world_table(cs: CompiledScene) -> np.ndarray:

@@ -34,6 +34,7 @@ from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import CompiledScene, compile_scene, single_wavelength, wavelength_groups
 from eyelume.detectors.receivers import BinnedPlane
+from eyelume.errors import SceneError
 from eyelume.estimators.fast_run import RunControl, direct_eye_plane, trace_fast, warm_up
 from eyelume.estimators.forward import trace_forward, trace_paths
 from eyelume.estimators.statistics import median_pixel_rel_error
@@ -347,6 +348,12 @@ def render(
     sc = cs.scene
     seed = sc.run.seed if seed is None else int(seed)
     estimator = opt.estimator or ("forward" if rays is not None else sc.run.estimator)
+    if estimator == "fast" and sc.elements:
+        raise SceneError(
+            f"estimator = 'fast': the scene has {len(sc.elements)} optical element(s), and "
+            "elements are traced by the forward estimator only, for now (--estimator forward, "
+            "or run.estimator = 'forward')"
+        )
     if cs.led_ids is None and not single_wavelength(sc):
         if estimator not in ("fast", "forward"):
             raise ValueError(f"estimator = {estimator!r}: must be 'fast' or 'forward'")

@@ -46,6 +46,7 @@ CATEGORY_COLORS: dict[str, str] = {
     "eye": "tab:blue",
     "tissue": "tab:brown",
     "lens": "tab:green",
+    "element": "tab:cyan",
     "stop": "black",
     "sensor": "tab:purple",
     "receiver": "tab:gray",
@@ -323,8 +324,9 @@ class SectionCurve:
         What the curve is, shown in error messages, e.g. ``"anterior cornea"``, ``"LED 1 body"``,
         ``"lens S3"``, ``"sensor"``.
     category : str
-        One of ``"led"``, ``"eye"``, ``"tissue"``, ``"lens"``, ``"stop"``, ``"sensor"``,
-        ``"receiver"``; sets the colour (:data:`CATEGORY_COLORS`) and the legend entry.
+        One of ``"led"``, ``"eye"``, ``"tissue"``, ``"lens"``, ``"element"`` (an optical
+        element of the scene), ``"stop"``, ``"sensor"``, ``"receiver"``; sets the colour
+        (:data:`CATEGORY_COLORS`) and the legend entry.
     z : numpy.ndarray
         World z (mm) of the polyline's vertices, 1-D.
     y : numpy.ndarray

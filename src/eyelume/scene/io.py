@@ -55,6 +55,13 @@ def _resolve_paths(data: dict[str, Any], base: Path) -> None:
     for k, item in enumerate(profile if isinstance(profile, list) else []):
         if isinstance(item, dict) and isinstance(item.get("table_csv"), str):
             item["table_csv"] = _resolved(base, item["table_csv"], f"leds.profile.{k}.table_csv")
+    for k, el in enumerate(data.get("elements") or []):
+        for side in ("front", "back"):
+            surf = el.get(side) if isinstance(el, dict) else None
+            coat = surf.get("coating") if isinstance(surf, dict) else None
+            if isinstance(coat, dict) and isinstance(coat.get("table_csv"), str):
+                field = f"elements.{k}.{side}.coating.table_csv"
+                coat["table_csv"] = _resolved(base, coat["table_csv"], field)
     lens = data.get("lens")
     if isinstance(lens, dict) and isinstance(lens.get("glass_catalogs"), list):
         lens["glass_catalogs"] = [

@@ -31,6 +31,9 @@ __all__ = [
     "EyePlane",
     "EyePose",
     "EyeSurface",
+    "Coating",
+    "Element",
+    "ElementSurface",
     "Face",
     "IdealLens",
     "ImagingLens",
@@ -799,13 +802,214 @@ class Run(_Model):
     max_events: int = Field(64, ge=2, le=10_000)
 
 
+#: Element kinds (:class:`Element`).
+ELEMENT_KINDS = ("lens", "mirror", "plate")
+
+
+class Coating(_Model):
+    """The reflectance model of one optical surface of an element (:class:`Element`).
+
+    ``model``:
+
+    * ``"fresnel"``: uncoated; R = (R_s + R_p)/2, the unpolarised Fresnel reflectance from the
+      indices either side at the ray's angle of incidence (as the cornea's), T = 1 − R, nothing
+      absorbed (at normal incidence R = ((n − 1)/(n + 1))²). A mirror (air on both sides) has
+      no Fresnel reflection: it takes ``"fixed"`` or ``"table"``.
+    * ``"fixed"``: ``reflectance`` R and ``transmittance`` T at every angle (a coating's or a
+      hot mirror's value at the scene's infrared wavelength), the rest A = 1 − R − T absorbed
+      by the surface (the ledger's entry of its element); R + T ≤ 1.
+    * ``"table"``: a CSV file ``table_csv`` of two columns, angle of incidence in degrees
+      (increasing, within 0 … 90) and R (0 … 1), T = 1 − R; ``source`` names where the numbers
+      come from (a datasheet, a measurement). Read and checked when the scene is compiled; NOT
+      traced yet (compile refuses it with one line: the kernels have no per-surface table).
+    """
+
+    model: Literal["fresnel", "fixed", "table"] = "fresnel"
+    reflectance: Fraction | None = None
+    transmittance: Fraction | None = None
+    table_csv: str | None = None
+    source: str = ""
+
+    @model_validator(mode="after")
+    def _fields_of_the_model(self) -> Coating:
+        fixed = (self.reflectance, self.transmittance)
+        if self.model == "fixed":
+            if None in fixed:
+                raise ValueError("model 'fixed' needs reflectance and transmittance (0 … 1)")
+            if self.reflectance + self.transmittance > 1.0:  # type: ignore[operator]
+                raise ValueError(
+                    f"reflectance + transmittance = "
+                    f"{self.reflectance + self.transmittance:g} exceeds 1"  # type: ignore[operator]
+                )
+        elif any(v is not None for v in fixed):
+            raise ValueError(
+                f"reflectance and transmittance belong to model 'fixed', not {self.model!r}"
+            )
+        if self.model == "table":
+            if not self.table_csv:
+                raise ValueError("model 'table' needs table_csv, the path of the R(angle) CSV")
+            if not self.source.strip():
+                raise ValueError("model 'table' needs source: where its numbers come from")
+        elif self.table_csv is not None:
+            raise ValueError(f"table_csv belongs to model 'table', not {self.model!r}")
+        return self
+
+
+#: A perfect mirror's coating, the default of a mirror's surface: R = 1, T = 0.
+MIRROR_COATING = Coating(model="fixed", reflectance=1.0, transmittance=0.0)
+
+
+class ElementSurface(_Model):
+    """One surface of an element, in the element's own frame (lens-design convention: the
+    element's axis is its local +z, radii positive when the centre of curvature lies farther
+    along it): ``radius_mm`` (±inf for a plane), conic constant ``conic`` (0 sphere, −1
+    paraboloid) and its ``coating`` (:class:`Coating`; unset: Fresnel on a lens or a plate,
+    a perfect mirror, R = 1, on a mirror)."""
+
+    radius_mm: Radius = math.inf
+    conic: float = Field(0.0, ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)
+    coating: Coating | None = None
+
+    def sag_mm(self, r: float) -> float:
+        """Sag z(r) (mm) of the surface at radial distance r (NaN beyond the conicoid)."""
+        if math.isinf(self.radius_mm) or self.radius_mm == 0.0:
+            return 0.0
+        c = 1.0 / self.radius_mm
+        arg = 1.0 - (1.0 + self.conic) * c * c * r * r
+        return math.nan if arg < 0.0 else c * r * r / (1.0 + math.sqrt(arg))
+
+
+class Element(_Model):
+    """An optical element between the eye, the LEDs and the camera, placed in the world frame
+    like the camera (:class:`Camera`): ``position_mm`` is its first surface's vertex, and its
+    axis (its local +z, from the first surface to the second) is ``direction`` or points at
+    ``look_at_mm`` (unset: world +z, from the eye toward the headset). Every element is
+    rotationally symmetric about its axis with a circular clear aperture of
+    ``semi_diameter_mm``.
+
+    ``kind``:
+
+    * ``"lens"``: two conic surfaces ``front`` and ``back`` (:class:`ElementSurface`),
+      ``thickness_mm`` apart on the axis, of ``glass`` (a name in the glass catalogs the lens
+      prescription uses: ``lens.glass_catalogs`` or the shipped ``eyelume.agf``), closed by an
+      absorbing cylindrical edge at the clear aperture;
+    * ``"plate"``: a window, a lens whose two surfaces are planes;
+    * ``"mirror"``: one surface ``front`` (plane, or curved by its radius and conic) of no
+      thickness, its coating acting the same from both sides (default R = 1); a hot mirror is a
+      mirror with a ``fixed`` coating of its reflectance R and transmittance T at the infrared
+      wavelength of the scene.
+
+    What a coating or an edge absorbs is the ledger entry ``element k (name)``. The glass
+    itself is taken as clear (no bulk absorption).
+    """
+
+    kind: Literal["lens", "mirror", "plate"]
+    name: str = ""
+    position_mm: Vector3
+    direction: Vector3 | None = None
+    look_at_mm: Vector3 | None = None
+    semi_diameter_mm: Positive
+    thickness_mm: Positive | None = None
+    glass: str = ""
+    front: ElementSurface = ElementSurface()
+    back: ElementSurface | None = None
+
+    @model_validator(mode="after")
+    def _fields_of_the_kind(self) -> Element:
+        if self.look_at_mm is not None and self.direction is not None:
+            raise ValueError("give look_at_mm or direction, not both")
+        if self.direction is not None and not any(self.direction):
+            raise ValueError("direction = (0, 0, 0) has no direction")
+        if self.look_at_mm is not None and tuple(self.look_at_mm) == tuple(self.position_mm):
+            raise ValueError(f"look_at_mm = {list(self.look_at_mm)} equals position_mm")
+        if self.kind == "mirror":
+            self._check_mirror()
+        else:
+            self._check_solid()
+        self._check_surfaces()
+        return self
+
+    def _check_mirror(self) -> None:
+        for name in ("thickness_mm", "back"):
+            if getattr(self, name) is not None:
+                raise ValueError(f"a mirror has no {name} (one surface, no thickness)")
+        if self.glass:
+            raise ValueError(f"a mirror has no glass (got {self.glass!r})")
+        if self.front.coating is not None and self.front.coating.model == "fresnel":
+            raise ValueError(
+                "front.coating.model = 'fresnel': a mirror has air on both sides and no "
+                "Fresnel reflection; give model 'fixed' (reflectance, transmittance)"
+            )
+
+    def _check_solid(self) -> None:
+        if self.thickness_mm is None:
+            raise ValueError(f"a {self.kind} needs thickness_mm (its centre thickness)")
+        if not self.glass.strip():
+            raise ValueError(f"a {self.kind} needs glass (a name in the glass catalogs)")
+        if self.kind == "plate":
+            for side, s in (("front", self.front), ("back", self.back)):
+                if s is not None and not math.isinf(s.radius_mm):
+                    raise ValueError(
+                        f"{side}.radius_mm = {s.radius_mm}: a plate's surfaces are planes "
+                        "(use kind = 'lens' for curved ones)"
+                    )
+
+    def _check_surfaces(self) -> None:
+        """Each surface exists out to the clear aperture; a lens's edge is not negative."""
+        sd = self.semi_diameter_mm
+        for side, s in (("front", self.front), ("back", self.back)):
+            if s is not None and math.isnan(s.sag_mm(sd)):
+                raise ValueError(
+                    f"semi_diameter_mm = {sd}: beyond the {side} surface's conicoid "
+                    f"(radius_mm {s.radius_mm}, conic {s.conic})"
+                )
+        if self.kind != "mirror":
+            edge = self.edge_thickness_mm
+            if edge < 0.0:
+                raise ValueError(
+                    f"thickness_mm = {self.thickness_mm}: the surfaces cross before the clear "
+                    f"aperture (edge thickness {edge:.3f} mm at semi_diameter_mm {sd})"
+                )
+
+    @property
+    def surfaces(self) -> list[ElementSurface]:
+        """Its optical surfaces in order along its axis, coatings filled in (lens, plate:
+        Fresnel; mirror: R = 1)."""
+        default = MIRROR_COATING if self.kind == "mirror" else Coating()
+        out = [self.front] if self.kind == "mirror" else [self.front, self.back or ElementSurface()]
+        return [
+            s if s.coating is not None else s.model_copy(update={"coating": default}) for s in out
+        ]
+
+    @property
+    def edge_thickness_mm(self) -> float:
+        """Axial length of the edge at the clear aperture: t + sag_back(sd) − sag_front(sd)
+        (mm; 0 for a mirror)."""
+        if self.kind == "mirror":
+            return 0.0
+        sd = self.semi_diameter_mm
+        front, back = self.surfaces
+        return float(self.thickness_mm) + back.sag_mm(sd) - front.sag_mm(sd)  # type: ignore[arg-type]
+
+    def axis(self) -> tuple[float, float, float]:
+        """Its axis in the world frame as the file writes it (not normalised): ``direction``,
+        the way to ``look_at_mm``, or world +z."""
+        if self.direction is not None:
+            return self.direction
+        if self.look_at_mm is not None:
+            return tuple(t - p for t, p in zip(self.look_at_mm, self.position_mm, strict=True))  # type: ignore[return-value]
+        return (0.0, 0.0, 1.0)
+
+
 class Scene(_Model):
     """A complete eye illumination and imaging system.
 
     ``eye_pose`` places the eye (and its face and eye plane) in the headset and says which
     eye it is (:class:`EyePose`). ``head_offset_mm`` moves the eye and the face together
     relative to the headset (LEDs, lens, sensor, eye plane): a headset that slips by −d on the
-    head is a head offset of +d.
+    head is a head offset of +d. ``elements``: optical elements (lenses, plates, mirrors)
+    between the eye, the LEDs and the camera (:class:`Element`; traced by the forward
+    estimator only, for now).
     """
 
     name: str
@@ -821,6 +1025,7 @@ class Scene(_Model):
     sensor: Sensor = Sensor()
     eye_plane: EyePlane = EyePlane()
     run: Run = Run()
+    elements: list[Element] = []
 
     @model_validator(mode="after")
     def _optics_given(self) -> Scene:

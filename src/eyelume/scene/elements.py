@@ -1,0 +1,172 @@
+"""Optical elements (:class:`eyelume.scene.model.Element`) as geometry in their own frame, and
+their coatings' reflectance tables.
+
+An element's local frame: its axis is +z, its first surface's vertex the origin, surface j's
+vertex at z = ``vertex_z_mm(element)[j]`` (0, then the centre thickness). A lens or plate is the
+solid between its two surfaces within the clear aperture r ≤ sd, closed by the cylinder r = sd;
+a mirror is its one surface (no thickness). :func:`outline_points` samples that boundary, so
+:mod:`eyelume.compile` can refuse an element that cuts the eye, the face, an LED or another
+element (a sampled test: a few hundred points per element, good to about sd/16).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+
+from eyelume.errors import InputFileError
+from eyelume.scene.model import Element
+from eyelume.scene.textfile import read_text_file
+
+__all__ = [
+    "crosses_surfaces",
+    "inside_solid",
+    "near_element",
+    "outline_points",
+    "read_reflectance_table",
+    "vertex_z_mm",
+]
+
+_AZIMUTHS = 24
+_RADII = 16
+
+
+def vertex_z_mm(element: Element) -> list[float]:
+    """Local z (mm) of each surface's vertex: [0] for a mirror, [0, t] for a lens or plate."""
+    return [0.0] if element.kind == "mirror" else [0.0, float(element.thickness_mm)]  # type: ignore[arg-type]
+
+
+def _sag(element: Element, j: int, r: np.ndarray) -> np.ndarray:
+    s = element.surfaces[j]
+    return np.array([s.sag_mm(float(x)) for x in np.ravel(r)]).reshape(np.shape(r))
+
+
+def outline_points(element: Element, azimuths: int = _AZIMUTHS, radii: int = _RADII) -> np.ndarray:
+    """The element's boundary as meridian polylines, local frame (mm): (azimuths, m, 3). For
+    each azimuth φ, the first surface from the axis out to the clear aperture, then (a lens or
+    plate) down its edge and back in along the second surface to the axis."""
+    sd = element.semi_diameter_mm
+    r = np.linspace(0.0, sd, radii + 1)
+    z0 = vertex_z_mm(element)
+    rs = [r]
+    zs = [z0[0] + _sag(element, 0, r)]
+    if element.kind != "mirror":
+        e0, e1 = zs[0][-1], z0[1] + _sag(element, 1, np.array([sd]))[0]
+        rs += [np.full(4, sd), r[::-1]]
+        zs += [np.linspace(e0, e1, 6)[1:-1], z0[1] + _sag(element, 1, r[::-1])]
+    rr, zz = np.concatenate(rs), np.concatenate(zs)
+    phi = np.linspace(0.0, 2.0 * math.pi, azimuths, endpoint=False)
+    out = np.empty((azimuths, rr.size, 3))
+    out[:, :, 0] = np.outer(np.cos(phi), rr)
+    out[:, :, 1] = np.outer(np.sin(phi), rr)
+    out[:, :, 2] = zz
+    return out
+
+
+def inside_solid(element: Element, local: np.ndarray, margin: float = 0.0) -> np.ndarray:
+    """Which local points (…, 3) lie inside the element's solid by more than ``margin`` mm
+    (r < sd − margin, sag₁(r) + margin < z < t + sag₂(r) − margin); a mirror has no inside."""
+    local = np.asarray(local, dtype=float)
+    if element.kind == "mirror":
+        return np.zeros(local.shape[:-1], dtype=bool)
+    r = np.hypot(local[..., 0], local[..., 1])
+    sd = element.semi_diameter_mm
+    rc = np.minimum(r, sd)
+    z0 = vertex_z_mm(element)
+    lo = z0[0] + _sag(element, 0, rc)
+    hi = z0[1] + _sag(element, 1, rc)
+    z = local[..., 2]
+    return (r < sd - margin) & (z > lo + margin) & (z < hi - margin)
+
+
+def near_element(element: Element, local: np.ndarray, clearance: float) -> np.ndarray:
+    """Which local points (…, 3) lie within about ``clearance`` mm of the element: inside a
+    lens's or plate's solid grown by ``clearance`` (a box in r and z, so a little generous at
+    the rim), or within ``clearance`` of a mirror's surface along its axis, r ≤ sd + clearance.
+    """
+    local = np.asarray(local, dtype=float)
+    if element.kind != "mirror":
+        return inside_solid(element, local, margin=-clearance)
+    r = np.hypot(local[..., 0], local[..., 1])
+    h = local[..., 2] - _sag(element, 0, np.minimum(r, element.semi_diameter_mm))
+    return (r <= element.semi_diameter_mm + clearance) & (np.abs(h) < clearance)
+
+
+def crosses_surfaces(element: Element, polylines: np.ndarray) -> bool:
+    """Whether a segment of ``polylines`` (k, m, 3) (local frame of ``element``) crosses one of
+    its optical surfaces within its clear aperture (the signed height z − z_surface(r) changes
+    sign between a segment's ends, both within the aperture)."""
+    p = np.asarray(polylines, dtype=float)
+    r = np.hypot(p[..., 0], p[..., 1])
+    within = r <= element.semi_diameter_mm
+    rc = np.minimum(r, element.semi_diameter_mm)
+    for j, z0 in enumerate(vertex_z_mm(element)):
+        h = p[..., 2] - (z0 + _sag(element, j, rc))
+        flip = (np.sign(h[:, :-1]) != np.sign(h[:, 1:])) & within[:, :-1] & within[:, 1:]
+        if np.any(flip):
+            return True
+    return False
+
+
+def read_reflectance_table(path: str, field: str) -> tuple[np.ndarray, np.ndarray]:
+    """A coating's R(θ) table: (angles of incidence in rad, reflectance 0 … 1).
+
+    The CSV (UTF-8, UTF-16 or Windows-1252, as :func:`~eyelume.scene.textfile.read_text_file`
+    reads it) has two columns, angle of incidence in degrees and reflectance R (a fraction),
+    one row per angle; a first header row and lines starting with ``#`` are skipped. Angles
+    increase, within 0 … 90°, at least two rows.
+
+    Raises
+    ------
+    InputFileError
+        One line naming the file, ``field`` and the bad row or value.
+    """
+    where = Path(path)
+    try:
+        text = read_text_file(where, InputFileError)
+    except InputFileError as exc:
+        raise InputFileError(exc.message, field=field) from None
+    try:
+        rows = [
+            r
+            for r in csv.reader(io.StringIO(text.lstrip("\ufeff")))
+            if r and "".join(r).strip() and not r[0].lstrip().startswith("#")
+        ]
+    except csv.Error as exc:
+        raise InputFileError(f"not a CSV table ({exc})", file=where, field=field) from None
+    angles, values = [], []
+    for n, row in enumerate(rows, 1):
+        try:
+            a, v = float(row[0]), float(row[1])
+        except (ValueError, IndexError):
+            if n == 1:
+                continue  # a header line
+            raise InputFileError(
+                f"row {n} {row!r} is not 'angle_deg, reflectance'", file=where, field=field
+            ) from None
+        if not (math.isfinite(a) and math.isfinite(v)) or not 0.0 <= v <= 1.0:
+            raise InputFileError(
+                f"row {n} {row!r}: the angle must be finite and the reflectance within 0 … 1",
+                file=where,
+                field=field,
+            )
+        if not 0.0 <= a <= 90.0:
+            raise InputFileError(
+                f"row {n} {row!r}: angle of incidence {a:g} deg out of range 0 … 90",
+                file=where,
+                field=field,
+            )
+        angles.append(a)
+        values.append(v)
+    a = np.asarray(angles)
+    if a.size < 2 or np.any(np.diff(a) <= 0):
+        raise InputFileError(
+            f"{a.size} rows of angles {a[:6].tolist()}: need at least two, increasing",
+            file=where,
+            field=field,
+        )
+    return np.radians(a), np.asarray(values)
