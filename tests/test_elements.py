@@ -326,3 +326,21 @@ def test_reflectance_table_is_read_checked_and_not_yet_traced(tmp_path):
         compile_scene(_scene([el]))
     with pytest.raises(SceneError, match="needs source"):
         _scene([PLATE | {"front": {"coating": coat | {"source": ""}}}])
+
+
+def test_the_readme_elements_example_compiles():
+    """The README's [[elements]] example, added to paper2005, is a valid scene."""
+    import re
+    import tomllib
+    from pathlib import Path
+
+    readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    block = next(
+        b for b in re.findall(r"```toml\n(.*?)```", readme, flags=re.S) if "[[elements]]" in b
+    )
+    elements = tomllib.loads(block)["elements"]
+    cs = compile_scene(_scene(elements))
+    assert [t for t in cs.tallies if t.startswith("element")] == [
+        "element 0 (window)",
+        "element 1 (mirror)",
+    ]
