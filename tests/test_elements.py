@@ -115,9 +115,10 @@ def test_a_ray_through_a_plate_is_displaced_as_snell_says(theta_deg):
         assert z_apparent - p0[2] == pytest.approx(t_mm * (1 - 1 / n), rel=1e-5)
 
 
-def _led_irradiance_flux(src, axis, i0, f, plane) -> np.ndarray:
+def _led_irradiance_flux(src, axis, i0, f, plane, weight=None) -> np.ndarray:
     """Flux per eye-plane bin (W) of a point LED at ``src`` with axis ``axis`` by 16 × 16
-    Gauss–Legendre quadrature of I₀ f(α) cos β / r² (as tests/estimators/test_led_closed_form)."""
+    Gauss–Legendre quadrature of I₀ f(α) w(cos β) cos β / r² (as
+    tests/estimators/test_led_closed_form; ``weight`` w, default 1)."""
     w, h, nc, nr = plane.width_mm, plane.height_mm, plane.cols, plane.rows
     g, gw = np.polynomial.legendre.leggauss(16)
     flux = np.zeros((nr, nc))
@@ -132,6 +133,8 @@ def _led_irradiance_flux(src, axis, i0, f, plane) -> np.ndarray:
             cos_a = (dx * axis[0] + dy * axis[1] + dz * axis[2]) / r
             alpha = np.arccos(np.clip(cos_a, -1, 1))
             inten = np.where(alpha <= math.pi / 2, i0 * f(np.minimum(alpha, math.pi / 2)), 0.0)
+            if weight is not None:
+                inten = inten * weight(src[2] / r)
             flux[row, col] = np.einsum("i,j,ij->", gw, gw, inten * (src[2] / r) / r**2)
             flux[row, col] *= bw * bh / 4
     return flux
@@ -314,18 +317,83 @@ def _scene_file(tmp_path, elements) -> str:
     return str(path)
 
 
-def test_reflectance_table_is_read_checked_and_not_yet_traced(tmp_path):
+def test_reflectance_table_is_checked_and_interpolated_in_the_angle_of_incidence(tmp_path):
+    """A coating's R(θ) table: refused with one line when its angles leave 0 … 90 or do not
+    span them; compiled, the interface's R at any angle of incidence, from either side, is the
+    table's linear interpolation in θ (np.interp), T = 1 − R, nothing absorbed."""
     table = tmp_path / "r.csv"
     coat = {"model": "table", "table_csv": str(table), "source": "test data"}
     el = PLATE | {"front": {"coating": coat}}
     table.write_text("angle_deg,R\n0,0.01\n95,0.2\n", encoding="utf-8")
     with pytest.raises(InputFileError, match=r"angle of incidence 95 deg out of range"):
         compile_scene(_scene([el]))
-    table.write_text("angle_deg,R\n0,0.01\n60,0.05\n90,1\n", encoding="utf-8")
-    with pytest.raises(SceneError, match="not traced yet"):
+    table.write_text("angle_deg,R\n0,0.01\n60,0.2\n", encoding="utf-8")
+    with pytest.raises(InputFileError, match=r"must increase from 0 to 90 deg"):
         compile_scene(_scene([el]))
     with pytest.raises(SceneError, match="needs source"):
         _scene([PLATE | {"front": {"coating": coat | {"source": ""}}}])
+    angles = np.array([0.0, 20.0, 45.0, 60.0, 75.0, 90.0])
+    r = np.array([0.01, 0.012, 0.03, 0.08, 0.3, 1.0])
+    table.write_text("".join(f"{a},{v}\n" for a, v in zip(angles, r, strict=True)), "utf-8")
+    cs = compile_scene(_scene([el]))
+    front, back, _ = _rows(cs)
+    for theta in (0.0, 10.0, 20.0, 33.3, 59.9, 74.0, 89.5, 90.0):
+        for sign in (-1.0, 1.0):
+            f = interface_at(cs.sf, cs.si, front, sign * math.cos(math.radians(theta)))
+            assert f.reflectance == pytest.approx(np.interp(theta, angles, r), abs=1e-12)
+            assert f.absorptance == 0.0
+    n = _n_bk7()  # the back surface keeps its Fresnel reflectance
+    assert interface_at(cs.sf, cs.si, back, -1.0).reflectance == pytest.approx(
+        ((n - 1) / (n + 1)) ** 2, rel=1e-12
+    )
+
+
+@pytest.mark.filterwarnings("ignore::eyelume.compile.LedAimWarning")
+def test_mirror_with_a_reflectance_table_weights_the_image_by_r_at_the_angle_of_incidence(
+    tmp_path,
+):
+    """The plane mirror of the image test with a measured-like R(θ) (T = 1 − R): a ray from the
+    mirrored emission point to a point of the eye plane meets the mirror (parallel to the plane)
+    at the angle β it meets the plane, so each bin's closed form is
+    ∫ I₀ f(α) R(β) cos β / r² dA; the forward counts agree bin by bin (Bonferroni, 1e-3)."""
+    angles = np.array([0.0, 15.0, 30.0, 45.0, 60.0, 90.0])
+    r = np.array([0.9, 0.85, 0.6, 0.3, 0.15, 0.1])
+    table = tmp_path / "hot_mirror.csv"
+    table.write_text(
+        "# angle_deg, R\n" + "".join(f"{a},{v}\n" for a, v in zip(angles, r, strict=True)),
+        encoding="utf-8",
+    )
+    coat = {"model": "table", "table_csv": str(table), "source": "made up for the test"}
+    mirror = {
+        "kind": "mirror",
+        "position_mm": [0.0, 0.0, 30.0],
+        "semi_diameter_mm": 40.0,
+        "front": {"coating": coat},
+    }
+    rays = 1_000_000
+    cs = compile_scene(_scene([mirror], **DARK))
+    result = eyelume.render(cs, eyelume.RenderOptions(rays=rays, seed=11))
+    sc = cs.scene
+    src, axis = cs.led.points[0], cs.led.axes[0]
+    image_src = np.array([src[0], src[1], 60.0 - src[2]])
+    image_axis = np.array([axis[0], axis[1], -axis[2]])
+    f = relative_intensity(sc.leds.profile)
+    i0 = sc.leds.radiant_intensity_w_sr
+
+    def r_of_cos(cos_b):
+        return np.interp(np.degrees(np.arccos(np.clip(cos_b, -1, 1))), angles, r)
+
+    flux = _led_irradiance_flux(image_src, image_axis, i0, f, sc.eye_plane, weight=r_of_cos)
+    flux += _led_irradiance_flux(src, axis, i0, f, sc.eye_plane)
+    p = flux / cs.emitted_w
+    expected = rays * p
+    sigma = np.sqrt(rays * p * (1 - p))
+    assert np.all(expected > 25)
+    z = (result.plane_counts - expected) / sigma
+    z_max = stats.norm.isf(1e-3 / 2 / z.size)
+    assert np.max(np.abs(z)) < z_max, f"worst bin z = {np.max(np.abs(z)):.2f}"
+    chi2 = float(np.sum(z**2))
+    assert stats.chi2.sf(chi2, df=z.size) > 1e-3, f"chi2 = {chi2:.1f} for {z.size} bins"
 
 
 def test_the_readme_elements_example_compiles():

@@ -27,8 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eyelume.errors import EyelumeWarning, GeometryError, GlassError, SceneError
+from eyelume.errors import EyelumeWarning, GeometryError, GlassError, InputFileError, SceneError
 from eyelume.kernels import geometry as G
+from eyelume.kernels import interact as I
 from eyelume.kernels import sequential as Q
 from eyelume.kernels.bins import PlaneGrid, eye_plane_grid, picture_grid
 from eyelume.kernels.sampling import cos_power_tables, profile_tables
@@ -285,9 +286,15 @@ class SurfaceSpec:
     rho_b: float = 0.0
     tally_a: str = ""
     tally_b: str = ""
+    r_table: tuple[np.ndarray, np.ndarray] | None = None  # R(θ): angles (rad), R
 
     def float_row(self) -> np.ndarray:
-        f = np.zeros(G.N_FLOAT)
+        f = np.zeros(G.N_FLOAT if self.r_table is None else I.N_FLOAT_WITH_TABLE)
+        if self.r_table is not None:
+            angles, values = self.r_table
+            f[I.R_TABLE_COUNT] = len(angles)
+            f[I.R_TABLE_ANGLE : I.R_TABLE_ANGLE + len(angles)] = angles
+            f[I.R_TABLE_VALUE : I.R_TABLE_VALUE + len(values)] = values
         f[G.OX : G.OZ + 1] = self.origin
         f[G.R00 : G.R22 + 1] = np.asarray(self.rot, dtype=float).ravel()
         f[G.CURV], f[G.CONIC], f[G.RADIUS] = self.curv, self.conic, self.radius
@@ -303,7 +310,8 @@ class SurfaceSpec:
     def int_row(self, tally_a: int, tally_b: int) -> np.ndarray:
         """The int row: shape, action, Fresnel flag and the ledger indices of its two sides."""
         i = np.zeros(G.N_INT, dtype=np.int64)
-        i[G.SHAPE], i[G.ACTION], i[G.FRESNEL] = self.shape, self.action, int(self.fresnel)
+        code = I.R_TABLE if self.r_table is not None else int(self.fresnel)
+        i[G.SHAPE], i[G.ACTION], i[G.FRESNEL] = self.shape, self.action, code
         i[G.TALLY_A], i[G.TALLY_B] = tally_a, tally_b
         return i
 
@@ -337,6 +345,19 @@ class _Table:
         self.rows_f.append(spec.float_row())
         self.rows_i.append(spec.int_row(tally_a, tally_b))
         self.names.append(name)
+
+
+def _stack_rows(rows: list[np.ndarray]) -> np.ndarray:
+    """The float rows as one table: the geometry's N_FLOAT columns, or N_FLOAT_WITH_TABLE (the
+    other rows padded with zeros) when a surface carries an R(θ) table
+    (:mod:`eyelume.kernels.interact`)."""
+    width = max(len(r) for r in rows)
+    if all(len(r) == width for r in rows):
+        return np.stack(rows)
+    out = np.zeros((len(rows), width))
+    for k, r in enumerate(rows):
+        out[k, : len(r)] = r
+    return out
 
 
 def _frame(axis) -> np.ndarray:
@@ -1171,19 +1192,23 @@ _SIDES = ("front", "back")
 
 
 def _coating_columns(k: int, j: int, coating: Coating) -> dict:
-    """The surface-table options of a coating: Fresnel flag, or fixed R and A = 1 − R − T.
-    Raises SceneError for an R(θ) table (read and checked, not traced yet)."""
+    """The surface-table options of a coating: Fresnel flag; fixed R and A = 1 − R − T; or
+    an R(θ) table (T = 1 − R), read here. Raises InputFileError for a table that cannot be
+    used or has more than :data:`eyelume.kernels.interact.R_TABLE_NODES` rows."""
     if coating.model == "fresnel":
         return {"fresnel": True}
     if coating.model == "fixed":
         r, t = float(coating.reflectance), float(coating.transmittance)  # type: ignore[arg-type]
         return {"refl": r, "absorb": max(0.0, 1.0 - r - t)}
     field = f"elements.{k}.{_SIDES[j]}.coating.table_csv"
-    read_reflectance_table(coating.table_csv, field)  # type: ignore[arg-type]
-    raise SceneError(
-        f"field 'elements.{k}.{_SIDES[j]}.coating.model' = 'table': R(angle) tables are read "
-        "and checked but not traced yet; give model 'fixed' (R and T at the scene's wavelength)"
-    )
+    angles, values = read_reflectance_table(coating.table_csv, field)  # type: ignore[arg-type]
+    if len(angles) > I.R_TABLE_NODES:
+        raise InputFileError(
+            f"{len(angles)} rows: at most {I.R_TABLE_NODES} angles per table",
+            file=coating.table_csv,
+            field=field,
+        )
+    return {"r_table": (angles, values)}
 
 
 def _add_elements(t: _Table, scene: Scene) -> None:
@@ -1493,7 +1518,7 @@ def compile_scene(
         _check_elements(scene, world[0])
         _add_elements(t, scene)
     surfaces = SurfaceTable(
-        np.ascontiguousarray(np.stack(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))
+        np.ascontiguousarray(_stack_rows(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))
     )
     picture, eye_plane = _grids(scene, frame)
     _check_view(scene, frame, first, picture)

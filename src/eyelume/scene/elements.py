@@ -118,7 +118,8 @@ def read_reflectance_table(path: str, field: str) -> tuple[np.ndarray, np.ndarra
     The CSV (UTF-8, UTF-16 or Windows-1252, as :func:`~eyelume.scene.textfile.read_text_file`
     reads it) has two columns, angle of incidence in degrees and reflectance R (a fraction),
     one row per angle; a first header row and lines starting with ``#`` are skipped. Angles
-    increase, within 0 … 90°, at least two rows.
+    increase from 0 to 90° (both given: R is interpolated linearly between rows, never
+    extrapolated).
 
     Raises
     ------
@@ -163,9 +164,10 @@ def read_reflectance_table(path: str, field: str) -> tuple[np.ndarray, np.ndarra
         angles.append(a)
         values.append(v)
     a = np.asarray(angles)
-    if a.size < 2 or np.any(np.diff(a) <= 0):
+    if a.size < 2 or np.any(np.diff(a) <= 0) or a[0] != 0.0 or a[-1] != 90.0:
         raise InputFileError(
-            f"{a.size} rows of angles {a[:6].tolist()}: need at least two, increasing",
+            f"{a.size} rows of angles {a[:6].tolist()}{' ...' if a.size > 6 else ''}: the "
+            "angles must increase from 0 to 90 deg (every angle of incidence a ray can have)",
             file=where,
             field=field,
         )

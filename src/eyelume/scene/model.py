@@ -819,9 +819,9 @@ class Coating(_Model):
       hot mirror's value at the scene's infrared wavelength), the rest A = 1 − R − T absorbed
       by the surface (the ledger's entry of its element); R + T ≤ 1.
     * ``"table"``: a CSV file ``table_csv`` of two columns, angle of incidence in degrees
-      (increasing, within 0 … 90) and R (0 … 1), T = 1 − R; ``source`` names where the numbers
-      come from (a datasheet, a measurement). Read and checked when the scene is compiled; NOT
-      traced yet (compile refuses it with one line: the kernels have no per-surface table).
+      (increasing from 0 to 90, at most 128 rows) and R (0 … 1) at the scene's wavelength,
+      T = 1 − R, R linear in the angle between rows; ``source`` names where the numbers come
+      from (a datasheet, a measurement). Read when the scene is compiled.
     """
 
     model: Literal["fresnel", "fixed", "table"] = "fresnel"
