@@ -11,6 +11,11 @@ the stop's centre, :func:`eyelume.estimators.camera.aim_chief`) leaves the lens 
 * an LED the camera sees directly images where the chief ray itself passes through its
   emission point.
 
+With optical elements in the scene, every such ray is followed through the elements it meets
+on its way (refracted by a window or lens, folded by a mirror: the stronger of the reflected
+and transmitted branches, :func:`_through_elements`), so the truth is what the camera sees
+through and in them; a spectacle ghost (an LED reflected by an element) is not listed yet.
+
 Pixel coordinates follow OpenCV's convention on the upright picture: pixel (column c, row r) has
 its centre at (x, y) = (c, r), row 0 at the top. A point is *visible* when nothing (an eyelid,
 the lens mount) blocks its rays; a glint whose reflection point falls outside the cornea's cap
@@ -35,7 +40,7 @@ from eyelume.compile import (
 from eyelume.detectors.receivers import BinnedPlane
 from eyelume.estimators.camera import aim_chief, into_scene
 from eyelume.kernels import geometry as G
-from eyelume.kernels.interact import reflect, refract
+from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.sampling import orthonormal_basis, radiant_intensity
 from eyelume.kernels.tables import CameraTables
 
@@ -51,12 +56,45 @@ def sensor_to_pixel(cs: CompiledScene, xs: float, ys: float) -> tuple[float, flo
     return float(c), float(r)
 
 
-def _chief_ray(cs: CompiledScene, cam: CameraTables, xs: float, ys: float):
+def _chief_ray(cs: CompiledScene, cam: CameraTables, xs: float, ys: float, target=None):
+    """The chief ray of sensor point (xs, ys) in the scene, past the optical elements it meets
+    first (:func:`_through_elements`; before ``target`` when given), or None."""
     chief = aim_chief(cam, xs, ys)
     if not chief.found:
         return None
     ok, x, y, z, dx, dy, dz, _ = into_scene(cam, xs, ys, chief.qx, chief.qy)
-    return (np.array([x, y, z]), np.array([dx, dy, dz])) if ok else None
+    if not ok:
+        return None
+    return _through_elements(cs, np.array([x, y, z]), np.array([dx, dy, dz]), target)
+
+
+_ELEMENT_EVENTS = 16  # element surfaces a truth ray may cross or be folded by
+
+
+def _through_elements(cs: CompiledScene, p: np.ndarray, d: np.ndarray, target=None):
+    """The ray (p, d) past the optical elements (:attr:`eyelume.scene.model.Scene.elements`)
+    it meets before any other surface (and, given ``target``, before passing it): at each
+    element surface the stronger branch — refracted when T ≥ R (a window, a lens), reflected
+    when R > T (a mirror, a hot mirror) or on total internal reflection — the path an image
+    seen through or in the elements takes. A scene without elements: (p, d) unchanged."""
+    if not cs.scene.elements:
+        return p, d
+    for _ in range(_ELEMENT_EVENTS):
+        s, t = G.nearest_hit(cs.sf, cs.si, *p, *d)
+        if s < 0 or not cs.surface_names[s].startswith("element "):
+            break
+        if target is not None and t > (target - p) @ d:
+            break
+        p = p + t * d
+        n = np.array(G.surface_normal(cs.sf, cs.si, s, *p))
+        f = interface_at(cs.sf, cs.si, s, float(d @ n))
+        ok, *dt = refract(*d, *n, f.n1 / f.n2)
+        if ok and 1.0 - f.reflectance - f.absorptance >= f.reflectance:
+            d = np.array(dt)
+        else:
+            d = np.array(reflect(*d, *n))
+        d = d / np.linalg.norm(d)
+    return p, d
 
 
 def _through_cornea(cs: CompiledScene, cornea: int, p: np.ndarray, d: np.ndarray):
@@ -216,6 +254,7 @@ def _glint_truth(v: _View, k: int, led: np.ndarray) -> dict:
     def residual(s):
         ray = _chief_ray(cs, cam, s[0], s[1])
         ray = None if ray is None else _off_cornea(cs, cornea, *ray)
+        ray = None if ray is None else _through_elements(cs, *ray, led)
         return _miss(ray, led, n, g1, g2)
 
     # first guess: the corneal centre's image, shifted toward the LED
@@ -230,6 +269,8 @@ def _glint_truth(v: _View, k: int, led: np.ndarray) -> dict:
     entry["centre_px"] = list(sensor_to_pixel(cs, *s))
     ray = _chief_ray(cs, cam, *s)
     hit = _off_cornea(cs, cornea, *ray)
+    if hit is not None:
+        hit = _through_elements(cs, *hit, led)
     blocked_in = not _clear(cs, ray[0], ray[1], cornea)
     blocked_out = hit is None or G.nearest_hit(cs.sf, cs.si, *hit[0], *hit[1])[0] not in (
         cs.surface_names.index(f"LED {k} body"),
@@ -255,7 +296,7 @@ def _led_in_view(v: _View, k: int, led: np.ndarray, row: int | None = None) -> d
     g1, g2 = _basis(n)
 
     def residual(s):
-        return _miss(_chief_ray(cs, cam, s[0], s[1]), led, n, g1, g2)
+        return _miss(_chief_ray(cs, cam, s[0], s[1], led), led, n, g1, g2)
 
     # first guess: the pinhole image through the entrance pupil's centre
     m = -(cs.image_z - ep[2]) / (ep[2] - led[2])
@@ -265,7 +306,7 @@ def _led_in_view(v: _View, k: int, led: np.ndarray, row: int | None = None) -> d
     c, r = sensor_to_pixel(cs, *s)
     if not (-0.5 <= c < cs.picture.cols - 0.5 and -0.5 <= r < cs.picture.rows - 0.5):
         return None
-    p, d = _chief_ray(cs, cam, *s)
+    p, d = _chief_ray(cs, cam, *s, led)
     hit, t = G.nearest_hit(cs.sf, cs.si, *p, *d)
     clear = hit < 0 or t >= (led - p) @ d - 1e-4  # nothing before the emission point
     intensity = float(radiant_intensity(cs.led, k if row is None else row, *(-d)))
