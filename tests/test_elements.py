@@ -438,3 +438,82 @@ def test_truth_sees_the_pupil_through_a_tilted_plate_displaced_as_snell_says():
     assert np.hypot(*(np.array(got) - want)) < 0.02, (got, want)
     assert np.hypot(*(np.array(got) - plain["pupil"]["centre_px"])) > 1.0  # the shift is real
     assert truth["glints_visible"] == plain["glints_visible"] == 4
+
+
+def _follow(cs, p, d, events: int = 8):
+    """A ray through the compiled table's element surfaces, taking the stronger branch at each
+    (refracted when T ≥ R, else reflected), until it meets no element: (point, direction)."""
+    p, d = np.asarray(p, dtype=float), np.asarray(d, dtype=float)
+    for _ in range(events):
+        s, t = G.nearest_hit(cs.sf, cs.si, *p, *d)
+        if s < 0 or not cs.surface_names[s].startswith("element "):
+            return p, d
+        p = p + t * d
+        n = np.array(G.surface_normal(cs.sf, cs.si, s, *p))
+        f = interface_at(cs.sf, cs.si, s, float(d @ n))
+        ok, *dt = refract(*d, *n, f.n1 / f.n2)
+        if ok and 1.0 - f.reflectance - f.absorptance >= f.reflectance:
+            d = np.array(dt)
+        else:
+            d = d - 2.0 * (d @ n) * n
+    raise AssertionError("the ray did not leave the elements")
+
+
+def test_a_thick_lens_element_focuses_a_paraxial_ray_at_its_back_focal_distance():
+    """A biconvex N-BK7 element R₁ = +30, R₂ = −30 mm, t = 4 mm: Φ = (n − 1)(1/R₁ − 1/R₂ +
+    (n − 1) t / (n R₁ R₂)), back focal distance BFD = (1 − (n − 1) t / (n R₁)) / Φ. A ray
+    parallel to the axis at h = 0.01 mm crosses the axis BFD behind the back vertex (to
+    O(h²), 1e-6 relative)."""
+    r1, r2, t = 30.0, -30.0, 4.0
+    lens = {
+        "kind": "lens",
+        "position_mm": [0.0, 0.0, 20.0],
+        "thickness_mm": t,
+        "glass": "N-BK7",
+        "semi_diameter_mm": 10.0,
+        "front": {"radius_mm": r1},
+        "back": {"radius_mm": r2},
+    }
+    cs = compile_scene(_scene([lens]))
+    n = _n_bk7()
+    power = (n - 1) * (1 / r1 - 1 / r2 + (n - 1) * t / (n * r1 * r2))
+    bfd = (1 - (n - 1) * t / (n * r1)) / power
+    h = 0.01
+    p, d = _follow(cs, [0.0, h, 5.0], [0.0, 0.0, 1.0])
+    z_cross = p[2] - p[1] * d[2] / d[1]
+    assert z_cross - (20.0 + t) == pytest.approx(bfd, rel=1e-6)
+
+
+@pytest.mark.parametrize("h", [1.0, 5.0, 9.5])
+def test_a_parabolic_mirror_element_sends_every_axial_ray_through_its_focus(h):
+    """A concave paraboloid (k = −1, R = −40 mm: centre of curvature toward the light) reflects
+    every ray parallel to its axis through the focus R/2 = 20 mm in front of its vertex,
+    whatever the height (exactly: no spherical aberration)."""
+    mirror = {
+        "kind": "mirror",
+        "position_mm": [0.0, 0.0, 45.0],
+        "semi_diameter_mm": 10.0,
+        "front": {"radius_mm": -40.0, "conic": -1.0},
+    }
+    cs = compile_scene(_scene([mirror]))
+    p, d = _follow(cs, [0.0, h, 30.0], [0.0, 0.0, 1.0])
+    assert d[2] < 0  # folded back toward the eye
+    t = -p[1] / d[1]
+    np.testing.assert_allclose(p + t * d, [0.0, 0.0, 25.0], atol=1e-9)
+
+
+def test_a_left_eye_mirrors_the_elements_like_the_rest_of_the_file():
+    """A left eye's scene is the file mirrored x → −x: an element at x = +6 mm, axis tilted
+    toward +x, sits at x = −6 mm, tilted toward −x (the paper's on-axis camera: camera frame =
+    world)."""
+    el = PLATE | {
+        "position_mm": [6.0, 0.0, 20.0],
+        "direction": [0.3, 0.0, 1.0],
+        "semi_diameter_mm": 5.0,
+    }
+    for which, sign in (("right", 1.0), ("left", -1.0)):
+        cs = compile_scene(_scene([el], **{"eye_pose.which": f'"{which}"'}))
+        front = _rows(cs)[0]
+        assert cs.sf[front, G.OX] == pytest.approx(sign * 6.0)
+        axis = cs.sf[front, G.R20 : G.R22 + 1]
+        np.testing.assert_allclose(axis, np.array([sign * 0.3, 0.0, 1.0]) / math.hypot(0.3, 1.0))
