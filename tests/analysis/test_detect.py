@@ -207,10 +207,21 @@ def test_lost_glint_is_reported_and_the_rest_matched():
     )
     _check_glints(d, truth, leds=[0, 1, 3])
     assert _err(d.pupil.centre_px, CENTRE) < 0.1
-    # Two opposite glints: their LEDs are told by their directions from their midpoint.
+    # Two opposite glints: their LEDs are told by their directions from their midpoint, but
+    # two glints fit a shifted copy of the pattern as well (reflections in spectacles): with
+    # LEDs missing 3 are needed.
     d = detect(draw_eye(EyePicture(glints=[truth[1], truth[3]], seed=5)), led_azimuths_deg=LEDS)
-    assert d.ok and d.missing_leds == [0, 2], d.failures
+    assert not d.ok and d.missing_leds == [0, 2], d.failures
     _check_glints(d, truth, leds=[1, 3])
+    assert any(f.startswith("glint lost: 2 of 4") and "3 are needed" in f for f in d.failures)
+    # A glint found that matches no LED while one has none: which are the LEDs' is uncertain.
+    stray = (CENTRE[0] + 2.0 * GLINT_R, CENTRE[1] + 0.3 * GLINT_R)
+    d = detect(
+        draw_eye(EyePicture(glints=[truth[0], truth[1], truth[3], stray], seed=5)),
+        led_azimuths_deg=LEDS,
+    )
+    assert not d.ok and d.missing_leds == [2], d.failures
+    assert any("match none" in f for f in d.failures), d.failures
     # Two neighbours: each lies exactly between two LEDs' directions from their midpoint, a
     # tie; refused, not guessed.
     d = detect(draw_eye(EyePicture(glints=[truth[0], truth[1]], seed=5)), led_azimuths_deg=LEDS)

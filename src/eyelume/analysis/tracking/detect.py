@@ -45,7 +45,9 @@ Which failures make ``ok`` False
 by an eyelid or the image border, or hidden); a pupil outline
 that is not an ellipse (RMS residual of its edge points above max(``max_fit_residual_px``,
 ``max_fit_residual_frac`` × the semi-minor axis)); too few glints (LED azimuths given and
-fewer than ``min_matched_glints`` (2; all of them with a single LED) matched to an LED). Messages
+fewer than ``min_matched_glints`` (2; all of them with a single LED) matched to an LED, or, with
+an LED missing, fewer than ``min_glints_when_missing`` (3), a glint left unmatched, or matched
+glints that do not fit the LEDs' pattern). Messages
 starting ``"warning: "`` leave ``ok`` True: LEDs without a glint when enough others have one
 (listed in ``Detection.missing_leds`` too: on a headset with 6–8 LEDs around an eye seen off its
 axis some glints routinely fall off the cornea or under a lid; the gaze models use the matched
@@ -212,6 +214,11 @@ class DetectParams:
         is a failure naming the missing LEDs; more missing LEDs than that are a warning.
         With LEDs missing, the matched glints must also fit the LEDs' glint pattern
         (:func:`_pattern_misfit`): direction alone lets two stray reflections pass for glints.
+    min_glints_when_missing : with an LED missing, at least this many matched (3) and no glint
+        left unmatched: two glints fit any pattern up to one degree of freedom, so a shifted
+        copy of it — the LEDs' reflections in spectacles, or strays beside the pupil — passes
+        for them (glasses-frame at 160 × 120, where the corneal glints are single pixels: two
+        such strays answered frames 35–41° off); an unmatched glint may be a missing LED's.
     pattern_min_scale : with ``led_pattern_px`` given, the fitted pattern's scale must be within
         [this, 1 / this] of the prediction (0.5: a guess — the glints' spread changes with gaze
         and with the eye's distance by far less than 2×; strays beside the pupil do not keep it).
@@ -267,6 +274,7 @@ class DetectParams:
     glint_edge_margin_px: float = 1.0
     match_max_angle_deg: float | None = None
     min_matched_glints: int = 2
+    min_glints_when_missing: int = 3
     pattern_min_scale: float = 0.5
 
 
@@ -613,6 +621,20 @@ def _match_glints(
     if len(matched) < need:
         lost = f"glint lost: {len(matched)} of {n_led} LEDs have a glint, {need} needed ({which})"
         return [lost + ambiguous], missing
+    if len(matched) < params.min_glints_when_missing:
+        return [
+            f"glint lost: {len(matched)} of {n_led} LEDs have a glint ({which}); with LEDs "
+            f"missing {params.min_glints_when_missing} are needed to tell which LEDs the glints "
+            "are (two fit a shifted copy of the pattern: reflections in spectacles, strays)"
+        ], missing
+    strays = [g for g in glints if g.led is None]
+    if strays:
+        x, y = strays[0].centre_px
+        return [
+            f"glint lost: {len(matched)} of {n_led} LEDs have a glint ({which}) and "
+            f"{len(strays)} glint(s) found match none (the first at ({x:.1f}, {y:.1f})): which "
+            "glints are the LEDs' is uncertain"
+        ], missing
     misfit = "; ".join(between) or _pattern_misfit(
         glints, led_azimuths_deg, pattern, max_ang, params
     )

@@ -8,7 +8,7 @@ found and matched. :func:`analyse_frames` estimates gaze with two estimators (:m
 PCCR polynomial, calibrated on a 3 × 3 grid of calibration frames and evaluated on the held-out
 test frames, and the Guestrin–Eizenman geometric model from the glints, which needs no
 calibration. Both use the glints matched to LEDs only: a frame with some LEDs' glints missing
-(off the cornea, under a lid) but ≥ 2 matched is answered (:func:`~.detect.detect`); its PCCR
+(off the cornea, under a lid) but ≥ 3 matched is answered (:func:`~.detect.detect`); its PCCR
 reference is the glint pattern's centre from the found glints and each LED's offset in the
 calibration frames (:func:`~.gaze.glint_offsets`), not the mean of the found glints, which
 moves toward them. Rendering the frames over a gaze grid is :mod:`eyelume.optimize.tracking`'s.
