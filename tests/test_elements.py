@@ -517,3 +517,49 @@ def test_a_left_eye_mirrors_the_elements_like_the_rest_of_the_file():
         assert cs.sf[front, G.OX] == pytest.approx(sign * 6.0)
         axis = cs.sf[front, G.R20 : G.R22 + 1]
         np.testing.assert_allclose(axis, np.array([sign * 0.3, 0.0, 1.0]) / math.hypot(0.3, 1.0))
+
+
+def test_info_lists_each_element_with_its_paraxial_power():
+    """`eyelume info`'s elements: a lens's EFL by the thick-lens formula, its back focal
+    distance where a traced paraxial ray crosses the axis, a plate's Fresnel R at normal
+    incidence; a concave mirror's focal length −R/2."""
+    from eyelume.info import scene_info
+
+    lens = {
+        "kind": "lens",
+        "name": "eyepiece",
+        "position_mm": [0.0, 0.0, 20.0],
+        "thickness_mm": 4.0,
+        "glass": "N-BK7",
+        "semi_diameter_mm": 10.0,
+        "front": {"radius_mm": 30.0},
+        "back": {"radius_mm": -30.0},
+    }
+    mirror = {
+        "kind": "mirror",
+        "position_mm": [0.0, 0.0, 45.0],
+        "semi_diameter_mm": 8.0,
+        "front": {"radius_mm": -40.0},
+    }
+    scene = _scene([lens, mirror])
+    info = scene_info(scene)["elements"]
+    n = _n_bk7()
+    power = (n - 1) * (1 / 30 + 1 / 30 - (n - 1) * 4 / (n * 900))
+    assert info[0]["efl_mm"] == pytest.approx(1 / power, rel=1e-12)
+    assert info[0]["index"] == pytest.approx(n, rel=1e-15)
+    assert info[0]["surfaces"][0]["reflectance_normal"] == pytest.approx(((n - 1) / (n + 1)) ** 2)
+    cs = compile_scene(eyelume.load_scene("paper2005", {"elements": [lens]}))
+    p, d = _follow(cs, [0.0, 0.01, 5.0], [0.0, 0.0, 1.0])
+    assert p[2] - p[1] * d[2] / d[1] - 24.0 == pytest.approx(
+        info[0]["back_focal_distance_mm"], rel=1e-6
+    )
+    assert info[1]["focal_length_mm"] == 20.0 and info[1]["ledger_entry"] == "element 1 (mirror)"
+
+
+def test_cli_render_with_the_fast_estimator_refuses_elements_in_one_line(tmp_path):
+    path = _scene_file(tmp_path, [PLATE])
+    res = runner.invoke(app, ["render", "--scene", path, "--out", str(tmp_path / "out")])
+    assert res.exit_code == 2, res.output
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "forward estimator only" in lines[0], res.stderr
+    assert not (tmp_path / "out").exists()  # refused before anything is made or run

@@ -360,13 +360,14 @@ def render(
     """Render a scene and write the eye image (irradiance, its noise, the camera's digital
     reading), the eye-plane irradiance, pictures, layout and summary into OUT."""
     from eyelume.compile import compile_scene
-    from eyelume.render import RenderOptions, render_extras
+    from eyelume.render import RenderOptions, check_estimator, render_extras
     from eyelume.render import render as render_scene
     from eyelume.report.outputs import write_render_outputs
 
     sc = _load(scene, set_)
     estimator = estimator or ("forward" if rays is not None else sc.run.estimator)
     _check_render_options(estimator, rays, samples, rel_error, max_samples, seed)
+    check_estimator(sc, estimator)
     _check_out(out)
     if max_samples is None:
         from eyelume.estimators.fast_run import MAX_SAMPLES_REL_ERROR

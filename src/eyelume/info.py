@@ -1,4 +1,5 @@
-"""Derived first-order optics of a scene (``eyelume info``): lens, eye, glasses, LEDs."""
+"""Derived first-order optics of a scene (``eyelume info``): lens, eye, glasses, LEDs, optical
+elements."""
 
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ from eyelume.compile import (
     WavelengthGroup,
     camera_pose,
     compile_scene,
+    element_label,
+    element_pose,
     eye_direction,
     eye_paraxial,
     eye_point,
@@ -18,10 +21,12 @@ from eyelume.compile import (
     single_wavelength,
     wavelength_groups,
 )
+from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
 from eyelume.scene.eye import LAMBDA_D, eye_indices
 from eyelume.scene.focus import focus
-from eyelume.scene.model import LedProfile, Scene
+from eyelume.scene.model import Element, LedProfile, Scene
+from eyelume.scene.optics import ParaxialSystem, curvature
 from eyelume.scene.pose import opencv_extrinsics
 from eyelume.scene.sources import cos_power_exponent, led_poses
 
@@ -101,6 +106,8 @@ def scene_info(scene: Scene) -> dict:
         out["imaging_lens"], out["glasses"] = _prescription_info(scene, cs)
     out["eye"] = _eye_info(scene)
     out["leds"] = _led_info(scene, cs)
+    if scene.elements:
+        out["elements"] = [_element_info(cs, k, el) for k, el in enumerate(scene.elements)]
     if not single_wavelength(scene):
         out["wavelength_groups"] = [_group_info(scene, cs, g) for g in wavelength_groups(scene)]
     if scene.camera.optics == "prescription":
@@ -264,4 +271,59 @@ def _led_info(scene: Scene, cs: CompiledScene) -> dict:
             )
         )
     ]
+    return out
+
+
+def _element_info(cs: CompiledScene, k: int, el: Element) -> dict:
+    """Optical element ``k`` as compiled: its first vertex and unit axis in the world frame
+    (mm), its glass's index at the scene's wavelength, each surface's coating and its
+    reflectance at normal incidence (Fresnel: ((n − 1)/(n + 1))²), and its paraxial power: a
+    lens's or plate's EFL and back focal distance (thick lens, in air), a mirror's focal length
+    −R/2 (positive for a concave mirror facing the incoming light, i.e. R < 0)."""
+    origin, rot = element_pose(cs.scene, el)
+    label = element_label(k, el)
+    rows = [s for s, name in enumerate(cs.surface_names) if name.startswith(label + " ")]
+    n = float(cs.sf[rows[0], G.N_B])
+    surfaces = []
+    for surf in el.surfaces:
+        c = surf.coating
+        assert c is not None  # Element.surfaces fills every coating in
+        if c.model == "fresnel":
+            r0 = ((n - 1.0) / (n + 1.0)) ** 2
+        elif c.model == "fixed":
+            r0 = c.reflectance
+        else:
+            r0 = None
+        entry = {"radius_mm": surf.radius_mm, "conic": surf.conic, "coating": c.model}
+        entry["reflectance_normal"] = r0
+        if c.model == "table":
+            entry["table_csv"], entry["source"] = c.table_csv, c.source
+        surfaces.append(entry)
+    out = {
+        "name": el.name,
+        "kind": el.kind,
+        "ledger_entry": label,
+        "vertex_mm": [float(x) for x in origin],
+        "axis": [float(x) for x in rot[2]],
+        "semi_diameter_mm": el.semi_diameter_mm,
+        "surfaces": surfaces,
+    }
+    if el.kind == "mirror":
+        r = el.front.radius_mm
+        out["focal_length_mm"] = None if math.isinf(r) else -r / 2.0
+        return out
+    par = ParaxialSystem(
+        tuple(curvature(s.radius_mm) for s in el.surfaces), (float(el.thickness_mm),), (1.0, n, 1.0)
+    )
+    power = par.power
+    out["glass"] = el.glass
+    out["index"] = n
+    out["thickness_mm"] = el.thickness_mm
+    out["edge_thickness_mm"] = el.edge_thickness_mm
+    if power == 0.0:
+        out["efl_mm"] = out["back_focal_distance_mm"] = None
+    else:
+        ys, us = par.trace(1.0, 0.0)
+        out["efl_mm"] = 1.0 / power
+        out["back_focal_distance_mm"] = -ys[-1] / us[-1]
     return out

@@ -311,6 +311,18 @@ class RenderOptions:
     max_samples_per_pixel: int | None = None
 
 
+def check_estimator(scene: Scene, estimator: str) -> None:
+    """Refuse (SceneError) an estimator that cannot render ``scene``: the fast one for a scene
+    with optical elements (its aimed light paths, cornea next-event estimation and closed-form
+    eye plane do not know them yet)."""
+    if estimator == "fast" and scene.elements:
+        raise SceneError(
+            f"estimator = 'fast': the scene has {len(scene.elements)} optical element(s), and "
+            "elements are traced by the forward estimator only, for now (--estimator forward, "
+            "or run.estimator = 'forward')"
+        )
+
+
 def render(
     scene: Scene | CompiledScene,
     options: RenderOptions | None = None,
@@ -348,12 +360,7 @@ def render(
     sc = cs.scene
     seed = sc.run.seed if seed is None else int(seed)
     estimator = opt.estimator or ("forward" if rays is not None else sc.run.estimator)
-    if estimator == "fast" and sc.elements:
-        raise SceneError(
-            f"estimator = 'fast': the scene has {len(sc.elements)} optical element(s), and "
-            "elements are traced by the forward estimator only, for now (--estimator forward, "
-            "or run.estimator = 'forward')"
-        )
+    check_estimator(sc, estimator)
     if cs.led_ids is None and not single_wavelength(sc):
         if estimator not in ("fast", "forward"):
             raise ValueError(f"estimator = {estimator!r}: must be 'fast' or 'forward'")
