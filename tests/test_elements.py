@@ -161,7 +161,9 @@ def test_plane_mirror_images_an_led_at_its_mirror_symmetric_point():
     point (x, y, 60 − z), axis (aₓ, a_y, −a_z)) plus its own direct tail, within the
     multinomial noise (Bonferroni over the bins, family-wise false alarm 1e-3). Without the
     mirror nearly nothing reaches the plane."""
-    mirror = {"kind": "mirror", "position_mm": [0.0, 0.0, 30.0], "semi_diameter_mm": 40.0}
+    # centred where the image's rays toward the eye plane cross z = 30 (y 6 … 18, |x| < 8),
+    # clear of the camera's axis (x = y = 0), which it would otherwise fold back into the lens
+    mirror = {"kind": "mirror", "position_mm": [0.0, 13.0, 30.0], "semi_diameter_mm": 11.5}
     rays = 1_000_000
     cs = compile_scene(_scene([mirror], **DARK))
     result = eyelume.render(cs, eyelume.RenderOptions(rays=rays, seed=3))
@@ -197,13 +199,16 @@ def test_forward_ledger_is_exact_and_a_mirror_files_what_it_absorbs():
     from eyelume.scene.sources import cos_power_exponent
 
     rays = 400_000
-    led_z, d, sd = 10.0, 20.0, 25.0
-    overrides = DARK | {"leds.directions": [[0.0, 0.0, 1.0]]}
+    led_y, led_z, d, sd = 40.0, 10.0, 20.0, 25.0  # the mirror clear of the camera's axis
+    overrides = DARK | {
+        "leds.directions": [[0.0, 0.0, 1.0]],
+        "leds.positions_mm": [[0, led_y, led_z]],
+    }
     rb = 2.5  # the default body: 5 mm across
     mirror = {
         "kind": "mirror",
         "name": "absorber",
-        "position_mm": [0.0, 20.0, led_z + rb + d],
+        "position_mm": [0.0, led_y, led_z + rb + d],
         "semi_diameter_mm": sd,
         "front": {"coating": {"model": "fixed", "reflectance": 0.6, "transmittance": 0.1}},
     }
@@ -298,7 +303,7 @@ def test_two_elements_that_intersect_are_refused(tmp_path):
     assert res.exit_code == 2
     assert "elements.1 (mirror) intersects elements.0 (window)" in res.stderr
     # moved clear of the plate, the same mirror is fine
-    ok = tilted | {"position_mm": [0.0, 0.0, 40.0]}
+    ok = tilted | {"position_mm": [0.0, 20.0, 40.0]}  # beside the camera's line of sight
     res = runner.invoke(app, ["info", "--scene", str(_scene_file(tmp_path, [PLATE, ok]))])
     assert res.exit_code == 0, res.output
 
@@ -366,8 +371,8 @@ def test_mirror_with_a_reflectance_table_weights_the_image_by_r_at_the_angle_of_
     coat = {"model": "table", "table_csv": str(table), "source": "made up for the test"}
     mirror = {
         "kind": "mirror",
-        "position_mm": [0.0, 0.0, 30.0],
-        "semi_diameter_mm": 40.0,
+        "position_mm": [0.0, 13.0, 30.0],
+        "semi_diameter_mm": 11.5,
         "front": {"coating": coat},
     }
     rays = 1_000_000
@@ -495,8 +500,11 @@ def test_a_parabolic_mirror_element_sends_every_axial_ray_through_its_focus(h):
         "semi_diameter_mm": 10.0,
         "front": {"radius_mm": -40.0, "conic": -1.0},
     }
-    cs = compile_scene(_scene([mirror]))
-    p, d = _follow(cs, [0.0, h, 30.0], [0.0, 0.0, 1.0])
+    # vr-offaxis: its camera looks at the eye from the side, so the mirror is out of its view
+    cs = compile_scene(eyelume.load_scene("vr-offaxis", {"elements": [mirror]}))
+    f = cs.frame  # its tables are in the camera's frame: in and out through the world's
+    p, d = _follow(cs, f.point([0.0, h, 30.0]), f.vector([0.0, 0.0, 1.0]))
+    p, d = f.world_point(p), f.world_vector(d)
     assert d[2] < 0  # folded back toward the eye
     t = -p[1] / d[1]
     np.testing.assert_allclose(p + t * d, [0.0, 0.0, 25.0], atol=1e-9)
@@ -537,7 +545,7 @@ def test_info_lists_each_element_with_its_paraxial_power():
     }
     mirror = {
         "kind": "mirror",
-        "position_mm": [0.0, 0.0, 45.0],
+        "position_mm": [0.0, 22.0, 45.0],  # beside the camera's line of sight
         "semi_diameter_mm": 8.0,
         "front": {"radius_mm": -40.0},
     }
@@ -563,3 +571,55 @@ def test_cli_render_with_the_fast_estimator_refuses_elements_in_one_line(tmp_pat
     lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and "forward estimator only" in lines[0], res.stderr
     assert not (tmp_path / "out").exists()  # refused before anything is made or run
+
+
+#: vr-offaxis's camera moved below the eye, looking up (+y) at a 45° fold mirror in front of
+#: the eye that turns its view onto the eye (the paper's Fig. 1 layout, in miniature): 30 mm up
+#: to the mirror, 33 mm on to the corneal vertex, focused at 63 mm.
+FOLDED = {
+    "camera.position_mm": [0.0, -30.0, 33.0],
+    "camera.look_at_mm": [0.0, 0.0, 33.0],
+    "camera.ideal.focus_distance_mm": 63.0,
+}
+FOLD = {
+    "kind": "mirror",
+    "name": "fold",
+    "position_mm": [0.0, 0.0, 33.0],
+    "direction": [0.0, -1.0, -1.0],
+    "semi_diameter_mm": 12.0,
+}
+
+
+def test_a_fold_mirror_turns_the_cameras_view_onto_the_eye():
+    """Without the mirror the camera (looking along +y) sees no eye and is refused; with the
+    45° mirror its line of sight is folded onto the eye: it compiles, and the truth finds the
+    pupil's centre at the picture's centre (the folded axis meets the eye's axis) and every
+    glint."""
+    from eyelume.analysis.truth import eye_truth
+
+    with pytest.raises(SceneError, match="sees no eye"):
+        compile_scene(eyelume.load_scene("vr-offaxis", FOLDED))
+    cs = compile_scene(eyelume.load_scene("vr-offaxis", FOLDED | {"elements": [FOLD]}))
+    truth = eye_truth(cs)
+    cols, rows = cs.picture.cols, cs.picture.rows
+    np.testing.assert_allclose(
+        truth["pupil"]["centre_px"], [(cols - 1) / 2, (rows - 1) / 2], atol=1e-3
+    )
+    assert truth["glints_visible"] == len(cs.led.points)
+
+
+def test_a_mirror_that_sends_the_view_nowhere_is_one_line_exit_2(tmp_path):
+    """The same mirror turned the other way folds the view away from the eye (+z)."""
+    sets = [
+        "camera.position_mm=[0, -30, 33]",
+        "camera.look_at_mm=[0, 0, 33]",
+        "camera.ideal.focus_distance_mm=63",
+        'elements=[{kind="mirror", name="fold", position_mm=[0, 0, 33], direction=[0, -1, 1], '
+        "semi_diameter_mm=12}]",
+    ]
+    args = ["info", "--scene", "vr-offaxis"] + [x for v in sets for x in ("--set", v)]
+    res = runner.invoke(app, args)
+    assert res.exit_code == 2, res.output
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1, res.stderr
+    assert "sees no eye: its line of sight, through element 0 (fold), ends on nothing" in lines[0]

@@ -698,13 +698,19 @@ def _check_leds_light_the_eye(
         warnings.warn(f"leds: {why}: its cone misses the eye", LedAimWarning, stacklevel=3)
 
 
-def _check_view(scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGrid) -> None:
-    """The camera sees the eye: its corneal vertex (gaze and head offset applied) lies in front
-    of the entrance pupil and is imaged inside the picture. Raises SceneError."""
+def _check_view(
+    scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGrid, straight: bool = True
+) -> None:
+    """The camera's lens is not inside the head, and (``straight``: its line of sight is not
+    folded by a mirror, :func:`_view_through_elements`) it sees the eye: its corneal vertex
+    (gaze and head offset applied) lies in front of the entrance pupil and is imaged inside the
+    picture. Raises SceneError."""
     p = frame.point(eye_point(scene, np.zeros(3)))
     ep = first.entrance_pupil_z
     pos, view, _ = camera_pose(scene)
     _check_leds_in_head(scene, np.array([pos], dtype=float), rb=0.0, what="camera: the lens")
+    if not straight:
+        return
     unit = np.asarray(view, dtype=float) / np.linalg.norm(view)
     where = (
         f"camera at {[round(float(x), 3) for x in pos]} mm looking along "
@@ -724,6 +730,53 @@ def _check_view(scene: Scene, frame: Frame, first: FirstOrder, picture: PlaneGri
             f"mm on the plane in focus, outside the ±{half_w:.1f} × ±{half_h:.1f} mm the "
             f"picture covers ({where})"
         )
+
+
+_VIEW_EVENTS = 16  # element surfaces the line of sight may cross or be folded by
+
+
+def _view_through_elements(
+    scene: Scene, surfaces: SurfaceTable, names: list[str], lf: np.ndarray
+) -> bool:
+    """The camera's line of sight (its axis, from the lens's first vertex toward the scene,
+    camera frame) followed through the optical elements, the stronger branch at each element
+    surface (refracted when T ≥ R, else reflected, as
+    :func:`eyelume.kernels.interact.interface_at` gives them). Returns whether a mirror folded
+    it (then :func:`_check_view`'s straight-line test does not apply). Raises SceneError when
+    the line of sight, having met an element, leaves the scene or ends on an LED or the camera
+    instead of the eye or the face."""
+    sf, si = surfaces.sf, surfaces.si
+    p = np.array([0.0, 0.0, float(lf[0, Q.L_Z]) - 1e-6])
+    d = np.array([0.0, 0.0, -1.0])
+    met: list[str] = []
+    folded = False
+    for _ in range(_VIEW_EVENTS):
+        s, t = G.nearest_hit(sf, si, *p, *d)
+        if s < 0 or not names[s].startswith("element "):
+            break
+        met.append(names[s].rsplit(" ", 1)[0])
+        p = p + t * d
+        n = np.array(G.surface_normal(sf, si, s, *p))
+        f = I.interface_at(sf, si, s, float(d @ n))
+        ok, *dt = I.refract(*d, *n, f.n1 / f.n2)
+        if ok and 1.0 - f.reflectance - f.absorptance >= f.reflectance:
+            d = np.array(dt)
+        else:
+            d = np.array(I.reflect(*d, *n))
+            folded = True
+        d = d / np.linalg.norm(d)
+    else:
+        s = -1
+    if not met:
+        return False
+    where = "nothing (it leaves the scene)" if s < 0 else names[s]
+    eye_or_face = {x.name for x in scene.eye.surfaces} | {"iris", "iris root", "sclera"}
+    if scene.face.enabled:
+        eye_or_face |= {x.name for x in scene.face.tissues}
+    if s < 0 or names[s] not in eye_or_face:
+        path = ", ".join(dict.fromkeys(met))
+        raise SceneError(f"camera: sees no eye: its line of sight, through {path}, ends on {where}")
+    return folded
 
 
 def _compile_lens(
@@ -1521,7 +1574,8 @@ def compile_scene(
         np.ascontiguousarray(_stack_rows(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))
     )
     picture, eye_plane = _grids(scene, frame)
-    _check_view(scene, frame, first, picture)
+    folded = bool(scene.elements) and _view_through_elements(scene, surfaces, t.names, lens.lf)
+    _check_view(scene, frame, first, picture, straight=not folded)
     tables = SceneTables(surfaces, lens, led, picture, eye_plane, int(scene.run.max_events))
     return CompiledScene(
         scene=scene,

@@ -199,7 +199,10 @@ class _View:
             return _miss(ray, point, self.axis, self.e1, self.e2)
 
         guess = np.array([-point[0], -point[1]]) * abs(self.par_m)
-        return _solve(residual, guess)
+        found = _solve(residual, guess)
+        if found is None and cs.scene.elements:  # a folded view: the straight guess misleads
+            found = _solve(residual, np.zeros(2))
+        return found
 
 
 def _view(cs: CompiledScene, cam: CameraTables) -> _View:
