@@ -267,6 +267,7 @@ def test_fast_estimator_refuses_a_scene_with_elements():
         ),
         (PLATE | {"thickness_mm": float("nan")}, "elements.0.thickness_mm"),
         (PLATE | {"front": {"radius_mm": 50.0}}, "a plate's surfaces are planes"),
+        (PLATE | {"position_mm": [0.0, 0.0, 100.0], "semi_diameter_mm": 5.0}, "cuts the camera"),
         (
             {"kind": "mirror", "position_mm": [0, 0, 30], "semi_diameter_mm": 5, "glass": "N-BK7"},
             "a mirror has no glass",

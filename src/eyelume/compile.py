@@ -1343,6 +1343,39 @@ def _check_elements(scene: Scene, led_centres: np.ndarray) -> None:
         shapes.append((el, origin, rot, world))
 
 
+def _check_elements_clear_of_camera(scene: Scene, lf: np.ndarray, frame: Frame) -> None:
+    """No optical element cuts the camera: the solid cylinder of its body (or, without one,
+    of the lens: its largest clear aperture, from the first vertex to the last surface), camera
+    frame. Sampled: the element's outline points inside the cylinder, or the cylinder's axis
+    and 12 lines of its wall crossing one of the element's surfaces or inside its solid. Raises
+    SceneError naming the element."""
+    body = scene.camera.body_used
+    z0 = float(lf[0, Q.L_Z])
+    if body is not None:
+        rc, z1 = body.diameter_mm / 2, z0 + body.length_mm
+    else:
+        rc, z1 = float(np.max(lf[:, Q.L_SD])), max(float(lf[-1, Q.L_Z]), z0 + 1e-3)
+    phi = np.linspace(0.0, 2.0 * math.pi, 12, endpoint=False)
+    zs = np.linspace(z0, z1, 24)
+    lines = [np.stack([np.zeros_like(zs), np.zeros_like(zs), zs], 1)]
+    lines += [
+        np.stack([np.full_like(zs, rc * math.cos(a)), np.full_like(zs, rc * math.sin(a)), zs], 1)
+        for a in phi
+    ]
+    camera = frame.world_point(np.stack(lines))  # (13, 24, 3) world mm
+    for k, el in enumerate(scene.elements):
+        origin, rot = element_pose(scene, el)
+        pts = frame.point(outline_points(el) @ rot + origin)
+        inside = (np.hypot(pts[..., 0], pts[..., 1]) < rc) & (pts[..., 2] > z0) & (pts[..., 2] < z1)
+        local = (camera - origin) @ rot.T
+        if inside.any() or crosses_surfaces(el, local) or inside_solid(el, local).any():
+            raise SceneError(
+                f"elements.{k} ({el.name or el.kind} at {list(el.position_mm)} mm) cuts the "
+                f"camera ({2 * rc:.3g} mm across, {z1 - z0:.3g} mm deep behind its lens's first "
+                "vertex)"
+            )
+
+
 def _check_leds_outside_camera_body(
     scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame
 ) -> None:
@@ -1569,6 +1602,7 @@ def compile_scene(
     _add_camera_body(t, scene, lens.lf)
     if scene.elements:
         _check_elements(scene, world[0])
+        _check_elements_clear_of_camera(scene, lens.lf, frame)
         _add_elements(t, scene)
     surfaces = SurfaceTable(
         np.ascontiguousarray(_stack_rows(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))
