@@ -624,3 +624,39 @@ def test_a_mirror_that_sends_the_view_nowhere_is_one_line_exit_2(tmp_path):
     lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1, res.stderr
     assert "sees no eye: its line of sight, through element 0 (fold), ends on nothing" in lines[0]
+
+
+def test_a_hot_mirror_reflects_above_its_cutoff_and_each_wavelength_group_sees_its_own():
+    """A hot mirror (cut-off 900 nm: R 0.95, T 0.03 above; R 0.02, T 0.98 below): LEDs at 850
+    and 940 nm render as two wavelength groups, each compiled with the mirror's R and
+    A = 1 − R − T at its own wavelength."""
+    from eyelume.compile import wavelength_groups
+
+    coat = {
+        "model": "fixed",
+        "reflectance": 0.95,
+        "transmittance": 0.03,
+        "cutoff_nm": 900.0,
+        "reflectance_below": 0.02,
+        "transmittance_below": 0.98,
+    }
+    mirror = {
+        "kind": "mirror",
+        "name": "hot",
+        "position_mm": [0.0, 22.0, 45.0],
+        "semi_diameter_mm": 8.0,
+        "front": {"coating": coat},
+    }
+    scene = _scene([mirror], **{"leds.wavelength_nm": [850.0, 940.0, 850.0, 940.0]})
+    nominal = compile_scene(scene)
+    got = {}
+    for g in wavelength_groups(scene):
+        cg = compile_scene(scene, g, nominal=nominal)
+        s = _rows(cg)[0]
+        got[g.wavelength_nm] = (cg.sf[s, G.REFL], cg.sf[s, G.ABSORB])
+    assert got[850.0] == pytest.approx((0.02, 0.0))
+    assert got[940.0] == pytest.approx((0.95, 0.02))
+    with pytest.raises(SceneError, match="need cutoff_nm"):
+        _scene([mirror | {"front": {"coating": coat | {"cutoff_nm": None}}}])
+    with pytest.raises(SceneError, match="needs reflectance_below"):
+        _scene([mirror | {"front": {"coating": coat | {"reflectance_below": None}}}])

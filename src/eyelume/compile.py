@@ -1244,14 +1244,15 @@ def _element_index(scene: Scene, k: int, element: Element) -> float:
 _SIDES = ("front", "back")
 
 
-def _coating_columns(k: int, j: int, coating: Coating) -> dict:
-    """The surface-table options of a coating: Fresnel flag; fixed R and A = 1 − R − T; or
+def _coating_columns(k: int, j: int, coating: Coating, wavelength_nm: float) -> dict:
+    """The surface-table options of a coating at ``wavelength_nm``: Fresnel flag; fixed R and
+    A = 1 − R − T (either side of a hot mirror's cut-off); or
     an R(θ) table (T = 1 − R), read here. Raises InputFileError for a table that cannot be
     used or has more than :data:`eyelume.kernels.interact.R_TABLE_NODES` rows."""
     if coating.model == "fresnel":
         return {"fresnel": True}
     if coating.model == "fixed":
-        r, t = float(coating.reflectance), float(coating.transmittance)  # type: ignore[arg-type]
+        r, t = coating.fixed_at(wavelength_nm)
         return {"refl": r, "absorb": max(0.0, 1.0 - r - t)}
     field = f"elements.{k}.{_SIDES[j]}.coating.table_csv"
     angles, values = read_reflectance_table(coating.table_csv, field)  # type: ignore[arg-type]
@@ -1292,7 +1293,7 @@ def _add_elements(t: _Table, scene: Scene) -> None:
                 n_b=n_b,
                 tally_a=tally,
                 tally_b=tally,
-                **_coating_columns(k, j, surf.coating),  # type: ignore[arg-type]
+                **_coating_columns(k, j, surf.coating, scene.wavelength_nm),  # type: ignore[arg-type]
             )
         if el.kind == "mirror" or el.edge_thickness_mm <= 0.0:
             continue

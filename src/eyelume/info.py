@@ -291,7 +291,7 @@ def _element_info(cs: CompiledScene, k: int, el: Element) -> dict:
         if c.model == "fresnel":
             r0 = ((n - 1.0) / (n + 1.0)) ** 2
         elif c.model == "fixed":
-            r0 = c.reflectance
+            r0 = c.fixed_at(cs.scene.wavelength_nm)[0]
         else:
             r0 = None
         entry = {"radius_mm": surf.radius_mm, "conic": surf.conic, "coating": c.model}

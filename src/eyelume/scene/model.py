@@ -817,7 +817,10 @@ class Coating(_Model):
       no Fresnel reflection: it takes ``"fixed"`` or ``"table"``.
     * ``"fixed"``: ``reflectance`` R and ``transmittance`` T at every angle (a coating's or a
       hot mirror's value at the scene's infrared wavelength), the rest A = 1 − R − T absorbed
-      by the surface (the ledger's entry of its element); R + T ≤ 1.
+      by the surface (the ledger's entry of its element); R + T ≤ 1. With ``cutoff_nm`` (a
+      hot mirror's edge, idealised as a step): R and T hold at wavelengths ≥ the cut-off, and
+      ``reflectance_below`` and ``transmittance_below`` below it (each LED's wavelength group
+      is traced with its own).
     * ``"table"``: a CSV file ``table_csv`` of two columns, angle of incidence in degrees
       (increasing from 0 to 90, at most 128 rows) and R (0 … 1) at the scene's wavelength,
       T = 1 − R, R linear in the angle between rows; ``source`` names where the numbers come
@@ -829,21 +832,20 @@ class Coating(_Model):
     transmittance: Fraction | None = None
     table_csv: str | None = None
     source: str = ""
+    cutoff_nm: float | None = Field(None, ge=WAVELENGTH_RANGE_NM[0], le=WAVELENGTH_RANGE_NM[1])
+    reflectance_below: Fraction | None = None
+    transmittance_below: Fraction | None = None
 
     @model_validator(mode="after")
     def _fields_of_the_model(self) -> Coating:
         fixed = (self.reflectance, self.transmittance)
+        below = (self.reflectance_below, self.transmittance_below)
         if self.model == "fixed":
-            if None in fixed:
-                raise ValueError("model 'fixed' needs reflectance and transmittance (0 … 1)")
-            if self.reflectance + self.transmittance > 1.0:  # type: ignore[operator]
-                raise ValueError(
-                    f"reflectance + transmittance = "
-                    f"{self.reflectance + self.transmittance:g} exceeds 1"  # type: ignore[operator]
-                )
-        elif any(v is not None for v in fixed):
+            self._check_fixed()
+        elif any(v is not None for v in (*fixed, *below, self.cutoff_nm)):
             raise ValueError(
-                f"reflectance and transmittance belong to model 'fixed', not {self.model!r}"
+                "reflectance, transmittance and the cut-off fields belong to model 'fixed', "
+                f"not {self.model!r}"
             )
         if self.model == "table":
             if not self.table_csv:
@@ -853,6 +855,28 @@ class Coating(_Model):
         elif self.table_csv is not None:
             raise ValueError(f"table_csv belongs to model 'table', not {self.model!r}")
         return self
+
+    def _check_fixed(self) -> None:
+        pairs = [("", self.reflectance, self.transmittance)]
+        below = (self.reflectance_below, self.transmittance_below)
+        if self.cutoff_nm is not None:
+            pairs.append(("_below", *below))
+        elif any(v is not None for v in below):
+            raise ValueError("reflectance_below and transmittance_below need cutoff_nm")
+        for tag, r, t in pairs:
+            if r is None or t is None:
+                raise ValueError(
+                    f"model 'fixed' needs reflectance{tag} and transmittance{tag} (0 … 1)"
+                )
+            if r + t > 1.0:
+                raise ValueError(f"reflectance{tag} + transmittance{tag} = {r + t:g} exceeds 1")
+
+    def fixed_at(self, wavelength_nm: float) -> tuple[float, float]:
+        """(R, T) of a ``fixed`` coating at ``wavelength_nm``: the values at and above
+        ``cutoff_nm`` (or everywhere without one), the ``_below`` ones under it."""
+        if self.cutoff_nm is not None and wavelength_nm < self.cutoff_nm:
+            return float(self.reflectance_below), float(self.transmittance_below)  # type: ignore[arg-type]
+        return float(self.reflectance), float(self.transmittance)  # type: ignore[arg-type]
 
 
 #: A perfect mirror's coating, the default of a mirror's surface: R = 1, T = 0.
