@@ -155,6 +155,7 @@ DARK = {
 
 
 @pytest.mark.filterwarnings("ignore::eyelume.compile.LedAimWarning")
+@pytest.mark.filterwarnings("ignore::eyelume.analysis.regions.RegionWarning")
 def test_plane_mirror_images_an_led_at_its_mirror_symmetric_point():
     """An LED at z ≈ 10 mm aimed away from the eye at a plane mirror (R = 1) in z = 30 mm:
     the eye-plane irradiance per bin is the closed form of the LED's mirror image (emission
@@ -190,6 +191,7 @@ def test_plane_mirror_images_an_led_at_its_mirror_symmetric_point():
 
 
 @pytest.mark.filterwarnings("ignore::eyelume.compile.LedAimWarning")
+@pytest.mark.filterwarnings("ignore::eyelume.analysis.regions.RegionWarning")
 def test_forward_ledger_is_exact_and_a_mirror_files_what_it_absorbs():
     """A mirror R = 0.6, T = 0.1 (A = 0.3) square to the LED's axis, d mm from its emission
     point: every ray within atan(sd/d) of the axis meets it first, P(hit) = 1 − cos^{m+1}(α)
@@ -355,6 +357,7 @@ def test_reflectance_table_is_checked_and_interpolated_in_the_angle_of_incidence
 
 
 @pytest.mark.filterwarnings("ignore::eyelume.compile.LedAimWarning")
+@pytest.mark.filterwarnings("ignore::eyelume.analysis.regions.RegionWarning")
 def test_mirror_with_a_reflectance_table_weights_the_image_by_r_at_the_angle_of_incidence(
     tmp_path,
 ):
@@ -660,3 +663,18 @@ def test_a_hot_mirror_reflects_above_its_cutoff_and_each_wavelength_group_sees_i
         _scene([mirror | {"front": {"coating": coat | {"cutoff_nm": None}}}])
     with pytest.raises(SceneError, match="needs reflectance_below"):
         _scene([mirror | {"front": {"coating": coat | {"reflectance_below": None}}}])
+
+
+def test_regions_warn_that_a_mirror_is_looked_through():
+    """The regions' map refracts only: through a window it is right (no warning), a mirror it
+    would look through, so a scene with one is warned about (one line naming it)."""
+    import warnings
+
+    from eyelume.analysis.regions import RegionWarning, region_masks
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RegionWarning)
+        region_masks(compile_scene(_scene([PLATE])))
+    cs = compile_scene(eyelume.load_scene("vr-offaxis", FOLDED | {"elements": [FOLD]}))
+    with pytest.warns(RegionWarning, match=r"elements.0 is a mirror"):
+        region_masks(cs)

@@ -11,15 +11,18 @@ no other region.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
 from eyelume.compile import CompiledScene
+from eyelume.errors import EyelumeWarning
 from eyelume.estimators.fast_run import primary_surface_map
 from eyelume.estimators.statistics import median_pixel_rel_error
 
 __all__ = [
     "GLINT_FRACTION",
+    "RegionWarning",
     "region_masks",
     "region_stats",
     "with_glints",
@@ -34,6 +37,7 @@ def region_masks(
 ) -> dict[str, np.ndarray]:
     """Boolean (rows, cols) masks by region name: ``pupil``, ``iris``, ``sclera``, ``skin`` and
     ``glint 0`` … (one per LED, when ``glint_images`` (n_leds, rows, cols) is given)."""
+    _warn_mirrors(cs)
     labels, sides = primary_surface_map(cs)
     names = cs.surface_names
     eye = cs.scene.eye
@@ -54,6 +58,25 @@ def region_masks(
         "skin": of(lambda n, b: n in tissues),
     }
     return masks if glint_images is None else with_glints(masks, glint_images)
+
+
+class RegionWarning(EyelumeWarning):
+    """The regions cannot be mapped faithfully for this scene (they are still returned)."""
+
+
+def _warn_mirrors(cs: CompiledScene) -> None:
+    """Warn once per scene that a mirror element is looked through, not in: the map follows
+    every chief ray by refraction only (:func:`eyelume.estimators.fast_run.primary_surface_map`),
+    which is right through windows and lenses but not for a view a mirror folds."""
+    mirrors = [k for k, el in enumerate(cs.scene.elements) if el.kind == "mirror"]
+    if mirrors:
+        warnings.warn(
+            f"elements.{mirrors[0]} is a mirror: the eye image's regions (pupil, iris, sclera, "
+            "skin) and their statistics are mapped by refraction only, as if it were not "
+            "there; wrong where it folds the camera's view",
+            RegionWarning,
+            stacklevel=3,
+        )
 
 
 def with_glints(masks: dict[str, np.ndarray], glint_images: np.ndarray) -> dict[str, np.ndarray]:
