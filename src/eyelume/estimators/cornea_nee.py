@@ -31,7 +31,7 @@ from eyelume.kernels.jit import per_ray
 from eyelume.kernels.sampling import led_cos_alpha, radiant_intensity
 from eyelume.kernels.tables import Ray
 
-__all__ = ["irradiance_through_cornea"]
+__all__ = ["irradiance_through_cornea", "led_through_cornea"]
 
 _H = 1e-4  # mm: forward-difference step on the eye plane
 _TOL2 = 1e-10  # mm²: converged when h(a) is within 1e-5 mm of x
@@ -131,46 +131,57 @@ def _path_is_clear(surfaces, cornea, target, ray, rc):
 
 
 @per_ray
+def led_through_cornea(surfaces, cornea, target, leds, k, rc):
+    """Irradiance (W/mm²) at receiver point ``rc`` (a :class:`Receiver`) on surface ``target``
+    from LED ``k`` of ``leds`` (:class:`~eyelume.kernels.tables.LedTable`) along the path
+    refracted by the anterior (surface ``cornea``) and posterior (``cornea + 1``) cornea; 0
+    when there is none. See the module docstring."""
+    x, y, z = rc.x, rc.y, rc.z
+    led = (leds.points[k, 0], leds.points[k, 1], leds.points[k, 2])
+    px, py, pz = led
+    # straight-line guess: where the segment LED → x crosses the eye plane
+    f = pz / (pz - z)
+    ax, ay = px + (x - px) * f, py + (y - py) * f
+    found = False
+    for _ in range(30):
+        h = _through(surfaces, cornea, led, ax, ay, rc)
+        if not h.ok:
+            break
+        h1 = _through(surfaces, cornea, led, ax + _H, ay, rc)
+        h2 = _through(surfaces, cornea, led, ax, ay + _H, rc)
+        if not (h1.ok and h2.ok):
+            break
+        j11, j21 = (h1.u - h.u) / _H, (h1.v - h.v) / _H
+        j12, j22 = (h2.u - h.u) / _H, (h2.v - h.v) / _H
+        det = j11 * j22 - j12 * j21
+        if det == 0.0 or math.isnan(det):
+            break
+        if h.u * h.u + h.v * h.v < _TOL2:
+            found = True
+            break
+        ax -= (j22 * h.u - j12 * h.v) / det
+        ay -= (-j21 * h.u + j11 * h.v) / det
+    if not found:
+        return 0.0
+    dx, dy, dz = h.dx, h.dy, h.dz
+    if led_cos_alpha(leds, k, dx, dy, dz) <= 0.0:
+        return 0.0
+    if not _path_is_clear(surfaces, cornea, target, Ray(px, py, pz, dx, dy, dz), rc):
+        return 0.0
+    d2 = (ax - px) ** 2 + (ay - py) ** 2 + pz * pz
+    dw_da = abs(dz) / d2  # solid angle per unit eye-plane area at a
+    return radiant_intensity(leds, k, dx, dy, dz) * h.trans * dw_da / abs(det)
+
+
+@per_ray
 def irradiance_through_cornea(surfaces, cornea, target, leds, rc):
     """Irradiance (W/mm²) at receiver point ``rc`` (a :class:`Receiver`) on surface ``target``
     from every LED (:class:`~eyelume.kernels.tables.LedTable`), along paths refracted by the
-    anterior (surface ``cornea``) and posterior (``cornea + 1``) cornea. See the module
-    docstring."""
-    x, y, z = rc.x, rc.y, rc.z
+    anterior (surface ``cornea``) and posterior (``cornea + 1``) cornea: the sum of
+    :func:`led_through_cornea`. See the module docstring."""
     e_total = 0.0
     for k in range(leds.points.shape[0]):
-        led = (leds.points[k, 0], leds.points[k, 1], leds.points[k, 2])
-        px, py, pz = led
-        # straight-line guess: where the segment LED → x crosses the eye plane
-        f = pz / (pz - z)
-        ax, ay = px + (x - px) * f, py + (y - py) * f
-        found = False
-        for _ in range(30):
-            h = _through(surfaces, cornea, led, ax, ay, rc)
-            if not h.ok:
-                break
-            h1 = _through(surfaces, cornea, led, ax + _H, ay, rc)
-            h2 = _through(surfaces, cornea, led, ax, ay + _H, rc)
-            if not (h1.ok and h2.ok):
-                break
-            j11, j21 = (h1.u - h.u) / _H, (h1.v - h.v) / _H
-            j12, j22 = (h2.u - h.u) / _H, (h2.v - h.v) / _H
-            det = j11 * j22 - j12 * j21
-            if det == 0.0 or math.isnan(det):
-                break
-            if h.u * h.u + h.v * h.v < _TOL2:
-                found = True
-                break
-            ax -= (j22 * h.u - j12 * h.v) / det
-            ay -= (-j21 * h.u + j11 * h.v) / det
-        if not found:
-            continue
-        dx, dy, dz = h.dx, h.dy, h.dz
-        if led_cos_alpha(leds, k, dx, dy, dz) <= 0.0:
-            continue
-        if not _path_is_clear(surfaces, cornea, target, Ray(px, py, pz, dx, dy, dz), rc):
-            continue
-        d2 = (ax - px) ** 2 + (ay - py) ** 2 + pz * pz
-        dw_da = abs(dz) / d2  # solid angle per unit eye-plane area at a
-        e_total += radiant_intensity(leds, k, dx, dy, dz) * h.trans * dw_da / abs(det)
+        e = led_through_cornea(surfaces, cornea, target, leds, k, rc)
+        if e != 0.0:
+            e_total += e
     return e_total

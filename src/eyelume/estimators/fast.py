@@ -12,12 +12,16 @@ Every light path runs LED → … → camera. We split path space by how the pat
    first vertex; at later ones to one LED drawn in proportion to its unshadowed irradiance
    (:func:`sampled_irradiance`: one shadow ray, noisy only where a shadow falls; a uniform
    draw × the LED count was most of a vr-offaxis skin pixel's noise) — and, on the
-   iris, the light the cornea refracts onto it, by a specular connection (:mod:`.cornea_nee`). It
+   iris, the light the cornea refracts onto it, by a specular connection (:mod:`.cornea_nee`):
+   from every LED at the first vertex, from one LED drawn uniformly (× the LED count) at later
+   ones (a continuation ray the cornea reflects back onto the iris: ~0.1 % of an iris pixel's
+   light, which cost ~40 % of a vr-offaxis iris sample with every LED's Newton solve). It
    then continues by cosine sampling: the first vertex always, with weight ρ, in g²
    directions, one in each of g × g strata of the cosine-weighted hemisphere (the light faces
    send each other is most of what varies between samples; g = ``run.continuation_grid``, at
-   least 3 on the iris); later ones by Russian roulette. LEDs are points, so a camera path
-   never hits one: these connections are the only way it receives light.
+   least 3 on the iris; in one direction for the part the cornea reflects, a ~2 % share);
+   later ones by Russian roulette. LEDs are points, so a camera path never hits one: these
+   connections are the only way it receives light.
 2. **First hit the cornea, except the refracted paths of part 1** (the glints, the light the
    cornea reflects onto the face, whatever enters the pupil): estimated from the LEDs. A light
    path leaves an LED uniformly inside the cone that holds the anterior cornea's bounding sphere
@@ -60,7 +64,7 @@ from eyelume.kernels import geometry as G
 from eyelume.kernels.bins import bin_of, from_grid, plane_point
 from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.jit import per_ray
-from eyelume.kernels.rng import mix64, next_uniform, stream_start
+from eyelume.kernels.rng import mix64, next_uniform, side_uniform, stream_start
 from eyelume.kernels.sampling import (
     about_axis,
     aimed_mixture,
@@ -76,7 +80,7 @@ from eyelume.kernels.sequential import LENS_PASSED, trace_lens
 from eyelume.kernels.tables import Facet, Ray, SceneTables, scene_parts
 
 from .camera import aim_at_stop, aim_chief, into_scene
-from .cornea_nee import Receiver, irradiance_through_cornea
+from .cornea_nee import Receiver, irradiance_through_cornea, led_through_cornea
 
 __all__ = [
     "camera_pass",
@@ -90,6 +94,7 @@ _INV_PI = 1.0 / math.pi
 _LIGHT_TAG = 0x4C49474854  # separates the light paths' streams from the camera paths'
 _DIRECT_TAG = 0x444952454354  # the light paths' direct legs (LED → lens) have their own
 _PLANE_TAG = 0x504C414E45  # … and the eye-plane points'
+_CORNEA_TAG = 0x434F524E4541  # the LED of a later vertex's connection through the cornea
 
 
 class Branch(NamedTuple):
@@ -274,9 +279,15 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex):
                 state, e = sampled_irradiance(state, scene.surfaces, leds, facet)
             if cam.through_cornea[s]:
                 e1, e2 = orthonormal_basis(nx, ny, nz)
-                e += irradiance_through_cornea(
-                    scene.surfaces, cam.cornea, s, leds, Receiver(x, y, z, nx, ny, nz, e1, e2)
-                )
+                rc = Receiver(x, y, z, nx, ny, nz, e1, e2)
+                if first_vertex:
+                    e += irradiance_through_cornea(scene.surfaces, cam.cornea, s, leds, rc)
+                else:
+                    # later vertices (a continuation ray the cornea sent back onto the
+                    # iris): one LED, drawn uniformly beside the stream, × the LED count
+                    n_leds = leds.points.shape[0]
+                    k = min(int(side_uniform(state, _CORNEA_TAG) * n_leds), n_leds - 1)
+                    e += n_leds * led_through_cornea(scene.surfaces, cam.cornea, s, leds, k, rc)
             radiance += beta * rho * _INV_PI * e
             if first_vertex:
                 vertex = Vertex(s, x, y, z, nx, ny, nz, beta * rho)
@@ -329,14 +340,15 @@ IRIS_GRID = 3
 
 
 @per_ray
-def _path_radiance(state, scene, cam, ray, beta, split):
-    """A camera path with its first Lambertian vertex's continuation(s); see _camera_branch.
-    Returns (state, radiance, has_branch, branch)."""
+def _path_radiance(state, scene, cam, ray, beta, split, grid):
+    """A camera path with its first Lambertian vertex's continuation(s) in ``grid``² strata
+    (at least IRIS_GRID² on the iris); see _camera_branch. Returns (state, radiance,
+    has_branch, branch)."""
     out = _camera_branch(state, scene, cam, ray, beta, split, True)
     state, radiance = out.state, out.radiance
     v = out.vertex
     if v.s >= 0:
-        g = max(cam.split_grid, IRIS_GRID) if cam.through_cornea[v.s] else cam.split_grid
+        g = max(grid, IRIS_GRID) if cam.through_cornea[v.s] else grid
         k = g * g
         for j in range(k):
             state, u1 = next_uniform(state)
@@ -361,9 +373,11 @@ def _camera_radiance(state, scene, cam, ray):
     specular connection (:mod:`.cornea_nee`); the light paths skip exactly those paths. The
     camera path is split at the first interface it meets (the cornea's 2.4 % reflection would
     otherwise be a rare, bright event in every pupil and iris pixel)."""
-    state, radiance, has_branch, branch = _path_radiance(state, scene, cam, ray, 1.0, True)
+    g = cam.split_grid
+    state, radiance, has_branch, branch = _path_radiance(state, scene, cam, ray, 1.0, True, g)
     if has_branch and branch.beta > 0.0:
-        state, more, _, _ = _path_radiance(state, scene, cam, branch.ray, branch.beta, False)
+        # the reflected branch (beta = R, ~2 %) continues in one direction, not g²
+        state, more, _, _ = _path_radiance(state, scene, cam, branch.ray, branch.beta, False, 1)
         radiance += more
     return state, radiance
 

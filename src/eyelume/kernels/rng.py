@@ -43,3 +43,10 @@ def next_uniform(state):
     """Advance a stream: returns (new_state, u) with u uniform in [0, 1) on a 2**-53 grid."""
     state = np.uint64(state) + _GAMMA
     return state, float(mix64(state) >> _S11) * _INV53
+
+
+@njit(cache=True, inline="always")
+def side_uniform(state, tag):
+    """A uniform in [0, 1) drawn beside a stream without advancing it: from the hash of its
+    state and a ``tag`` (a constant per use), so the stream's own numbers stay as they were."""
+    return float(mix64(np.uint64(state) ^ np.uint64(tag)) >> _S11) * _INV53
