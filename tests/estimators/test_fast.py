@@ -286,3 +286,50 @@ def test_camera_tables_reject_nothing_on_the_default_scene(paper_compiled):
     t = cs.camera
     assert 0 < t.stop_radius < cs.lf[:, 3].max()
     assert t.k_stop == cs.lf.shape[0] - 1 - cs.stop_index
+
+
+def test_one_led_through_the_cornea_is_the_sum_on_average():
+    """A later vertex on the iris connects through the cornea to one LED drawn uniformly, × the
+    LED count: that is unbiased when every LED's connection (led_through_cornea) adds up to
+    the all-LED one (irradiance_through_cornea) the first vertex uses, checked at iris points of
+    vr-offaxis where several LEDs reach through the cornea; the side uniform that draws the
+    LED leaves the path's stream as it was and is uniform."""
+    from eyelume.estimators.cornea_nee import (
+        Receiver,
+        irradiance_through_cornea,
+        led_through_cornea,
+    )
+    from eyelume.kernels.bins import from_grid
+    from eyelume.kernels.rng import next_uniform, side_uniform
+    from eyelume.kernels.sampling import orthonormal_basis
+    from eyelume.kernels.tables import Ray
+
+    cs = compile_scene(eyelume.load_scene("vr-offaxis"))
+    iris = cs.surface_names.index("iris")
+    cam, leds, surfaces = cs.camera, cs.tables.leds, cs.tables.surfaces
+    checked = 0
+    for col, row in ((200, 200), (190, 205), (210, 195), (205, 210)):
+        for dc in range(-30, 31, 2):
+            xs, ys = from_grid(cs.tables.picture, col + dc + 0.5, row + 0.5)
+            chief = aim_chief(cam, xs, ys)
+            r = into_scene(cam, xs, ys, chief.qx, chief.qy)
+            out = F._camera_branch(
+                np.uint64(1), cs.tables, cam, Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz), 1.0, True, True
+            )
+            v = out.vertex
+            if v.s != iris:
+                continue
+            e1, e2 = orthonormal_basis(v.nx, v.ny, v.nz)
+            rc = Receiver(v.x, v.y, v.z, v.nx, v.ny, v.nz, e1, e2)
+            each = [led_through_cornea(surfaces, cam.cornea, iris, leds, k, rc) for k in range(8)]
+            total = irradiance_through_cornea(surfaces, cam.cornea, iris, leds, rc)
+            assert sum(1 for e in each if e > 0.0) >= 2
+            assert total == pytest.approx(math.fsum(each), rel=1e-12)
+            checked += 1
+    assert checked >= 10
+    state = stream_start(7, 3)
+    u = [side_uniform(np.uint64(s), 0x1234) for s in range(1, 20_001)]
+    assert 0.0 <= min(u) and max(u) < 1.0
+    assert abs(np.mean(u) - 0.5) < 4 * math.sqrt(1 / 12 / len(u))
+    assert side_uniform(state, 1) != side_uniform(state, 2)
+    assert next_uniform(state) == next_uniform(state)  # side_uniform took nothing from it
