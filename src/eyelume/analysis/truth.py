@@ -14,7 +14,10 @@ the stop's centre, :func:`eyelume.estimators.camera.aim_chief`) leaves the lens 
 With optical elements in the scene, every such ray is followed through the elements it meets
 on its way (refracted by a window or lens, folded by a mirror: the stronger of the reflected
 and transmitted branches, :func:`_through_elements`), so the truth is what the camera sees
-through and in them; a spectacle ghost (an LED reflected by an element) is not listed yet.
+through and in them. Each spectacle ghost (an LED's image by a chain of one or two specular
+reflections off element surfaces and the cornea) is listed under ``ghosts``
+(:mod:`eyelume.analysis.ghosts`: its chain, pixel and flux); a scene without elements has no
+``ghosts`` key.
 
 Pixel coordinates follow OpenCV's convention on the upright picture: pixel (column c, row r) has
 its centre at (x, y) = (c, r), row 0 at the top. A point is *visible* when nothing (an eyelid,
@@ -86,15 +89,23 @@ def _through_elements(cs: CompiledScene, p: np.ndarray, d: np.ndarray, target=No
         if target is not None and t > (target - p) @ d:
             break
         p = p + t * d
-        n = np.array(G.surface_normal(cs.sf, cs.si, s, *p))
-        f = interface_at(cs.sf, cs.si, s, float(d @ n))
-        ok, *dt = refract(*d, *n, f.n1 / f.n2)
-        if ok and 1.0 - f.reflectance - f.absorptance >= f.reflectance:
-            d = np.array(dt)
-        else:
-            d = np.array(reflect(*d, *n))
-        d = d / np.linalg.norm(d)
+        d, _ = _stronger_branch(cs, s, p, d)
     return p, d
+
+
+def _stronger_branch(cs: CompiledScene, s: int, p: np.ndarray, d: np.ndarray):
+    """At point ``p`` of element surface ``s``: the direction of the stronger branch of ray
+    direction ``d`` (refracted when T ≥ R, else reflected, or on total internal reflection)
+    and that branch's share of the power (T or R)."""
+    n = np.array(G.surface_normal(cs.sf, cs.si, s, *p))
+    f = interface_at(cs.sf, cs.si, s, float(d @ n))
+    ok, *dt = refract(*d, *n, f.n1 / f.n2)
+    t = 1.0 - f.reflectance - f.absorptance
+    if ok and t >= f.reflectance:
+        d, w = np.array(dt), t
+    else:
+        d, w = np.array(reflect(*d, *n)), (f.reflectance if ok else 1.0)
+    return d / np.linalg.norm(d), float(w)
 
 
 def _through_cornea(cs: CompiledScene, cornea: int, p: np.ndarray, d: np.ndarray):
@@ -330,7 +341,9 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     lies on the cornea's cap (``on_cornea``) and is seen (``visible``), or why there is none;
     the counts ``glints_on_cornea`` and ``glints_visible``; ``leds_in_view``: each LED the
     camera sees directly (a wide lens beside the ring), its pixel, whether it is seen and
-    its radiant intensity toward the lens — a bright spot that is not a glint. LEDs of several
+    its radiant intensity toward the lens — a bright spot that is not a glint; with optical
+    elements, ``ghosts``: each LED's specular images by the elements (chain, pixel, flux:
+    :func:`eyelume.analysis.ghosts.ghost_truth`; no such key without elements). LEDs of several
     wavelengths: each LED's entries at its own wavelength, marked with it
     (:func:`_truth_by_wavelength`); the pupil at the scene's.
     """
@@ -346,7 +359,7 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
         for row, (k, led) in enumerate(zip(ids, cs.led.points, strict=True))
     ]
     in_view = [e for e in in_view if e is not None]
-    return {
+    out = {
         "gaze_deg": {
             "horizontal": eye.gaze_horizontal_deg,
             "vertical": eye.gaze_vertical_deg,
@@ -361,6 +374,11 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
         "glints_visible": sum(g["visible"] for g in glints),
         "leds_in_view": in_view,
     }
+    if cs.scene.elements:
+        from eyelume.analysis.ghosts import ghost_truth
+
+        out["ghosts"] = ghost_truth(v)
+    return out
 
 
 def _truth_by_wavelength(cs: CompiledScene) -> dict:
@@ -377,15 +395,19 @@ def _truth_by_wavelength(cs: CompiledScene) -> dict:
     out["optical_axis"] = cs.frame.world_vector(base.axis).tolist()
     glints: dict[int, dict] = {}
     in_view: list[dict] = []
+    ghosts: list[dict] = []
     for g in wavelength_groups(cs.scene):
         t = out if g.index == 0 else eye_truth(compile_scene(cs.scene, g, nominal=cs))
         for e in t["glints"]:
             glints[e["led"]] = {**e, "wavelength_nm": g.wavelength_nm}
         in_view += [{**e, "wavelength_nm": g.wavelength_nm} for e in t["leds_in_view"]]
+        ghosts += [{**e, "wavelength_nm": g.wavelength_nm} for e in t.get("ghosts", [])]
     out["glints"] = [glints[k] for k in sorted(glints)]
     out["glints_on_cornea"] = sum(e["on_cornea"] for e in out["glints"])
     out["glints_visible"] = sum(e["visible"] for e in out["glints"])
     out["leds_in_view"] = sorted(in_view, key=lambda e: e["led"])
+    if cs.scene.elements:
+        out["ghosts"] = sorted(ghosts, key=lambda e: e["led"])
     return out
 
 

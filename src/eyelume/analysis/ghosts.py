@@ -1,0 +1,284 @@
+"""Specular images of the LEDs caused by optical elements (issue 14, "every bright spot has an
+origin"): spectacle ghosts and their kin, found from the LED side the way corneal glints are
+(:mod:`eyelume.analysis.truth`).
+
+A *chain* is the ordered list of surfaces that reflect the LED's light on its way to the camera
+(in the light's order): one element surface (``["spectacle front"]``: LED → that surface →
+camera), or an element surface and the anterior cornea in either order (``["cornea",
+"spectacle front"]``: LED → cornea → spectacle → camera). Between the reflections the light
+crosses any element surface it meets by the stronger branch (refracted through a window or a
+lens, so a back-surface ghost is refracted twice by the front; folded by a mirror), as
+:func:`eyelume.analysis.truth._through_elements` does. A chain whose element reflection is the
+stronger branch there (a mirror, a hot mirror: R > T) is the camera's ordinary view, not a
+ghost, and is not listed (the glints and ``leds_in_view`` already give it).
+
+Position: the sensor point whose real chief ray, reflected by the chain's surfaces in reverse
+order, passes through the LED's emission point (Newton's method on the sensor point, started
+from a coarse grid over the sensor). Only images inside the picture are listed.
+
+Flux: the LED's radiant intensity I(u) toward the chain (W/sr, u the emission direction of the
+image's chief ray) times the product W of the reflectances and transmittances along the path
+(at the path's own angles of incidence), spread over the entrance pupil's plane by the chain:
+the irradiance there is E = I(u) W / |det J|, J = ∂(x, y)/∂(u₁, u₂) the Jacobian (mm²/sr) of
+where a ray from the LED meets the plane z = z_EP (camera frame, ⟂ the lens axis) with
+respect to its emission direction (central differences). For a plane mirror |det J| =
+D²/cos γ (D the distance from the LED's mirror image to the pupil, γ the angle to the axis),
+for a curved one the caustic's focusing is in J. ``flux_w`` = E π r_EP² (W into the entrance
+pupil of radius r_EP, before the lens's transmission and vignetting; valid while E varies
+little over the pupil, the small-aperture camera of an eye tracker); ``relative_to_glint`` =
+E / E_glint, the same LED's corneal glint computed the same way (None without one).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from eyelume.analysis.truth import (
+    _ELEMENT_EVENTS,
+    _basis,
+    _solve,
+    _stronger_branch,
+    _View,
+    sensor_to_pixel,
+)
+from eyelume.estimators.camera import aim_chief, into_scene
+from eyelume.kernels import geometry as G
+from eyelume.kernels.interact import interface_at, reflect
+from eyelume.kernels.sampling import radiant_intensity
+
+__all__ = ["ghost_truth"]
+
+_GRID = 9  # coarse sensor grid (per side) the Newton searches start from
+_STARTS = 4  # best grid points tried
+_DU = 1e-5  # rad: emission-direction step of the flux Jacobian
+
+
+def _chief_ray(cs, cam, xs: float, ys: float):
+    """The chief ray of sensor point (xs, ys) as it leaves the camera (before any element),
+    camera frame, or None."""
+    chief = aim_chief(cam, xs, ys)
+    if not chief.found:
+        return None
+    ok, x, y, z, dx, dy, dz, _ = into_scene(cam, xs, ys, chief.qx, chief.qy)
+    return (np.array([x, y, z]), np.array([dx, dy, dz])) if ok else None
+
+
+def _is_element(cs, s: int) -> bool:
+    name = cs.surface_names[s] if s >= 0 else ""
+    return name.startswith("element ") and not name.endswith(" edge")
+
+
+def _label(cs, cornea: int, s: int) -> str:
+    """``cornea``, or an element surface's ``name side`` (``spectacle front``)."""
+    if s == cornea:
+        return "cornea"
+    name = cs.surface_names[s]
+    return name[name.index("(") + 1 : name.rindex(")")] + name[name.rindex(")") + 1 :]
+
+
+def _follow(cs, p, d, chain, target=None, strict=False):
+    """The ray (p, d) reflected by the surfaces ``chain`` in order, crossing the element
+    surfaces it meets before each (stronger branch), then through the elements up to
+    ``target``. Returns (p, d, weight, reflectances) — weight the product of R and T along the
+    path, ``reflectances`` the R at each chain surface — or None when a chain surface is
+    missed (or, ``strict``, anything else is met first)."""
+    w, refl = 1.0, []
+    for s in chain:
+        for _ in range(_ELEMENT_EVENTS):
+            ts = G.intersect_surface(cs.sf, cs.si, s, *p, *d, math.inf)
+            h, th = G.nearest_hit(cs.sf, cs.si, *p, *d)
+            if h != s and h >= 0 and (ts < 0 or th < ts):
+                if not _is_element(cs, h):
+                    if strict:
+                        return None
+                    break
+                p = p + th * d
+                d, f = _stronger_branch(cs, h, p, d)
+                w *= f
+                continue
+            break
+        else:
+            return None
+        if ts < 0:
+            return None
+        p = p + ts * d
+        n = np.array(G.surface_normal(cs.sf, cs.si, s, *p))
+        r = float(interface_at(cs.sf, cs.si, s, float(d @ n)).reflectance)
+        refl.append(r)
+        w *= r
+        d = np.array(reflect(*d, *n))
+        d = d / np.linalg.norm(d)
+    # after the chain: through the elements (their weights) up to the target
+    for _ in range(_ELEMENT_EVENTS):
+        h, th = G.nearest_hit(cs.sf, cs.si, *p, *d)
+        if not _is_element(cs, h) or (target is not None and th > (target - p) @ d):
+            break
+        p = p + th * d
+        d, f = _stronger_branch(cs, h, p, d)
+        w *= f
+    return p, d, w, refl
+
+
+def _miss(ray, led, n, g1, g2):
+    if ray is None:
+        return None
+    p, d = ray[0], ray[1]
+    den = d @ n
+    if abs(den) < 1e-12:
+        return None
+    h = p + ((led - p) @ n) / den * d - led
+    return np.array([h @ g1, h @ g2])
+
+
+def _sensor_box(cs):
+    """Half-width and half-height (mm) of the picture on the sensor."""
+    return cs.picture.width_mm / 2.0, cs.picture.height_mm / 2.0
+
+
+def _find(v: _View, chain_cam: list[int], led: np.ndarray):
+    """The sensor point (mm) of the image of ``led`` by ``chain_cam`` (camera-side order)."""
+    cs, cam = v.cs, v.cam
+    n = led / np.linalg.norm(led)  # a plane through the LED, ⟂ its direction from the origin
+    g1, g2 = _basis(n)
+
+    def residual(s):
+        ray = _chief_ray(cs, cam, s[0], s[1])
+        if ray is None:
+            return None
+        return _miss(_follow(cs, *ray, chain_cam, led), led, n, g1, g2)
+
+    hw, hh = _sensor_box(cs)
+    starts = []
+    for x in np.linspace(-hw, hw, _GRID):
+        for y in np.linspace(-hh, hh, _GRID):
+            r = residual(np.array([x, y]))
+            if r is not None:
+                starts.append((float(r @ r), x, y))
+    for _, x, y in sorted(starts)[:_STARTS]:
+        found = _solve(residual, np.array([x, y]))
+        if found is not None:
+            return found
+    return None
+
+
+def _irradiance(v: _View, chain_led: list[int], row: int, led: np.ndarray, u: np.ndarray):
+    """E (W/mm²) at the entrance pupil's plane of LED ``row``'s light sent along ``u`` and
+    reflected by ``chain_led`` (light order), and the path's weight; None if a ray is lost."""
+    cs = v.cs
+    zp = v.cam.entrance_pupil_z
+    target = np.array([0.0, 0.0, zp])
+    a, b = _basis(u)
+
+    def at_pupil(du):
+        d = u + du[0] * a + du[1] * b
+        d = d / np.linalg.norm(d)
+        got = _follow(cs, led, d, chain_led, target)
+        if got is None or abs(got[1][2]) < 1e-12:
+            return None, None
+        p, dd = got[0], got[1]
+        t = (zp - p[2]) / dd[2]
+        return (p + t * dd)[:2], got[2]
+
+    cols = []
+    for k in range(2):
+        e = np.zeros(2)
+        e[k] = _DU
+        hi, _ = at_pupil(e)
+        lo, _ = at_pupil(-e)
+        if hi is None or lo is None:
+            return None
+        cols.append((hi - lo) / (2 * _DU))
+    _, w = at_pupil(np.zeros(2))
+    if w is None:
+        return None
+    det = abs(np.linalg.det(np.column_stack(cols)))
+    if det == 0.0:
+        return None
+    intensity = float(radiant_intensity(cs.led, row, *u))
+    return intensity * w / det, w
+
+
+def _emission(v: _View, s: np.ndarray, chain_cam: list[int], led: np.ndarray):
+    """The emission direction (from the LED) of the image's chief ray, the path clear?"""
+    cs = v.cs
+    ray = _chief_ray(cs, v.cam, *s)
+    got = _follow(cs, *ray, chain_cam, led, strict=True)
+    clear = got is not None
+    if got is None:
+        got = _follow(cs, *ray, chain_cam, led)
+    p, d = got[0], got[1]
+    if clear:  # nothing between the last surface and the LED but its own body
+        h, th = G.nearest_hit(cs.sf, cs.si, *p, *d)
+        k_body = [i for i, nm in enumerate(cs.surface_names) if nm.endswith(" body")]
+        clear = h < 0 or h in k_body or th >= (led - p) @ d - 1e-4
+    return -d, clear, got[3]
+
+
+def _one(v: _View, k: int, row: int, led: np.ndarray, chain_cam: list[int]):
+    """The entry of LED ``k``'s image by ``chain_cam`` (camera-side order), or None."""
+    cs = v.cs
+    s = _find(v, chain_cam, led)
+    if s is None:
+        return None
+    c, r = sensor_to_pixel(cs, *s)
+    if not (-0.5 <= c < cs.picture.cols - 0.5 and -0.5 <= r < cs.picture.rows - 0.5):
+        return None
+    u, clear, refl = _emission(v, s, chain_cam, led)
+    for sf in chain_cam:  # the ordinary view (R > T: a mirror) is not a ghost
+        f = interface_at(cs.sf, cs.si, sf, -1.0)
+        if _is_element(cs, sf) and f.reflectance > 1.0 - f.reflectance - f.absorptance:
+            return None
+    chain_led = chain_cam[::-1]
+    e = _irradiance(v, chain_led, row, led, u)
+    intensity = float(radiant_intensity(cs.led, row, *u))
+    return {
+        "led": k,
+        "chain": [_label(cs, v.cornea, x) for x in chain_led],
+        "centre_px": [c, r],
+        "visible": bool(clear and intensity > 0.0),
+        "reflectances": refl[::-1],
+        "pupil_irradiance_w_mm2": None if e is None else e[0],
+        "flux_w": None if e is None else e[0] * math.pi * cs.first_order.entrance_pupil_radius**2,
+    }
+
+
+def ghost_truth(v: _View) -> list[dict]:
+    """Every specular image of an LED that an optical element causes, inside the picture: per
+    LED and chain (module doc) its ``led``, ``chain`` (surface names in the light's order),
+    ``centre_px`` (OpenCV convention), ``visible`` (nothing else on the path, the LED emitting
+    that way), ``reflectances`` (R at each chain surface, same order), the irradiance it gives
+    at the entrance pupil (``pupil_irradiance_w_mm2``), ``flux_w`` (W into the entrance
+    pupil) and ``relative_to_glint`` (over the same LED's corneal glint, same method). A scene
+    without elements: []."""
+    cs = v.cs
+    if not cs.scene.elements:
+        return []
+    surfaces = [
+        s
+        for s, nm in enumerate(cs.surface_names)
+        if nm.startswith("element ") and not nm.endswith(" edge")
+    ]
+    out = []
+    for row, (k, led) in enumerate(zip(cs.led_indices, cs.led.points, strict=True)):
+        glint = _one_glint(v, row, led)
+        for s in surfaces:
+            for chain_cam in ([s], [s, v.cornea], [v.cornea, s]):
+                e = _one(v, k, row, led, chain_cam)
+                if e is None:
+                    continue
+                pe = e["pupil_irradiance_w_mm2"]
+                e["relative_to_glint"] = None if (pe is None or not glint) else pe / glint
+                out.append(e)
+    return out
+
+
+def _one_glint(v: _View, row: int, led: np.ndarray) -> float | None:
+    """The corneal glint's irradiance at the entrance pupil (W/mm²), same method."""
+    s = _find(v, [v.cornea], led)
+    if s is None:
+        return None
+    u, _, _ = _emission(v, s, [v.cornea], led)
+    e = _irradiance(v, [v.cornea], row, led, u)
+    return None if e is None else e[0]
