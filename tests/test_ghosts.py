@@ -11,6 +11,8 @@ has an origin"), against independent references written here:
   the LED), projected the same way; and its irradiance is that of the virtual image, whose
   intensity is I R (s'/s)² (a cone of half-angle u from the LED leaves the mirror in u' =
   u s/s');
+* the forward render (which knows nothing of the truth) draws the ghosts there, as bright as
+  their ``flux_w`` says, within its counting noise;
 * a scene without elements has the same truth as before (pinned: ``tests/reference/
   truth_without_elements.json``, written by the code before ghosts were added).
 """
@@ -237,3 +239,58 @@ def _same(a, b):
         assert a == pytest.approx(b, rel=1e-9, abs=1e-9)
     else:
         assert a == b
+
+
+def _mean_shift(img, start, radius):
+    """The count-weighted centroid of ``img`` within ``radius`` px of itself (iterated from
+    ``start``), the counts inside, and the centroid's standard error per axis (px)."""
+    rr, cc = np.mgrid[: img.shape[0], : img.shape[1]]
+    c = np.array(start, dtype=float)
+    for _ in range(100):
+        w = img * ((cc - c[0]) ** 2 + (rr - c[1]) ** 2 <= radius**2)
+        n = w.sum()
+        new = np.array([(w * cc).sum(), (w * rr).sum()]) / n
+        if np.allclose(new, c, atol=1e-9):
+            break
+        c = new
+    var = np.array([(w * (cc - c[0]) ** 2).sum(), (w * (rr - c[1]) ** 2).sum()]) / n
+    return c, int(n), np.sqrt(var / n), (cc - c[0]) ** 2 + (rr - c[1]) ** 2 <= radius**2
+
+
+@pytest.mark.slow
+def test_spectacle_ghosts_where_and_as_bright_as_the_forward_render_shows_them():
+    """The forward estimator (LED → spectacle → camera lens → sensor, no knowledge of the
+    truth) draws each ghost as the blur disc of the virtual image (it lies ~15 mm behind the
+    eye plane the camera focuses on: ~9 px across). Its count-weighted centroid matches the
+    truth's pixel within 4 standard errors (the disc's own spread / √N), and the counts in it
+    (less the picture's mean background per pixel) match flux_w / (P / rays) within 4 √N —
+    each ray carries P / rays of the LEDs' total power P = Σ I₀ 2π ∫ f(α) sin α dα, and the
+    camera lens transmits 100 % inside its apertures (kernels/sequential.py). LEDs 0 and 2
+    (their two ghosts 11 px apart, apart from everything else); LED 3's two discs overlap."""
+    from eyelume.estimators.forward import trace_forward
+
+    cs = _compiled(SPECTACLE)
+    truth = eye_truth(cs)
+    rays = 4_000_000
+    img = trace_forward(cs, rays, seed=7).image.astype(float)
+    a = cs.led.alpha_grid
+    power = sum(
+        cs.led.i0[k] * 2 * math.pi * np.trapezoid(cs.led.intensity_grid[k] * np.sin(a), a)
+        for k in range(len(cs.led.i0))
+    )
+    radius = 5.0  # px: the blur disc (~4.5 px) and a margin, short of the neighbour ghost
+    spots = np.zeros(img.shape, dtype=bool)  # every ghost's and glint's disc
+    for g in truth["ghosts"] + truth["glints"]:
+        spots |= _mean_shift(img, g["centre_px"], radius)[3]
+    background = img[~spots].mean()
+    checked = 0
+    for g in truth["ghosts"]:
+        if g["led"] not in (0, 2):
+            continue
+        c, n, se, inside = _mean_shift(img, g["centre_px"], radius)
+        assert np.all(np.abs(c - g["centre_px"]) < 4 * se), (g["chain"], g["centre_px"], c, se)
+        expect = g["flux_w"] / (power / rays)
+        got = n - background * inside.sum()
+        assert abs(got - expect) < 4 * math.sqrt(expect), (g["led"], g["chain"], got, expect)
+        checked += 1
+    assert checked == 4
