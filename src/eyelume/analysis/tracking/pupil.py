@@ -31,10 +31,7 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
 4. **Full-resolution blob** (:func:`full_res_blob`): the picture (σ 1 px Gaussian) thresholded
    at the chosen level around the blob; glints touching it joined; a closing with an
    elliptical element of ≈ 0.15 × its diameter (odd, ≥ 3) fills what is left of a glint's
-   notch; when not compact (solidity < 0.8), an opening by the same element cuts appendages
-   thinner than it (a lid's crease or shadow joined at the pupil's edge: vr-offaxis at (−20°,
-   −20°), whose pupil at the black level was otherwise refused for the iris); refused when
-   still not compact.
+   notch; refused when not compact (solidity < 0.8).
 5. **Contrast and edge** (:func:`blob_contrast`, :func:`edge_points`, :func:`_refine_smoothed`):
    the pupil's median against its own surround (a ring 0.05–0.1 × its diameter outside), at
    least 5 σ of the pixel noise there (:func:`_local_noise`: shot noise grows with the signal,
@@ -823,7 +820,12 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
             else:
                 comp[joined[glab]] = 255
     closed = _closing(comp, k)
-    closed, contour, area, solidity = _compact(closed, k, params)
+    contours, _ = cv2.findContours(closed, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    contour = max(contours, key=cv2.contourArea)
+    c_area = cv2.contourArea(contour)
+    hull_area = cv2.contourArea(cv2.convexHull(contour))
+    area = float(cv2.countNonZero(closed))
+    solidity = c_area / hull_area if hull_area > 0 else 0.0
     if solidity < params.pupil_min_solidity:
         return Refusal(
             f"no pupil: the darkest blob ({int(area)} px) is not compact "
@@ -831,31 +833,6 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
         )
     diam = math.sqrt(4.0 * area / math.pi)
     return Blob(x0, y0, closed, raw, near_glint, contour, area, diam, cand.level)
-
-
-def _compact(closed: np.ndarray, k: int, params):
-    """The closed blob, its outer outline, area (px) and solidity (contour area / hull area);
-    when under ``pupil_min_solidity``, the same after an opening by the k × k elliptical
-    element if that makes it compact: a thin dark appendage (a lid's crease or shadow joined at
-    the pupil's edge) is cut, the pupil kept."""
-
-    def measure(mask):
-        cs, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-        if not cs:
-            return None, 0.0
-        c = max(cs, key=cv2.contourArea)
-        hull = cv2.contourArea(cv2.convexHull(c))
-        return c, (cv2.contourArea(c) / hull if hull > 0 else 0.0)
-
-    contour, solidity = measure(closed)
-    if solidity < params.pupil_min_solidity:
-        disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-        c2, s2 = measure(cv2.morphologyEx(closed, cv2.MORPH_OPEN, disc))
-        if c2 is not None and s2 >= params.pupil_min_solidity:
-            closed = np.zeros_like(closed)
-            cv2.drawContours(closed, [c2], 0, 255, thickness=-1)
-            contour, solidity = c2, s2
-    return closed, contour, float(cv2.countNonZero(closed)), solidity
 
 
 def _closing(mask: np.ndarray, k: int) -> np.ndarray:
@@ -878,25 +855,14 @@ def _closing(mask: np.ndarray, k: int) -> np.ndarray:
 
 
 def _grown_glints(bright: np.ndarray, params, extra: int = 0, radius: float | None = None):
-    """The glint mask grown by max(``glint_margin_px``, r) px, r each glint's own equivalent
-    radius (⌈r⌉ size classes, as :func:`_fill_glints`; ``radius`` for all when given): the
-    mask holds a glint's core (above half its peak), and its skirt, which brightens the pupil's
-    edge under it, reaches about as far again. Growing every glint by the largest one's radius
-    let a saturated patch of skin or iris taken for a glint (an over-exposed off-axis view)
-    blank the pupil's outline around every small glint (glasses-frame at (20°, −20°): 41 % of
-    it backed, refused; 49 % with each by its own)."""
+    """The glint mask grown by max(``glint_margin_px``, r) px, r the equivalent radius of the
+    largest glint in it (``radius`` when given): the mask holds a glint's core (above half its
+    peak), and its skirt, which brightens the pupil's edge under it, reaches about as far
+    again."""
     if not cv2.countNonZero(bright):
         return bright.copy()
     if radius is None:
-        _, lab, stats, _ = cv2.connectedComponentsWithStats(bright, connectivity=8)
-        rad = np.ceil(np.sqrt(stats[:, cv2.CC_STAT_AREA] / math.pi)).astype(int)
-        rad[0] = -1
-        out = np.zeros_like(bright)
-        for rc in np.unique(rad[1:]):
-            own = np.where(rad[lab] == rc, 255, 0).astype(np.uint8)
-            g = int(math.ceil(max(params.glint_margin_px, rc))) + extra
-            out |= cv2.dilate(own, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2))
-        return out
+        radius = _largest_radius(bright)
     g = int(math.ceil(max(params.glint_margin_px, radius))) + extra
     return cv2.dilate(bright, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2))
 
