@@ -131,9 +131,7 @@ def test_vr_offaxis_pupil_small(h, v, seed):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    ("h", "v"), [(0.0, 0.0), (30.0, 20.0), (20.0, -20.0)]
-)
+@pytest.mark.parametrize(("h", "v"), [(0.0, 0.0), (30.0, 20.0), (20.0, -20.0)])
 def test_glasses_frame_pupil(h, v):
     """The skin saturates (full scale over most of the picture); the pupil and iris do not. At
     (20°, −20°) saturated patches of skin beside the iris pass as glints; each glint is filled
