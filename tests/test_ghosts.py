@@ -11,6 +11,8 @@ has an origin"), against independent references written here:
   the LED), projected the same way; and its irradiance is that of the virtual image, whose
   intensity is I R (s'/s)² (a cone of half-angle u from the LED leaves the mirror in u' =
   u s/s');
+* a two-reflection chain (LED → 4 % partial mirror → cornea → camera) lies at the corneal
+  glint of the LED's mirror image;
 * the forward render (which knows nothing of the truth) draws the ghosts there, as bright as
   their ``flux_w`` says, within its counting noise;
 * a scene without elements has the same truth as before (pinned: ``tests/reference/
@@ -294,3 +296,46 @@ def test_spectacle_ghosts_where_and_as_bright_as_the_forward_render_shows_them()
         assert abs(got - expect) < 4 * math.sqrt(expect), (g["led"], g["chain"], got, expect)
         checked += 1
     assert checked == 4
+
+
+BEAMSPLITTER = {
+    "kind": "mirror",
+    "name": "beamsplitter",
+    "position_mm": [0.0, 0.0, 65.0],
+    "semi_diameter_mm": 30.0,
+    "front": {"coating": {"model": "fixed", "reflectance": 0.04, "transmittance": 0.96}},
+}
+ONE_LED = {"leds.count": 1, "leds.positions_mm": [[22.0, 0.0, 45.0]]}
+
+
+@pytest.mark.filterwarnings("ignore::eyelume.compile.LedAimWarning")
+@pytest.mark.filterwarnings("ignore::eyelume.analysis.regions.RegionWarning")
+def test_partial_mirror_then_cornea_is_the_glint_of_the_led_mirror_image():
+    """An LED aimed away from the eye at a 4 % partial mirror (zero thickness: what it passes
+    is not deviated) in z = 65 mm lights the cornea from its mirror image: the chain
+    ["beamsplitter front", "cornea"] lies where the corneal glint of the mirrored emission point
+    lies in the scene without the mirror (the glint truth's own solver, independent of the
+    ghosts' code)."""
+    from eyelume.analysis.truth import _glint_truth
+
+    cs = compile_scene(
+        eyelume.load_scene(
+            "paper2005",
+            {**ONE_LED, "leds.directions": [[0.0, 0.0, 1.0]], "elements": [BEAMSPLITTER]},
+        )
+    )
+    truth = eye_truth(cs)
+    g = _ghost(truth, 0, ["beamsplitter front", "cornea"])
+    assert [tuple(e["chain"]) for e in truth["ghosts"]] == [("beamsplitter front", "cornea")]
+    assert g["reflectances"][0] == 0.04
+    assert g["visible"]
+    led = cs.led.points[0].copy()
+    image = led.copy()
+    image[2] = 2 * BEAMSPLITTER["position_mm"][2] - led[2]
+    ref = compile_scene(
+        eyelume.load_scene("paper2005", {**ONE_LED, "leds.directions": [[0.0, 0.0, -1.0]]})
+    )
+    expect = _glint_truth(_view(ref, ref.camera), 0, image)["centre_px"]
+    assert np.hypot(*(np.array(g["centre_px"]) - expect)) < 1e-6  # px: both exact
+    # the LED sends nothing toward the eye itself: no glint of its own to compare with
+    assert g["relative_to_glint"] is None
