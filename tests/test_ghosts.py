@@ -11,6 +11,8 @@ has an origin"), against independent references written here:
   the LED), projected the same way; and its irradiance is that of the virtual image, whose
   intensity is I R (s'/s)² (a cone of half-angle u from the LED leaves the mirror in u' =
   u s/s');
+* ``relative_to_glint`` against a partial plane mirror's ghost over the corneal glint's
+  Coddington irradiance (the conic cornea's principal radii at the specular point);
 * a two-reflection chain (LED → 4 % partial mirror → cornea → camera) lies at the corneal
   glint of the LED's mirror image;
 * the forward render (which knows nothing of the truth) draws the ghosts there, as bright as
@@ -339,3 +341,80 @@ def test_partial_mirror_then_cornea_is_the_glint_of_the_led_mirror_image():
     assert np.hypot(*(np.array(g["centre_px"]) - expect)) < 1e-6  # px: both exact
     # the LED sends nothing toward the eye itself: no glint of its own to compare with
     assert g["relative_to_glint"] is None
+
+
+def _coddington(intensity, refl, s_obj, dist, cos_t, r_t, r_s, cos_g):
+    """Irradiance (W/mm²) on a plane at distance ``dist`` from a convex mirror's specular point
+    (normal irradiance times ``cos_g``), principal radii ``r_t`` (in the plane of incidence)
+    and ``r_s``: the reflected pencil diverges from virtual foci |s_t|, |s_s| behind the point,
+    1/|s_t| = 1/s + 2/(r_t cos θ), 1/|s_s| = 1/s + 2 cos θ / r_s (Coddington)."""
+    s_t = 1.0 / (1.0 / s_obj + 2.0 / (r_t * cos_t))
+    s_s = 1.0 / (1.0 / s_obj + 2.0 * cos_t / r_s)
+    return intensity * refl * s_t * s_s / (s_obj**2 * (dist + s_t) * (dist + s_s)) * cos_g
+
+
+@pytest.mark.filterwarnings("ignore::eyelume.analysis.regions.RegionWarning")
+def test_relative_to_glint_against_the_plane_mirror_and_coddington_on_the_cornea():
+    """A zero-thickness 4 % partial mirror (nothing it passes is deviated) tilted in front of
+    paper2005's eye: LED 0's ghost in it gives I(u) R cos γ / D² at the pupil (its mirror
+    image), its corneal glint — seen twice through the mirror, T² — the Coddington irradiance
+    of the conic cornea (R = 7.8 mm, k = −0.25) at the specular point, principal radii
+    R_s = √(R² − k r²) (sagittal) and R_t = R_s³/R² (tangential; the plane of incidence is the
+    meridian: LED 0 and the camera's axis lie in y = 0). ``relative_to_glint`` is their ratio."""
+    mirror = {
+        "kind": "mirror",
+        "name": "window",
+        "position_mm": [0.0, 0.0, 48.0],
+        "direction": PLATE["direction"],
+        "semi_diameter_mm": 27.0,
+        "front": {"coating": {"model": "fixed", "reflectance": 0.04, "transmittance": 0.96}},
+    }
+    cs = _compiled(mirror)
+    truth = eye_truth(cs)
+    g = _ghost(truth, 0, ["window front"])
+    led = cs.led.points[0]
+    axis = np.array(mirror["direction"])
+    surface = np.array(mirror["position_mm"])
+    image = led - 2.0 * ((led - surface) @ axis) * axis
+    px, ep = _project(cs, image)
+    assert np.hypot(*(np.array(g["centre_px"]) - px)) < 1e-3
+    w = (ep - image) / np.linalg.norm(ep - image)
+    hit = image + ((surface - image) @ axis) / (w @ axis) * w
+    u = (hit - led) / np.linalg.norm(hit - led)
+    e_ghost = (
+        float(radiant_intensity(cs.led, 0, *u)) * 0.04 * w[2] / np.linalg.norm(ep - image) ** 2
+    )
+    assert g["pupil_irradiance_w_mm2"] == pytest.approx(e_ghost, rel=1e-5)
+    # the glint: Fermat's specular point on the cornea z = -sag(r) for the LED and its chief
+    # ray's pupil point (found by projecting the point, twice)
+    radius, k = 7.8, -0.25
+    assert (cs.scene.eye.surfaces[0].radius_mm, cs.scene.eye.surfaces[0].conic) == (radius, k)
+
+    def on_cornea(a):
+        r2 = a[0] ** 2 + a[1] ** 2
+        return np.array([a[0], a[1], -r2 / radius / (1 + math.sqrt(1 - (1 + k) * r2 / radius**2))])
+
+    ep = np.array([0.0, 0.0, cs.camera.entrance_pupil_z])
+    for _ in range(3):
+
+        def path(a, ep=ep):
+            p = on_cornea(a)
+            return np.linalg.norm(p - led) + np.linalg.norm(ep - p)
+
+        opts = {"xatol": 1e-12, "fatol": 1e-14}
+        pt = on_cornea(optimize.minimize(path, [1.0, 0.0], method="Nelder-Mead", options=opts).x)
+        glint_px, ep = _project(cs, pt)
+    r = math.hypot(pt[0], pt[1])
+    r_s = math.sqrt(radius**2 - k * r**2)
+    r_t = r_s**3 / radius**2
+    normal = np.array([pt[0], pt[1], math.sqrt(r_s**2 - r**2)]) / r_s  # toward the axis point
+    s_obj, dist = np.linalg.norm(pt - led), np.linalg.norm(ep - pt)
+    u = (pt - led) / s_obj
+    cos_t = abs(u @ normal)
+    w = (ep - pt) / dist
+    t_mirror = 0.96
+    e_glint = t_mirror**2 * _coddington(
+        float(radiant_intensity(cs.led, 0, *u)), 0.024, s_obj, dist, cos_t, r_t, r_s, w[2]
+    )
+    assert np.hypot(*(np.array(truth["glints"][0]["centre_px"]) - glint_px)) < 1e-3
+    assert g["relative_to_glint"] == pytest.approx(e_ghost / e_glint, rel=1e-3)
