@@ -418,3 +418,26 @@ def test_relative_to_glint_against_the_plane_mirror_and_coddington_on_the_cornea
     )
     assert np.hypot(*(np.array(truth["glints"][0]["centre_px"]) - glint_px)) < 1e-3
     assert g["relative_to_glint"] == pytest.approx(e_ghost / e_glint, rel=1e-3)
+
+
+def test_ghosts_of_leds_of_two_wavelengths_each_at_its_own():
+    """LEDs at 940 and 850 nm: each LED's ghosts come from its wavelength group's compile
+    (the lens's index at that wavelength), marked with it; the 850 nm ones are those of the
+    single-wavelength scene; ``ghosts=False`` skips them."""
+    one = eye_truth(_compiled(SPECTACLE))
+    cs = compile_scene(
+        eyelume.load_scene(
+            "paper2005", {"elements": [SPECTACLE], "leds.wavelength_nm": [850, 940, 940, 850]}
+        )
+    )
+    two = eye_truth(cs)
+    assert {g["led"] for g in two["ghosts"]} == {g["led"] for g in one["ghosts"]}
+    for g in two["ghosts"]:
+        assert g["wavelength_nm"] == (850.0 if g["led"] in (0, 3) else 940.0)
+        same = _ghost(one, g["led"], g["chain"])
+        if g["wavelength_nm"] == 850.0:
+            assert g["centre_px"] == pytest.approx(same["centre_px"], abs=1e-6)
+            assert g["flux_w"] == pytest.approx(same["flux_w"], rel=1e-6)
+        else:  # a lower index at 940 nm: a weaker Fresnel reflection
+            assert g["reflectances"][0] < same["reflectances"][0]
+    assert "ghosts" not in eye_truth(cs, ghosts=False)

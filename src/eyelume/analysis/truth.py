@@ -332,7 +332,7 @@ def _led_in_view(v: _View, k: int, led: np.ndarray, row: int | None = None) -> d
     }
 
 
-def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
+def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: bool = True) -> dict:
     """The true gaze, apparent pupil (centre and edge) and glints of a compiled scene.
 
     Returns a JSON-ready dict (``truth.json``): gaze angles; the pupil's 3D centre (world mm),
@@ -343,12 +343,13 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
     camera sees directly (a wide lens beside the ring), its pixel, whether it is seen and
     its radiant intensity toward the lens — a bright spot that is not a glint; with optical
     elements, ``ghosts``: each LED's specular images by the elements (chain, pixel, flux:
-    :func:`eyelume.analysis.ghosts.ghost_truth`; no such key without elements). LEDs of several
+    :func:`eyelume.analysis.ghosts.ghost_truth`; no such key without elements or with
+    ``ghosts=False``, which skips their search, ~1 s a scene). LEDs of several
     wavelengths: each LED's entries at its own wavelength, marked with it
     (:func:`_truth_by_wavelength`); the pupil at the scene's.
     """
     if cs.led_ids is None and cam is None and not single_wavelength(cs.scene):
-        return _truth_by_wavelength(cs)
+        return _truth_by_wavelength(cs, ghosts)
     v = _view(cs, cam or cs.camera)
     eye = cs.scene.eye
     depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
@@ -374,20 +375,21 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None) -> dict:
         "glints_visible": sum(g["visible"] for g in glints),
         "leds_in_view": in_view,
     }
-    if cs.scene.elements:
+    if cs.scene.elements and ghosts:
         from eyelume.analysis.ghosts import ghost_truth
 
         out["ghosts"] = ghost_truth(v)
     return out
 
 
-def _truth_by_wavelength(cs: CompiledScene) -> dict:
+def _truth_by_wavelength(cs: CompiledScene, with_ghosts: bool = True) -> dict:
     """:func:`eye_truth` of a scene whose LEDs have several wavelengths: the gaze and the pupil
     of the nominal compile ``cs`` (the scene's ``wavelength_nm``), each LED's glint and direct
     view from its wavelength group's compile (:func:`eyelume.compile.compile_scene`: the eye's
     and the lens's indices at that wavelength), the union over the groups in LED order, each
     entry with its ``wavelength_nm``."""
-    out = eye_truth(compile_scene(cs.scene, wavelength_groups(cs.scene)[0], nominal=cs))
+    first = compile_scene(cs.scene, wavelength_groups(cs.scene)[0], nominal=cs)
+    out = eye_truth(first, ghosts=with_ghosts)
     base = _view(cs, cs.camera)
     eye = cs.scene.eye
     depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
@@ -397,7 +399,11 @@ def _truth_by_wavelength(cs: CompiledScene) -> dict:
     in_view: list[dict] = []
     ghosts: list[dict] = []
     for g in wavelength_groups(cs.scene):
-        t = out if g.index == 0 else eye_truth(compile_scene(cs.scene, g, nominal=cs))
+        t = (
+            out
+            if g.index == 0
+            else eye_truth(compile_scene(cs.scene, g, nominal=cs), ghosts=with_ghosts)
+        )
         for e in t["glints"]:
             glints[e["led"]] = {**e, "wavelength_nm": g.wavelength_nm}
         in_view += [{**e, "wavelength_nm": g.wavelength_nm} for e in t["leds_in_view"]]
@@ -406,7 +412,7 @@ def _truth_by_wavelength(cs: CompiledScene) -> dict:
     out["glints_on_cornea"] = sum(e["on_cornea"] for e in out["glints"])
     out["glints_visible"] = sum(e["visible"] for e in out["glints"])
     out["leds_in_view"] = sorted(in_view, key=lambda e: e["led"])
-    if cs.scene.elements:
+    if cs.scene.elements and with_ghosts:
         out["ghosts"] = sorted(ghosts, key=lambda e: e["led"])
     return out
 
@@ -432,7 +438,7 @@ def glint_counts(scene, gaze_h=COUNT_GAZE_H, gaze_v=COUNT_GAZE_V) -> dict:
             turned = apply_overrides(
                 scene, {"eye.gaze_horizontal_deg": gh, "eye.gaze_vertical_deg": gv}
             )
-            t = eye_truth(compile_scene(turned))
+            t = eye_truth(compile_scene(turned), ghosts=False)
             row_on.append(t["glints_on_cornea"])
             row_seen.append(t["glints_visible"])
         on.append(row_on)
