@@ -215,9 +215,14 @@ def test_back_surface_ghost_is_weaker_by_the_front_transmission_and_both_listed(
     truth = eye_truth(cs)
     chains = {tuple(g["chain"]) for g in truth["ghosts"] if g["led"] == 0}
     assert chains == {("spectacle front",), ("spectacle back",)}
+    seen = [np.array(e["centre_px"]) for e in truth["glints"] if e["visible"]]
+    assert len(seen) == 4
     for g in truth["ghosts"]:
         assert g["relative_to_glint"] > 1.0  # a plane-ish 4 % mirror beats the cornea's
         assert len(g["reflectances"]) == len(g["chain"])
+        near = min(np.hypot(*(np.array(g["centre_px"]) - c)) for c in seen)
+        assert g["nearest_glint_px"] == pytest.approx(near, rel=1e-12)
+    assert truth["ghosts_visible"] == sum(g["visible"] for g in truth["ghosts"]) == 6
 
 
 def test_no_ghosts_without_elements_and_the_truth_unchanged():

@@ -343,7 +343,8 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
     camera sees directly (a wide lens beside the ring), its pixel, whether it is seen and
     its radiant intensity toward the lens — a bright spot that is not a glint; with optical
     elements, ``ghosts``: each LED's specular images by the elements (chain, pixel, flux:
-    :func:`eyelume.analysis.ghosts.ghost_truth`; no such key without elements or with
+    :func:`eyelume.analysis.ghosts.ghost_truth`, and each one's ``nearest_glint_px``; their
+    count ``ghosts_visible``; no such keys without elements or with
     ``ghosts=False``, which skips their search, ~1 s a scene). LEDs of several
     wavelengths: each LED's entries at its own wavelength, marked with it
     (:func:`_truth_by_wavelength`); the pupil at the scene's.
@@ -378,8 +379,19 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
     if cs.scene.elements and ghosts:
         from eyelume.analysis.ghosts import ghost_truth
 
-        out["ghosts"] = ghost_truth(v)
+        out["ghosts"] = _near_glints(ghost_truth(v), glints)
+        out["ghosts_visible"] = sum(g["visible"] for g in out["ghosts"])
     return out
+
+
+def _near_glints(ghosts: list[dict], glints: list[dict]) -> list[dict]:
+    """Each ghost with ``nearest_glint_px``: its distance (px) to the nearest visible corneal
+    glint's centre (None without one) — how easily a detector takes it for a glint."""
+    seen = [g["centre_px"] for g in glints if g["visible"] and g["centre_px"] is not None]
+    for e in ghosts:
+        d = [math.hypot(e["centre_px"][0] - c, e["centre_px"][1] - r) for c, r in seen]
+        e["nearest_glint_px"] = min(d) if d else None
+    return ghosts
 
 
 def _truth_by_wavelength(cs: CompiledScene, with_ghosts: bool = True) -> dict:
@@ -413,7 +425,8 @@ def _truth_by_wavelength(cs: CompiledScene, with_ghosts: bool = True) -> dict:
     out["glints_visible"] = sum(e["visible"] for e in out["glints"])
     out["leds_in_view"] = sorted(in_view, key=lambda e: e["led"])
     if cs.scene.elements and with_ghosts:
-        out["ghosts"] = sorted(ghosts, key=lambda e: e["led"])
+        out["ghosts"] = _near_glints(sorted(ghosts, key=lambda e: e["led"]), out["glints"])
+        out["ghosts_visible"] = sum(g["visible"] for g in out["ghosts"])
     return out
 
 
