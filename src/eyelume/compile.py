@@ -168,8 +168,10 @@ class FirstOrder:
     object plane at z = 0): ``efl``, ``f_number`` (EFL / entrance-pupil diameter), the
     ``object_distance`` (object plane → lens), entrance pupil (``entrance_pupil_z``, its radius
     ``entrance_pupil_radius``), exit pupil (``exit_pupil_z``, ``exit_pupil_magnification``), the
-    sensor's ``image_z``, and ``magnification`` (signed, object plane → image). A prescription's
-    come from its paraxial trace; an ideal lens's are exact (the pupils are the lens)."""
+    sensor's ``image_z``, ``magnification`` (signed, object plane → image) and the image-side
+    ``working_f_number`` N_w = 1 / (2 n′ |u′|) of the axial marginal ray from the object plane
+    (an ideal lens: N (1 + |m|), exactly, its pupils being the lens). A prescription's come from
+    its paraxial trace; an ideal lens's are exact (the pupils are the lens)."""
 
     efl: float
     f_number: float
@@ -180,6 +182,7 @@ class FirstOrder:
     exit_pupil_magnification: float
     image_z: float
     magnification: float
+    working_f_number: float
 
 
 @dataclass
@@ -933,9 +936,10 @@ def _first_order(
         ideal = scene.camera.ideal
         assert ideal is not None
         a = ideal.pupil_radius_mm
+        m = -ideal.image_distance_mm / s_obj
         return FirstOrder(
-            ideal.efl_mm, ideal.f_number, s_obj, s_obj, a, s_obj, 1.0, lens.image_z,
-            -ideal.image_distance_mm / s_obj,
+            ideal.efl_mm, ideal.f_number, s_obj, s_obj, a, s_obj, 1.0, lens.image_z, m,
+            ideal.f_number * (1.0 - m),
         )  # fmt: skip
     par = lens_paraxial(scene, idx)
     xp_z, xp_m = _exit_pupil(scene, idx, stop, lens.lf)
@@ -954,6 +958,7 @@ def _first_order(
         exit_pupil_magnification=xp_m,
         image_z=lens.image_z,
         magnification=par.magnification(s_obj),
+        working_f_number=par.working_f_number(s_obj, stop, float(lens.lf[stop, Q.L_SD])),
     )
 
 

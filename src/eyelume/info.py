@@ -84,7 +84,7 @@ def _ideal_lens_info(cs: CompiledScene) -> dict:
         "object_distance_mm": fo.object_distance,
         "image_distance_mm": ideal.image_distance_mm,
         "magnification": fo.magnification,
-        "working_f_number": ideal.f_number * (1 - fo.magnification),
+        "working_f_number": fo.working_f_number,
         "field_of_view_deg": [2 * h for h in half],
         "distortion_k1_k2": [ideal.k1, ideal.k2],
         "image_plane_z_mm": cs.image_z,

@@ -33,6 +33,13 @@ from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import CompiledScene, compile_scene, single_wavelength, wavelength_groups
+from eyelume.detectors.psf import (
+    PixelPsf,
+    camera_psf,
+    convolve_irradiance,
+    convolve_variance,
+    region_mean_variance,
+)
 from eyelume.detectors.receivers import BinnedPlane
 from eyelume.errors import SceneError
 from eyelume.estimators.fast_run import RunControl, direct_eye_plane, trace_fast, warm_up
@@ -109,10 +116,20 @@ class RenderResult:
     estimator : "forward" or "fast"
     eye_image : (rows, cols) float64
         Image-plane irradiance (W/mm²) binned over the sensor; row 0 is the top of the picture as
-        a person views it (world +y), columns run with world +x as seen from the camera.
+        a person views it (world +y), columns run with world +x as seen from the camera. The
+        traced (geometric) irradiance convolved with the camera's point-spread function
+        (``camera.psf``, :mod:`eyelume.detectors.psf`; each wavelength group with its own)
+        when ``psf_parts`` is set.
     eye_image_variance : (rows, cols) float64
         Estimated variance of each pixel's value ((W/mm²)²): Poisson for the forward counts, the
-        spread of independent samples for the fast estimator.
+        spread of independent samples for the fast estimator; with a PSF, K² ⊗ the traced
+        pixels' variance (neighbouring pixels are then correlated: a region's mean takes its
+        variance from the traced variance through the kernel, :meth:`region_stats`).
+    psf_parts : list of (PixelPsf, (rows, cols) float64) or None
+        The point-spread function applied and the traced pixels' variance before it, per
+        wavelength group (one for a scene of one wavelength). None: ``camera.psf = "none"``,
+        or a first round cut short, whose missing pixels leave nothing to convolve
+        (``psf_skipped``).
     eye_plane : (rows, cols) float64
         Eye-plane irradiance (W/mm²) toward the eye over the receiver; row 0 at +y. Forward: all
         light crossing the plane toward the eye; fast: the LEDs' direct light (shadowed).
@@ -156,6 +173,13 @@ class RenderResult:
     rel_error_achieved: float | None = None
     covered_pixels: int | None = None  # fast, first round interrupted: pixels finished
     groups: list[GroupRender] | None = None  # LEDs of several wavelengths: each group's share
+    psf_parts: list[tuple[PixelPsf, np.ndarray]] | None = None
+    psf_skipped: bool = False  # the scene asks for a PSF but missing pixels left it unapplied
+
+    @property
+    def psf(self) -> PixelPsf | None:
+        """The PSF applied (the first wavelength group's), or None."""
+        return self.psf_parts[0][0] if self.psf_parts else None
 
     @property
     def eye_image_at_scene_wavelength(self) -> np.ndarray:
@@ -186,12 +210,20 @@ class RenderResult:
     def region_stats(self) -> dict[str, dict]:
         """Mean, median pixel and their relative standard errors per region."""
         finished = np.isfinite(self.eye_image)  # all but a cut first round's missing pixels
+        mean_variance = None
+        parts = self.psf_parts
+        if parts and all(np.all(np.isfinite(v)) for _, v in parts):
+
+            def mean_variance(mask: np.ndarray) -> float:
+                return sum(region_mean_variance(mask, v, k) for k, v in parts)
+
         return region_stats(
             np.where(finished, self.eye_image, 0.0),
             np.where(finished, self.eye_image_variance, 0.0),
             {k: m & finished for k, m in self.regions.items()},
             self.pixel_area_mm2,
             self.variance_dof,
+            mean_variance,
         )
 
     def summary(self) -> dict:
@@ -241,6 +273,15 @@ class RenderResult:
             power["escaped"] = self.ledger["escaped"]
             power["sum"] = float(sum(self.ledger.values()))
         out["power_w"] = power
+        if self.psf_parts:
+            kernels = [k.summary() for k, _ in self.psf_parts]
+            out["psf"] = kernels[0] if len(kernels) == 1 else kernels
+        elif self.psf_skipped:
+            out["psf"] = {
+                "kind": self.scene.camera.psf_used,
+                "applied": False,
+                "note": "not applied: the interrupted first round left pixels missing",
+            }
         out["regions"] = self.region_stats()
         out["safety"] = eye_safety(self.scene)
         out["units"] = {"eye_image": "W/mm^2", "eye_plane": "W/mm^2", "power": "W"}
@@ -386,6 +427,7 @@ def render(
             control=RunControl(advance, opt.max_samples_per_pixel),
         )
         plane = direct_eye_plane(cs, seed)
+        blur = _Blur(cs, est.image)
         wall = time.perf_counter() - t0
         return RenderResult(
             scene=sc,
@@ -394,10 +436,10 @@ def render(
             seed=seed,
             wall_time_s=wall,
             emitted_w=cs.emitted_w,
-            eye_image=est.image,
-            eye_image_variance=est.variance,
+            eye_image=blur.image(est.image),
+            eye_image_variance=blur.variance(est.variance),
             eye_plane=plane,
-            regions=with_glints(regions, est.glint_images),
+            regions=with_glints(regions, blur.glints(est.glint_images)),
             interrupted=est.interrupted,
             samples_per_pixel=est.samples_per_pixel,
             light_paths=est.light_paths,
@@ -406,6 +448,7 @@ def render(
             target_reached=est.target_reached,
             rel_error_achieved=est.rel_error_achieved,
             covered_pixels=est.covered_pixels,
+            **_Blur.facts([blur], [est.variance]),
             **extents,
         )
     if estimator != "forward":
@@ -414,8 +457,10 @@ def render(
     kernel_s = warm_up_forward(cs) or None
     t0 = time.perf_counter()
     fc = trace_forward(cs, rays, seed, opt.batch_size, progress)
-    wall = time.perf_counter() - t0
     w = cs.emitted_w / fc.rays
+    image, variance = fc.image * (w / px_area), fc.image * (w / px_area) ** 2
+    blur = _Blur(cs, image)
+    wall = time.perf_counter() - t0
     pl_area = eye_plane.bin_area_mm2
     return RenderResult(
         scene=sc,
@@ -424,8 +469,8 @@ def render(
         seed=seed,
         wall_time_s=wall,
         emitted_w=cs.emitted_w,
-        eye_image=fc.image * (w / px_area),
-        eye_image_variance=fc.image * (w / px_area) ** 2,
+        eye_image=blur.image(image),
+        eye_image_variance=blur.variance(variance),
         eye_plane=fc.plane * (w / pl_area),
         regions=region_masks(cs),
         interrupted=fc.interrupted,
@@ -435,8 +480,39 @@ def render(
         ledger={name: float(n) * w for name, n in zip(cs.tallies, fc.tallies, strict=True)},
         interactions=fc.interactions,
         kernel_load_s=kernel_s,
+        **_Blur.facts([blur], [variance]),
         **extents,
     )
+
+
+class _Blur:
+    """The camera's PSF (:func:`eyelume.detectors.psf.camera_psf`, at the compiled scene's
+    wavelength: a wavelength group's own) applied to a render's traced picture — the one place
+    both estimators' pictures pass through before the sensor. Skipped (``psf_skipped``) when
+    the picture has missing pixels (a cut first round)."""
+
+    def __init__(self, cs: CompiledScene, image: np.ndarray) -> None:
+        psf = camera_psf(cs)
+        self.skipped = psf is not None and not bool(np.all(np.isfinite(image)))
+        self.psf = None if self.skipped else psf
+
+    def image(self, irradiance: np.ndarray) -> np.ndarray:
+        return convolve_irradiance(irradiance, self.psf)
+
+    def variance(self, variance: np.ndarray) -> np.ndarray:
+        return convolve_variance(variance, self.psf)
+
+    def glints(self, glint_images: np.ndarray) -> np.ndarray:
+        """Each LED's glint image (n, rows, cols) convolved alike (for the glint regions)."""
+        if self.psf is None or not len(glint_images):
+            return glint_images
+        return np.stack([self.image(g) for g in glint_images])
+
+    @staticmethod
+    def facts(blurs: list[_Blur], variances: list[np.ndarray]) -> dict:
+        """The RenderResult fields of the PSF: each group's kernel and traced variance."""
+        parts = [(b.psf, v) for b, v in zip(blurs, variances, strict=True) if b.psf is not None]
+        return {"psf_parts": parts or None, "psf_skipped": any(b.skipped for b in blurs)}
 
 
 class _Groups:
@@ -499,7 +575,7 @@ def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> Render
     plane = np.zeros(groups.plane_shape)
     glints = np.zeros((sc.leds.count, *groups.shape))
     skin = groups.regions["skin"]
-    ests, parts, done = [], [], [0]
+    ests, parts, done, blurs = [], [], [0], []
 
     def advance_in(d: int, planned: int) -> None:
         if advance:
@@ -513,22 +589,25 @@ def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> Render
         est = trace_fast(cg, spp, light, sg, opt.rel_error, status, skin, control)
         groups.check_whole(g, est.interrupted)
         plane += direct_eye_plane(cg, sg)
-        glints[list(g.leds)] = est.glint_images
+        blur = _Blur(cg, est.image)  # the group's own wavelength
+        blurs.append(blur)
+        glints[list(g.leds)] = blur.glints(est.glint_images)
         rays = est.samples_per_pixel * pixels + est.light_paths
         done[0] += rays
         ests.append(est)
         parts.append(
-            GroupRender(g.wavelength_nm, g.leds, sg, cg.emitted_w, est.image, est.variance,
-                        rays, est.samples_per_pixel)
+            GroupRender(g.wavelength_nm, g.leds, sg, cg.emitted_w, blur.image(est.image),
+                        blur.variance(est.variance), rays, est.samples_per_pixel)
         )  # fmt: skip
     wall = time.perf_counter() - t0
-    image = sum(e.image for e in ests)
-    variance = sum(e.variance for e in ests)
+    image = sum(p.eye_image for p in parts)
+    variance = sum(p.eye_image_variance for p in parts)
     dof = min(e.variance_dof for e in ests)
     reached = err = None
-    if opt.rel_error is not None:  # the sum's own error, not the groups'
-        m = skin & (image > 0) & np.isfinite(image)
-        e = median_pixel_rel_error(image[m], variance[m], dof) if m.any() else math.inf
+    if opt.rel_error is not None:  # the sum's own error, not the groups' (the traced pictures)
+        traced, traced_var = sum(e.image for e in ests), sum(e.variance for e in ests)
+        m = skin & (traced > 0) & np.isfinite(traced)
+        e = median_pixel_rel_error(traced[m], traced_var[m], dof) if m.any() else math.inf
         reached, err = e <= opt.rel_error, (e if math.isfinite(e) else None)
     return RenderResult(
         scene=sc,
@@ -550,6 +629,7 @@ def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> Render
         rel_error_achieved=err,
         covered_pixels=ests[-1].covered_pixels,
         groups=parts,
+        **_Blur.facts(blurs, [e.variance for e in ests]),
         **groups.extents,
     )
 
@@ -574,6 +654,7 @@ def _groups_forward(groups: _Groups, opt: RenderOptions, progress) -> RenderResu
     plane_counts = np.zeros(groups.plane_shape, dtype=np.int64)
     ledger: dict[str, float] = {}
     parts, interactions, traced, interrupted = [], 0, 0, False
+    blurs, traced_vars = [], []
     px_area, pl_area = groups.areas
     for (g, cg, sg), n in zip(groups, shares, strict=True):
 
@@ -585,7 +666,11 @@ def _groups_forward(groups: _Groups, opt: RenderOptions, progress) -> RenderResu
         groups.check_whole(g, fc.interrupted)
         interrupted = fc.interrupted
         w = cg.emitted_w / fc.rays
-        part, part_var = fc.image * (w / px_area), fc.image * (w / px_area) ** 2
+        traced_var = fc.image * (w / px_area) ** 2
+        blur = _Blur(cg, fc.image)  # the group's own wavelength
+        blurs.append(blur)
+        traced_vars.append(traced_var)
+        part, part_var = blur.image(fc.image * (w / px_area)), blur.variance(traced_var)
         image += part
         variance += part_var
         plane += fc.plane * (w / pl_area)
@@ -618,6 +703,7 @@ def _groups_forward(groups: _Groups, opt: RenderOptions, progress) -> RenderResu
         interactions=interactions,
         kernel_load_s=kernel_s,
         groups=parts,
+        **_Blur.facts(blurs, traced_vars),
         **groups.extents,
     )
 

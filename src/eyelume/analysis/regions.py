@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 
 import numpy as np
 
@@ -101,13 +102,15 @@ def region_stats(
     masks: dict[str, np.ndarray],
     pixel_area_mm2: float,
     dof: int | None = None,
+    mean_variance: Callable[[np.ndarray], float] | None = None,
 ) -> dict[str, dict]:
     """Per region: pixels, mean irradiance (W/mm²) and its relative standard error, the median
     pixel and the median over the region of each pixel's relative standard error; for glints
     also the total flux (W) and its relative standard error.
 
-    ``variance`` is the estimated variance of each pixel's value; pixels are independent
-    estimates, so the variance of a region's mean is Σ variance / n².
+    ``variance`` is the estimated variance of each pixel's value. Independent pixels: the
+    variance of a region's mean is Σ variance / n². Pixels correlated by a point-spread
+    function: ``mean_variance(mask)`` gives it (:func:`eyelume.detectors.psf.region_mean_variance`).
     """
     out = {}
     for name, m in masks.items():
@@ -117,7 +120,10 @@ def region_stats(
             continue
         vals, var = image[m], variance[m]
         mean = float(vals.mean())
-        se = math.sqrt(float(var.sum())) / n
+        if mean_variance is None:
+            se = math.sqrt(float(var.sum())) / n
+        else:
+            se = math.sqrt(mean_variance(m))
         entry = {
             "pixels": n,
             "mean_w_mm2": mean,

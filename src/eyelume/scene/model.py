@@ -658,10 +658,20 @@ class Camera(_Model):
     :mod:`eyelume.scene.pose`: everything is traced in the camera's frame, whose z axis is the
     lens axis. ``body``: the camera's body behind the lens (:class:`CameraBody`; an ideal lens
     has a default one).
+
+    ``psf``: the point-spread function convolved with the traced (geometric) image-plane
+    irradiance before the sensor's electronics (:mod:`eyelume.detectors.psf`):
+    ``"diffraction"``, the Airy pattern of the circular pupil at the scene's wavelength and the
+    camera's working F-number, integrated over the pixels; ``"none"``, the geometric image as
+    traced. Unset: ``"diffraction"`` for an ideal lens (a module whose 3 µm pixels are about
+    one Airy radius: a geometric glint would be one pixel, which no real camera records) and
+    ``"none"`` for a prescription (its trace carries the aberrations, not diffraction; the
+    paper's 530 µm picture bins are ~100 Airy radii, and its render stays bit-identical).
     """
 
     optics: Literal["prescription", "ideal"] = "prescription"
     ideal: IdealLens | None = None
+    psf: Literal["diffraction", "none"] | None = None
     position_mm: Vector3 | None = None
     look_at_mm: Vector3 | None = None
     direction: Vector3 | None = None
@@ -676,6 +686,14 @@ class Camera(_Model):
         if enabled is None:
             enabled = self.optics == "ideal"
         return self.body if enabled else None
+
+    @property
+    def psf_used(self) -> str:
+        """The point-spread function applied: ``psf``, unset → ``"diffraction"`` for an ideal
+        lens, ``"none"`` for a prescription."""
+        if self.psf is not None:
+            return self.psf
+        return "diffraction" if self.optics == "ideal" else "none"
 
     @model_validator(mode="after")
     def _one_view(self) -> Camera:
