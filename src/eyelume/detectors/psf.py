@@ -258,11 +258,18 @@ def camera_psf(cs: CompiledScene) -> PixelPsf | None:
 
 
 def _zero_padded(a: np.ndarray, kernel: np.ndarray) -> np.ndarray:
-    """a ⊗ kernel (odd, centred), zero outside ``a``, same shape; by FFT, its round-off
-    (~1e-16 of the largest value) clipped at zero (every input and kernel here is ≥ 0)."""
+    """a ⊗ kernel (odd, centred), zero outside ``a``, same shape; by FFT. Its round-off (~1e-16
+    of the largest value, of either sign) is clipped at zero (every input and kernel here is
+    ≥ 0) and removed where no non-zero input is within the kernel's reach, so a dark pixel
+    away from all light stays exactly 0."""
     if kernel.shape == (1, 1):
         return a * kernel[0, 0]
-    return np.maximum(signal.fftconvolve(a, kernel, mode="same"), 0.0)
+    out = np.maximum(signal.fftconvolve(a, kernel, mode="same"), 0.0)
+    # how many non-zero inputs each output sees through the kernel's footprint (integers: the
+    # FFT's error is far below ½)
+    seen = signal.fftconvolve((a != 0).astype(np.float64), (kernel > 0).astype(np.float64), "same")
+    out[seen < 0.5] = 0.0
+    return out
 
 
 def _weights(shape: tuple[int, int], kernel: np.ndarray) -> np.ndarray:
