@@ -156,7 +156,7 @@ REF = Path(__file__).parents[1] / "reference" / "vr_offaxis_small_seed3.npz"
 
 def test_psf_none_reproduces_the_render_before_the_psf():
     """``camera.psf = "none"`` is the render as it was before the PSF existed: the arrays of
-    ``tests/reference/vr_offaxis_small_seed3.npz``, rendered by commit 06e17de (vr-offaxis at 80
+    ``tests/reference/vr_offaxis_small_seed3.npz``, rendered by commit 88e872f (vr-offaxis at 80
     × 80 pixels of 15 µm, fast 4 samples/pixel and forward 300 000 rays, seed 3), to 1e-9
     relative as tests/test_bit_identity.py."""
     ref = np.load(REF)
