@@ -342,7 +342,7 @@ def test_partial_mirror_then_cornea_is_the_glint_of_the_led_mirror_image():
     ref = compile_scene(
         eyelume.load_scene("paper2005", {**ONE_LED, "leds.directions": [[0.0, 0.0, -1.0]]})
     )
-    expect = _glint_truth(_view(ref, ref.camera), 0, image)["centre_px"]
+    expect = _glint_truth(_view(ref, ref.camera), 0, image, 0)["centre_px"]
     assert np.hypot(*(np.array(g["centre_px"]) - expect)) < 1e-6  # px: both exact
     # the LED sends nothing toward the eye itself: no glint of its own to compare with
     assert g["relative_to_glint"] is None

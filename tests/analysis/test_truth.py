@@ -81,3 +81,19 @@ def test_head_offset_moves_the_pupil_by_the_magnified_offset():
     dy = moved["pupil"]["centre_px"][1] - base[1]
     expected = 2.0 * 1.144 / (46.0 / 87)
     assert dx == pytest.approx(expected, rel=0.02) and dy == pytest.approx(expected, rel=0.02)
+
+
+def test_a_glint_the_led_sends_no_light_to_is_not_visible(tmp_path):
+    """A glint is 'visible' only where the LED's profile sends light toward the cornea: with a
+    profile that is zero beyond 0.5° from the axis (a table), no glint's emission direction lies
+    inside it, so none is visible and each says why; the same LEDs with the paper's profile show
+    theirs. The glints' positions do not depend on the profile."""
+    table = tmp_path / "pencil.csv"
+    table.write_text("angle,rel\n0,1\n0.5,0\n90,0\n", encoding="utf-8")
+    pencil = {"leds.profile.kind": "table", "leds.profile.table_csv": str(table)}
+    lit = eye_truth(compile_scene(eyelume.load_scene("paper2005")))["glints"]
+    dark = eye_truth(compile_scene(eyelume.load_scene("paper2005", pencil)))["glints"]
+    assert all(g["visible"] for g in lit)
+    for a, b in zip(lit, dark, strict=True):
+        assert b["centre_px"] == a["centre_px"]
+        assert not b["visible"] and "sends no light" in b["reason"], b

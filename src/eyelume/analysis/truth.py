@@ -257,9 +257,10 @@ def _pupil_truth(v: _View, pupil_c: np.ndarray) -> dict:
     }
 
 
-def _glint_truth(v: _View, k: int, led: np.ndarray) -> dict:
-    """LED ``k``'s glint: the pixel whose chief ray the cornea reflects to the LED, and whether
-    the way in and out is clear."""
+def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
+    """LED ``k``'s glint (row ``row`` of the compiled LED table): the pixel whose chief ray the
+    cornea reflects to the LED, and whether the way in and out is clear and the LED sends light
+    that way (its profile I(α) > 0 toward the cornea)."""
     cs, cam, cornea = v.cs, v.cam, v.cornea
     to_led = led - v.turned(np.array([0.0, 0.0, -cs.scene.eye.surfaces[0].radius_mm]))
     n = to_led / np.linalg.norm(to_led)
@@ -290,8 +291,15 @@ def _glint_truth(v: _View, k: int, led: np.ndarray) -> dict:
         cs.surface_names.index(f"LED {k} body"),
         -1,
     )
-    entry["visible"] = not (blocked_in or blocked_out)
-    entry["reason"] = "" if entry["visible"] else "blocked (an eyelid or the face)"
+    dark = hit is not None and float(radiant_intensity(cs.led, row, *(-hit[1]))) <= 0.0
+    entry["visible"] = not (blocked_in or blocked_out or dark)
+    entry["reason"] = (
+        ""
+        if entry["visible"]
+        else "the LED sends no light this way (beyond its angular profile)"
+        if dark and not (blocked_in or blocked_out)
+        else "blocked (an eyelid or the face)"
+    )
     return entry
 
 
@@ -355,7 +363,10 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
     eye = cs.scene.eye
     depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
     ids = cs.led_indices  # a wavelength group's compile: its LEDs' scene indices
-    glints = [_glint_truth(v, k, led) for k, led in zip(ids, cs.led.points, strict=True)]
+    glints = [
+        _glint_truth(v, k, led, row)
+        for row, (k, led) in enumerate(zip(ids, cs.led.points, strict=True))
+    ]
     in_view = [
         _led_in_view(v, k, led, row)
         for row, (k, led) in enumerate(zip(ids, cs.led.points, strict=True))
