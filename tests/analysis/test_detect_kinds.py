@@ -352,3 +352,21 @@ def test_enlargement_factor_finds_nearest_neighbour_blocks_only():
     f = np.kron(closeup(), np.ones((2, 2)))
     f[10:12, 20:22] = np.nan  # NaN pixels, enlarged with the rest
     assert enlargement_factor(f) == 2
+
+
+def test_black_sliver_of_skin_is_refused_not_the_pupil():
+    """A black strip 4 px wide and 22 px long in the skin (drawn at 75°), the only dark thing
+    in a picture without a pupil — like the strip no light reaches beside a lid in vr-offaxis
+    at (30°, 20°): its fitted outline is ~40 × 3.7 px (axis ratio ~0.09), thinner than any
+    pupil an eye camera sees (``pupil_min_axis_ratio``, 0.25 = cos 75.5°). It was answered
+    ``ok`` as the pupil, 63 px from where the pupil would be; now the named refusal. With the
+    pupil there too, the pupil is answered."""
+    canvas = np.zeros((SIZE * 4, SIZE * 4), np.uint8)
+    end = (30 + 22 * math.cos(math.radians(75)), 130 - 22 * math.sin(math.radians(75)))
+    cv2.line(canvas, (120, 520), (int(4 * end[0]), int(4 * end[1])), 255, 16)
+    strip = cv2.resize(canvas.astype(np.float32) / 255, (SIZE, SIZE), interpolation=cv2.INTER_AREA)
+    no_pupil = closeup(pupil=150.0, iris=150.0, iris_radius=1.0) * (1.0 - strip)
+    d = detect(u8(no_pupil))
+    assert not d.ok and d.pupil is None, d
+    assert d.failures[0].startswith("no pupil: the dark blob is a sliver"), d.failures
+    assert_pupil(detect(u8(closeup() * (1.0 - strip))))

@@ -135,6 +135,12 @@ class DetectParams:
         "pupil too small" when nothing larger is found.
     pupil_min_solidity : area / convex-hull area of the closed blob (0.8); an ellipse, even cut
         by an eyelid, is convex (1); lashes and shadows are not.
+    pupil_min_axis_ratio : the fitted ellipse's minor / major axis (0.25): a circular pupil seen
+        θ off its axis is foreshortened to about cos θ (the cornea's refraction makes it rounder
+        still), and an eye camera sees it at most ~75° off (cos 75.5° = 0.25: the off-axis
+        presets' most oblique pupil, vr-offaxis at (−30°, 10°), fits 0.33). A thinner dark blob
+        — a black strip of skin beside a lid, a lash, a fold — is refused as a sliver and the
+        next candidate fitted.
     pupil_min_contrast_sigma, pupil_min_contrast : the surround's median must exceed the
         pupil's by 5 σ of the pixel noise (a 5 σ step is not noise) and by 3 % of the robust
         range (a guess at the smallest step a camera's shading and vignetting do not make).
@@ -237,6 +243,7 @@ class DetectParams:
     pupil_tiny_area_px: int = 6
     pupil_max_area_frac: float = 0.10
     pupil_min_solidity: float = 0.8
+    pupil_min_axis_ratio: float = 0.25
     pupil_min_contrast_sigma: float = 5.0
     pupil_min_contrast: float = 0.03
     closing_kernel_px: int | None = None

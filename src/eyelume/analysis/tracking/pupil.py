@@ -53,7 +53,9 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
 6. **Robust fit** (:func:`_robust_fit`): ``cv2.fitEllipse`` on the edge points; when more than
    5 % lie off it, the best of fits to contiguous runs of the outline, so an eyelid's edge or a
    lash drops out. The inlier tolerance scales with the pupil: max(1 px, 3σ_edge, 0.03 ×
-   its diameter).
+   its diameter). A fit smaller than ``pupil_min_area_px`` is refused ("pupil too small"), one
+   thinner than ``pupil_min_axis_ratio`` (0.25 = cos 75.5°) as a sliver (a black strip of
+   skin beside a lid), and the next candidate is fitted.
 7. **Support** (:func:`support_of`): the fraction of the ellipse's outline backed by inlier
    edge points and its longest unbacked arc: a lid or the border hides one long arc, a ragged
    real edge leaves short gaps.
@@ -1067,14 +1069,9 @@ def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, p
         if e2 is None:
             break
         e, inl, sigma, xr, yr = e2, inl2, sigma2, x2[ok2], y2[ok2]
-    fitted_area = math.pi * e.a * e.b
-    if fitted_area < params.pupil_min_area_px:
-        return PupilFit(
-            None,
-            reason=f"pupil too small: {fitted_area:.0f} px inside its fitted outline (a pupil "
-            f"needs ≥ {params.pupil_min_area_px} px)",
-            dropped=dropped,
-        )
+    implausible = _implausible(e, params)
+    if implausible:
+        return PupilFit(None, reason=implausible, dropped=dropped)
     d = sampson_distance(e, xr[inl], yr[inl])
     dropped["outlier"] = int((~inl).sum())
     span = wp.hi - wp.lo
@@ -1092,6 +1089,27 @@ def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, p
         dropped=dropped,
         threshold=wp.to_input(blob.level),
     )
+
+
+def _implausible(e: Ellipse, params) -> str | None:
+    """Why a fitted ellipse cannot be a pupil, or None: smaller than ``pupil_min_area_px``
+    inside its outline ("pupil too small"), or thinner than ``pupil_min_axis_ratio`` (a
+    sliver: a black strip of skin beside a lid, a lash, a fold)."""
+    fitted_area = math.pi * e.a * e.b
+    if fitted_area < params.pupil_min_area_px:
+        return (
+            f"pupil too small: {fitted_area:.0f} px inside its fitted outline (a pupil "
+            f"needs ≥ {params.pupil_min_area_px} px)"
+        )
+    major, minor = 2 * max(e.a, e.b), 2 * min(e.a, e.b)
+    if minor < params.pupil_min_axis_ratio * major:
+        return (
+            f"no pupil: the dark blob is a sliver, {major:.1f} × {minor:.1f} px (axis ratio "
+            f"{minor / major:.2f}; a pupil seen up to "
+            f"{math.degrees(math.acos(params.pupil_min_axis_ratio)):.0f}° off its axis has "
+            f"≥ {params.pupil_min_axis_ratio:.2f})"
+        )
+    return None
 
 
 def _fit_candidates(img, wp, picks, f: int, bright, params, reasons: list[str]):
