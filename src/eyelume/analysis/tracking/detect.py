@@ -80,7 +80,12 @@ from dataclasses import asdict, dataclass, field
 import cv2
 import numpy as np
 
-from eyelume.analysis.tracking.glints import default_max_angle, find_glints, match_leds
+from eyelume.analysis.tracking.glints import (
+    default_max_angle,
+    find_glints,
+    match_leds,
+    match_pattern,
+)
 from eyelume.analysis.tracking.pupil import (
     find_pupil,
     noise_sigma,
@@ -607,7 +612,8 @@ def _assign_leds(centres: np.ndarray, led_azimuths_deg, max_ang: float):
 def _match_glints(
     glints: list[Glint], led_azimuths_deg, params, pattern=None
 ) -> tuple[list[str], list[int]]:
-    """Step 5b: each glint's LED (in place, :func:`_assign_leds`); the messages and the LEDs
+    """Step 5b: each glint's LED (in place, :func:`_assign_leds`, or with ``pattern`` and ≥ 3
+    glints :func:`~.glints.match_pattern` when it matches as many); the messages and the LEDs
     left without a glint: an error when fewer than ``min_matched_glints`` (or, with fewer
     LEDs, all of them) are matched or when the matched do not fit the LEDs' pattern
     (:func:`_pattern_misfit`), else a warning."""
@@ -617,6 +623,13 @@ def _match_glints(
     if max_ang is None:
         max_ang = default_max_angle(led_azimuths_deg)
     leds, ambiguous, between = _assign_leds(centres, led_azimuths_deg, max_ang)
+    if pattern is not None and len(centres) >= 3:
+        # The predicted layout (an off-axis camera's glints are a distorted ring, whose
+        # directions from its centre are not the LEDs' azimuths): used when it matches at
+        # least as many glints (glints.match_pattern; two glints fit any two of its points).
+        by_pattern = match_pattern(centres, pattern)
+        if sum(k is not None for k in by_pattern) >= sum(k is not None for k in leds):
+            leds, ambiguous, between = by_pattern, "", []
     for g, k in zip(glints, leds, strict=True):
         g.led = k
     matched = {g.led for g in glints if g.led is not None}
@@ -696,8 +709,10 @@ def detect(
     valid : optional (rows, cols) bool, True where the picture shows the eye (e.g. inside a
         headset's lens); dark regions touching the rest are never the pupil.
     led_pattern_px : optional (k, 2) px, each LED's glint relative to the glints' centre as
-        predicted (:func:`~.evaluate.led_picture_pattern`); with LEDs missing the matched
-        glints must fit it (:func:`_pattern_misfit`), else a ring of the azimuths.
+        predicted (:func:`~.evaluate.led_picture_pattern`); with ≥ 3 glints they are matched
+        to it (:func:`~.glints.match_pattern`) when that matches at least as many as the
+        azimuths do; with LEDs missing the matched glints must fit it
+        (:func:`_pattern_misfit`), else a ring of the azimuths.
     params : :class:`DetectParams`.
 
     Raises

@@ -50,6 +50,7 @@ __all__ = [
     "glint_threshold",
     "saturated_floor",
     "match_leds",
+    "match_pattern",
     "default_max_angle",
 ]
 
@@ -287,3 +288,91 @@ def match_leds(
             break
         ref = sol[:2]
     return (out, ref) if with_reference else out
+
+
+def _pattern_start(gc, pc, spacing, gate_frac, min_scale, max_rotation_deg):
+    """The similarity (t, z) that two glints and two LEDs define exactly (complex x + i y),
+    over every such choice with |z| in [min_scale, 1 / min_scale] and |arg z| within
+    max_rotation_deg, putting the most glints within the gate (ties: least summed distance);
+    None when no choice is allowed."""
+    n, k = len(gc), len(pc)
+    j1, j2 = np.nonzero(~np.eye(n, dtype=bool))
+    k1, k2 = np.nonzero(~np.eye(k, dtype=bool))
+    z = (gc[j1][:, None] - gc[j2][:, None]) / (pc[k1][None, :] - pc[k2][None, :])
+    t = (gc[j1][:, None] - z * pc[k1][None, :]).ravel()
+    z = z.ravel()
+    s = np.abs(z)
+    ok = (s >= min_scale) & (s <= 1.0 / min_scale)
+    ok &= np.abs(np.degrees(np.angle(z))) <= max_rotation_deg
+    if not ok.any():
+        return None
+    z, t, s = z[ok], t[ok], s[ok]
+    near = np.abs(gc[None, :, None] - (t[:, None, None] + z[:, None, None] * pc)).min(axis=2)
+    inside = near <= (gate_frac * spacing * s)[:, None]
+    best = np.lexsort((np.where(inside, near, 0.0).sum(axis=1), -inside.sum(axis=1)))[0]
+    return t[best], z[best]
+
+
+def match_pattern(
+    centres: np.ndarray,
+    pattern_px: np.ndarray,
+    gate_frac: float = 0.35,
+    min_scale: float = 0.5,
+    max_rotation_deg: float = 30.0,
+    iterations: int = 6,
+) -> list[int | None]:
+    """LED index for each glint centre (n, 2) px, or ``None``, by the glints' predicted layout.
+
+    ``pattern_px`` (k, 2) px holds where each LED's glint is expected relative to the glints'
+    centre (:func:`~.evaluate.led_picture_pattern`: for an off-axis camera a foreshortened,
+    distorted ring, whose directions from its centre are not the LEDs' azimuths). The glints
+    are matched to its points moved by a similarity transform, g_k ≈ t + z p_k (complex
+    notation x + i y: t the shift, z = s e^{iθ} the scale s and rotation θ). Start: the
+    transform two glints and two LEDs define exactly, over every such choice with s in
+    [``min_scale``, 1 / ``min_scale``] and |θ| ≤ ``max_rotation_deg``, that puts the most
+    glints within the gate. Then, until the matching stands: the Hungarian assignment
+    (``scipy.optimize.linear_sum_assignment``) on the distances |g_j − (t + z p_k)| (capped at
+    twice the gate, so far strays do not weigh), pairs beyond the gate left unmatched, and
+    t, z refitted to the matched pairs (least squares). The gate is ``gate_frac`` × s × the
+    smallest distance between two pattern points: within it a glint is nearer its own LED's
+    point than any other's (``gate_frac`` < 0.5), so a stray or a lost glint does not shift
+    the others' LEDs. Fewer than two glints or LEDs: none matched (no transform to tell).
+
+    >>> match_pattern(np.array([[11.0, 5.0], [5.0, 0.0], [50.0, 50.0], [5.0, 10.0]]),
+    ...               np.array([[5.0, 0.0], [0.0, -5.0], [-5.0, 0.0], [0.0, 5.0]]))
+    [0, 1, None, 3]
+    """
+    g = np.asarray(centres, float).reshape(-1, 2)
+    p_xy = np.asarray(pattern_px, float).reshape(-1, 2)
+    n, k = len(g), len(p_xy)
+    out: list[int | None] = [None] * n
+    if n < 2 or k < 2:
+        return out
+    gc = g[:, 0] + 1j * g[:, 1]
+    pc = p_xy[:, 0] + 1j * p_xy[:, 1]
+    spacing = float(np.abs(pc[:, None] - pc[None, :])[~np.eye(k, dtype=bool)].min())
+    if not spacing > 0:
+        return out  # two LEDs' glints predicted at one place: they cannot be told apart
+    tz = _pattern_start(gc, pc, spacing, gate_frac, min_scale, max_rotation_deg)
+    if tz is None:
+        return out
+    for _ in range(iterations):
+        dist = np.abs(gc[:, None] - (tz[0] + tz[1] * pc)[None, :])
+        lim = gate_frac * spacing * abs(tz[1])
+        rows, cols = linear_sum_assignment(np.minimum(dist, 2.0 * lim))
+        new: list[int | None] = [None] * n
+        for r, c in zip(rows, cols, strict=True):
+            if dist[r, c] <= lim:
+                new[int(r)] = int(c)
+        if new == out:
+            break
+        out = new
+        pairs = [(jj, kk) for jj, kk in enumerate(out) if kk is not None]
+        if len(pairs) < 2:
+            break
+        a = np.column_stack([np.ones(len(pairs)), pc[[kk for _, kk in pairs]]])
+        sol = np.linalg.lstsq(a, gc[[jj for jj, _ in pairs]], rcond=None)[0]
+        if not (np.isfinite(sol).all() and abs(sol[1]) > 0):
+            break
+        tz = (sol[0], sol[1])
+    return out
