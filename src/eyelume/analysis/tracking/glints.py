@@ -31,6 +31,9 @@
   move it), then the centre of the LED pattern the matched glints fit — their centroid when
   all are there, unbiased when one is lost (:func:`match_leds`). Not the pupil centre: with
   the eye turned the glints' pattern moves off it by more than its own size.
+  An off-axis camera sees the LEDs' glints as a foreshortened, distorted ring whose
+  directions from its centre are not the azimuths: there the glints are matched to the
+  predicted layout itself by a fitted shift, scale and rotation (:func:`match_pattern`).
 """
 
 from __future__ import annotations
