@@ -370,3 +370,23 @@ def test_black_sliver_of_skin_is_refused_not_the_pupil():
     assert not d.ok and d.pupil is None, d
     assert d.failures[0].startswith("no pupil: the dark blob is a sliver"), d.failures
     assert_pupil(detect(u8(closeup() * (1.0 - strip))))
+
+
+def test_a_blob_dark_on_one_side_only_is_refused():
+    """The surround check (``surround_sector_min``) on a made-up ellipse: a dark ellipse in
+    brighter surround all round passes (a pupil in its iris); with the picture black beyond
+    one side of it (the strip no light reaches beside a lid, vr-offaxis (20°, 0°) before the
+    PSF, answered 77 px off), that sector is at the blob's own level and it is refused."""
+    from eyelume.analysis.tracking.detect import DetectParams
+    from eyelume.analysis.tracking.pupil import Ellipse, _one_sided, work_picture
+
+    img = np.full((100, 100), 150.0)
+    cv2.ellipse(img, ((50.0, 50.0), (30.0, 15.0), 20.0), 40.0, -1)
+    e = Ellipse(50.0, 50.0, 15.0, 7.5, math.radians(20.0))
+    none = np.zeros((100, 100), np.uint8)
+    params = DetectParams()
+    wp = work_picture(img, None, none, params)
+    assert _one_sided(img, wp, e, 40.0, none, params) is None
+    img[:, 62:] = 40.0  # the picture as dark as the blob beyond its right-hand end
+    wp = work_picture(img, None, none, params)
+    assert "dark on one side only" in _one_sided(img, wp, e, 40.0, none, params)

@@ -146,6 +146,12 @@ class DetectParams:
         presets' most oblique pupil, vr-offaxis at (−30°, 10°), fits 0.33). A thinner dark blob
         — a black strip of skin beside a lid, a lash, a fold — is refused as a sliver and the
         next candidate fitted.
+    surround_sector_ring, surround_sectors, surround_sector_min : the fitted ellipse's ring
+        from 1.15 to 1.5 × its outline, cut into 8 sectors of equal angle: each sector's median
+        must be above the pupil's level by 0.3 of the whole ring's step, else the blob is
+        refused as dark on one side only (a black strip beside a lid: 0.16 on vr-offaxis at
+        (20°, 0°) before the PSF; the presets' real pupils, lid-cut too, ≥ 0.65). A guess
+        between those, checked on the real close-ups (benchmarks/detect_real.py).
     pupil_min_contrast_sigma, pupil_min_contrast : the surround's median must exceed the
         pupil's by 5 σ of the pixel noise (a 5 σ step is not noise) and by 3 % of the robust
         range (a guess at the smallest step a camera's shading and vignetting do not make).
@@ -249,6 +255,9 @@ class DetectParams:
     pupil_max_area_frac: float = 0.10
     pupil_min_solidity: float = 0.8
     pupil_min_axis_ratio: float = 0.25
+    surround_sector_ring: tuple[float, float] = (1.15, 1.5)
+    surround_sectors: int = 8
+    surround_sector_min: float = 0.3
     pupil_min_contrast_sigma: float = 5.0
     pupil_min_contrast: float = 0.03
     closing_kernel_px: int | None = None

@@ -1069,7 +1069,7 @@ def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, p
         if e2 is None:
             break
         e, inl, sigma, xr, yr = e2, inl2, sigma2, x2[ok2], y2[ok2]
-    implausible = _implausible(e, params)
+    implausible = _implausible(e, params) or _one_sided(img, wp, e, pupil_level, bright, params)
     if implausible:
         return PupilFit(None, reason=implausible, dropped=dropped)
     d = sampson_distance(e, xr[inl], yr[inl])
@@ -1108,6 +1108,46 @@ def _implausible(e: Ellipse, params) -> str | None:
             f"{minor / major:.2f}; a pupil seen up to "
             f"{math.degrees(math.acos(params.pupil_min_axis_ratio)):.0f}° off its axis has "
             f"≥ {params.pupil_min_axis_ratio:.2f})"
+        )
+    return None
+
+
+def _one_sided(img, wp: WorkPicture, e: Ellipse, pupil_level: float, bright, params) -> str | None:
+    """Why a fitted ellipse is dark on one side only, or None: the ring between
+    ``surround_sector_ring`` (1.15–1.5) × the ellipse outside it is cut into
+    ``surround_sectors`` (8) equal angles about its centre, and each sector's median (off
+    glints and invalid pixels) must exceed the pupil's level by ``surround_sector_min`` (0.3)
+    of the whole ring's step. A pupil is surrounded by iris all round (a lid over it is skin,
+    brighter still); a dark strip beside a lid or a fold has a dark side."""
+    r0, r1 = params.surround_sector_ring
+    rows, cols = img.shape
+    reach = r1 * max(e.a, e.b) + 2
+    x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
+    y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
+    yy, xx = np.mgrid[y0:y1, x0:x1]
+    u, v = e.local(xx.astype(np.float64), yy.astype(np.float64))
+    rho = np.hypot(u / e.a, v / e.b)
+    ring = (rho > r0) & (rho < r1) & (bright[y0:y1, x0:x1] == 0)
+    if wp.invalid is not None:
+        ring &= ~wp.invalid[y0:y1, x0:x1]
+    if not ring.any():
+        return None
+    sub = img[y0:y1, x0:x1]
+    step = median(sub[ring]) - pupil_level
+    if step <= 0:
+        return None
+    n = params.surround_sectors
+    k = ((np.arctan2(v / e.b, u / e.a) + math.pi) / (2 * math.pi) * n).astype(int) % n
+    worst = min(
+        (median(sub[ring & (k == i)]) - pupil_level) / step
+        for i in range(n)
+        if (ring & (k == i)).sum() >= 3
+    )
+    if worst < params.surround_sector_min:
+        return (
+            f"no pupil: the dark blob at ({e.cx:.0f}, {e.cy:.0f}) px is dark on one side only "
+            f"(its darkest surround sector is {worst:.2f} of the surround's step above it, "
+            f"need {params.surround_sector_min:.2f}: a strip beside a lid or a fold?)"
         )
     return None
 
