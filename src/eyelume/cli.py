@@ -797,12 +797,18 @@ def _parse_leds(leds: str | None) -> list[float] | None:
     if leds is None:
         return None
     try:
-        az = [float(v) for v in leds.split(",") if v.strip()]
+        az = [float(v) for v in leds.split(",")]
     except ValueError:
         az = []
     if not az or not all(math.isfinite(v) for v in az):
         raise OptionError(
             f"--leds {leds!r}: expected comma-separated finite degrees, e.g. 0,90,180,270"
+        )
+    seen = [round(v % 360.0, 9) % 360.0 for v in az]
+    if len(set(seen)) != len(seen):
+        raise OptionError(
+            f"--leds {leds!r}: two LEDs at the same azimuth (modulo 360°): each LED's glint is "
+            "told apart by its direction"
         )
     return az
 

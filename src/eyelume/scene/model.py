@@ -273,6 +273,22 @@ class LedArray(_Model):
         return data
 
     @model_validator(mode="after")
+    def _emitter_within_body(self) -> LedArray:
+        """The emitting area sits inside the LED's package: an emitter wider than the body is a
+        unit slip (µm for mm) that would make the retinal hazard look far smaller."""
+        for k, (e, b) in enumerate(
+            zip(self.emitter_diameters_mm(), self.body_radii_mm(), strict=True)
+        ):
+            if e > 2 * b:
+                item = f"[{k}]" if isinstance(self.emitter_diameter_mm, list) else ""
+                raise ValueError(
+                    f"emitter_diameter_mm{item} = {e:g} is wider "
+                    f"than the LED's body (body_diameter_mm = {2 * b:g}): the emitting area "
+                    "lies inside the package (a size in µm given as mm?)"
+                )
+        return self
+
+    @model_validator(mode="after")
     def _azimuths_match_count(self) -> LedArray:
         ring = self.positions_mm is None
         if ring and self.azimuths_deg is not None and len(self.azimuths_deg) != self.count:
@@ -911,6 +927,13 @@ class ElementSurface(_Model):
     radius_mm: Radius = math.inf
     conic: float = Field(0.0, ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)
     coating: Coating | None = None
+
+    @field_validator("radius_mm")
+    @classmethod
+    def _radius_not_zero(cls, v: float) -> float:
+        if v == 0.0:
+            raise ValueError("0 is no radius of curvature: a plane is inf (or leave it unset)")
+        return v
 
     def sag_mm(self, r: float) -> float:
         """Sag z(r) (mm) of the surface at radial distance r (NaN beyond the conicoid)."""
