@@ -97,3 +97,28 @@ def test_a_glint_the_led_sends_no_light_to_is_not_visible(tmp_path):
     for a, b in zip(lit, dark, strict=True):
         assert b["centre_px"] == a["centre_px"]
         assert not b["visible"] and "sends no light" in b["reason"], b
+
+
+def test_nothing_is_visible_behind_an_opaque_element():
+    """A plate with R = T = 0 between the eye and the camera passes no light: the truth keeps the
+    positions but sees neither the pupil nor any glint (a fresh user found them all 'visible'
+    while the render put 0 W on the sensor); a clear plate there keeps them visible."""
+    plate = (
+        '{kind="plate", position_mm=[0,0,40], thickness_mm=1, glass="N-BK7", semi_diameter_mm=25%s}'
+    )
+    black = ', front={coating={model="fixed", reflectance=0, transmittance=0}}'
+    seen = {}
+    for name, extra in (("clear", ""), ("black", black)):
+        sc = eyelume.load_scene("paper2005", {"elements": [_toml_table(plate % extra)]})
+        seen[name] = eye_truth(compile_scene(sc), ghosts=False)
+    assert seen["clear"]["pupil"]["visible_fraction"] > 0.9
+    assert all(g["visible"] for g in seen["clear"]["glints"])
+    assert seen["black"]["pupil"]["visible_fraction"] == 0.0
+    for g in seen["black"]["glints"]:
+        assert not g["visible"] and "opaque element" in g["reason"], g
+
+
+def _toml_table(text: str) -> dict:
+    import tomllib
+
+    return tomllib.loads(f"t = {text}")["t"]

@@ -59,16 +59,20 @@ def sensor_to_pixel(cs: CompiledScene, xs: float, ys: float) -> tuple[float, flo
     return float(c), float(r)
 
 
-def _chief_ray(cs: CompiledScene, cam: CameraTables, xs: float, ys: float, target=None):
+def _chief_ray(
+    cs: CompiledScene, cam: CameraTables, xs: float, ys: float, target=None, share=False
+):
     """The chief ray of sensor point (xs, ys) in the scene, past the optical elements it meets
-    first (:func:`_through_elements`; before ``target`` when given), or None."""
+    first (:func:`_through_elements`; before ``target`` when given), or None; with ``share``
+    also the power share its element branches pass (:func:`_element_path`)."""
     chief = aim_chief(cam, xs, ys)
     if not chief.found:
         return None
     ok, x, y, z, dx, dy, dz, _ = into_scene(cam, xs, ys, chief.qx, chief.qy)
     if not ok:
         return None
-    return _through_elements(cs, np.array([x, y, z]), np.array([dx, dy, dz]), target)
+    p, d, w = _element_path(cs, np.array([x, y, z]), np.array([dx, dy, dz]), target)
+    return (p, d, w) if share else (p, d)
 
 
 _ELEMENT_EVENTS = 16  # element surfaces a truth ray may cross or be folded by
@@ -80,8 +84,15 @@ def _through_elements(cs: CompiledScene, p: np.ndarray, d: np.ndarray, target=No
     element surface the stronger branch — refracted when T ≥ R (a window, a lens), reflected
     when R > T (a mirror, a hot mirror) or on total internal reflection — the path an image
     seen through or in the elements takes. A scene without elements: (p, d) unchanged."""
+    return _element_path(cs, p, d, target)[:2]
+
+
+def _element_path(cs: CompiledScene, p: np.ndarray, d: np.ndarray, target=None):
+    """:func:`_through_elements`'s ray and the share of the power its branches carry (the
+    product of their T or R: 0 behind an opaque element, 1 without elements)."""
+    share = 1.0
     if not cs.scene.elements:
-        return p, d
+        return p, d, share
     for _ in range(_ELEMENT_EVENTS):
         s, t = G.nearest_hit(cs.sf, cs.si, *p, *d)
         if s < 0 or not cs.surface_names[s].startswith("element "):
@@ -89,8 +100,9 @@ def _through_elements(cs: CompiledScene, p: np.ndarray, d: np.ndarray, target=No
         if target is not None and t > (target - p) @ d:
             break
         p = p + t * d
-        d, _ = _stronger_branch(cs, s, p, d)
-    return p, d
+        d, w = _stronger_branch(cs, s, p, d)
+        share *= w
+    return p, d, share
 
 
 def _stronger_branch(cs: CompiledScene, s: int, p: np.ndarray, d: np.ndarray):
@@ -245,8 +257,8 @@ def _pupil_truth(v: _View, pupil_c: np.ndarray) -> dict:
         if s is None:
             continue
         edge.append(sensor_to_pixel(cs, *s))
-        ray = _chief_ray(cs, v.cam, *s)
-        if ray is not None and _clear(cs, ray[0], ray[1], v.cornea):
+        ray = _chief_ray(cs, v.cam, *s, share=True)
+        if ray is not None and ray[2] > 0.0 and _clear(cs, ray[0], ray[1], v.cornea):
             seen += 1
     return {
         "centre_mm": cs.frame.world_point(pupil_c).tolist(),
@@ -282,14 +294,21 @@ def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
         return entry
     entry["on_cornea"] = True
     entry["centre_px"] = list(sensor_to_pixel(cs, *s))
-    ray = _chief_ray(cs, cam, *s)
+    *ray, share_in = _chief_ray(cs, cam, *s, share=True)
     hit = _off_cornea(cs, cornea, *ray)
+    share_out = 1.0
     if hit is not None:
-        hit = _through_elements(cs, *hit, led)
-    blocked_in = not _clear(cs, ray[0], ray[1], cornea)
-    blocked_out = hit is None or G.nearest_hit(cs.sf, cs.si, *hit[0], *hit[1])[0] not in (
-        cs.surface_names.index(f"LED {k} body"),
-        -1,
+        *hit, share_out = _element_path(cs, *hit, led)
+    blocked_in = share_in <= 0.0 or not _clear(cs, ray[0], ray[1], cornea)
+    blocked_out = share_out <= 0.0
+    blocked_out = (
+        blocked_out
+        or hit is None
+        or G.nearest_hit(cs.sf, cs.si, *hit[0], *hit[1])[0]
+        not in (
+            cs.surface_names.index(f"LED {k} body"),
+            -1,
+        )
     )
     dark = hit is not None and float(radiant_intensity(cs.led, row, *(-hit[1]))) <= 0.0
     entry["visible"] = not (blocked_in or blocked_out or dark)
@@ -298,7 +317,7 @@ def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
         if entry["visible"]
         else "the LED sends no light this way (beyond its angular profile)"
         if dark and not (blocked_in or blocked_out)
-        else "blocked (an eyelid or the face)"
+        else "blocked (an eyelid, the face or an opaque element)"
     )
     return entry
 
