@@ -11,8 +11,6 @@ element (a sampled test: a few hundred points per element, good to about sd/16).
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from pathlib import Path
 
@@ -20,7 +18,7 @@ import numpy as np
 
 from eyelume.errors import InputFileError
 from eyelume.scene.model import Element
-from eyelume.scene.textfile import read_text_file
+from eyelume.scene.textfile import read_csv_rows
 
 __all__ = [
     "crosses_surfaces",
@@ -127,18 +125,7 @@ def read_reflectance_table(path: str, field: str) -> tuple[np.ndarray, np.ndarra
         One line naming the file, ``field`` and the bad row or value.
     """
     where = Path(path)
-    try:
-        text = read_text_file(where, InputFileError)
-    except InputFileError as exc:
-        raise InputFileError(exc.message, field=field) from None
-    try:
-        rows = [
-            r
-            for r in csv.reader(io.StringIO(text.lstrip("\ufeff")))
-            if r and "".join(r).strip() and not r[0].lstrip().startswith("#")
-        ]
-    except csv.Error as exc:
-        raise InputFileError(f"not a CSV table ({exc})", file=where, field=field) from None
+    rows = read_csv_rows(where, field)
     angles, values = [], []
     for n, row in enumerate(rows, 1):
         try:

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -12,7 +10,7 @@ import numpy as np
 
 from eyelume.errors import InputFileError
 from eyelume.scene.model import LedArray, LedProfile
-from eyelume.scene.textfile import read_text_file
+from eyelume.scene.textfile import read_csv_rows
 
 __all__ = [
     "TABLE_END_FRACTION",
@@ -68,18 +66,7 @@ def read_profile_table(path: str) -> tuple[np.ndarray, np.ndarray]:
         One line naming the file (and the row) and the value.
     """
     where = Path(path)
-    try:
-        text = read_text_file(where, InputFileError)
-    except InputFileError as exc:
-        raise InputFileError(exc.message, field=_FIELD) from None
-    try:
-        rows = [
-            r
-            for r in csv.reader(io.StringIO(text.lstrip("\ufeff")))
-            if r and "".join(r).strip() and not r[0].lstrip().startswith("#")
-        ]
-    except csv.Error as exc:
-        raise InputFileError(f"not a CSV table ({exc})", file=where, field=_FIELD) from None
+    rows = read_csv_rows(where, _FIELD)
     a, v = _numbers(rows, where)
     if len(a) < 2 or a[0] != 0 or np.any(np.diff(a) <= 0) or a[-1] > 90:
         raise InputFileError(

@@ -8,9 +8,13 @@ header) or as UTF-16. :func:`decode_text` tells them apart from the bytes alone.
 
 from __future__ import annotations
 
+import csv
+import io
 from pathlib import Path
 
-__all__ = ["decode_text", "read_text_file"]
+from eyelume.errors import InputFileError
+
+__all__ = ["decode_text", "read_csv_rows", "read_text_file"]
 
 
 def decode_text(raw: bytes, path: Path, error: type[Exception]) -> str:
@@ -63,3 +67,27 @@ def read_text_file(path: str | Path, error: type[Exception]) -> str:
     except OSError as exc:
         raise error(f"{path}: cannot be read ({exc.strerror})") from None
     return decode_text(raw, path, error)
+
+
+def read_csv_rows(path: str | Path, field: str) -> list[list[str]]:
+    """The rows of a CSV table file (any encoding :func:`decode_text` knows; a BOM dropped),
+    without empty lines and lines starting with ``#``, as lists of strings.
+
+    Raises
+    ------
+    InputFileError
+        One line naming the file and ``field``: missing, unreadable, or not CSV.
+    """
+    where = Path(path)
+    try:
+        text = read_text_file(where, InputFileError)
+    except InputFileError as exc:
+        raise InputFileError(exc.message, field=field) from None
+    try:
+        return [
+            r
+            for r in csv.reader(io.StringIO(text.lstrip("\ufeff")))
+            if r and "".join(r).strip() and not r[0].lstrip().startswith("#")
+        ]
+    except csv.Error as exc:
+        raise InputFileError(f"not a CSV table ({exc})", file=where, field=field) from None
