@@ -135,6 +135,15 @@ def test_plane_plate_first_surface_ghost_at_the_mirror_image_with_its_flux():
     assert g["pupil_irradiance_w_mm2"] == pytest.approx(e, rel=1e-5)
     r_ep = cs.first_order.entrance_pupil_radius
     assert g["flux_w"] == pytest.approx(g["pupil_irradiance_w_mm2"] * math.pi * r_ep**2)
+    # the light comes from the mirror image: its apparent distance is the image's from ep
+    assert g["apparent_distance_mm"] == pytest.approx(dist, rel=1e-5)
+    # defocus: the cone from the image through the pupil (radius r_ep), cut by the plane in
+    # focus (the object plane z = 0, D_f from the pupil), times |m|, in pixels
+    fo = cs.first_order
+    d_f = fo.entrance_pupil_z
+    pitch = cs.scene.sensor.field_mm[0] / cs.scene.sensor.cols
+    blur = 2 * r_ep * abs(dist - d_f) / dist * abs(fo.magnification) / pitch
+    assert g["blur_px"] == pytest.approx(blur, rel=1e-5)
 
 
 def test_spectacle_first_surface_ghost_against_the_convex_mirror():
@@ -301,6 +310,14 @@ def test_spectacle_ghosts_where_and_as_bright_as_the_forward_render_shows_them()
         expect = g["flux_w"] / (power / rays)
         got = n - background * inside.sum()
         assert abs(got - expect) < 4 * math.sqrt(expect), (g["led"], g["chain"], got, expect)
+        # its size: a uniform disc of radius a has a per-axis variance a²/4 (+ 1/12 px² from
+        # the pixels); blur_px/2 is paraxial (the back ghost is refracted twice by the tilted
+        # front: astigmatic), so 15 % + 0.3 px (the variance's own noise is ~2 % at ~400 counts)
+        rr, cc = np.mgrid[: img.shape[0], : img.shape[1]]
+        w = (img - background) * inside
+        var = np.array([(w * (cc - c[0]) ** 2).sum(), (w * (rr - c[1]) ** 2).sum()]) / w.sum()
+        a = 2.0 * np.sqrt(var - 1.0 / 12.0)
+        assert np.all(np.abs(a - g["blur_px"] / 2) < 0.15 * g["blur_px"] / 2 + 0.3), (a, g)
         checked += 1
     assert checked == 4
 
@@ -446,3 +463,43 @@ def test_ghosts_of_leds_of_two_wavelengths_each_at_its_own():
         else:  # a lower index at 940 nm: a weaker Fresnel reflection
             assert g["reflectances"][0] < same["reflectances"][0]
     assert "ghosts" not in eye_truth(cs, ghosts=False)
+
+
+def test_reflection_region_is_a_disc_about_each_visible_ghost_and_in_the_stats():
+    """The ``reflection`` region (analysis/regions.py): the pixels whose centres lie within
+    blur_px/2 (+ the Airy radius: paper2005's prescription lens has no PSF) of each visible
+    ghost's true centre, at least 1 px; removed from the pupil, iris, sclera and skin; its
+    statistics give a flux."""
+    from eyelume.analysis.regions import region_masks, region_stats
+
+    cs = _compiled(SPECTACLE)
+    truth = eye_truth(cs)
+    masks = region_masks(cs)
+    assert "reflection" in masks
+    rr, cc = np.mgrid[: cs.picture.rows, : cs.picture.cols]
+    expect = np.zeros_like(masks["reflection"])
+    visible = [g for g in truth["ghosts"] if g["visible"]]
+    assert len(visible) >= 4
+    for g in visible:
+        rho = max(1.0, g["blur_px"] / 2)
+        x, y = g["centre_px"]
+        expect |= (cc - x) ** 2 + (rr - y) ** 2 <= rho**2
+        # the pixel the ghost's centre falls in is in the region
+        assert masks["reflection"][int(round(y)), int(round(x))]
+    assert np.array_equal(masks["reflection"], expect)
+    for name in ("pupil", "iris", "sclera", "skin"):
+        assert not np.any(masks[name] & masks["reflection"]), name
+    plain = region_masks(cs, reflections=False)
+    assert "reflection" not in plain
+    assert np.array_equal(plain["skin"] & ~expect, masks["skin"])
+    image = np.ones(masks["skin"].shape)
+    stats = region_stats(image, 0.01 * image, masks, pixel_area_mm2=0.5)
+    assert stats["reflection"]["pixels"] == int(expect.sum())
+    assert stats["reflection"]["flux_w"] == pytest.approx(0.5 * expect.sum())
+
+
+def test_no_reflection_region_without_elements():
+    from eyelume.analysis.regions import region_masks
+
+    cs = compile_scene(eyelume.load_scene("paper2005"))
+    assert "reflection" not in region_masks(cs)

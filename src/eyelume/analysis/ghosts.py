@@ -27,6 +27,16 @@ for a curved one the caustic's focusing is in J. ``flux_w`` = E π r_EP² (W int
 pupil of radius r_EP, before the lens's transmission and vignetting; valid while E varies
 little over the pupil, the small-aperture camera of an eye tracker); ``relative_to_glint`` =
 E / E_glint, the same LED's corneal glint computed the same way (None without one).
+
+Size: the light reaches the pupil as if from a point at the *apparent distance* D =
+sqrt(|det ∂x/∂d′| cos γ) (x the pupil-plane point, d′ the arriving ray's direction, both
+differentiated over the emission direction: ∂x/∂d′ = J (∂d′/∂u)⁻¹; a point at distance D gives
+|det| = D²/cos γ; the geometric mean of the two focal distances of an astigmatic chain; ∞
+for a collimated one); a camera focused at D_f (its object plane)
+blurs it to a disc ``blur_px`` = 2 r_EP |D − D_f| / D · |m| / pitch wide (geometric defocus,
+paraxial; the LED taken as a point, as the renderer traces it; the diffraction PSF comes on
+top). The eye image's ``reflection`` region is drawn from these
+(:func:`eyelume.analysis.regions.with_reflections`).
 """
 
 from __future__ import annotations
@@ -165,7 +175,9 @@ def _find(v: _View, chain_cam: list[int], led: np.ndarray):
 
 def _irradiance(v: _View, chain_led: list[int], row: int, led: np.ndarray, u: np.ndarray):
     """E (W/mm²) at the entrance pupil's plane of LED ``row``'s light sent along ``u`` and
-    reflected by ``chain_led`` (light order), and the path's weight; None if a ray is lost."""
+    reflected by ``chain_led`` (light order), the path's weight and the apparent distance
+    (mm) of the source seen from the pupil, sqrt(|det ∂x/∂d′| cos γ) (module doc); None if a
+    ray is lost."""
     cs = v.cs
     zp = v.cam.entrance_pupil_z
     target = np.array([0.0, 0.0, zp])
@@ -176,28 +188,35 @@ def _irradiance(v: _View, chain_led: list[int], row: int, led: np.ndarray, u: np
         d = d / np.linalg.norm(d)
         got = _follow(cs, led, d, chain_led, target)
         if got is None or abs(got[1][2]) < 1e-12:
-            return None, None
-        p, dd = got[0], got[1]
+            return None
+        p, dd = got[0], got[1] / np.linalg.norm(got[1])
         t = (zp - p[2]) / dd[2]
-        return (p + t * dd)[:2], got[2]
+        return (p + t * dd)[:2], dd, got[2]
 
-    cols = []
+    mid = at_pupil(np.zeros(2))
+    if mid is None:
+        return None
+    _, d_mid, w = mid
+    a2, b2 = _basis(d_mid)
+    cols, turns = [], []
     for k in range(2):
         e = np.zeros(2)
         e[k] = _DU
-        hi, _ = at_pupil(e)
-        lo, _ = at_pupil(-e)
+        hi, lo = at_pupil(e), at_pupil(-e)
         if hi is None or lo is None:
             return None
-        cols.append((hi - lo) / (2 * _DU))
-    _, w = at_pupil(np.zeros(2))
-    if w is None:
-        return None
-    det = abs(np.linalg.det(np.column_stack(cols)))
+        cols.append((hi[0] - lo[0]) / (2 * _DU))
+        dd = (hi[1] - lo[1]) / (2 * _DU)
+        turns.append([dd @ a2, dd @ b2])
+    jac = np.column_stack(cols)
+    det = abs(np.linalg.det(jac))
     if det == 0.0:
         return None
     intensity = float(radiant_intensity(cs.led, row, *u))
-    return intensity * w / det, w
+    # where the pupil-plane point moves per radian of the arriving ray's direction
+    turn = abs(np.linalg.det(np.array(turns).T))
+    dist = math.sqrt(det / turn * abs(d_mid[2])) if turn > 0.0 else math.inf
+    return intensity * w / det, w, dist
 
 
 def _emission(v: _View, s: np.ndarray, chain_cam: list[int], led: np.ndarray):
@@ -241,7 +260,24 @@ def _one(v: _View, k: int, row: int, led: np.ndarray, chain_cam: list[int]):
         "reflectances": refl[::-1],
         "pupil_irradiance_w_mm2": None if e is None else e[0],
         "flux_w": None if e is None else e[0] * math.pi * cs.first_order.entrance_pupil_radius**2,
+        "apparent_distance_mm": None if e is None or math.isinf(e[2]) else e[2],
+        "blur_px": None if e is None else _blur_px(cs, e[2]),
     }
+
+
+def _blur_px(cs, distance_mm: float) -> float:
+    """Geometric defocus blur diameter (px) of a point seen at ``distance_mm`` from the
+    entrance pupil (radius r) by a camera focused at D_f (its object plane): the cone from the
+    point through the pupil is 2 r |D − D_f| / D wide at the plane in focus, times |m| on the
+    sensor (paraxial, thin-pupil)."""
+    fo = cs.first_order
+    d_f = fo.entrance_pupil_z  # the object plane is z = 0 of the camera frame
+    width_mm = (
+        2.0
+        * fo.entrance_pupil_radius
+        * (1.0 if math.isinf(distance_mm) else abs(distance_mm - d_f) / distance_mm)
+    )
+    return width_mm * abs(fo.magnification) / (cs.picture.width_mm / cs.picture.cols)
 
 
 def ghost_truth(v: _View) -> list[dict]:

@@ -95,7 +95,7 @@ def mask_from_regions(
 
     Only the regions ``pupil`` (the iris's opening: the iris root closes the eye around the
     iris, see compile.py), ``iris`` (its root included), ``sclera`` and ``skin`` are used; glint
-    regions, if present, were already removed from them and weigh 0.
+    and reflection regions, if present, were already removed from them and weigh 0.
     """
     shape = regions["skin"].shape
     image = np.zeros(shape)

@@ -1,11 +1,15 @@
-"""Regions of the eye image — pupil, iris, sclera, skin, one per glint — and their statistics.
+"""Regions of the eye image — pupil, iris, sclera, skin, one per glint, the reflections — and
+their statistics.
 
 The regions come from the scene's own geometry seen through the camera: each pixel takes the
 surface its chief ray meets first after refraction (never reflection) — through the cornea, the
 iris (its root, out to the eyeball wall, included) or, through the pupil, the crystalline lens
 and fundus. A glint's region is the set of pixels where the light that met only the cornea (no
 Lambertian face) from that LED reaches at least 5 % of that glint's peak; glint pixels belong to
-no other region.
+no other region. With optical elements, the ``reflection`` region holds the pixels of every
+visible specular image an element causes (spectacle ghosts, :mod:`eyelume.analysis.ghosts`):
+a disc about each one's true centre, as wide as its defocus blur and the diffraction PSF's
+Airy disc (:func:`reflection_mask`); its pixels belong to no other region but a glint's.
 """
 
 from __future__ import annotations
@@ -23,21 +27,29 @@ from eyelume.estimators.statistics import median_pixel_rel_error
 
 __all__ = [
     "GLINT_FRACTION",
+    "REFLECTION_MIN_RADIUS_PX",
     "RegionWarning",
+    "reflection_mask",
     "region_masks",
     "region_stats",
     "with_glints",
+    "with_reflections",
 ]
 
 GLINT_FRACTION = 0.05
 _PUPIL_SURFACES = ("anterior lens", "posterior lens", "retina")
+#: The smallest radius (px) of a reflection's disc: a point imaged in focus still lights the
+#: pixel it falls in and, off its centre, a neighbour.
+REFLECTION_MIN_RADIUS_PX = 1.0
 
 
 def region_masks(
-    cs: CompiledScene, glint_images: np.ndarray | None = None
+    cs: CompiledScene, glint_images: np.ndarray | None = None, *, reflections: bool = True
 ) -> dict[str, np.ndarray]:
-    """Boolean (rows, cols) masks by region name: ``pupil``, ``iris``, ``sclera``, ``skin`` and
-    ``glint 0`` … (one per LED, when ``glint_images`` (n_leds, rows, cols) is given)."""
+    """Boolean (rows, cols) masks by region name: ``pupil``, ``iris``, ``sclera``, ``skin``,
+    ``glint 0`` … (one per LED, when ``glint_images`` (n_leds, rows, cols) is given) and, for
+    a scene with optical elements, ``reflection`` (:func:`reflection_mask` of the ghosts'
+    truth; ``reflections=False`` skips their search, ~1 s)."""
     _warn_mirrors(cs)
     labels, sides = primary_surface_map(cs)
     names = cs.surface_names
@@ -58,6 +70,11 @@ def region_masks(
         "sclera": of(lambda n, b: n == "sclera" and b),
         "skin": of(lambda n, b: n in tissues),
     }
+    if cs.scene.elements and reflections:
+        from eyelume.analysis.ghosts import ghost_truth
+        from eyelume.analysis.truth import _view
+
+        masks = with_reflections(masks, reflection_mask(cs, ghost_truth(_view(cs, cs.camera))))
     return masks if glint_images is None else with_glints(masks, glint_images)
 
 
@@ -78,6 +95,36 @@ def _warn_mirrors(cs: CompiledScene) -> None:
             RegionWarning,
             stacklevel=3,
         )
+
+
+def reflection_mask(cs: CompiledScene, ghosts: list[dict]) -> np.ndarray:
+    """(rows, cols) bool: the pixels within radius ρ of each visible ghost's ``centre_px``
+    (OpenCV convention; :func:`eyelume.analysis.ghosts.ghost_truth`), ρ = ``blur_px``/2 (its
+    geometric defocus) + the Airy radius 1.22 λ N_w of the camera's diffraction PSF (0 without
+    one), at least :data:`REFLECTION_MIN_RADIUS_PX`. Pixel (c, r) is inside when its centre
+    is: (c − x)² + (r − y)² ≤ ρ²."""
+    from eyelume.detectors.psf import camera_psf
+
+    rows, cols = cs.picture.rows, cs.picture.cols
+    psf = camera_psf(cs)
+    airy = 0.0 if psf is None else psf.airy_radius_mm / psf.pitch_mm[0]
+    r, c = np.mgrid[0:rows, 0:cols]
+    out = np.zeros((rows, cols), dtype=bool)
+    for g in ghosts:
+        if not g["visible"]:
+            continue
+        rho = max(REFLECTION_MIN_RADIUS_PX, 0.5 * (g.get("blur_px") or 0.0) + airy)
+        x, y = g["centre_px"]
+        out |= (c - x) ** 2 + (r - y) ** 2 <= rho * rho
+    return out
+
+
+def with_reflections(masks: dict[str, np.ndarray], reflection: np.ndarray) -> dict[str, np.ndarray]:
+    """``masks`` plus ``reflection`` (rows, cols) bool; its pixels are removed from the
+    others."""
+    out = {name: m & ~reflection for name, m in masks.items()}
+    out["reflection"] = reflection
+    return out
 
 
 def with_glints(masks: dict[str, np.ndarray], glint_images: np.ndarray) -> dict[str, np.ndarray]:
@@ -106,7 +153,7 @@ def region_stats(
 ) -> dict[str, dict]:
     """Per region: pixels, mean irradiance (W/mm²) and its relative standard error, the median
     pixel and the median over the region of each pixel's relative standard error; for glints
-    also the total flux (W) and its relative standard error.
+    and the reflections also the total flux (W) and its relative standard error.
 
     ``variance`` is the estimated variance of each pixel's value. Independent pixels: the
     variance of a region's mean is Σ variance / n². Pixels correlated by a point-spread
@@ -131,7 +178,7 @@ def region_stats(
             "median_w_mm2": float(np.median(vals)),
             "median_pixel_rel_error": median_pixel_rel_error(vals, var, dof),
         }
-        if name.startswith("glint"):
+        if name.startswith("glint") or name == "reflection":
             entry["flux_w"] = float(vals.sum()) * pixel_area_mm2
             entry["flux_rel_error"] = entry["mean_rel_error"]
         out[name] = entry
