@@ -503,3 +503,73 @@ def test_no_reflection_region_without_elements():
 
     cs = compile_scene(eyelume.load_scene("paper2005"))
     assert "reflection" not in region_masks(cs)
+
+
+def test_false_glint_counts_over_gazes_from_the_truth():
+    """The study's ``ghosts`` metric source: at each gaze the visible ghosts at least 5 % of
+    their glint, their smallest distance to a visible glint and to the pupil's centre. The
+    window's first-surface ghosts do not move with the gaze: each lies at its LED's mirror
+    image in the surface's plane, projected (the closed form of the plate test)."""
+    from eyelume.analysis.ghosts import FALSE_GLINT_MIN_RELATIVE, false_glint_counts
+
+    scene = eyelume.load_scene("paper2005", {"elements": [PLATE]})
+    gh = (0.0, 15.0)
+    fg = false_glint_counts(scene, gaze_h=gh, gaze_v=(0.0,))
+    cs = compile_scene(scene)
+    axis = np.array(PLATE["direction"])
+    surface = np.array(PLATE["position_mm"]) + PLATE["thickness_mm"] * axis
+    front = []
+    for led in cs.led.points:
+        image = led - 2.0 * ((led - surface) @ axis) * axis
+        front.append(_project(cs, image)[0])
+    for j, h in enumerate(gh):
+        turned = eyelume.load_scene(
+            "paper2005", {"elements": [PLATE], "eye.gaze_horizontal_deg": h}
+        )
+        t = eye_truth(compile_scene(turned))
+        false = [
+            g
+            for g in t["ghosts"]
+            if g["visible"]
+            and (
+                g["relative_to_glint"] is None or g["relative_to_glint"] >= FALSE_GLINT_MIN_RELATIVE
+            )
+        ]
+        assert fg["false_glints"][0][j] == len(false) > 0
+        pts = [g["centre_px"] for g in false]
+        firsts = [g for g in false if g["chain"] == ["window back"]]
+        assert len(firsts) == 1  # LED 0's: the others image outside the picture
+        for g in firsts:
+            assert np.hypot(*(np.array(g["centre_px"]) - front[g["led"]])) < 1e-3
+        seen = [g["centre_px"] for g in t["glints"] if g["visible"]]
+        near = min(math.dist(p, q) for p in pts for q in seen)
+        assert fg["nearest_glint_px"][0][j] == pytest.approx(near, rel=1e-12)
+        pupil = min(math.dist(p, t["pupil"]["centre_px"]) for p in pts)
+        assert fg["pupil_px"][0][j] == pytest.approx(pupil, rel=1e-12)
+    plain = false_glint_counts(eyelume.load_scene("paper2005"), gaze_h=(0.0,), gaze_v=(0.0,))
+    assert plain["false_glints"] == [[0]] and plain["pupil_px"] == [[None]]
+
+
+def test_study_ghosts_metric_aggregates_the_grid(monkeypatch):
+    """run_metrics' ``ghosts``: the mean and max count over the gazes and the smallest
+    distances (None where no gaze has a false glint), on a constructed grid."""
+    from eyelume.analysis import ghosts
+    from eyelume.optimize.study import Study, run_metrics
+
+    grid = {
+        "false_glints": [[0, 2], [1, 0]],
+        "nearest_glint_px": [[None, 7.5], [3.25, None]],
+        "pupil_px": [[None, 40.0], [12.0, None]],
+    }
+    monkeypatch.setattr(ghosts, "false_glint_counts", lambda scene: grid)
+    scene = eyelume.load_scene("paper2005")
+    m = run_metrics(scene, {}, Study(name="g", metrics=["ghosts"]))
+    assert m == {
+        "false_glints_mean": 0.75,
+        "false_glints_max": 2,
+        "false_glint_to_glint_px_min": 3.25,
+        "false_glint_to_pupil_px_min": 12.0,
+    }
+    grid = {k: [[None if k != "false_glints" else 0]] for k in grid}
+    m = run_metrics(scene, {}, Study(name="g", metrics=["ghosts"]))
+    assert m["false_glints_max"] == 0 and m["false_glint_to_glint_px_min"] is None

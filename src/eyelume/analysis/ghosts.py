@@ -58,7 +58,15 @@ from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import interface_at, reflect
 from eyelume.kernels.sampling import radiant_intensity
 
-__all__ = ["ghost_truth"]
+__all__ = ["FALSE_GLINT_MIN_RELATIVE", "false_glint_counts", "ghost_truth"]
+
+#: A visible ghost at least this fraction of its LED's corneal glint's irradiance at the pupil
+#: (``relative_to_glint``; or with no glint to compare) is counted as a false glint by
+#: :func:`false_glint_counts`. ASSUMPTION: the 5 % of a glint's peak at which the regions call
+#: a pixel part of a glint (:data:`eyelume.analysis.regions.GLINT_FRACTION`); a real detector's
+#: glint threshold sits at a high percentile of the picture, and a glint saturates, so a spot a
+#: twentieth of a glint is still far above the skin.
+FALSE_GLINT_MIN_RELATIVE = 0.05
 
 _GRID = 9  # coarse sensor grid (per side) the Newton searches start from
 _STARTS = 4  # best grid points tried
@@ -318,3 +326,53 @@ def _one_glint(v: _View, row: int, led: np.ndarray) -> float | None:
     u, _, _ = _emission(v, s, [v.cornea], led)
     e = _irradiance(v, [v.cornea], row, led, u)
     return None if e is None else e[0]
+
+
+def false_glint_counts(scene, gaze_h=None, gaze_v=None) -> dict:
+    """False glints from the truth over a gaze grid (the study metric ``ghosts``): at each
+    gaze, the visible ghosts (:func:`ghost_truth`) at least :data:`FALSE_GLINT_MIN_RELATIVE`
+    of their LED's glint (or with no glint), their distance (px) to the nearest visible
+    corneal glint (``nearest_glint_px``) and to the apparent pupil's centre.
+
+    ``gaze_h`` / ``gaze_v`` (degrees): default :data:`eyelume.analysis.truth.COUNT_GAZE_H` /
+    ``COUNT_GAZE_V`` (±20° × ±15°, 5 × 5). Returns ``{"gaze_h_deg", "gaze_v_deg",
+    "false_glints": (nv, nh) counts, "nearest_glint_px": (nv, nh) the smallest distance at
+    each gaze (None: no false glint or no visible glint), "pupil_px": (nv, nh) likewise to the
+    pupil's centre}``. A scene without elements: all counts 0."""
+    from eyelume.analysis.truth import COUNT_GAZE_H, COUNT_GAZE_V, eye_truth
+    from eyelume.compile import compile_scene
+    from eyelume.scene.io import apply_overrides
+
+    gaze_h = COUNT_GAZE_H if gaze_h is None else gaze_h
+    gaze_v = COUNT_GAZE_V if gaze_v is None else gaze_v
+    counts, near, pupil = [], [], []
+    for gv in gaze_v:
+        row_n, row_g, row_p = [], [], []
+        for gh in gaze_h:
+            turned = apply_overrides(
+                scene, {"eye.gaze_horizontal_deg": gh, "eye.gaze_vertical_deg": gv}
+            )
+            t = eye_truth(compile_scene(turned))
+            false = [
+                g
+                for g in t.get("ghosts", [])
+                if g["visible"]
+                and (g["relative_to_glint"] is None
+                     or g["relative_to_glint"] >= FALSE_GLINT_MIN_RELATIVE)
+            ]  # fmt: skip
+            row_n.append(len(false))
+            d = [g["nearest_glint_px"] for g in false if g["nearest_glint_px"] is not None]
+            row_g.append(min(d) if d else None)
+            pc = t["pupil"]["centre_px"]
+            d = [math.dist(g["centre_px"], pc) for g in false] if pc is not None else []
+            row_p.append(min(d) if d else None)
+        counts.append(row_n)
+        near.append(row_g)
+        pupil.append(row_p)
+    return {
+        "gaze_h_deg": list(gaze_h),
+        "gaze_v_deg": list(gaze_v),
+        "false_glints": counts,
+        "nearest_glint_px": near,
+        "pupil_px": pupil,
+    }

@@ -11,6 +11,10 @@ A study file (TOML)::
     samples_per_pixel = 16         # renders of eye_image_merit / skin_uniformity
     # glints: glints_visible_min / _mean over a ±20° × ±15° gaze grid and the share of gazes
     # with every LED's glint on the cornea and seen (eyelume.analysis.truth.glint_counts)
+    # ghosts (optical elements): false glints (element ghosts a detector would take for glints)
+    # over the same grid from the truth: their mean and max count per gaze and their smallest
+    # distance (px) to a true glint and to the pupil's centre
+    # (eyelume.analysis.ghosts.false_glint_counts)
 
     [[vary]]                       # one table per parameter; the runs are their product
     path = "leds.height_mm"
@@ -57,6 +61,7 @@ METRICS = (
     "tracking",
     "safety",
     "glints",
+    "ghosts",
 )
 
 
@@ -91,7 +96,13 @@ class Study(_Table):
     seed: int = Field(0, ge=0)
     metrics: list[
         Literal[
-            "eye_plane_merit", "eye_image_merit", "skin_uniformity", "tracking", "safety", "glints"
+            "eye_plane_merit",
+            "eye_image_merit",
+            "skin_uniformity",
+            "tracking",
+            "safety",
+            "glints",
+            "ghosts",
         ]
     ] = [
         "eye_plane_merit",
@@ -287,6 +298,20 @@ def run_metrics(base: Scene, overrides: dict, study: Study) -> dict:
         out["glints_visible_min"] = float(counts.min())
         out["glints_visible_mean"] = float(counts.mean())
         out["gaze_share_all_glints"] = float(np.mean(counts == scene.leds.count))
+    if "ghosts" in study.metrics:
+        from eyelume.analysis.ghosts import false_glint_counts
+
+        fg = false_glint_counts(scene)
+        n = np.asarray(fg["false_glints"], dtype=float)
+        out["false_glints_mean"] = float(n.mean())
+        out["false_glints_max"] = int(n.max())
+
+        def smallest(rows):
+            vals = [x for row in rows for x in row if x is not None]
+            return min(vals) if vals else None
+
+        out["false_glint_to_glint_px_min"] = smallest(fg["nearest_glint_px"])
+        out["false_glint_to_pupil_px_min"] = smallest(fg["pupil_px"])
     if "safety" in study.metrics:
         s = eye_safety(scene)
         out["corneal_margin"] = s["corneal_margin"]

@@ -12,6 +12,10 @@ calibration. Both use the glints matched to LEDs only: a frame with some LEDs' g
 reference is the glint pattern's centre from the found glints and each LED's offset in the
 calibration frames (:func:`~.gaze.glint_offsets`), not the mean of the found glints, which
 moves toward them. Rendering the frames over a gaze grid is :mod:`eyelume.optimize.tracking`'s.
+
+With optical elements (spectacles, a hot mirror), a detected glint matched to an LED may be a
+spectacle ghost (:mod:`eyelume.analysis.ghosts`) taken for the corneal glint:
+:func:`false_glints` counts them per frame (``Frame.false_glints``) and the summary totals them.
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ __all__ = [
     "analyse_frame",
     "analyse_frames",
     "error_map_rows",
+    "false_glints",
     "pinhole_camera",
     "led_picture_azimuths",
     "led_picture_pattern",
@@ -49,6 +54,11 @@ __all__ = [
 #: The classic 9-point calibration: a 3 × 3 grid of gaze targets (degrees).
 CALIBRATION_H = (-20.0, 0.0, 20.0)
 CALIBRATION_V = (-15.0, 0.0, 15.0)
+#: A matched glint this close (px) to a visible ghost's true centre — or within the ghost's
+#: blur radius, if larger — may be the ghost (:func:`false_glints`). A detected centroid lies
+#: within ~1 px of the spot's true centre (tests/analysis/test_detect.py); 3 px also covers a
+#: ghost beside a glint merged into one blob, whose centroid lies between them.
+FALSE_GLINT_PX = 3.0
 #: The test grid of the issue: 7 × 5 gazes.
 TEST_H = (-30.0, -20.0, -10.0, 0.0, 10.0, 20.0, 30.0)
 TEST_V = (-20.0, -10.0, 0.0, 10.0, 20.0)
@@ -72,6 +82,7 @@ class Frame:
     detect_ms: float = 0.0
     saturated_share: float = 0.0  # of the frame's pixels at the full well or full scale
     glints_px: list | None = None
+    false_glints: int = 0  # matched glints that are element ghosts (false_glints)
 
 
 @dataclass
@@ -177,8 +188,38 @@ def analyse_frame(
         if g.led is not None:
             glints[g.led] = g.centre_px
     f.glints_px = glints
+    f.false_glints = len(false_glints(det.glints, truth))
     _set_pg_vector(f, None)
     return f
+
+
+def false_glints(glints, truth: dict, radius_px: float = FALSE_GLINT_PX) -> list[int]:
+    """Indices into ``glints`` (detected, :class:`~.detect.Glint`: ``centre_px`` (x, y) px
+    and ``led``) of those matched to an LED that are an element's ghost, not the corneal
+    glint: within max(``radius_px``, the ghost's ``blur_px``/2) of a visible ghost's true
+    centre (``truth["ghosts"]``, :mod:`eyelume.analysis.ghosts`) and nearer to it than to
+    that LED's true glint (or the LED has no visible glint). A frame without ghosts in its
+    truth (no elements): []."""
+    ghosts = [g for g in truth.get("ghosts", []) if g["visible"]]
+    if not ghosts:
+        return []
+    true = {
+        g["led"]: g["centre_px"]
+        for g in truth["glints"]
+        if g["visible"] and g["centre_px"] is not None
+    }
+    out = []
+    for i, g in enumerate(glints):
+        if g.led is None:
+            continue
+        own = true.get(g.led)
+        d_own = math.inf if own is None else math.dist(g.centre_px, own)
+        for e in ghosts:
+            d = math.dist(g.centre_px, e["centre_px"])
+            if d <= max(radius_px, 0.5 * (e.get("blur_px") or 0.0)) and d < d_own:
+                out.append(i)
+                break
+    return out
 
 
 def _set_pg_vector(f: Frame, offsets: np.ndarray | None) -> None:
@@ -266,7 +307,8 @@ def _errors(frames: list[Frame], attr: str) -> np.ndarray:
 
 
 def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
-    """Detection rate, pupil-centre error (px, mm), glints per frame, gaze errors (°)."""
+    """Detection rate, pupil-centre error (px, mm), glints per frame, false glints (total,
+    frames with any, mean per frame: :func:`false_glints`), gaze errors (°)."""
     frames = report.frames
     ok = [f for f in frames if f.detection.ok]
     pe = np.array([f.pupil_error_px for f in ok if math.isfinite(f.pupil_error_px)])
@@ -295,6 +337,11 @@ def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
         "glints_per_frame": {
             "found_mean": float(np.mean([f.glints_found for f in frames])),
             "true_mean": float(np.mean([f.glints_true for f in frames])),
+        },
+        "false_glints": {
+            "total": int(sum(f.false_glints for f in frames)),
+            "frames_with": int(sum(f.false_glints > 0 for f in frames)),
+            "per_frame_mean": float(np.mean([f.false_glints for f in frames])) if frames else 0.0,
         },
         "gaze_pccr": stats(_errors(frames, "pccr")) if pccr_calibrated else {"frames": 0},
         "gaze_geometric": stats(_errors(frames, "geometric")),
@@ -383,13 +430,15 @@ def _finite(x: float | None) -> float | None:
 
 def error_map_rows(frames: Sequence[Frame]) -> list[dict]:
     """One plain row per frame for the error maps over the gaze grid: ``gaze`` (h, v °),
-    ``pupil_error_px`` (None where detection failed), ``glints_found``, ``pccr_error_deg`` and
+    ``pupil_error_px`` (None where detection failed), ``glints_found``, ``false_glints``
+    (:func:`false_glints`), ``pccr_error_deg`` and
     ``geometric_error_deg`` (None without an estimate). JSON-ready: a study stores them."""
     return [
         {
             "gaze": [float(f.gaze[0]), float(f.gaze[1])],
             "pupil_error_px": _finite(f.pupil_error_px) if f.detection.ok else None,
             "glints_found": int(f.glints_found),
+            "false_glints": int(f.false_glints),
             "pccr_error_deg": _finite(_err(f.pccr, f.gaze)),
             "geometric_error_deg": _finite(_err(f.geometric, f.gaze)),
         }
