@@ -424,7 +424,7 @@ def render(
             opt.rel_error,
             status,
             regions["skin"],
-            control=RunControl(advance, opt.max_samples_per_pixel),
+            control=_run_control(cs, advance, opt),
         )
         plane = direct_eye_plane(cs, seed)
         blur = _Blur(cs, est.image)
@@ -483,6 +483,21 @@ def render(
         **_Blur.facts([blur], [variance]),
         **extents,
     )
+
+
+def _run_control(cs: CompiledScene, advance, opt: RenderOptions) -> RunControl:
+    """The fast run's control: progress, the sample cap, and — for a ``rel_error`` run — the
+    camera's PSF as the map from the traced picture to the delivered one, so the run stops
+    when the picture the result holds (and whose error it reports) meets the target."""
+    psf = camera_psf(cs)
+    if psf is None or opt.rel_error is None:
+        return RunControl(advance, opt.max_samples_per_pixel)
+
+    def deliver(image: np.ndarray, variance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return convolve_irradiance(image, psf), convolve_variance(variance, psf)
+
+    ratio = float(np.sum(psf.kernel**2))
+    return RunControl(advance, opt.max_samples_per_pixel, deliver, ratio)
 
 
 class _Blur:
@@ -585,7 +600,7 @@ def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> Render
     for g, cg, sg in groups:
         if status:
             status(f"wavelength group {g.index + 1} of {len(groups.list)}: {g.wavelength_nm:g} nm")
-        control = RunControl(advance_in, opt.max_samples_per_pixel)
+        control = _run_control(cg, advance_in, opt)
         est = trace_fast(cg, spp, light, sg, opt.rel_error, status, skin, control)
         groups.check_whole(g, est.interrupted)
         plane += direct_eye_plane(cg, sg)
@@ -604,10 +619,9 @@ def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> Render
     variance = sum(p.eye_image_variance for p in parts)
     dof = min(e.variance_dof for e in ests)
     reached = err = None
-    if opt.rel_error is not None:  # the sum's own error, not the groups' (the traced pictures)
-        traced, traced_var = sum(e.image for e in ests), sum(e.variance for e in ests)
-        m = skin & (traced > 0) & np.isfinite(traced)
-        e = median_pixel_rel_error(traced[m], traced_var[m], dof) if m.any() else math.inf
+    if opt.rel_error is not None:  # the delivered sum's own error, not the groups'
+        m = skin & (image > 0) & np.isfinite(image)
+        e = median_pixel_rel_error(image[m], variance[m], dof) if m.any() else math.inf
         reached, err = e <= opt.rel_error, (e if math.isfinite(e) else None)
     return RenderResult(
         scene=sc,

@@ -53,6 +53,7 @@ w = K ⊗ mask, not the sum of the convolved variances (:func:`region_mean_varia
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from functools import lru_cache
@@ -262,8 +263,13 @@ def _zero_padded(a: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     of the largest value, of either sign) is clipped at zero (every input and kernel here is
     ≥ 0) and removed where no non-zero input is within the kernel's reach, so a dark pixel
     away from all light stays exactly 0."""
-    if kernel.shape == (1, 1):
-        return a * kernel[0, 0]
+    if kernel.shape == (1, 1) or not a.any():
+        return a * kernel[0, 0] if kernel.shape == (1, 1) else np.zeros(a.shape)
+    crop = _reach(a, kernel)
+    if crop is not None:  # a compact spot (a glint's picture): convolve the part that matters
+        out = np.zeros(a.shape)
+        out[crop] = _zero_padded(a[crop], kernel)
+        return out
     out = np.maximum(signal.fftconvolve(a, kernel, mode="same"), 0.0)
     # how many non-zero inputs each output sees through the kernel's footprint (integers: the
     # FFT's error is far below ½)
@@ -272,9 +278,35 @@ def _zero_padded(a: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     return out
 
 
+def _reach(a: np.ndarray, kernel: np.ndarray) -> tuple[slice, slice] | None:
+    """The rectangle of ``a`` holding its non-zero pixels grown by the kernel's half-size, when
+    it is under half the picture (else None): every output pixel outside it is 0, every one
+    inside sees only inputs inside it, so the rectangle's own zero-padded convolution is the
+    picture's there."""
+    rows, cols = np.flatnonzero(a.any(axis=1)), np.flatnonzero(a.any(axis=0))
+    if rows.size == 0:
+        return None
+    ky, kx = kernel.shape[0] // 2, kernel.shape[1] // 2
+    r0, r1 = max(rows[0] - ky, 0), min(rows[-1] + ky + 1, a.shape[0])
+    c0, c1 = max(cols[0] - kx, 0), min(cols[-1] + kx + 1, a.shape[1])
+    if 2 * (r1 - r0) * (c1 - c0) >= a.size:
+        return None
+    return np.s_[r0:r1, c0:c1]
+
+
 def _weights(shape: tuple[int, int], kernel: np.ndarray) -> np.ndarray:
-    """W_j = Σ_{i in the picture} K(j − i): 1 inside, less within the kernel's reach of an edge."""
-    return _zero_padded(np.ones(shape), kernel)
+    """W_j = Σ_{i in the picture} K(j − i): 1 inside, less within the kernel's reach of an edge
+    (read-only; one computation per picture shape and kernel, :func:`_cached_weights`)."""
+    k = np.ascontiguousarray(kernel, dtype=np.float64)
+    return _cached_weights(tuple(shape), k.shape, k.tobytes())
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_weights(shape: tuple[int, int], kshape: tuple[int, int], kbytes: bytes) -> np.ndarray:
+    kernel = np.frombuffer(kbytes, dtype=np.float64).reshape(kshape)
+    w = _zero_padded(np.ones(shape), kernel)
+    w.flags.writeable = False
+    return w
 
 
 def convolve_irradiance(irradiance: np.ndarray, psf: PixelPsf | None) -> np.ndarray:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numba
 import numpy as np
@@ -69,7 +69,7 @@ CHUNK_PATHS = 1 << 16
 
 #: Stratification grids: sets of 4 × 4 camera samples from 32 samples per pixel on, else of 2 × 2.
 #: Larger sets stratify better; two sets at least are needed for a variance.
-GRID_FINE, GRID_COARSE = 4, 2
+GRID_FINE, GRID_COARSE, GRID_SINGLE = 4, 2, 1
 
 
 class _Run:
@@ -217,22 +217,27 @@ _PILOT_ABOVE = 50_000
 _PILOT_PIXELS = 2048
 
 
-def _pilot(cs: CompiledScene, seed: int, target: np.ndarray, rel_error: float) -> tuple[int, int]:
+def _pilot(
+    cs: CompiledScene, seed: int, target: np.ndarray, rel_error: float, variance_ratio: float
+) -> tuple[int, int]:
     """(grid, sets) expected to reach ``rel_error`` in the median target pixel at the least
-    cost, from 4 sets of 2 × 2 and 2 sets of 4 × 4 on up to 2048 target pixels (their own
-    samples: a pixel's samples depend on its index and the seed only). The prediction aims at
-    the target itself; if the first round falls short, the run adds a round."""
+    cost, from 4 sets of 1 × 1, 4 sets of 2 × 2 and 2 sets of 4 × 4 on up to 2048 target pixels
+    (their own samples: a pixel's samples depend on its index and the seed only). The pilot's
+    pixels are scattered, so the delivered picture's error is predicted from the traced one's
+    by ``variance_ratio`` (:class:`RunControl`). The prediction aims at the target itself; if
+    the first round falls short, the run adds a round."""
     idx = np.flatnonzero(target.reshape(-1))
     if idx.size > _PILOT_PIXELS:
         idx = np.sort(np.random.default_rng(seed).choice(idx, _PILOT_PIXELS, replace=False))
     best = (GRID_FINE, 2, math.inf)
-    for grid, n in ((GRID_COARSE, 4), (GRID_FINE, 2)):
+    for grid, n in ((GRID_SINGLE, 4), (GRID_COARSE, 4), (GRID_FINE, 2)):
         s1, s2 = np.zeros(idx.size), np.zeros(idx.size)
         sums = F.CameraSums(idx.astype(np.int64), s1, s2)
         F.camera_pass(seed, 0, n, cs.tables, cs.camera, grid, sums)
         mean = s1 / n
         var = np.maximum(s2 - n * mean**2, 0.0) / (n * (n - 1))
         err = median_pixel_rel_error(mean[mean > 0], var[mean > 0], n - 1)
+        err *= math.sqrt(variance_ratio)
         sets = max(2, math.ceil(n * (err / rel_error) ** 2))
         cost = sets * grid * grid
         if cost < best[2]:
@@ -340,10 +345,20 @@ class RunControl:
 
     ``advance(done, planned)`` is called after each chunk of work, in camera samples plus light
     paths (``planned`` grows with ``rel_error`` rounds); ``max_samples_per_pixel`` caps a
-    ``rel_error`` run (None: 65 536 sets, the hard limit)."""
+    ``rel_error`` run (None: 65 536 sets, the hard limit).
+
+    ``deliver(image, variance)`` maps the traced picture's mean and variance (rows, cols; W/mm²,
+    (W/mm²)²) to the picture the caller delivers — :func:`eyelume.render.render` passes the
+    camera's PSF, which averages neighbouring pixels' independent noise — so a ``rel_error`` run
+    stops when the *delivered* picture's median target pixel reaches the target (the error its
+    result reports). ``variance_ratio`` is that map's ratio of a pixel's relative variance after
+    to before among similar neighbours (Σ K² for a kernel K of sum 1), used by the pilot, whose
+    scattered pixels cannot be convolved. None and 1.0: the traced picture is delivered."""
 
     advance: Callable[[int, int], None] | None = None
     max_samples_per_pixel: int | None = None
+    deliver: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
+    variance_ratio: float = 1.0
 
 
 class _Work:
@@ -390,18 +405,26 @@ def _fixed_budget(args: tuple, stop, work: _Work, progress) -> _Run:
     return run
 
 
-def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, cap: int):
-    """(run, error reached): rounds until ``target = (rel_error, pixels)`` or ``cap`` samples
-    per pixel; ``args`` = (cs, samples_per_pixel, ratio, seed)."""
-    cs, samples_per_pixel, ratio, seed = args
+def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, control: RunControl):
+    """(run, error reached): rounds until ``target = (rel_error, pixels)`` is met by the
+    delivered picture (``control.deliver``) or ``cap`` samples per pixel; ``args`` = (cs,
+    samples_per_pixel, ratio, seed, cap)."""
+    cs, samples_per_pixel, ratio, seed, cap = args
     rel_error, target_pixels = target
+
+    def judged(est: FastEstimate) -> float:
+        if control.deliver is not None:
+            image, variance = control.deliver(est.image, est.variance)
+            est = replace(est, image=image, variance=variance)
+        return estimate_median_rel_error(est, target_pixels)
+
     grid, sets = planned_sets(samples_per_pixel)[0], 0
     if (
         cs.picture.cols * cs.picture.rows > _PILOT_ABOVE
         and target_pixels is not None
         and (target_pixels.any())
     ):
-        grid, sets = _pilot(cs, seed, target_pixels, rel_error)
+        grid, sets = _pilot(cs, seed, target_pixels, rel_error, control.variance_ratio)
         if progress:
             progress(f"pilot: {grid}×{grid} sets, {sets * grid * grid} samples per pixel")
         _over_cap(progress, rel_error, sets * grid * grid, cap)
@@ -411,7 +434,7 @@ def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, cap: int
     work.plan(run, first)
     err = math.inf
     if run.add(first, ratio, stop, work.tick):
-        err = estimate_median_rel_error(run.estimate(False), target_pixels)
+        err = judged(run.estimate(False))
         _say(progress, run, err)
         if err > rel_error:
             _over_cap(progress, rel_error, run.samples_per_pixel * (err / rel_error) ** 2, cap)
@@ -421,7 +444,7 @@ def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, cap: int
         work.plan(run, run.sets + n_more)
         if not run.add(n_more, ratio, stop, work.tick):
             break
-        err = estimate_median_rel_error(run.estimate(False), target_pixels)
+        err = judged(run.estimate(False))
         _say(progress, run, err)
     return run, err
 
@@ -474,7 +497,7 @@ def trace_fast(
             run, err = _fixed_budget(args, stop, work, progress), math.inf
         else:
             target = (rel_error, target_pixels)
-            run, err = _to_target(args, stop, work, progress, target, cap)
+            run, err = _to_target((*args, cap), stop, work, progress, target, control)
     if run.sets == 0 and run.covered == 0:
         raise KeyboardInterrupt("interrupted before a camera set finished: nothing usable")
     est = run.estimate(stop.requested)
