@@ -49,12 +49,20 @@ def test_preset_renders_an_eye(name):
     cx, cy = truth["pupil"]["centre_px"]
     assert 0 <= cx < scene.sensor.cols and 0 <= cy < scene.sensor.rows
     assert truth["glints_on_cornea"] == scene.leds.count
-    r = eyelume.render(cs)
+    if scene.elements:
+        # the fast estimator refuses elements for now (issue 14): the forward one, 4 million
+        # rays (~20 s), is too noisy for the iris (seen only through the cornea, 0 counts at
+        # this budget): the pupil is checked against the skin, and the ledger is exact
+        r = eyelume.render(cs, eyelume.RenderOptions(estimator="forward", rays=4_000_000))
+        assert sum(r.ledger.values()) == pytest.approx(r.emitted_w, rel=1e-12)
+    else:
+        r = eyelume.render(cs)
     img, reg = r.eye_image, r.regions
     assert np.isfinite(img).all() and (img >= 0).all()
     for region in ("pupil", "iris", "skin"):
         assert reg[region].sum() >= 3, region
-    pupil, iris = img[reg["pupil"]].mean(), img[reg["iris"]].mean()
-    assert pupil < 0.5 * iris  # a dark pupil
+    pupil = img[reg["pupil"]].mean()
+    lit = img[reg["skin"]].mean() if scene.elements else img[reg["iris"]].mean()
+    assert pupil < 0.5 * lit  # a dark pupil
     info = scene_info(scene)["camera"]["opencv"]
     assert np.allclose(np.array(info["R"]) @ np.array(info["R"]).T, np.eye(3), atol=1e-12)

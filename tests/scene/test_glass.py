@@ -55,7 +55,8 @@ def test_shipped_catalog_has_the_lens_glasses(shipped):
         "N-BK7",
         "N-F2",
         "F2",
-    }  # and three common SCHOTT glasses for user prescriptions
+        "CR-39",
+    }  # and three common SCHOTT glasses for user prescriptions, and CR-39 for spectacles
     assert shipped.files == (SHIPPED_CATALOG,)
     for name in shipped.names:
         g = shipped[name]
@@ -92,8 +93,9 @@ def test_shipped_against_opticalglass_reference(shipped):
     ref = json.loads(REFERENCE.read_text(encoding="utf-8"))
     assert ref["opticalglass_version"] == "1.1.1"
     # the paper's lens glasses; N-BK7, N-F2 and F2 (not in opticalglass's reference file) are
-    # checked against their own nd and vd above and N-BK7 against SCHOTT's data sheet below
-    assert set(ref["glasses"]) == set(shipped.names) - {"N-BK7", "N-F2", "F2"}
+    # checked against their own nd and vd above and N-BK7 against SCHOTT's data sheet below;
+    # CR-39 (a fit to its nd and vd, no vendor formula) against its own nd and vd above
+    assert set(ref["glasses"]) == set(shipped.names) - {"N-BK7", "N-F2", "F2", "CR-39"}
     for name, entry in ref["glasses"].items():
         assert 850.0 in [float(w) for w in entry["indices"]]
         for wavelength, n_ref in entry["indices"].items():
@@ -197,7 +199,7 @@ def test_lookup_is_case_insensitive(shipped):
     assert "bsm24" in shipped and "N-Sk16" in shipped
     assert "SK16" not in shipped and 16 not in shipped
     assert list(shipped) == list(shipped.names)
-    assert len(shipped) == 8
+    assert len(shipped) == 9
 
 
 def test_unknown_glass_names_glass_and_catalog(shipped):
