@@ -32,7 +32,59 @@ _SAMPLES_CAP = next(
     m.le for m in Run.model_fields["samples_per_pixel"].metadata if getattr(m, "le", None)
 )
 
-err = Console(stderr=True)
+
+class _PipeSafe:
+    """``sys.stdout`` or ``sys.stderr`` (looked up at each write, as Rich's own console does)
+    that swallows a broken pipe: ``eyelume render … | head -1`` closes the pipe after one line,
+    and the command must still finish its work and write its files rather than stop (Click
+    would exit 1 in silence). Once broken, the stream's later output is dropped;
+    :meth:`_OneLineErrors.main` then points the descriptor at /dev/null so Python's final flush
+    says nothing either."""
+
+    broken = False
+
+    def __init__(self, name: str) -> None:
+        self._name = name
+
+    @property
+    def stream(self):
+        return getattr(sys, self._name)
+
+    def write(self, text: str) -> int:
+        if not _PipeSafe.broken:
+            try:
+                self.stream.write(text)
+            except BrokenPipeError:
+                _PipeSafe.broken = True
+        return len(text)
+
+    def flush(self) -> None:
+        if not _PipeSafe.broken:
+            try:
+                self.stream.flush()
+            except BrokenPipeError:
+                _PipeSafe.broken = True
+
+    def __getattr__(self, name: str):  # isatty, fileno, encoding … of the stream itself
+        return getattr(self.stream, name)
+
+
+def _silence_broken_pipe() -> None:
+    """After a broken pipe: stdout and stderr onto /dev/null, so the interpreter's last flush
+    of the pipe raises nothing."""
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    for stream in (sys.__stdout__, sys.__stderr__):
+        try:
+            os.dup2(devnull, stream.fileno())
+        except (OSError, ValueError, AttributeError):
+            pass
+    os.close(devnull)
+
+
+err = Console(file=_PipeSafe("stderr"))  # type: ignore[arg-type]
+out_stream = _PipeSafe("stdout")
 
 # Click's exception classes as Typer raises them: recent Typer vendors its own Click (the
 # installed ``click`` package's classes are then other classes), older Typer re-exports Click's;
@@ -85,6 +137,9 @@ class _OneLineErrors(TyperGroup):
         except typer.Abort:
             err.print("aborted")
             sys.exit(1)
+        finally:
+            if _PipeSafe.broken:
+                _silence_broken_pipe()
         sys.exit(rv if isinstance(rv, int) else 0)
 
 
@@ -179,6 +234,29 @@ def _warn_saturation(summary_json: Path) -> None:
         )
 
 
+def _check_counts(samples: int, seed: int) -> None:
+    """Refuse --samples below 1 or --seed below 0, naming the one that is wrong."""
+    if samples < 1:
+        _fail(f"--samples {samples}: must be ≥ 1 (camera samples per pixel)")
+    if seed < 0:
+        _fail(f"--seed {seed}: must be ≥ 0")
+
+
+def _refuse_elements(sc, command: str) -> None:
+    """The commands that render many frames use the fast estimator, which does not trace
+    optical elements yet: a scene with some is refused before any work, naming them."""
+    if sc.elements:
+        names = ", ".join(
+            f"elements.{k}" + (f" ({el.name})" if el.name else "")
+            for k, el in enumerate(sc.elements)
+        )
+        _fail(
+            f"{command} renders with the fast estimator, which does not trace optical elements "
+            f"yet, and the scene has {names}: take them out (--set elements=[]), or render the "
+            "scene with `eyelume render --estimator forward`"
+        )
+
+
 def _refuse_gaze(sets: list[str] | None, command: str) -> None:
     """The tracking commands turn the eye themselves: a --set of the gaze would be ignored."""
     for key in _overrides(sets):
@@ -233,6 +311,7 @@ def _progress_bar(label: str, count: str) -> Progress:
         TimeRemainingColumn(),
         console=err,
         transient=True,
+        disable=not err.is_terminal,  # no live bar (it left a blank line): _Progress's lines
     )
 
 
@@ -414,21 +493,8 @@ def render(
 
 
 def _check_render_options(estimator, rays, samples, rel_error, max_samples, seed) -> None:
-    if estimator not in ("fast", "forward"):
-        _fail(f"--estimator {estimator!r}: must be 'fast' or 'forward'")
-    if rays is not None and (samples is not None or rel_error is not None):
-        other = f"--samples {samples}" if samples is not None else f"--rel-error {rel_error}"
-        _fail(
-            f"--rays {rays} with {other}: give one (--rays is the forward estimator's budget, "
-            "--samples and --rel-error the fast one's)"
-        )
-    if rays is not None and (rays < 1 or estimator != "forward"):
-        _fail(f"--rays {rays}: must be ≥ 1, with --estimator forward (fast: --samples)")
+    _check_budget(estimator, rays, samples, rel_error)
     cap = _SAMPLES_CAP
-    if samples is not None and (not 1 <= samples <= cap or estimator != "fast"):
-        _fail(f"--samples {samples}: must be 1 to {cap:,}, with --estimator fast (forward: --rays)")
-    if rel_error is not None and (not 0 < rel_error < 1 or estimator != "fast"):
-        _fail(f"--rel-error {rel_error}: must be in (0, 1), with --estimator fast")
     if samples is not None and rel_error is not None:
         _fail(
             f"--samples {samples} with --rel-error {rel_error}: give one (a fixed count, or a "
@@ -440,6 +506,38 @@ def _check_render_options(estimator, rays, samples, rel_error, max_samples, seed
         _fail(f"--max-samples {max_samples}: must be 1 to {cap:,}")
     if seed is not None and seed < 0:
         _fail(f"--seed {seed}: must be ≥ 0")
+
+
+def _check_budget(estimator, rays, samples, rel_error) -> None:
+    """The estimator and its budget: --rays for the forward one, --samples or --rel-error for
+    the fast one; a budget given to the other estimator is refused naming the right option."""
+    if estimator not in ("fast", "forward"):
+        _fail(f"--estimator {estimator!r}: must be 'fast' or 'forward'")
+    if rays is not None and (samples is not None or rel_error is not None):
+        other = f"--samples {samples}" if samples is not None else f"--rel-error {rel_error}"
+        _fail(
+            f"--rays {rays} with {other}: give one (--rays is the forward estimator's budget, "
+            "--samples and --rel-error the fast one's)"
+        )
+    if rays is not None and estimator != "forward":
+        _fail(
+            f"--rays {rays} with --estimator {estimator}: the fast estimator takes camera "
+            "samples per pixel, not rays; give --samples N (or --estimator forward --rays N)"
+        )
+    for name, value in (("--samples", samples), ("--rel-error", rel_error)):
+        if value is not None and estimator != "fast":
+            _fail(
+                f"{name} {value} with --estimator {estimator}: the forward estimator traces "
+                "rays, not camera samples per pixel; give --rays N (or --estimator fast "
+                f"{name} {value})"
+            )
+    if rays is not None and rays < 1:
+        _fail(f"--rays {rays}: must be ≥ 1")
+    cap = _SAMPLES_CAP
+    if samples is not None and not 1 <= samples <= cap:
+        _fail(f"--samples {samples}: must be 1 to {cap:,}")
+    if rel_error is not None and not 0 < rel_error < 1:
+        _fail(f"--rel-error {rel_error}: must be in (0, 1)")
 
 
 def _render_fast(cs, samples, rel_error, max_samples, seed):
@@ -653,8 +751,10 @@ def reproduce(
     bad = [v for v in values if not 0 <= v < 1]
     if not values or bad:
         _fail(f"--deltas {deltas!r}: each δ must be in [0, 1)")
-    if samples < 1 or direct < 0 or seed < 0:
-        _fail(f"--samples {samples}, --direct {direct}, --seed {seed}: must be ≥ 1, ≥ 0, ≥ 0")
+    _check_counts(samples=samples, seed=seed)
+    if direct < 0:
+        _fail(f"--direct {direct}: must be ≥ 0 (0 skips the direct optimisation)")
+    _refuse_elements(sc, "reproduce")
     _refuse_without_direct(direct, direct_leds, vary_spread, vary_azimuths)
     direct_leds = "4" if direct_leds is None else direct_leds
     try:
@@ -862,7 +962,7 @@ def track(
         raise InputFileError(str(exc), file=image) from None
     from eyelume.json_files import dumps
 
-    sys.stdout.write(dumps({**detection_to_dict(result), "enlargement": k}) + "\n")
+    out_stream.write(dumps({**detection_to_dict(result), "enlargement": k}) + "\n")
     for reason in result.failures:
         err.print(f"[yellow]{escape(reason)}[/]", highlight=False)
     if image.name == "eye_image.png" and not result.ok:
@@ -903,8 +1003,8 @@ def evaluate_tracking_cmd(
 
     _refuse_gaze(set_, "evaluate-tracking")
     sc = _load(scene, set_)
-    if samples < 1 or seed < 0:
-        _fail(f"--samples {samples}, --seed {seed}: must be ≥ 1 and ≥ 0")
+    _check_counts(samples=samples, seed=seed)
+    _refuse_elements(sc, "evaluate-tracking")
     _check_out(out)
     compile_scene(sc)
     t0 = time.perf_counter()
@@ -997,8 +1097,10 @@ def optimize_tracking_cmd(
 
     _refuse_gaze(set_, "optimize-tracking")
     sc = _load(scene, set_)
-    if samples < 1 or seed < 0 or not 0 <= delta < 1:
-        _fail(f"--samples {samples}, --seed {seed}, --delta {delta}: need ≥ 1, ≥ 0, [0, 1)")
+    _check_counts(samples=samples, seed=seed)
+    if not 0 <= delta < 1:
+        _fail(f"--delta {delta}: must be in [0, 1)")
+    _refuse_elements(sc, "optimize-tracking")
     _check_out(out)
     b = sweep_leds(sc, gaussian_target(delta, sc.eye_plane)).best
     dopt = (b["height_mm"], b["distance_mm"], b["pitch_deg"])
@@ -1164,14 +1266,11 @@ def info(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
 ) -> None:
     """Print the derived optics: lens EFL, image distance, magnification, F-numbers, eye power,
-    glass indices."""
-    from eyelume.info import scene_info
+    glass indices — as indented ``name: value`` lines to read, or with --json as one JSON
+    object (the same numbers, full precision) for a program."""
+    from eyelume.info import info_text, scene_info
+    from eyelume.json_files import dumps
 
     sc = _load(scene, set_)
     data = scene_info(sc)
-    from eyelume.json_files import dumps
-
-    if as_json:
-        sys.stdout.write(dumps(data) + "\n")
-        return
-    Console().print_json(dumps(data))
+    out_stream.write((dumps(data) if as_json else info_text(data)) + "\n")

@@ -30,7 +30,7 @@ from eyelume.scene.optics import ParaxialSystem, curvature
 from eyelume.scene.pose import opencv_extrinsics
 from eyelume.scene.sources import cos_power_exponent, led_poses
 
-__all__ = ["scene_info", "camera_info"]
+__all__ = ["camera_info", "info_text", "scene_info"]
 
 
 def camera_info(cs: CompiledScene) -> dict:
@@ -327,3 +327,52 @@ def _element_info(cs: CompiledScene, k: int, el: Element) -> dict:
         out["efl_mm"] = 1.0 / power
         out["back_focal_distance_mm"] = -ys[-1] / us[-1]
     return out
+
+
+def _scalar(v) -> str:
+    if isinstance(v, bool) or v is None:
+        return {True: "true", False: "false", None: "none"}[v]
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
+
+
+def _flat(v) -> bool:
+    return isinstance(v, list) and all(not isinstance(x, dict | list) for x in v)
+
+
+def info_text(data: dict) -> str:
+    """:func:`scene_info`'s dictionary as text to read (``eyelume info`` without ``--json``):
+    one ``name: value`` line per entry, a nested table indented under its name, a list of
+    numbers on one line, numbers to 6 significant digits (``--json`` keeps full precision).
+
+    >>> print(info_text({"lens": {"efl_mm": 12.3456789, "sd_mm": [1.0, 2.5]}, "ok": True}))
+    lens:
+      efl_mm: 12.3457
+      sd_mm: 1, 2.5
+    ok: true
+    """
+    lines: list[str] = []
+
+    def walk(d: dict, depth: int) -> None:
+        pad = "  " * depth
+        for key, v in d.items():
+            if isinstance(v, dict):
+                lines.append(f"{pad}{key}:")
+                walk(v, depth + 1)
+            elif _flat(v):
+                lines.append(f"{pad}{key}: {', '.join(_scalar(x) for x in v)}")
+            elif isinstance(v, list) and all(_flat(x) for x in v):  # a matrix: one row a line
+                lines.append(f"{pad}{key}:")
+                lines.extend([f"{pad}  {', '.join(_scalar(x) for x in row)}" for row in v])
+            elif isinstance(v, list):
+                lines.append(f"{pad}{key}:")
+                for k, item in enumerate(v):
+                    if isinstance(item, dict):
+                        lines.append(f"{pad}  [{k}]")
+                        walk(item, depth + 2)
+                    else:
+                        lines.append(f"{pad}  [{k}] {_scalar(item)}")
+            else:
+                lines.append(f"{pad}{key}: {_scalar(v)}")
+
+    walk(data, 0)
+    return "\n".join(lines)

@@ -1,0 +1,134 @@
+"""A fresh user's findings on the command line: `info` without --json is text, --json is JSON;
+messages name the option that is wrong (and the real one to use); a broken pipe (`| head -1`)
+loses no outputs and exits quietly with 0; no stray blank line where stderr is no terminal."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+from typer.testing import CliRunner
+
+from eyelume.cli import app
+
+runner = CliRunner()
+
+PLATE = (
+    'elements=[{kind="plate", name="w", position_mm=[0, 0, 20], thickness_mm=3, '
+    'glass="N-BK7", semi_diameter_mm=18}]'
+)
+
+
+def test_info_prints_text_and_info_json_prints_json():
+    text = runner.invoke(app, ["info"])
+    as_json = runner.invoke(app, ["info", "--json"])
+    assert text.exit_code == 0 and as_json.exit_code == 0, (text.output, as_json.output)
+    assert text.stdout != as_json.stdout
+    data = json.loads(as_json.stdout)
+    with pytest.raises(json.JSONDecodeError):
+        json.loads(text.stdout)
+    lines = text.stdout.splitlines()
+    assert "scene: paper2005" in lines
+    efl = data["imaging_lens"]["effective_focal_length_mm"]
+    assert f"  effective_focal_length_mm: {efl:.6g}" in lines
+
+
+def _one_line(res) -> str:
+    assert res.exit_code == 2, res.output
+    lines = [ln for ln in res.output.splitlines() if ln.strip()]
+    assert len(lines) == 1, lines
+    assert "Traceback" not in res.output
+    return lines[0]
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--samples", "4", "--estimator", "forward"], ["--samples 4", "traces rays", "--rays"]),
+        (["--rel-error", "0.1", "--estimator", "forward"], ["--rel-error 0.1", "--rays"]),
+        (["--rays", "100", "--estimator", "fast"], ["--rays 100", "--samples"]),
+        (["--samples", "0"], ["--samples 0: must be 1 to"]),
+        (["--rays", "0"], ["--rays 0: must be ≥ 1"]),
+    ],
+)
+def test_render_option_messages_name_the_real_option(tmp_path, args, words):
+    line = _one_line(runner.invoke(app, ["render", "--out", str(tmp_path / "o"), *args]))
+    assert all(w in line for w in words), line
+    if "forward" in args:
+        assert "with --estimator fast" not in line  # the old message told forward to use fast
+
+
+@pytest.mark.parametrize(
+    ("args", "named", "not_named"),
+    [
+        (["--samples", "0"], "--samples 0", "--seed"),
+        (["--seed", "-1"], "--seed -1", "--samples"),
+    ],
+)
+@pytest.mark.parametrize("command", ["evaluate-tracking", "optimize-tracking", "reproduce"])
+def test_counts_name_the_option_that_is_wrong(tmp_path, command, args, named, not_named):
+    head = [command, "paper2005"] if command == "reproduce" else [command]
+    line = _one_line(runner.invoke(app, [*head, "--out", str(tmp_path / "o"), *args]))
+    assert named in line and not_named not in line, line
+
+
+@pytest.mark.parametrize("command", ["evaluate-tracking", "optimize-tracking"])
+def test_tracking_with_elements_names_no_option_it_lacks(tmp_path, command):
+    """The fast estimator's refusal said '--estimator forward', an option these commands lack;
+    and the progress bar left a blank line before it where stderr is no terminal."""
+    res = runner.invoke(app, [command, "--out", str(tmp_path / "o"), "--set", PLATE])
+    line = _one_line(res)
+    assert res.output.startswith("error:"), repr(res.output)  # no blank line first
+    assert f"{command} renders with the fast estimator" in line and "elements.0 (w)" in line
+    assert "eyelume render --estimator forward" in line
+    assert not (tmp_path / "o").exists()
+
+
+def _cli(args: list[str], tmp_path) -> list[str]:
+    return [sys.executable, "-c", "from eyelume.cli import app; app()", *args]
+
+
+def test_a_broken_pipe_loses_no_outputs_and_exits_0(tmp_path):
+    """`eyelume render … 2>&1 | head -1` exited 1 at its first message, writing nothing."""
+    out = tmp_path / "o"
+    args = ["render", "--out", str(out), "--rays", "20000", "--seed", "1"]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    proc = subprocess.Popen(
+        _cli(args, tmp_path), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env
+    )
+    assert proc.stdout is not None
+    first = proc.stdout.readline()
+    proc.stdout.close()  # what `head -1` does
+    assert proc.wait(timeout=600) == 0
+    assert first.strip()
+    assert (out / "summary.json").is_file() and (out / "eye_image.npy").is_file()
+
+    info = subprocess.Popen(
+        _cli(["info"], tmp_path), stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env
+    )
+    assert info.stdout is not None and info.stderr is not None
+    info.stdout.close()  # before it writes: its output meets a closed pipe
+    errors = info.stderr.read()
+    assert info.wait(timeout=600) == 0
+    assert b"Traceback" not in errors and b"BrokenPipe" not in errors, errors
+
+
+def test_wavelengths_within_the_tolerance_are_one_group():
+    """850 and 850.0000001 nm made two wavelength groups (a whole render each)."""
+    from eyelume.compile import WAVELENGTH_TOLERANCE_NM, single_wavelength, wavelength_groups
+    from eyelume.scene.io import load_scene
+
+    near = load_scene("paper2005", {"leds.wavelength_nm": [850, 850.0000001, 850, 849.995]})
+    assert single_wavelength(near)
+    assert [(g.wavelength_nm, g.leds) for g in wavelength_groups(near)] == [(850.0, (0, 1, 2, 3))]
+    apart = 850 + 2 * WAVELENGTH_TOLERANCE_NM
+    far = load_scene("paper2005", {"leds.wavelength_nm": [850, apart, 850, 850]})
+    assert not single_wavelength(far)
+    assert [g.leds for g in wavelength_groups(far)] == [(0, 2, 3), (1,)]
+    res = runner.invoke(
+        app, ["info", "--json", "--set", "leds.wavelength_nm=[850, 850.0000001, 850, 850]"]
+    )
+    assert res.exit_code == 0 and "wavelength_groups" not in json.loads(res.stdout)
