@@ -103,9 +103,17 @@ def _holds_bool(annotation) -> bool:
     return annotation is bool or any(_holds_bool(a) for a in get_args(annotation))
 
 
+def _only_bool(annotation) -> bool:
+    """Whether a field is a switch: ``bool`` or ``bool | None``."""
+    return annotation is bool or (
+        bool in get_args(annotation) and set(get_args(annotation)) <= {bool, type(None)}
+    )
+
+
 class _Model(BaseModel):
     """Every scene table: unknown keys, NaN and ±inf refused; ``true``/``false`` refused where
-    a number is asked (pydantic's lax mode would read ``count = true`` as 1)."""
+    a number is asked (pydantic's lax mode would read ``count = true`` as 1), and a switch
+    (a ``bool`` field) takes only ``true`` or ``false`` (lax mode would read 1, 0, "yes")."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
@@ -114,10 +122,12 @@ class _Model(BaseModel):
     def _no_bool_for_a_number(cls, v, info):
         items = v if isinstance(v, list | tuple) else [v]
         flat = [x for it in items for x in (it if isinstance(it, list | tuple) else [it])]
-        if any(isinstance(x, bool) for x in flat) and not _holds_bool(
-            cls.model_fields[info.field_name].annotation
-        ):
+        annotation = cls.model_fields[info.field_name].annotation
+        if any(isinstance(x, bool) for x in flat) and not _holds_bool(annotation):
             raise ValueError("true/false is not a value this field takes")
+        if _only_bool(annotation) and not (isinstance(v, bool) or v is None):
+            # pydantic's lax mode would read 1, 0, "yes", "off" as a switch
+            raise ValueError("must be true or false (a switch)")
         return v
 
 
