@@ -1536,26 +1536,55 @@ class WavelengthGroup:
     leds: tuple[int, ...]
 
 
+#: LED wavelengths closer than this (nm) are one wavelength group, traced at one wavelength:
+#: 850 and 850.0000001 nm are the same LED to any datasheet (whose peak wavelengths are given
+#: to 1 nm at best), and rendering them apart costs a whole render each. Over 0.01 nm the
+#: indices of the eye and the lens glasses change by ~1e-7 (their dispersion dn/dλ is about
+#: 1e-5 per nm near 850 nm), far below any effect on a picture.
+WAVELENGTH_TOLERANCE_NM = 0.01
+
+
 def wavelength_groups(scene: Scene) -> list[WavelengthGroup]:
     """The scene's LEDs grouped by wavelength (each LED's ``leds.wavelength_nm``, the scene's
-    ``wavelength_nm`` where not given), in order of increasing wavelength.
+    ``wavelength_nm`` where not given), in order of increasing wavelength. LEDs within
+    :data:`WAVELENGTH_TOLERANCE_NM` of a group's shortest wavelength join that group; the group
+    is traced at the scene's ``wavelength_nm`` when that is within the tolerance of the
+    group's shortest, else at the mean of its LEDs' wavelengths (each LED's eye-safety weight
+    stays at its own wavelength).
 
     >>> from eyelume.scene.io import load_scene
     >>> s = load_scene("paper2005", {"leds.wavelength_nm": [940, 850, 940, 850]})
     >>> [(g.wavelength_nm, g.leds) for g in wavelength_groups(s)]
     [(850.0, (1, 3)), (940.0, (0, 2))]
+    >>> s = load_scene("paper2005", {"leds.wavelength_nm": [850, 850.0000001, 940, 940.004]})
+    >>> [(g.wavelength_nm, g.leds) for g in wavelength_groups(s)]
+    [(850.0, (0, 1)), (940.002, (2, 3))]
     """
     lams = scene.leds.wavelengths_nm(scene.wavelength_nm)
-    return [
-        WavelengthGroup(g, lam, tuple(k for k, x in enumerate(lams) if x == lam))
-        for g, lam in enumerate(sorted(set(lams)))
-    ]
+    order = sorted(range(len(lams)), key=lambda k: lams[k])
+    members: list[list[int]] = []
+    for k in order:
+        if members and lams[k] - lams[members[-1][0]] <= WAVELENGTH_TOLERANCE_NM:
+            members[-1].append(k)
+        else:
+            members.append([k])
+    groups = []
+    for g, leds in enumerate(members):
+        first = lams[leds[0]]
+        if abs(float(scene.wavelength_nm) - first) <= WAVELENGTH_TOLERANCE_NM:
+            lam = float(scene.wavelength_nm)
+        else:
+            lam = float(sum(lams[k] for k in leds) / len(leds))
+        groups.append(WavelengthGroup(g, lam, tuple(sorted(leds))))
+    return groups
 
 
 def single_wavelength(scene: Scene) -> bool:
-    """True when every LED shines at the scene's ``wavelength_nm``: the scene compiles and
-    renders as one (:func:`compile_scene` without a group)."""
-    return set(scene.leds.wavelengths_nm(scene.wavelength_nm)) == {float(scene.wavelength_nm)}
+    """True when every LED shines at the scene's ``wavelength_nm`` (within
+    :data:`WAVELENGTH_TOLERANCE_NM`): the scene compiles and renders as one
+    (:func:`compile_scene` without a group)."""
+    groups = wavelength_groups(scene)
+    return len(groups) == 1 and groups[0].wavelength_nm == float(scene.wavelength_nm)
 
 
 def compile_scene(
