@@ -140,13 +140,19 @@ def _follow(cs, p, d, chain, target=None, strict=False):
 
 
 def _miss(ray, led, n, g1, g2):
+    """Where the ray (after its chain) crosses the plane through the LED ⟂ n, relative to the
+    LED, in (g1, g2); None when it does not reach that plane going forward (an LED behind the
+    ray's last surface is no image of it)."""
     if ray is None:
         return None
     p, d = ray[0], ray[1]
     den = d @ n
     if abs(den) < 1e-12:
         return None
-    h = p + ((led - p) @ n) / den * d - led
+    t = ((led - p) @ n) / den
+    if t < 0.0:
+        return None
+    h = p + t * d - led
     return np.array([h @ g1, h @ g2])
 
 

@@ -1,0 +1,96 @@
+"""The ``paper2005-integrated`` preset (issue 14; the paper's Fig. 1): the eye imaged through
+a Thorlabs LA1131-B eyepiece and a 45° hot mirror onto an ideal camera.
+
+* Its magnification from real chief rays (the camera's, folded by the mirror and refracted by
+  the eyepiece, down to the eye plane z = 0) against a paraxial calculation written here: the
+  y–nu trace of the plano-convex eyepiece (N-BK7 at 850 nm) gives the eye plane's virtual image
+  (distance q before the plane side, magnification m_e); the fold keeps distances, so the camera
+  sees it D = 50 − q away (20 mm eyepiece → mirror, 30 mm mirror → camera) and its thin lens
+  (f, focused at s) images it with the chief-ray magnification v / D, v = 1/(1/f − 1/s).
+* The preset's focus distance is that D (the picture is in focus on the eye plane).
+* The truth: the four LEDs' glints seen, the pupil centred on the axis, ghosts searched.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import eyelume
+from eyelume.analysis.ghosts import _chief_ray
+from eyelume.analysis.truth import _through_elements, eye_truth
+from eyelume.compile import compile_scene
+from eyelume.scene.glass import load_catalog
+
+
+@pytest.fixture(scope="module")
+def integrated():
+    scene = eyelume.load_scene("paper2005-integrated")
+    return scene, compile_scene(scene)
+
+
+def _paraxial(scene):
+    """(m_e, q, D): the eyepiece's magnification of the eye plane, its virtual image's
+    distance from the plane side (negative: before it), the camera's object distance."""
+    eyepiece, mirror = scene.elements
+    n = load_catalog()["N-BK7"].index(scene.wavelength_nm)
+    r1, t, z1 = eyepiece.front.radius_mm, eyepiece.thickness_mm, eyepiece.position_mm[2]
+
+    def trace(y, u):  # y-nu: object plane z = 0 -> S1 (R1) -> S2 (plane), air after
+        y = y + z1 * u
+        u = (u - y * (n - 1) / r1) / n
+        y = y + t * u
+        return y, n * u
+
+    y, u = trace(0.0, 1.0)
+    q = -y / u
+    h, uh = trace(1.0, 0.0)
+    m_e = h + q * uh
+    back = z1 + t
+    to_mirror = mirror.position_mm[2] - back
+    to_camera = math.dist(scene.camera.position_mm, mirror.position_mm)
+    return m_e, q, to_mirror + to_camera - q
+
+
+def test_focus_on_the_eyepiece_image_of_the_eye_plane(integrated):
+    scene, _ = integrated
+    m_e, q, d = _paraxial(scene)
+    assert q < 0 and m_e > 1  # virtual, magnified: the eye inside the eyepiece's focal length
+    assert scene.camera.ideal.focus_distance_mm == pytest.approx(d, abs=0.01)
+    assert 20.0 <= scene.elements[0].position_mm[2] <= 70.0  # the paper's eye relief range
+
+
+def test_magnification_against_the_paraxial_eyepiece_mirror_camera(integrated):
+    scene, cs = integrated
+    m_e, _, d = _paraxial(scene)
+    f, s = scene.camera.ideal.efl_mm, scene.camera.ideal.focus_distance_mm
+    v = 1.0 / (1.0 / f - 1.0 / s)
+    expect = m_e * v / d
+    eps = 0.005  # mm on the sensor (~2.5 pixels' worth): paraxial, central differences
+    for axis in (0, 1):
+        hits = []
+        for sign in (-1.0, 1.0):
+            xs = np.zeros(2)
+            xs[axis] = sign * eps
+            p, dvec = _chief_ray(cs, cs.camera, *xs)
+            p, dvec = _through_elements(cs, p, dvec)
+            pw, dw = cs.frame.world_point(p), cs.frame.world_vector(dvec)
+            assert dw[2] < 0  # folded by the mirror, through the eyepiece, toward the eye
+            hits.append(pw - pw[2] / dw[2] * dw)
+        shift = np.linalg.norm(hits[1] - hits[0])
+        assert 2 * eps / shift == pytest.approx(expect, rel=1e-4), axis  # 4e-6 found
+
+
+def test_truth_glints_pupil_and_ghosts(integrated):
+    scene, cs = integrated
+    t = eye_truth(cs)
+    assert t["glints_visible"] == 4
+    cx, cy = t["pupil"]["centre_px"]
+    assert cx == pytest.approx((scene.sensor.cols - 1) / 2, abs=0.01)
+    assert cy == pytest.approx((scene.sensor.rows - 1) / 2, abs=0.01)
+    assert "ghosts" in t and t["ghosts_visible"] == sum(g["visible"] for g in t["ghosts"])
+    # the glints lie about the pupil centre, the four LEDs' layout (a ring about the axis)
+    radii = [math.dist(g["centre_px"], (cx, cy)) for g in t["glints"]]
+    assert max(radii) - min(radii) < 0.01 * max(radii)
