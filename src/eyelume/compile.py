@@ -54,6 +54,7 @@ from eyelume.scene.eye import (
     eye_indices,
     iris_root_radius,
     limbus_geometry,
+    with_contact_lens,
 )
 from eyelume.scene.focus import check_focus
 from eyelume.scene.glass import Glass, load_catalog
@@ -1605,6 +1606,7 @@ def compile_scene(
     whichever LEDs emit). A prescription lens keeps the clear apertures of the lens as built,
     sized at the scene's wavelength (from ``nominal``, that compile, made here if not given).
     """
+    scene = with_contact_lens(scene)  # a contact lens is built into the eye (scene/eye.py)
     if group is not None:
         if scene.camera.optics == "prescription" and nominal is None:
             nominal = compile_scene(scene)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import brentq
 
 from eyelume.errors import GeometryError
 from eyelume.scene.model import Eye
@@ -19,6 +20,7 @@ __all__ = [
     "eye_indices",
     "iris_root_radius",
     "limbus_geometry",
+    "with_contact_lens",
 ]
 
 LAMBDA_D = 587.5618  # nm, helium d line
@@ -255,3 +257,61 @@ def _check_eyeball(eye: Eye) -> None:
                 field="eye.sclera_radius_mm",
                 value=eye.sclera_radius_mm,
             )
+
+
+def with_contact_lens(scene):
+    """The scene with its eye's contact lens (``eye.contact_lens``,
+    :class:`~eyelume.scene.model.ContactLens`) built in, and that field cleared (so applying it
+    twice is applying it once); a scene without one is returned unchanged.
+    :func:`eyelume.compile.compile_scene` calls it first, so everything compiled sees the lens.
+
+    A thin shell of thickness t concentric with the anterior cornea (radius R, conic k): the
+    eye's first surface becomes the lens's front, radius R + t, same conic (ASSUMPTION, a lens
+    that follows the cornea's cap — for a conic, R + t with the same k is concentric only near
+    the axis; a soft lens's skirt over the sclera is not modelled), t in front of the corneal
+    vertex, so the eye frame's vertex moves t toward the world (``eye_pose.relief_mm`` − t;
+    the rotation centre stays put: ``rotation_centre_mm`` + t; the face moves with the eye
+    frame by t) and the first surface's thickness grows by t; its clear aperture ends where it
+    meets the sclera sphere (so the eyeball, :func:`limbus_geometry`, stays where it was).
+
+    Its reflection: the front's Fresnel reflectance at normal incidence, R = ((n − 1)/(n + 1))²
+    (n the lens's index; 4.0 % for 1.50 against the tear film's 2.1 %), as a fixed split
+    (ASSUMPTION: its rise with the angle — 4.2 % at 30° for n = 1.50 — is ignored). Behind the
+    front the shell refracts as the cornea (the medium after the first surface keeps the
+    cornea's index): a thin concentric shell bends a ray as the single interface does to first
+    order in t, and its back face against the tear film and cornea (index step 1.50 → ~1.376:
+    R ≈ 0.2 %) forms no glint here.
+    """
+    eye = scene.eye
+    lens = eye.contact_lens
+    if lens is None:
+        return scene
+    t, n = lens.thickness_mm, lens.refractive_index
+    cornea = eye.surfaces[0]
+    c, k = curvature(cornea.radius_mm + t), cornea.conic
+    _, _, z_c = limbus_geometry(eye)  # eyeball centre, behind the bare corneal vertex
+    r_s = eye.sclera_radius_mm
+
+    def off_sclera(h: float) -> float:  # the front's point at height h against the sclera
+        return h * h + (z_c + t - float(sag(c, k, h))) ** 2 - r_s * r_s
+
+    # the shell lies t outside the cornea, so it meets the sclera just beyond the limbus
+    edge = brentq(off_sclera, cornea.semi_diameter_mm, cornea.semi_diameter_mm + 2.0)
+    front = cornea.model_copy(
+        update={
+            "radius_mm": cornea.radius_mm + t,
+            "thickness_mm": cornea.thickness_mm + t,
+            "semi_diameter_mm": edge,
+        }
+    )
+    fitted = eye.model_copy(
+        update={
+            "surfaces": [front, *eye.surfaces[1:]],
+            "cornea_reflection": "fixed",
+            "cornea_reflectance": ((n - 1.0) / (n + 1.0)) ** 2,
+            "rotation_centre_mm": eye.rotation_centre_mm + t,
+            "contact_lens": None,
+        }
+    )
+    pose = scene.eye_pose.model_copy(update={"relief_mm": scene.eye_pose.relief_mm - t})
+    return scene.model_copy(update={"eye": fitted, "eye_pose": pose})

@@ -412,6 +412,21 @@ class EyeSurface(_Model):
         return self
 
 
+class ContactLens(_Model):
+    """A contact lens on the eye (issue 14): a thin shell of ``thickness_mm`` concentric with
+    the anterior cornea, its front of index ``refractive_index`` over the tear film.
+
+    Defaults: n = 1.50 — the issue's figure; rigid lenses are 1.44–1.51 (PMMA 1.49; rigid
+    gas-permeable materials lower), soft hydrogels 1.37–1.44 (lower the more water they hold),
+    the ranges contact-lens texts give; ASSUMPTION for any one lens — and 0.10 mm (ASSUMPTION:
+    a −3 D soft lens is ~0.07–0.12 mm thick at its centre, a rigid one ~0.12–0.2). How it is
+    applied: :func:`eyelume.scene.eye.with_contact_lens`.
+    """
+
+    refractive_index: float = Field(1.50, gt=1.0, le=2.0)
+    thickness_mm: float = Field(0.10, gt=0.0, le=1.0)
+
+
 class Eye(_Model):
     """A schematic eye with its Lambertian tissues.
 
@@ -427,6 +442,8 @@ class Eye(_Model):
     corneal vertex of primary gaze, first by ``gaze_vertical_deg`` about the x axis (positive:
     looking up, +y), then by ``gaze_horizontal_deg`` about the y axis (positive: looking toward
     +x, the nose of a right eye). The world frame stays that of primary gaze (ARCHITECTURE.md §2).
+
+    ``contact_lens``: a contact lens on the cornea (:class:`ContactLens`; unset: none).
     """
 
     model: str = "arizona"
@@ -444,6 +461,7 @@ class Eye(_Model):
     gaze_horizontal_deg: float = Field(0.0, ge=-30.0, le=30.0)
     gaze_vertical_deg: float = Field(0.0, ge=-30.0, le=30.0)
     rotation_centre_mm: Positive = 13.5
+    contact_lens: ContactLens | None = None
 
     @model_validator(mode="after")
     def _consistent(self) -> Eye:
