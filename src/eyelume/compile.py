@@ -1261,7 +1261,7 @@ def _coating_columns(k: int, j: int, coating: Coating, wavelength_nm: float) -> 
         r, t = coating.fixed_at(wavelength_nm)
         return {"refl": r, "absorb": max(0.0, 1.0 - r - t)}
     field = f"elements.{k}.{_SIDES[j]}.coating.table_csv"
-    angles, values = read_reflectance_table(coating.table_csv, field)  # type: ignore[arg-type]
+    angles, values = read_reflectance_table(coating.table_csv, field, wavelength_nm)  # type: ignore[arg-type]
     if len(angles) > I.R_TABLE_NODES:
         raise InputFileError(
             f"{len(angles)} rows: at most {I.R_TABLE_NODES} angles per table",

@@ -110,14 +110,21 @@ def crosses_surfaces(element: Element, polylines: np.ndarray) -> bool:
     return False
 
 
-def read_reflectance_table(path: str, field: str) -> tuple[np.ndarray, np.ndarray]:
-    """A coating's R(θ) table: (angles of incidence in rad, reflectance 0 … 1).
+def read_reflectance_table(
+    path: str, field: str, wavelength_nm: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """A coating's R(θ) table at ``wavelength_nm``: (angles of incidence in rad, reflectance
+    0 … 1).
 
     The CSV (UTF-8, UTF-16 or Windows-1252, as :func:`~eyelume.scene.textfile.read_text_file`
     reads it) has two columns, angle of incidence in degrees and reflectance R (a fraction),
-    one row per angle; a first header row and lines starting with ``#`` are skipped. Angles
-    increase from 0 to 90° (both given: R is interpolated linearly between rows, never
-    extrapolated).
+    one row per angle — or three, angle (degrees), wavelength (nm) and R, the rows of each
+    wavelength an R(θ) curve of their own (a coating measured at several wavelengths, for a
+    scene whose LEDs have more than one). A first header row and lines starting with ``#``
+    are skipped. Each curve's angles increase from 0 to 90° (both given: R is interpolated
+    linearly between rows, never extrapolated). With wavelengths, R(θ, λ) is interpolated
+    linearly in λ between the two curves that bracket ``wavelength_nm`` (on the union of their
+    angles); a wavelength outside the table's is refused, never extrapolated.
 
     Raises
     ------
@@ -125,37 +132,95 @@ def read_reflectance_table(path: str, field: str) -> tuple[np.ndarray, np.ndarra
         One line naming the file, ``field`` and the bad row or value.
     """
     where = Path(path)
-    rows = read_csv_rows(where, field)
-    angles, values = [], []
-    for n, row in enumerate(rows, 1):
-        try:
-            a, v = float(row[0]), float(row[1])
-        except (ValueError, IndexError):
-            if n == 1:
-                continue  # a header line
-            raise InputFileError(
-                f"row {n} {row!r} is not 'angle_deg, reflectance'", file=where, field=field
-            ) from None
-        if not (math.isfinite(a) and math.isfinite(v)) or not 0.0 <= v <= 1.0:
-            raise InputFileError(
-                f"row {n} {row!r}: the angle must be finite and the reflectance within 0 … 1",
-                file=where,
-                field=field,
-            )
-        if not 0.0 <= a <= 90.0:
-            raise InputFileError(
-                f"row {n} {row!r}: angle of incidence {a:g} deg out of range 0 … 90",
-                file=where,
-                field=field,
-            )
+    curves: dict[float | None, tuple[list[float], list[float]]] = {}
+    width = 0
+    for n, row in enumerate(read_csv_rows(where, field), 1):
+        got = _table_row(n, row, width, where, field)
+        if got is None:
+            continue  # a header line
+        width, a, lam, v = got
+        angles, values = curves.setdefault(lam, ([], []))
         angles.append(a)
         values.append(v)
-    a = np.asarray(angles)
-    if a.size < 2 or np.any(np.diff(a) <= 0) or a[0] != 0.0 or a[-1] != 90.0:
+    if not curves:
+        raise InputFileError("no rows of 'angle_deg, reflectance'", file=where, field=field)
+    for lam, (angles, _) in curves.items():
+        a = np.asarray(angles)
+        if a.size < 2 or np.any(np.diff(a) <= 0) or a[0] != 0.0 or a[-1] != 90.0:
+            at = "" if lam is None else f" at {lam:g} nm"
+            raise InputFileError(
+                f"{a.size} rows of angles{at} {a[:6].tolist()}{' ...' if a.size > 6 else ''}: "
+                "the angles must increase from 0 to 90 deg (every angle of incidence a ray can "
+                "have)",
+                file=where,
+                field=field,
+            )
+    if width == 2:
+        a, v = curves[None]
+        return np.radians(a), np.asarray(v, dtype=float)
+    return _at_wavelength(curves, wavelength_nm, where, field)
+
+
+_FORMS = {
+    0: "'angle_deg, reflectance' or 'angle_deg, wavelength_nm, reflectance'",
+    2: "'angle_deg, reflectance'",
+    3: "'angle_deg, wavelength_nm, reflectance'",
+}
+
+
+def _table_row(n: int, row: list[str], width: int, where: Path, field: str):
+    """Row ``n`` of an R(θ) table as (width, angle °, wavelength nm or None, R); None for a
+    first-row header; InputFileError naming the row otherwise. ``width``: the columns of the
+    rows before (0: none yet)."""
+    cells = [c for c in row if c.strip()]
+    try:
+        nums = [float(c) for c in cells]
+    except ValueError:
+        nums = None
+    if nums is None or len(nums) not in (2, 3) or (width and len(nums) != width):
+        if n == 1 and nums is None:
+            return None
+        raise InputFileError(f"row {n} {row!r} is not {_FORMS[width]}", file=where, field=field)
+    a, v = nums[0], nums[-1]
+    lam = nums[1] if len(nums) == 3 else None
+    if not all(math.isfinite(x) for x in nums) or not 0.0 <= v <= 1.0:
         raise InputFileError(
-            f"{a.size} rows of angles {a[:6].tolist()}{' ...' if a.size > 6 else ''}: the "
-            "angles must increase from 0 to 90 deg (every angle of incidence a ray can have)",
+            f"row {n} {row!r}: the angle{'' if lam is None else ' and wavelength'} must be "
+            "finite and the reflectance within 0 … 1",
             file=where,
             field=field,
         )
-    return np.radians(a), np.asarray(values)
+    if lam is not None and lam <= 0.0:
+        raise InputFileError(
+            f"row {n} {row!r}: wavelength {lam:g} nm must be positive", file=where, field=field
+        )
+    if not 0.0 <= a <= 90.0:
+        raise InputFileError(
+            f"row {n} {row!r}: angle of incidence {a:g} deg out of range 0 … 90",
+            file=where,
+            field=field,
+        )
+    return len(nums), a, lam, v
+
+
+def _at_wavelength(curves: dict, wavelength_nm: float | None, where: Path, field: str):
+    """R(θ) at ``wavelength_nm`` from the curves {λ: (angles °, R)}: linear in λ between the
+    two that bracket it, on the union of their angles (radians, R)."""
+    lams = sorted(curves)
+    if wavelength_nm is None or not lams[0] <= wavelength_nm <= lams[-1]:
+        raise InputFileError(
+            f"wavelength {wavelength_nm} nm outside the table's {lams[0]:g} … {lams[-1]:g} nm "
+            "(a table is never extrapolated: add rows for it)",
+            file=where,
+            field=field,
+        )
+    hi = int(np.searchsorted(lams, wavelength_nm))
+    if lams[hi] == wavelength_nm:
+        a, v = curves[lams[hi]]
+        return np.radians(a), np.asarray(v, dtype=float)
+    l0, l1 = lams[hi - 1], lams[hi]
+    (a0, v0), (a1, v1) = curves[l0], curves[l1]
+    grid = np.union1d(a0, a1)
+    w = (wavelength_nm - l0) / (l1 - l0)
+    r = (1.0 - w) * np.interp(grid, a0, v0) + w * np.interp(grid, a1, v1)
+    return np.radians(grid), r

@@ -885,8 +885,11 @@ class Coating(_Model):
       is traced with its own).
     * ``"table"``: a CSV file ``table_csv`` of two columns, angle of incidence in degrees
       (increasing from 0 to 90, at most 128 rows) and R (0 … 1) at the scene's wavelength,
-      T = 1 − R, R linear in the angle between rows; ``source`` names where the numbers come
-      from (a datasheet, a measurement). Read when the scene is compiled.
+      T = 1 − R, R linear in the angle between rows; or of three, angle, wavelength (nm) and
+      R, each wavelength's rows a curve of their own, R linear in the wavelength between the
+      two curves about each wavelength group's (never extrapolated:
+      :func:`eyelume.scene.elements.read_reflectance_table`); ``source`` names where the
+      numbers come from (a datasheet, a measurement). Read when the scene is compiled.
     """
 
     model: Literal["fresnel", "fixed", "table"] = "fresnel"
