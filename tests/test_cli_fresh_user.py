@@ -4,6 +4,7 @@ loses no outputs and exits quietly with 0; no stray blank line where stderr is n
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import subprocess
@@ -132,3 +133,62 @@ def test_wavelengths_within_the_tolerance_are_one_group():
         app, ["info", "--json", "--set", "leds.wavelength_nm=[850, 850.0000001, 850, 850]"]
     )
     assert res.exit_code == 0 and "wavelength_groups" not in json.loads(res.stdout)
+
+
+def test_the_time_projection_counts_every_wavelength_group(tmp_path, monkeypatch):
+    """16 wavelength groups were projected '~1 s' and took 8.6 s: each group is a render."""
+    import eyelume.estimators.fast_run as fast_run
+
+    render_module = importlib.import_module("eyelume.render")  # eyelume.render: the function
+    monkeypatch.setattr(fast_run, "pilot_rates", lambda cs, seed, grid: (1e4, 1e30))
+
+    def stop(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(render_module, "render", stop)
+    said = {}
+    for lams in ("[850, 850, 850, 850]", "[850, 900, 940, 980]"):
+        res = runner.invoke(
+            app,
+            ["render", "--out", str(tmp_path / "o"), "--estimator", "fast", "--samples", "8",
+             "--set", f"leds.wavelength_nm={lams}"],
+        )  # fmt: skip
+        assert res.exit_code == 130, res.output
+        said[lams] = " ".join(res.stderr.split())  # unwrapped
+    # 8 samples × 87 × 65 pixels at 1e4 camera samples per second: 4.5 s a render
+    assert "~5 s and" in said["[850, 850, 850, 850]"]
+    assert "~18 s (4 wavelength groups, a render each)" in said["[850, 900, 940, 980]"]
+
+
+def test_progress_lines_without_a_terminal_keep_every_announcement():
+    """Piped, later wavelength groups' announcements were throttled away and the last line
+    carried a stale label at 100 %."""
+    import io
+
+    from rich.console import Console
+
+    from eyelume.cli import _Progress
+
+    sink = io.StringIO()
+    bar = _Progress("{task.description}", "{task.percentage:>3.0f}%", announce=True,
+                    console=Console(file=sink, force_terminal=False), disable=True)  # fmt: skip
+    with bar:
+        task = bar.add_task("", total=4)
+        for g in range(4):
+            bar.update(task, description=f"group {g + 1}")
+            bar.update(task, completed=g + 1)
+            bar.update(task, description=f"group {g + 1} done")
+    lines = sink.getvalue().splitlines()
+    for g in range(1, 4):
+        assert any(ln.startswith(f"group {g} ") for ln in lines), lines
+    finished = [ln for ln in lines if "100%" in ln]
+    assert len(finished) == 1 and finished[0].startswith("group 4 done 100%"), lines
+
+
+def test_the_defocus_warning_names_each_groups_wavelength():
+    res = runner.invoke(app, ["info", "--json", "--set", "leds.wavelength_nm=[800, 830, 850, 850]"])
+    assert res.exit_code == 0, res.output
+    warns = [ln for ln in res.stderr.splitlines() if ln.startswith("warning: lens:")]
+    assert warns and len(warns) == len(set(warns)), res.stderr
+    assert all(" nm the sensor" in w for w in warns), warns
+    assert any("at 800 nm" in w for w in warns), warns

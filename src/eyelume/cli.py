@@ -273,24 +273,43 @@ _LINE_EVERY_S = 10.0
 
 
 class _Progress(Progress):
-    """Rich's progress bar; where stderr is no terminal, also plain lines (label, count, elapsed,
-    remaining) at most every :data:`_LINE_EVERY_S` s and when a task finishes, so a long run in a
-    log still shows its progress."""
+    """Rich's progress bar; where stderr is no terminal, plain lines instead (label, count,
+    elapsed, remaining): at most every :data:`_LINE_EVERY_S` s, once when a task finishes, and
+    with ``announce`` whenever the task's description changes (each one a milestone, e.g. a
+    wavelength group starting: none is throttled away), so a long run in a log still shows its
+    progress."""
 
-    def __init__(self, label: str, count: str, *columns, **kwargs) -> None:
+    def __init__(self, label: str, count: str, *columns, announce: bool = False, **kwargs):
         super().__init__(*columns, **kwargs)
         self._line = f"{label} {count}"
         self._last_line = -math.inf
+        self._announce = announce
+        self._said: str | None = None  # the description of the last line
+        self._done: set = set()  # tasks whose finished line is said
 
     def update(self, task_id, **kwargs) -> None:  # type: ignore[override]
         super().update(task_id, **kwargs)
         if self.console.is_terminal:
             return
         task = self._tasks[task_id]
+        if task.finished:
+            return  # said once, by stop(), with the last description
         now = time.monotonic()
-        if now - self._last_line < _LINE_EVERY_S and not task.finished:
+        new = self._announce and "description" in kwargs and task.description != self._said
+        if now - self._last_line < _LINE_EVERY_S and not new:
             return
-        self._last_line = now
+        self._last_line, self._said = now, task.description
+        self._say(task)
+
+    def stop(self) -> None:
+        super().stop()
+        if not self.console.is_terminal:
+            for task in self.tasks:
+                if task.finished and task.id not in self._done:
+                    self._done.add(task.id)
+                    self._say(task)
+
+    def _say(self, task) -> None:
         left = None if task.finished else task.time_remaining
         when = f", {task.elapsed or 0.0:.0f} s" + (
             f", about {left:.0f} s left" if left is not None else ""
@@ -298,9 +317,10 @@ class _Progress(Progress):
         self.console.print(self._line.format(task=task) + when, highlight=False, soft_wrap=True)
 
 
-def _progress_bar(label: str, count: str) -> Progress:
+def _progress_bar(label: str, count: str, announce: bool = False) -> Progress:
     """The one progress bar of every long command, on stderr: label, bar, count, elapsed, ETA
-    (plain lines instead where stderr is no terminal: :class:`_Progress`)."""
+    (plain lines instead where stderr is no terminal: :class:`_Progress`, a line for each new
+    description with ``announce``)."""
     return _Progress(
         label,
         count,
@@ -309,6 +329,7 @@ def _progress_bar(label: str, count: str) -> Progress:
         TextColumn(count),
         TimeElapsedColumn(),
         TimeRemainingColumn(),
+        announce=announce,
         console=err,
         transient=True,
         disable=not err.is_terminal,  # no live bar (it left a blank line): _Progress's lines
@@ -544,6 +565,7 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
     """The fast estimator with a projection first (arrays, time from a pilot), a progress bar
     with an ETA, Ctrl-C/SIGTERM answered within about a second (nothing written when no sample
     set had finished), and a warning when a --rel-error target stops at --max-samples."""
+    from eyelume.compile import wavelength_groups
     from eyelume.estimators.fast_run import array_bytes, pilot_rates, planned_sets
     from eyelume.render import RenderOptions
     from eyelume.render import render as render_scene
@@ -562,10 +584,12 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
     pixels = sc.sensor.cols * sc.sensor.rows
     cam_rate, light_rate = pilot_rates(cs, sc.run.seed if seed is None else seed, grid)
     light_per_sample = sc.run.light_paths_per_pixel / 16
+    groups = len(wavelength_groups(sc))  # each group is a whole render (render._render_groups)
 
     def projection(spp: int) -> str:
-        s = spp * pixels * (1 / cam_rate + light_per_sample / light_rate)
-        return f"~{_seconds(s)} and ~{_bytes(need)} of arrays (a pilot's projection)"
+        s = groups * spp * pixels * (1 / cam_rate + light_per_sample / light_rate)
+        each = f" ({groups} wavelength groups, a render each)" if groups > 1 else ""
+        return f"~{_seconds(s)}{each} and ~{_bytes(need)} of arrays (a pilot's projection)"
 
     if rel_error is not None:
         goal = (
@@ -579,7 +603,8 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
         goal = f"{spp} samples per pixel{note}"
         plan = projection(spp)
     err.print(f"rendering {sc.name} (fast estimator, {goal}); {plan}; Ctrl-C stops")
-    with _progress_bar("[bold]rendering[/] {task.description}", "{task.percentage:>3.0f}%") as bar:
+    label = "[bold]rendering[/] {task.description}"
+    with _progress_bar(label, "{task.percentage:>3.0f}%", announce=True) as bar:
         task = bar.add_task("", total=None)
         try:
             result = render_scene(

@@ -601,7 +601,8 @@ def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> Render
         if status:
             status(f"wavelength group {g.index + 1} of {len(groups.list)}: {g.wavelength_nm:g} nm")
         control = _run_control(cg, advance_in, opt)
-        est = trace_fast(cg, spp, light, sg, opt.rel_error, status, skin, control)
+        said = (lambda m, g=g: status(f"{g.wavelength_nm:g} nm: {m}")) if status else None
+        est = trace_fast(cg, spp, light, sg, opt.rel_error, said, skin, control)
         groups.check_whole(g, est.interrupted)
         plane += direct_eye_plane(cg, sg)
         blur = _Blur(cg, est.image)  # the group's own wavelength

@@ -191,4 +191,4 @@ def test_sensor_far_from_focus_cli_warns_one_line_exit_0():
     res = CliRunner().invoke(app, ["info", "--json", "--set", "lens.surfaces.0.glass=N-BK7"])
     assert res.exit_code == 0, res.output
     warn = [ln for ln in res.stderr.splitlines() if ln.strip()]
-    assert len(warn) == 1 and warn[0].startswith("warning: lens: the sensor"), res.stderr
+    assert len(warn) == 1 and warn[0].startswith("warning: lens: at 850 nm the sensor"), res.stderr

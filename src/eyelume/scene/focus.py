@@ -114,7 +114,9 @@ def check_focus(
     warn: bool = True,
 ) -> Focus:
     """:func:`focus`, refusing a virtual image and (with ``warn``) warning when the sensor is
-    out of focus — judged against the real-ray best focus ``best_focus_mm`` when given.
+    out of focus — judged against the real-ray best focus ``best_focus_mm`` when given. The
+    warning names ``scene.wavelength_nm``: each wavelength group of LEDs is compiled at its own
+    (:func:`eyelume.compile.compile_scene`), and each focuses on its own.
 
     Raises
     ------
@@ -143,7 +145,8 @@ def check_focus(
     if warn and abs(f.defocus_mm) > f.depth_of_focus_mm:
         what = "paraxial image" if f.best_focus_mm is None else "real-ray best focus"
         warnings.warn(
-            f"lens: the sensor (lens.surfaces.{len(scene.lens.surfaces) - 1}.thickness_mm = "
+            f"lens: at {scene.wavelength_nm:g} nm the sensor "
+            f"(lens.surfaces.{len(scene.lens.surfaces) - 1}.thickness_mm = "
             f"{f.sensor_distance_mm:g}) is {abs(f.defocus_mm):.3g} mm "
             f"{'behind' if f.defocus_mm > 0 else 'in front of'} the eye plane's {what} "
             f"({f.focus_mm:.5g} mm), outside the depth of focus ± N_w·p = "
