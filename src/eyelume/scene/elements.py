@@ -18,7 +18,7 @@ import numpy as np
 
 from eyelume.errors import InputFileError
 from eyelume.scene.model import Element
-from eyelume.scene.textfile import read_csv_rows
+from eyelume.scene.textfile import is_header_row, read_csv_rows
 
 __all__ = [
     "crosses_surfaces",
@@ -120,9 +120,11 @@ def read_reflectance_table(
     reads it) has two columns, angle of incidence in degrees and reflectance R (a fraction),
     one row per angle — or three, angle (degrees), wavelength (nm) and R, the rows of each
     wavelength an R(θ) curve of their own (a coating measured at several wavelengths, for a
-    scene whose LEDs have more than one). A first header row and lines starting with ``#``
-    are skipped. Each curve's angles increase from 0 to 90° (both given: R is interpolated
-    linearly between rows, never extrapolated). With wavelengths, R(θ, λ) is interpolated
+    scene whose LEDs have more than one). Lines starting with ``#`` are skipped, and a first
+    row of words only (``angle_deg, R``: :func:`~eyelume.scene.textfile.is_header_row`) as its
+    header; a first row mixing numbers and words (``O.5, 0.04``, a letter O for a zero), or a
+    row of another number of columns, is refused naming the row. Each curve's angles increase
+    from 0 to 90° (both given: R is interpolated linearly between rows, never extrapolated). With wavelengths, R(θ, λ) is interpolated
     linearly in λ between the two curves that bracket ``wavelength_nm`` (on the union of their
     angles); a wavelength outside the table's is refused, never extrapolated.
 
@@ -178,8 +180,8 @@ def _table_row(n: int, row: list[str], width: int, where: Path, field: str):
     except ValueError:
         nums = None
     if nums is None or len(nums) not in (2, 3) or (width and len(nums) != width):
-        if n == 1 and nums is None:
-            return None
+        if n == 1 and is_header_row(cells):
+            return None  # a header: words only (a first row mixing words and numbers is not)
         raise InputFileError(f"row {n} {row!r} is not {_FORMS[width]}", file=where, field=field)
     a, v = nums[0], nums[-1]
     lam = nums[1] if len(nums) == 3 else None

@@ -10,7 +10,7 @@ import numpy as np
 
 from eyelume.errors import InputFileError
 from eyelume.scene.model import LedArray, LedProfile
-from eyelume.scene.textfile import read_csv_rows
+from eyelume.scene.textfile import read_csv_table
 
 __all__ = [
     "TABLE_END_FRACTION",
@@ -51,8 +51,10 @@ def read_profile_table(path: str) -> tuple[np.ndarray, np.ndarray]:
 
     The file (CSV as datasheets and spreadsheets export it: UTF-8 with or without a byte-order
     mark, UTF-16, or Windows-1252; see :func:`eyelume.scene.textfile.decode_text`) holds two
-    columns, angle in degrees and relative intensity in any unit, one row per angle; an optional
-    first header row and lines starting with ``#`` are skipped. Angles start at 0, increase
+    columns, angle in degrees and relative intensity in any unit, one row per angle; lines
+    starting with ``#`` are skipped, and a first row of words only (``angle_deg, intensity``:
+    :func:`~eyelume.scene.textfile.is_header_row`) as its header; a row of another number of
+    columns, or a first row mixing numbers and words, is refused. Angles start at 0, increase
     and end at or below 90°; intensities are finite and ≥ 0, the on-axis one > 0.
 
     The table must reach the intensity's end: where it stops before 90° with the intensity above
@@ -66,8 +68,7 @@ def read_profile_table(path: str) -> tuple[np.ndarray, np.ndarray]:
         One line naming the file (and the row) and the value.
     """
     where = Path(path)
-    rows = read_csv_rows(where, _FIELD)
-    a, v = _numbers(rows, where)
+    a, v = _numbers(where)
     if len(a) < 2 or a[0] != 0 or np.any(np.diff(a) <= 0) or a[-1] > 90:
         raise InputFileError(
             f"{len(a)} rows of angles {a[:6].tolist()}{' ...' if len(a) > 6 else ''}: "
@@ -110,27 +111,18 @@ def read_profile_table(path: str) -> tuple[np.ndarray, np.ndarray]:
     return np.radians(a), rel
 
 
-def _numbers(rows: list[list[str]], where: Path) -> tuple[np.ndarray, np.ndarray]:
-    """(angles, intensities) of the table's rows; a first row that is not numbers is a header."""
-    angles, values = [], []
-    for n, row in enumerate(rows, 1):
-        try:
-            a, v = float(row[0]), float(row[1])
-        except (ValueError, IndexError):
-            if n == 1:
-                continue  # a header line
-            raise InputFileError(
-                f"row {n} {row!r} is not 'angle_deg, relative_intensity'", file=where, field=_FIELD
-            ) from None
+def _numbers(where: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(angles, intensities) of the table (:func:`~eyelume.scene.textfile.read_csv_table`)."""
+    table = read_csv_table(where, _FIELD, ("angle_deg", "relative_intensity"))
+    for n, (a, v) in enumerate(table, 1):
         if not (math.isfinite(a) and math.isfinite(v)) or v < 0:
             raise InputFileError(
-                f"row {n} {row!r}: angle and intensity must be finite, intensity >= 0",
+                f"row {n} of numbers ({a:g}, {v:g}): angle and intensity must be finite, "
+                "intensity >= 0",
                 file=where,
                 field=_FIELD,
             )
-        angles.append(a)
-        values.append(v)
-    return np.asarray(angles), np.asarray(values)
+    return table[:, 0], table[:, 1]
 
 
 def relative_intensity(profile: LedProfile) -> Callable[[np.ndarray], np.ndarray]:

@@ -10,11 +10,14 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 from pathlib import Path
+
+import numpy as np
 
 from eyelume.errors import InputFileError
 
-__all__ = ["decode_text", "read_csv_rows", "read_text_file"]
+__all__ = ["decode_text", "is_header_row", "read_csv_rows", "read_csv_table", "read_text_file"]
 
 
 def decode_text(raw: bytes, path: Path, error: type[Exception]) -> str:
@@ -91,3 +94,76 @@ def read_csv_rows(path: str | Path, field: str) -> list[list[str]]:
         ]
     except csv.Error as exc:
         raise InputFileError(f"not a CSV table ({exc})", file=where, field=field) from None
+
+
+def _number(cell: str) -> float | None:
+    try:
+        return float(cell)
+    except ValueError:
+        return None
+
+
+def is_header_row(row: list[str]) -> bool:
+    """Whether a table's first row is its header: no cell is empty or a number, and one at
+    least holds a letter (``angle_deg, R``; ``Angle (°);Relative intensity``). ``nan``, ``inf``
+    and ``1e-3`` are numbers, so a row mixing numbers and words (``0, R``; ``O.5, 1`` with a
+    letter O for a zero) is no header: it is refused as a row that is not numbers.
+
+    >>> is_header_row(["angle_deg", " R"]), is_header_row(["0", "R"]), is_header_row(["nan", "x"])
+    (True, False, False)
+    """
+    cells = [c.strip() for c in row]
+    return all(c and _number(c) is None for c in cells) and any(
+        re.search(r"[^\W\d_]", c) for c in cells
+    )
+
+
+def read_csv_table(path: str | Path, field: str, columns: tuple[str, ...]) -> np.ndarray:
+    """The numbers of a CSV table file of exactly ``len(columns)`` columns: a float array
+    (rows, len(columns)). The one reader of every table's columns (the LED profile, a coating's
+    R(angle); a table with a wavelength column passes its name among ``columns``).
+
+    Rows as :func:`read_csv_rows` reads them (``#`` lines and empty lines skipped); empty cells
+    at a row's end (a spreadsheet's trailing separators) are dropped. The first row may be a
+    header, and is skipped, only if it is recognisably one (:func:`is_header_row`: words, no
+    numbers); any other row must hold ``len(columns)`` numbers (``nan`` and ``inf`` are read
+    as such: the caller's range checks refuse them, naming the row).
+
+    Raises
+    ------
+    InputFileError
+        One line naming the file, ``field`` and the row: a row of another number of columns
+        (a third column is not silently ignored), a cell that is not a number. A file of no
+        rows gives (0, len(columns)): the caller says how many rows it needs.
+    """
+    where = Path(path)
+    names = ", ".join(columns)
+    out = []
+    for n, row in enumerate(read_csv_rows(where, field), 1):
+        while row and not row[-1].strip():
+            row = row[:-1]
+        if n == 1 and is_header_row(row):
+            if len(row) != len(columns):
+                raise InputFileError(
+                    f"header row {row!r} names {len(row)} columns; the table has "
+                    f"{len(columns)}: {names}",
+                    file=where,
+                    field=field,
+                )
+            continue
+        if len(row) != len(columns):
+            raise InputFileError(
+                f"row {n} {row!r} has {len(row)} columns; expected {len(columns)}: {names}",
+                file=where,
+                field=field,
+            )
+        values = [_number(c) for c in row]
+        if any(v is None for v in values):
+            raise InputFileError(
+                f"row {n} {row!r} is not {len(columns)} numbers '{names}'"
+                + (" (a header row is words only, e.g. 'angle_deg, R')" if n == 1 else ""),
+                file=where,
+                field=field,
+            )
+        out.append(values)
+    return np.asarray(out, dtype=float).reshape(len(out), len(columns))
