@@ -82,19 +82,45 @@ class RegionWarning(EyelumeWarning):
     """The regions cannot be mapped faithfully for this scene (they are still returned)."""
 
 
+def _mirror_rt(cs: CompiledScene, k: int) -> tuple[float, float]:
+    """(R, T) of mirror ``elements[k]`` where it reflects the most: over the LEDs' wavelengths
+    (a ``fixed`` coating, its cut-off) or over the angles of its R(angle) table (T = 1 − R)."""
+    from eyelume.scene.elements import read_reflectance_table
+    from eyelume.scene.model import MIRROR_COATING
+
+    coat = cs.scene.elements[k].front.coating or MIRROR_COATING
+    if coat.model == "table":
+        field = f"elements.{k}.front.coating.table_csv"
+        r = float(read_reflectance_table(coat.table_csv, field)[1].max())  # type: ignore[arg-type]
+        return r, 1.0 - r
+    lams = set(cs.scene.leds.wavelengths_nm(cs.scene.wavelength_nm)) | {cs.scene.wavelength_nm}
+    return max((coat.fixed_at(lam) for lam in lams), key=lambda rt: rt[0] - rt[1])
+
+
 def _warn_mirrors(cs: CompiledScene) -> None:
-    """Warn once per scene that a mirror element is looked through, not in: the map follows
+    """Warn once per scene when a mirror element may fold the camera's view: the map follows
     every chief ray by refraction only (:func:`eyelume.estimators.fast_run.primary_surface_map`),
-    which is right through windows and lenses but not for a view a mirror folds."""
-    mirrors = [k for k, el in enumerate(cs.scene.elements) if el.kind == "mirror"]
-    if mirrors:
-        warnings.warn(
-            f"elements.{mirrors[0]} is a mirror: the eye image's regions (pupil, iris, sclera, "
-            "skin) and their statistics are mapped by refraction only, as if it were not "
-            "there; wrong where it folds the camera's view",
-            RegionWarning,
-            stacklevel=3,
-        )
+    through a mirror as if it were not there — the view it transmits. That is the view the
+    camera mostly sees through a partial mirror that transmits at least as much as it reflects
+    (T ≥ R; its reflection adds a second, fainter view the map leaves out), and is wrong where a
+    mirror reflecting more than it transmits (R > T at some LED wavelength or angle) folds the
+    view — the rule by which the compile follows the camera's line of sight
+    (:func:`eyelume.compile.compile_scene`: the stronger branch). Only that is warned about,
+    naming R and T."""
+    for k, el in enumerate(cs.scene.elements):
+        if el.kind != "mirror":
+            continue
+        r, t = _mirror_rt(cs, k)
+        if r > t:
+            warnings.warn(
+                f"elements.{k} is a mirror (R = {r:g}, T = {t:g}): the eye image's regions "
+                "(pupil, iris, sclera, skin) and their statistics are mapped by refraction "
+                "only, through it as if it were not there; wrong where it folds the camera's "
+                "view",
+                RegionWarning,
+                stacklevel=3,
+            )
+            return
 
 
 def reflection_mask(cs: CompiledScene, ghosts: list[dict]) -> np.ndarray:
