@@ -10,6 +10,7 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -192,3 +193,27 @@ def test_the_defocus_warning_names_each_groups_wavelength():
     assert warns and len(warns) == len(set(warns)), res.stderr
     assert all(" nm the sensor" in w for w in warns), warns
     assert any("at 800 nm" in w for w in warns), warns
+
+
+@pytest.mark.parametrize(
+    ("scale", "exit_code", "words"),
+    [
+        (1e-8, 0, '"ok": true'),  # a render's irradiance in W/mm²
+        (1e-20, 2, "no usable signal: the largest value is 1e-20"),
+        (0.0, 2, "no light: no pixel is above 0"),
+    ],
+)
+def test_track_refuses_a_picture_with_no_usable_signal(tmp_path, scale, exit_code, words):
+    """A picture of ~1e-20 values was 'tracked': its glints lost, its pupil mis-sized, exit 0."""
+    from tests.analysis.test_detect import draw_eye
+
+    picture = draw_eye().astype(np.float64)
+    path = tmp_path / "eye.npy"
+    np.save(path, picture / picture.max() * scale)
+    res = runner.invoke(app, ["track", str(path), "--leds", "0,90,180,270"])
+    assert res.exit_code == exit_code, res.output
+    if exit_code == 2:
+        line = _one_line(res)
+        assert words in line and "eye.npy" in line, line
+    else:
+        assert words in res.stdout

@@ -23,7 +23,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from typer.core import TyperGroup
 
-from eyelume.errors import EyelumeError, EyelumeWarning, OptionError
+from eyelume.errors import EyelumeError, EyelumeWarning, InputFileError, OptionError
 from eyelume.scene.io import load_scene
 from eyelume.scene.model import Run
 
@@ -915,6 +915,33 @@ def _read_picture(image: Path):
     return data
 
 
+#: The smallest largest-value a float picture may have: the detector's floors are absolute
+#: (e.g. 1e-12 in the pupil's gradient normalisation), so a picture whose values are all below
+#: this loses its glints and mis-sizes its pupil (1e-18 and below did) although its shape is
+#: intact; such a picture is refused, naming the cause, instead of a wrong "ok".
+MIN_FLOAT_PEAK = 1e-12
+
+
+def _refuse_no_signal(data, image: Path) -> None:
+    """InputFileError (exit 2) for a picture with no usable signal: no finite pixel above 0
+    (no light), or a float picture whose largest value is below :data:`MIN_FLOAT_PEAK`."""
+    import numpy as np
+
+    finite = data[np.isfinite(data)] if data.dtype.kind == "f" else data
+    if finite.size == 0:
+        return  # detect refuses it (no valid pixel)
+    peak = float(finite.max())
+    if peak <= 0:
+        raise InputFileError(f"no light: no pixel is above 0 (largest {peak:g})", file=image)
+    if data.dtype.kind == "f" and peak < MIN_FLOAT_PEAK:
+        raise InputFileError(
+            f"no usable signal: the largest value is {peak:.3g}, below {MIN_FLOAT_PEAK:g} "
+            "(the detector's thresholds need more); if this is a picture in some tiny unit, "
+            "scale it (e.g. irradiance in W/m², or camera counts)",
+            file=image,
+        )
+
+
 def _parse_leds(leds: str | None) -> list[float] | None:
     """LED azimuths from '0,90,180,270' (degrees, finite); None when not given."""
     import math
@@ -970,6 +997,7 @@ def track(
             raise InputFileError(
                 f"mask shape {mask.shape} differs from the picture's {data.shape}", file=valid
             )
+    _refuse_no_signal(data, image)
     k = enlargement_factor(data)
     if k > 1:
         data = data[::k, ::k]
