@@ -217,3 +217,29 @@ def test_track_refuses_a_picture_with_no_usable_signal(tmp_path, scale, exit_cod
         assert words in line and "eye.npy" in line, line
     else:
         assert words in res.stdout
+
+
+def test_the_study_command_plans_its_runs_once(tmp_path, monkeypatch):
+    """`eyelume study` planned the runs three times (the study's check, the banner's count,
+    the runner); a Latin-hypercube or random study of 10⁵ runs paid for each."""
+    from eyelume.optimize import study as study_module
+
+    made = []
+    plan = study_module._plan
+    monkeypatch.setattr(study_module, "_plan", lambda st: made.append(st.name) or plan(st))
+    monkeypatch.setattr(study_module, "_LAST_PLAN", None)
+    path = tmp_path / "study.toml"
+    path.write_text(
+        'name = "once"\nscene = "paper2005"\nmetrics = ["eye_plane_merit"]\nseed = 3\n'
+        '[[vary]]\npath = "leds.height_mm"\nrandom = [20.0, 40.0]\nsamples = 2\n',
+        encoding="utf-8",
+    )
+    res = runner.invoke(app, ["study", str(path), "--out", str(tmp_path / "o"), "--workers", "1"])
+    assert res.exit_code == 0, res.output
+    assert made == ["once"]
+    assert "2/2 runs" in res.stderr
+    # the plan is the same list each call, fresh dicts (a caller's change does not leak)
+    st = study_module.load_study(path)
+    first = study_module.plan_runs(st)
+    first[0]["leds.height_mm"] = -1.0
+    assert study_module.plan_runs(st) == plan(st) and len(made) == 1

@@ -1214,7 +1214,7 @@ def study(
     """Run a study: the base scene with parameters varied by their dotted paths, metrics per
     run, each finished run committed at once to OUT/results.sqlite (resumable)."""
     from eyelume.optimize.runner import run_study
-    from eyelume.optimize.study import load_study, plan_runs
+    from eyelume.optimize.study import load_study, run_count
     from eyelume.report.optimize_outputs import write_study_table
 
     st = load_study(study_file)
@@ -1232,7 +1232,7 @@ def study(
         from eyelume.optimize.store import read_rows
 
         read_rows(out)  # a damaged store is one line before the banner, not after it
-    total = len(plan_runs(st))
+    total = run_count(st)
     err.print(f"study {st.name}: {total} runs into {out} (Ctrl-C, then --resume, loses nothing)")
     with _progress_bar("[bold]runs", "{task.completed}/{task.total}") as bar:
         task = bar.add_task("study", total=total)

@@ -52,7 +52,16 @@ from eyelume.scene.model import Scene
 from eyelume.scene.model import _Model as _Table  # extra keys, NaN and true-for-a-number refused
 from eyelume.scene.textfile import decode_text
 
-__all__ = ["METRICS", "Study", "Vary", "load_study", "plan_runs", "run_key", "run_metrics"]
+__all__ = [
+    "METRICS",
+    "Study",
+    "Vary",
+    "load_study",
+    "plan_runs",
+    "run_count",
+    "run_key",
+    "run_metrics",
+]
 
 METRICS = (
     "eye_plane_merit",
@@ -208,10 +217,25 @@ def _check_runs(study: Study, base: Scene, path: Path) -> None:
             ) from None
 
 
+#: The last study planned (its JSON) and its runs: :func:`load_study` checks every planned run,
+#: and ``eyelume study`` then runs them; the plan is made once (up to :data:`MAX_RUNS` runs).
+_LAST_PLAN: tuple[str, list[dict]] | None = None
+
+
 def plan_runs(study: Study) -> list[dict]:
     """The runs of a study: the product of the grid/values/random parameters, with the Latin-
     hypercube parameters drawn jointly (one draw per run of the product, or ``samples`` when
-    nothing else varies)."""
+    nothing else varies). A fresh list of fresh dicts each call; the plan itself is made once
+    for the same study (it depends on the study's fields only: the draws on its ``seed``)."""
+    global _LAST_PLAN
+    key = study.model_dump_json()
+    if _LAST_PLAN is None or _LAST_PLAN[0] != key:
+        _LAST_PLAN = (key, _plan(study))
+    return [dict(r) for r in _LAST_PLAN[1]]
+
+
+def _plan(study: Study) -> list[dict]:
+    """:func:`plan_runs`, made anew."""
     rng = np.random.default_rng(study.seed)
     axes: list[tuple[str, list]] = []
     latin = [v for v in study.vary if v.latin is not None]
