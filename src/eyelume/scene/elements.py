@@ -124,9 +124,10 @@ def read_reflectance_table(
     row of words only (``angle_deg, R``: :func:`~eyelume.scene.textfile.is_header_row`) as its
     header; a first row mixing numbers and words (``O.5, 0.04``, a letter O for a zero), or a
     row of another number of columns, is refused naming the row. Each curve's angles increase
-    from 0 to 90° (both given: R is interpolated linearly between rows, never extrapolated). With wavelengths, R(θ, λ) is interpolated
-    linearly in λ between the two curves that bracket ``wavelength_nm`` (on the union of their
-    angles); a wavelength outside the table's is refused, never extrapolated.
+    from 0 to 90° (both given: R is interpolated linearly between rows, never extrapolated).
+    With wavelengths, R(θ, λ) is interpolated linearly in λ between the two curves that bracket
+    ``wavelength_nm`` (on the union of their angles); a wavelength outside the table's is
+    refused, never extrapolated.
 
     Raises
     ------
