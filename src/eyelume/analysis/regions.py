@@ -83,17 +83,20 @@ class RegionWarning(EyelumeWarning):
 
 
 def _mirror_rt(cs: CompiledScene, k: int) -> tuple[float, float]:
-    """(R, T) of mirror ``elements[k]`` where it reflects the most: over the LEDs' wavelengths
-    (a ``fixed`` coating, its cut-off) or over the angles of its R(angle) table (T = 1 − R)."""
+    """(R, T) of mirror ``elements[k]`` where it reflects the most over the LEDs' wavelengths
+    (a ``fixed`` coating, its cut-off) and, for an R(angle) table, its angles (T = 1 − R)."""
     from eyelume.scene.elements import read_reflectance_table
     from eyelume.scene.model import MIRROR_COATING
 
     coat = cs.scene.elements[k].front.coating or MIRROR_COATING
+    lams = set(cs.scene.leds.wavelengths_nm(cs.scene.wavelength_nm)) | {cs.scene.wavelength_nm}
     if coat.model == "table":
         field = f"elements.{k}.front.coating.table_csv"
-        r = float(read_reflectance_table(coat.table_csv, field)[1].max())  # type: ignore[arg-type]
+        r = max(
+            float(read_reflectance_table(coat.table_csv, field, lam)[1].max())  # type: ignore[arg-type]
+            for lam in lams
+        )
         return r, 1.0 - r
-    lams = set(cs.scene.leds.wavelengths_nm(cs.scene.wavelength_nm)) | {cs.scene.wavelength_nm}
     return max((coat.fixed_at(lam) for lam in lams), key=lambda rt: rt[0] - rt[1])
 
 
