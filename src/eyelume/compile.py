@@ -52,6 +52,7 @@ from eyelume.scene.elements import (
 from eyelume.scene.eye import (
     check_eye_geometry,
     eye_indices,
+    glint_reflectance,
     iris_root_radius,
     limbus_geometry,
     with_contact_lens,
@@ -1008,7 +1009,7 @@ def _add_eye(t: _Table, scene: Scene) -> None:
             action=G.ACT_REFRACT,
             n_a=n_eye[j],
             n_b=n_eye[j + 1],
-            refl=eye.cornea_reflectance if anterior else 0.0,
+            refl=glint_reflectance(eye, scene.wavelength_nm) if anterior else 0.0,
             absorb=eye.cornea_absorptance if anterior else 0.0,
             fresnel=anterior and eye.cornea_reflection == "fresnel",
         )

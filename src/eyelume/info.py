@@ -23,7 +23,7 @@ from eyelume.compile import (
 )
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
-from eyelume.scene.eye import LAMBDA_D, eye_indices
+from eyelume.scene.eye import LAMBDA_D, eye_indices, glint_reflectance
 from eyelume.scene.focus import focus
 from eyelume.scene.model import Element, LedProfile, Scene
 from eyelume.scene.optics import ParaxialSystem, curvature
@@ -196,6 +196,12 @@ def _eye_info(scene: Scene) -> dict:
     eye_d = eye_paraxial(scene, LAMBDA_D)
     return {
         "model": scene.eye.model,
+        "dispersion": scene.eye.dispersion,
+        "glint_reflectance": (
+            "fresnel"
+            if scene.eye.cornea_reflection == "fresnel"
+            else glint_reflectance(scene.eye, scene.wavelength_nm)
+        ),
         "which": scene.eye_pose.which,
         # world mm: the eye's pose with the head offset, gaze turned (a left eye mirrored)
         "corneal_vertex_mm": eye_point(scene, [0.0, 0.0, 0.0]).tolist(),

@@ -21,7 +21,7 @@ import numpy as np
 
 from eyelume.analysis.regions import region_masks
 from eyelume.compile import CompiledScene, compile_scene
-from eyelume.scene.eye import eye_indices
+from eyelume.scene.eye import eye_indices, glint_reflectance
 from eyelume.scene.io import apply_overrides
 from eyelume.scene.model import Scene
 
@@ -131,8 +131,10 @@ def glints_off(scene: Scene) -> Scene:
     at 30° incidence (0.5 % at 40°).
     """
     eye = scene.eye
-    r = eye.cornea_reflectance
+    r = glint_reflectance(eye, scene.wavelength_nm)
     overrides: dict[str, object] = {"eye.cornea_reflectance": 0.0}
+    if eye.cornea_reflection == "tear_film":  # its R at the scene wavelength, as a fixed split
+        overrides["eye.cornea_reflection"] = "fixed"
     if eye.cornea_reflection == "fresnel":
         n = eye_indices(eye, scene.wavelength_nm)[1]
         r = ((n - 1.0) / (n + 1.0)) ** 2

@@ -8,6 +8,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from eyelume.errors import GeometryError
+from eyelume.scene.eye_models import ocular_index, tear_film_reflectance
 from eyelume.scene.model import Eye
 from eyelume.scene.optics import curvature, sag
 
@@ -18,6 +19,7 @@ __all__ = [
     "check_eye_geometry",
     "eye_index",
     "eye_indices",
+    "glint_reflectance",
     "iris_root_radius",
     "limbus_geometry",
     "with_contact_lens",
@@ -52,11 +54,35 @@ def eye_index(nd: float, nF: float, nC: float, wavelength_nm: float) -> float:
 
 
 def eye_indices(eye: Eye, wavelength_nm: float) -> list[float]:
-    """Indices [air, after surface 1, …] of the eye's media at ``wavelength_nm``; air is 1."""
+    """Indices [air, after surface 1, …] of the eye's media at ``wavelength_nm``; air is 1.
+
+    By the eye's ``dispersion``: ``"cauchy_dFC"``, :func:`eye_index` from each medium's
+    nd, nF, nC; ``"atchison_smith_2005"``, :func:`eyelume.scene.eye_models.ocular_index` from
+    its medium and n_ref at ``eye.reference_wavelength_nm``.
+
+    Raises
+    ------
+    ValueError
+        ``"atchison_smith_2005"`` and a wavelength outside its 400–1060 nm (one line).
+    """
     out = [1.0]
     for s in eye.surfaces[:-1]:
-        out.append(eye_index(s.nd, s.nF, s.nC, wavelength_nm))
+        if eye.dispersion == "atchison_smith_2005":
+            n = ocular_index(s.medium, s.n_ref, eye.reference_wavelength_nm, wavelength_nm)
+        else:
+            n = eye_index(s.nd, s.nF, s.nC, wavelength_nm)
+        out.append(n)
     return out
+
+
+def glint_reflectance(eye: Eye, wavelength_nm: float) -> float:
+    """The anterior cornea's reflectance as a fixed split at ``wavelength_nm``: the tear film's
+    normal-incidence Fresnel reflectance for ``cornea_reflection = "tear_film"``
+    (:func:`eyelume.scene.eye_models.tear_film_reflectance`), else ``cornea_reflectance``
+    (for ``"fresnel"`` the kernel computes R(θ) itself and this value is unused)."""
+    if eye.cornea_reflection == "tear_film":
+        return tear_film_reflectance(wavelength_nm)
+    return eye.cornea_reflectance
 
 
 def limbus_geometry(eye: Eye) -> tuple[float, float, float]:

@@ -184,9 +184,25 @@ def _drop_ring_for_positions(data: dict[str, Any], overrides: dict[str, Any]) ->
             leds.pop(name, None)
 
 
+#: The eye's fields a library eye model supplies (:class:`~eyelume.scene.model.Eye`).
+_EYE_MODEL_FIELDS = ("surfaces", "iris_surface", "dispersion", "reference_wavelength_nm")
+
+
+def _drop_eye_for_model(data: dict[str, Any], overrides: dict[str, Any]) -> None:
+    """An override that names another eye model (``eye.model``) takes that model's surfaces,
+    pupil and dispersion from the library: the scene's written ones go, unless overridden too."""
+    eye = data.get("eye")
+    if "eye.model" not in overrides or not isinstance(eye, dict):
+        return
+    for name in _EYE_MODEL_FIELDS:
+        if not any(k == f"eye.{name}" or k.startswith(f"eye.{name}.") for k in overrides):
+            eye.pop(name, None)
+
+
 def _override_data(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
     data = copy.deepcopy(data)
     _drop_ring_for_positions(data, overrides)
+    _drop_eye_for_model(data, overrides)
     for key, raw in overrides.items():
         parts = key.split(".")
         if not key or any(p == "" for p in parts):

@@ -11,7 +11,7 @@ primary gaze).
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal, get_args
+from typing import Annotated, Any, Literal, get_args
 
 from pydantic import (
     AfterValidator,
@@ -23,6 +23,8 @@ from pydantic import (
     model_serializer,
     model_validator,
 )
+
+from eyelume.scene.eye_models import DISPERSION_RANGE_NM, eye_model_data, eye_model_names
 
 __all__ = [
     "Camera",
@@ -392,8 +394,11 @@ class LedArray(_Model):
 class EyeSurface(_Model):
     """One row of a schematic-eye prescription (eye frame, lens-design sign convention).
 
-    ``nd, nF, nC`` are the indices of the medium *after* the surface (toward the retina) at the
-    d (587.56 nm), F (486.13 nm) and C (656.27 nm) lines; the last row (retina) has none.
+    The medium *after* the surface (toward the retina; the last row, the retina, has none) is
+    given as the eye's ``dispersion`` needs it (:class:`Eye`): ``nd, nF, nC``, its indices at
+    the d (587.56 nm), F (486.13 nm) and C (656.27 nm) lines (``"cauchy_dFC"``); or ``medium``
+    (cornea, aqueous, lens, vitreous) and ``n_ref``, its index at the eye's
+    ``reference_wavelength_nm`` (``"atchison_smith_2005"``).
     """
 
     name: str
@@ -404,6 +409,8 @@ class EyeSurface(_Model):
     nd: float | None = Field(None, gt=1)
     nF: float | None = Field(None, gt=1)
     nC: float | None = Field(None, gt=1)
+    medium: Literal["cornea", "aqueous", "lens", "vitreous"] | None = None
+    n_ref: float | None = Field(None, gt=1, lt=2)
 
     @model_validator(mode="after")
     def _finite_radius(self) -> EyeSurface:
@@ -444,11 +451,31 @@ class Eye(_Model):
     +x, the nose of a right eye). The world frame stays that of primary gaze (ARCHITECTURE.md §2).
 
     ``contact_lens``: a contact lens on the cornea (:class:`ContactLens`; unset: none).
+
+    ``model``: with no ``surfaces`` written, the schematic eye of that name in the library
+    (:func:`eyelume.scene.eye_models.eye_model_names`: ``arizona``, ``navarro1999``,
+    ``legrand1980``; their data and sources in ``scene/presets/eyes/eye_models.toml``) supplies
+    ``surfaces``, ``iris_surface`` (its pupil), ``dispersion`` and ``reference_wavelength_nm``;
+    with ``surfaces`` written, those are used as written and ``model`` only names them.
+
+    ``dispersion``: how the media's indices follow the wavelength. ``"cauchy_dFC"``: the
+    two-term Cauchy law through each medium's nd, nF, nC (:func:`eyelume.scene.eye.eye_index`;
+    extrapolated beyond the visible, as the paper does). ``"atchison_smith_2005"``: Atchison &
+    Smith's NIR fits (:func:`eyelume.scene.eye_models.ocular_index`), valid 400–1060 nm; a
+    scene wavelength outside is refused.
+
+    ``cornea_reflection``: ``"fixed"``: the glint takes ``cornea_reflectance`` (the paper's
+    2.4 %); ``"fresnel"``: Fresnel's R(θ) at the air–cornea step (the cornea's index);
+    ``"tear_film"``: Fresnel's normal-incidence reflectance of the tear film at the scene's
+    wavelength (:func:`eyelume.scene.eye_models.tear_film_reflectance`, ~2.0 % at 850 nm), as
+    a fixed split (its rise with the angle ignored, as for a contact lens).
     """
 
     model: str = "arizona"
     surfaces: list[EyeSurface]
-    cornea_reflection: Literal["fixed", "fresnel"] = "fixed"
+    dispersion: Literal["cauchy_dFC", "atchison_smith_2005"] = "cauchy_dFC"
+    reference_wavelength_nm: float = Field(589.3, ge=400.0, le=1060.0)
+    cornea_reflection: Literal["fixed", "fresnel", "tear_film"] = "fixed"
     cornea_reflectance: Fraction = 0.024
     cornea_absorptance: Fraction = 0.0
     iris_surface: int = Field(2, ge=1)
@@ -463,15 +490,35 @@ class Eye(_Model):
     rotation_centre_mm: Positive = 13.5
     contact_lens: ContactLens | None = None
 
+    @model_validator(mode="before")
+    @classmethod
+    def _from_library(cls, data: Any) -> Any:
+        """No ``surfaces`` written: take them (and the pupil's surface, the dispersion law and
+        its reference wavelength, unless written) from the library eye ``model``."""
+        if not isinstance(data, dict) or "surfaces" in data:
+            return data
+        name = data.get("model", "arizona")
+        if name not in eye_model_names():
+            raise ValueError(
+                f"model = {name!r} is not an eye model of the library "
+                f"({', '.join(eye_model_names())}); or write the eye's [[eye.surfaces]]"
+            )
+        return {**eye_model_data(name), **data}
+
     @model_validator(mode="after")
     def _consistent(self) -> Eye:
         if len(self.surfaces) < 3:
             raise ValueError(
                 "surfaces needs at least an anterior cornea, one more surface and the retina"
             )
-        for s in self.surfaces[:-1]:
-            if None in (s.nd, s.nF, s.nC):
+        for j, s in enumerate(self.surfaces[:-1]):
+            if self.dispersion == "cauchy_dFC" and None in (s.nd, s.nF, s.nC):
                 raise ValueError(f"surface '{s.name}' needs nd, nF and nC of the medium after it")
+            if self.dispersion == "atchison_smith_2005" and None in (s.medium, s.n_ref):
+                raise ValueError(
+                    f"surfaces.{j} ('{s.name}'): dispersion = 'atchison_smith_2005' needs the "
+                    "medium after it (cornea, aqueous, lens, vitreous) and its n_ref"
+                )
         if self.pupil_diameter_mm >= self.iris_outer_diameter_mm:
             raise ValueError(
                 f"pupil_diameter_mm = {self.pupil_diameter_mm} must be smaller than "
@@ -1122,6 +1169,33 @@ class Scene(_Model):
     eye_plane: EyePlane = EyePlane()
     run: Run = Run()
     elements: list[Element] = []
+
+    @model_validator(mode="after")
+    def _in_dispersion_range(self) -> Scene:
+        """Every wavelength traced (the scene's and each LED's) within the eye's dispersion
+        model's range, if it has one (Atchison & Smith's 400–1060 nm, also the tear film's)."""
+        eye = self.eye
+        if eye.dispersion != "atchison_smith_2005" and eye.cornea_reflection != "tear_film":
+            return self
+        lo, hi = DISPERSION_RANGE_NM
+        named = [("wavelength_nm", self.wavelength_nm)]
+        lw = self.leds.wavelength_nm
+        if isinstance(lw, list):
+            named += [(f"leds.wavelength_nm[{k}]", v) for k, v in enumerate(lw)]
+        elif lw is not None:
+            named.append(("leds.wavelength_nm", lw))
+        why = (
+            f"eye.dispersion = {eye.dispersion!r}"
+            if eye.dispersion == "atchison_smith_2005"
+            else "eye.cornea_reflection = 'tear_film'"
+        )
+        for field, v in named:
+            if not lo <= v <= hi:
+                raise ValueError(
+                    f"{field} = {v:g} nm lies outside {lo:g}-{hi:g} nm, the range of the ocular "
+                    f"dispersion model (Atchison & Smith 2005) that {why} uses"
+                )
+        return self
 
     @model_validator(mode="after")
     def _optics_given(self) -> Scene:
