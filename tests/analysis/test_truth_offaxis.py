@@ -47,9 +47,16 @@ def _cornea_point(scene, r: np.ndarray, a: float, b: float) -> np.ndarray:
     return centre + r @ (p - centre)
 
 
-@pytest.mark.parametrize("k1", [0.0, -0.2])
-def test_glints_of_an_off_axis_camera_and_a_turned_eye(k1):
-    scene = apply_overrides(load_scene("vr-offaxis"), {**GAZE, "camera.ideal.k1": k1})
+@pytest.mark.parametrize(
+    ("k1", "model"),
+    [(0.0, "arizona"), (-0.2, "arizona"), (0.0, "navarro1999"), (0.0, "legrand1980")],
+)
+def test_glints_of_an_off_axis_camera_and_a_turned_eye(k1, model):
+    # every library eye (issue 15): its own anterior cornea (Navarro 7.72 mm, k −0.26; Le Grand
+    # 7.8 mm, a sphere) places the glints
+    overrides = {**GAZE, "camera.ideal.k1": k1, "eye.model": model}
+    scene = load_scene("vr-offaxis", overrides)
+    assert scene.eye.model == model
     cs = compile_scene(scene)
     truth = eye_truth(cs)
     info = camera_info(cs)["opencv"]

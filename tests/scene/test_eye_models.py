@@ -28,6 +28,7 @@ from eyelume.scene.eye_models import (
     eye_model_names,
     tear_film_reflectance,
 )
+from eyelume.scene.io import preset_names
 
 # Atchison & Smith, JOSA A 22:29 (2005): n = A + B/λ² + C/λ⁴ + D/λ⁶, λ in µm
 AS2005 = {
@@ -141,7 +142,9 @@ def test_arizona_power_and_focus():
     # (Schwiegerling, Field Guide to Visual and Ophthalmic Optics, 2004: relaxed power ≈ 60 D)
     # that is emmetropic — its back focal point on the retina at the d line.
     eye = library_eye("arizona")
-    assert eye == eyelume.load_scene("paper2005").eye  # the library's arizona is the presets'
+    for preset in preset_names():  # the library's arizona is every preset's eye, as written
+        written = eyelume.load_scene(preset).eye
+        assert eyelume.load_scene(preset, {"eye.model": "arizona"}).eye == written, preset
     p, _, fb = eye_paraxial_at(eye, 587.6)
     retina = sum(s.thickness_mm for s in eye.surfaces[:-1])
     assert p == pytest.approx(60.0, abs=0.1)
