@@ -12,13 +12,19 @@ import os
 import re
 import shutil
 import subprocess
+import sys
 
 import pytest
+from PIL import Image
 
 from eyelume.optimize.best_run import save_best_run
 from eyelume.optimize.runner import run_study
 from eyelume.optimize.study import load_study
 from eyelume.report.html import write_report
+from eyelume.report.plots import observe_figures
+
+sys.path.insert(0, os.path.dirname(__file__))
+from test_figures import Caught  # noqa: E402
 
 STUDY = """
 name = "report"
@@ -54,19 +60,67 @@ def test_report_renders_in_headless_chromium_with_its_figures(tmp_path):
     p.write_text(STUDY, encoding="utf-8")
     run_study(load_study(p), tmp_path / "out", workers=1)
     save_best_run(tmp_path / "out", "paper2005")  # the best run's pictures, stored
-    page = write_report(tmp_path / "out")
+    caught = Caught()
+    with observe_figures(caught):  # the page's figures, checked from matplotlib's extents
+        page = write_report(tmp_path / "out")
+    assert not caught.defects, caught.defects
     text = page.read_text(encoding="utf-8")
     n_img = text.count("<img ")
     assert n_img >= 3  # two metric landscapes (+ margins) and the best run's images
+    assert len(caught.names) == n_img
+    assert text.count("<figcaption>") == n_img
+    shots = tmp_path / "screenshots"  # the test's artefacts, kept in pytest's tmp folder
+    shots.mkdir()
+    for width in (1280, 1920):
+        args = [browser, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+                f"--window-size={width},1600", "--virtual-time-budget=5000"]  # fmt: skip
+        dom = subprocess.run(
+            [*args, "--dump-dom", page.as_uri()],
+            capture_output=True, text=True, timeout=120, check=True,
+        ).stdout  # fmt: skip
+        decoded = re.search(r'data-figures="(\d+)"', dom)
+        assert decoded and int(decoded.group(1)) == n_img  # every figure decoded, has a size
+        overflow = re.search(r'data-overflow-px="(\d+)"', dom)
+        assert overflow and int(overflow.group(1)) == 0, f"{width} px: page wider than window"
+        # 3 of the 6 runs have 1 W/sr LEDs: over the corneal limit, drawn in red
+        assert dom.count('class="unsafe"') == 3
+        shot = shots / f"report_{width}.png"
+        subprocess.run(
+            [*args, f"--screenshot={shot}", page.as_uri()],
+            capture_output=True,
+            timeout=120,
+            check=True,
+        )
+        with Image.open(shot) as im:
+            assert im.size == (width, 1600)
+
+
+def test_report_escapes_user_text_and_scrolls_wide_tables(tmp_path):
+    """A study and parameter names with markup are shown as text, and a runs table of 30
+    columns sits in a box that scrolls sideways (overflow-x: auto): in headless Chromium at
+    1280 px the page itself does not overflow."""
+    from eyelume.optimize.store import ResultStore
+
+    folder = tmp_path / "study"
+    names = [f"leds.<b>parameter_number_{i}</b>" for i in range(30)]  # wider than any window
+    store = ResultStore(folder)
+    try:
+        store.put("k0", 0, "s<i>", {n: 1.0 for n in names}, {"merit": 1.0}, 0.1)
+    finally:
+        store.close()
+    page = write_report(folder)
+    text = page.read_text(encoding="utf-8")
+    assert "<b>" not in text and "<i>" not in text
+    assert "leds.&lt;b&gt;parameter_number_0&lt;/b&gt;" in text and "s&lt;i&gt;" in text
+    assert '<div class="scroll"><table>' in text
+    browser = _browser()
     dom = subprocess.run(
-        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=5000",
-         "--dump-dom", page.as_uri()],
+        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+         "--window-size=1280,900", "--virtual-time-budget=5000", "--dump-dom", page.as_uri()],
         capture_output=True, text=True, timeout=120, check=True,
     ).stdout  # fmt: skip
-    decoded = re.search(r'data-figures="(\d+)"', dom)
-    assert decoded and int(decoded.group(1)) == n_img  # every figure decoded and has a size
-    # 3 of the 6 runs have 1 W/sr LEDs: over the corneal limit, drawn in red
-    assert dom.count('class="unsafe"') == 3
+    overflow = re.search(r'data-overflow-px="(\d+)"', dom)
+    assert overflow and int(overflow.group(1)) == 0
 
 
 def test_without_chromium_the_browser_test_skips_unless_ci_requires_it(monkeypatch):

@@ -6,7 +6,9 @@ study's folder holds them (:func:`eyelume.optimize.best_run.save_best_run`, whic
 ``eyelume report --scene`` runs first) — the best run's eye-plane pattern and eye image, and its
 tracking-error maps when the study measured tracking. The report only reads what is stored: it
 renders nothing. When the page has loaded, a script counts the figures that decoded into
-``data-figures`` on the body, so a headless browser can check that it renders with its figures.
+``data-figures`` on the body and writes how many CSS pixels the page overflows the window
+sideways into ``data-overflow-px``, so a headless browser can check that it renders with its
+figures and without a horizontal scroll bar (wide tables scroll in their own box).
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from matplotlib.figure import Figure
 
 from eyelume.errors import StoreError
 from eyelume.optimize.best_run import BEST_RUN_FILES, best_runs
-from eyelume.report.plots import agg_figure
+from eyelume.report.plots import agg_figure, save_figure
 from eyelume.report.tracking_outputs import save_error_maps
 
 __all__ = ["write_report"]
@@ -31,24 +33,33 @@ __all__ = ["write_report"]
 
 def _png(fig: Figure) -> str:
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=90, bbox_inches="tight")
+    save_figure(fig, buf, dpi=90)
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
 def _landscapes(rows: list[dict], params: list[str], metrics: list[str]) -> list[tuple[str, str]]:
     out = []
+    n = max(1, len(params))
     for m in metrics:
-        fig = agg_figure(3.2 * max(1, len(params)), 2.8)
-        axes = fig.subplots(1, max(1, len(params)), squeeze=False)[0]
+        fig = agg_figure(3.4 * n, 3.0)
+        axes = fig.subplots(1, n, squeeze=False, sharey=True)[0]
         for ax, p in zip(axes, params, strict=False):
             xs = [r["overrides"].get(p) for r in rows]
             ys = [r["metrics"].get(m) for r in rows]
-            pts = [(x, y) for x, y in zip(xs, ys, strict=True) if isinstance(y, int | float)]
+            pts = [(x, y) for x, y in zip(xs, ys, strict=True)
+                   if isinstance(y, int | float) and isinstance(x, int | float)]  # fmt: skip
             if pts:
                 ax.plot(*zip(*pts, strict=True), "o", ms=4)
-            ax.set_xlabel(p)
-            ax.set_ylabel(m)
-        out.append((f"{m} against each parameter", _png(fig)))
+            ax.set_xlabel(p, fontsize=8)
+            ax.tick_params(labelsize=7)
+            ax.grid(True, linewidth=0.3, alpha=0.5)
+        axes[0].set_ylabel(m, fontsize=8)
+        caption = (
+            f"{m} of each committed run (one dot per run) against each varied parameter "
+            f"({', '.join(params) or 'none'}), the other parameters at the run's own values; "
+            "read from the study's store, not recomputed."
+        )
+        out.append((caption, _png(fig)))
     return out
 
 
@@ -62,19 +73,29 @@ def _best_images(folder: Path) -> list[tuple[str, str]]:
     info = json.loads(meta.read_text(encoding="utf-8"))
     fig = agg_figure(9, 3.4)
     a, b = fig.subplots(1, 2)
-    im = a.imshow(pattern, cmap="inferno")
-    a.set_title("eye-plane irradiance (W/mm²)")
-    fig.colorbar(im, ax=a)
-    b.imshow(image, cmap="gray", vmin=0, vmax=float(np.percentile(image, 99.5)))
-    b.set_title("eye image (fast estimator)")
+    im = a.imshow(pattern, cmap="inferno", vmin=0)
+    a.set_title("eye-plane irradiance", fontsize=10)
+    fig.colorbar(im, ax=a, label="irradiance (W/mm²)")
+    im = b.imshow(image, cmap="gray", vmin=0, vmax=float(np.percentile(image, 99.5)) or 1.0)
+    b.set_title("eye image (glints clipped at 99.5 %)", fontsize=10)
+    fig.colorbar(im, ax=b, label="irradiance (W/mm²)", extend="max")
     for ax in (a, b):
-        ax.set_xticks([])
-        ax.set_yticks([])
-    out = [(f"best run ({info['index']}): eye-plane pattern and eye image", _png(fig))]
+        ax.set_xlabel("column (px)", fontsize=8)
+        ax.set_ylabel("row (px)", fontsize=8)
+        ax.tick_params(labelsize=7)
+    out = [
+        (
+            f"Best run (#{info['index']}): its eye-plane irradiance toward the eye and the "
+            "simulated eye image, rendered anew with the fast estimator after the study "
+            "(eyelume report --scene) and stored beside its results.",
+            _png(fig),
+        )
+    ]
     if info.get("tracking_rows"):
         buf = io.BytesIO()
         save_error_maps(info["tracking_rows"], buf)
-        out.append(("best run: tracking errors over the gaze grid",
+        out.append(("Best run: pupil-centre, glint and gaze errors of the tracking evaluation "
+                    "over the gaze grid (one cell per gaze; a red × where the frame failed).",
                     base64.b64encode(buf.getvalue()).decode("ascii")))  # fmt: skip
     return out
 
@@ -117,7 +138,8 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
         cls = ' class="unsafe"' if unsafe else ""
         body.append(f"<tr{cls}>" + "".join(f"<td>{t}</td>" for t in tds) + "</tr>")
     best_html = "".join(
-        f"<li>run {r['index']}: {html.escape(str(r['overrides']))} — {merit} "
+        f"<li>run {html.escape(str(r['index']))}: {html.escape(str(r['overrides']))} — "
+        f"{html.escape(str(merit))} "
         f"{r['metrics'][merit]:.5g}</li>"
         for r in best
     )
@@ -133,11 +155,20 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
         for r in rows
     )
     page = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>eyelume study {html.escape(", ".join(studies))}
+<html lang="en"><head><meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1"><title>eyelume study {
+        html.escape(", ".join(studies))
+    }
 </title><style>
-body {{ font-family: sans-serif; margin: 2em; }} table {{ border-collapse: collapse; }}
-td, th {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; }}
-tr.unsafe td {{ color: #b00; font-weight: bold; }} figure {{ display: inline-block; }}
+body {{ font-family: sans-serif; margin: 1em auto; padding: 0 1em; max-width: 1600px; }}
+.scroll {{ overflow-x: auto; max-width: 100%; }}
+table {{ border-collapse: collapse; font-size: 0.9em; }}
+td, th {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; white-space: nowrap; }}
+th {{ background: #f4f4f4; position: sticky; top: 0; }}
+tr.unsafe td {{ color: #b00; font-weight: bold; }}
+figure {{ display: inline-block; vertical-align: top; max-width: 100%; margin: 0.5em; }}
+figure img {{ max-width: 100%; height: auto; }}
+figcaption {{ font-size: 0.9em; color: #333; max-width: 60em; }}
 </style></head>
 <body data-figures="0">
 <h1>Study {html.escape(", ".join(studies))}</h1>
@@ -149,12 +180,15 @@ tr.unsafe td {{ color: #b00; font-weight: bold; }} figure {{ display: inline-blo
         else ""
     }
 <h2>Merit landscapes</h2>{figs}
-<h2>Best runs{f" by {merit}" if merit else ""}</h2><ol>{best_html}</ol>
-<h2>All runs</h2><table><tr>{head}</tr>{"".join(body)}</table>
+<h2>Best runs{f" by {html.escape(str(merit))}" if merit else ""}</h2><ol>{best_html}</ol>
+<h2>All runs</h2><div class="scroll"><table><tr>{head}</tr>{"".join(body)}</table></div>
 <script>
 window.addEventListener("load", () => {{
   const ok = [...document.images].filter(i => i.complete && i.naturalWidth > 0).length;
   document.body.dataset.figures = String(ok);
+  // for a headless check of the layout: how far the page overflows the window sideways
+  document.body.dataset.overflowPx = String(
+    Math.max(0, document.documentElement.scrollWidth - window.innerWidth));
 }});
 </script></body></html>
 """

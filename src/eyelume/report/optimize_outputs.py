@@ -70,6 +70,16 @@ def write_sweep_outputs(sweep, target: np.ndarray, refined, delta, plane_extent,
     return written
 
 
+def _caption(meta: dict) -> str:
+    """Scene, seed and budget of a δ study, for its figures."""
+    keys = (
+        ("scene", "scene {}"),
+        ("seed", "seed {}"),
+        ("samples_per_pixel", "{} samples per pixel"),
+    )
+    return ", ".join(say.format(meta[k]) for k, say in keys if meta.get(k) is not None)
+
+
 def write_delta_study_outputs(
     rows: Sequence, direct, paper_merits: dict, paper_choice: dict, meta: dict, out
 ) -> list[Path]:
@@ -134,6 +144,8 @@ def write_delta_study_outputs(
         list(paper_merits),
         list(paper_merits.values()),
         path("merit_vs_delta.png"),
+        merit_se=[r.evaluator_merit_se for r in rows],
+        caption=_caption(meta),
     )
     save_delta_gallery(
         deltas,
@@ -141,6 +153,7 @@ def write_delta_study_outputs(
         [r.image for r in rows],
         [f"Y{r.height_mm:g} Z{r.distance_mm:g} θ{r.pitch_deg:g}" for r in rows],
         path("deltas.png"),
+        caption=_caption(meta),
     )
     for r in rows:
         save_grey_png(r.image, path(f"eye_image_delta_{r.delta:.1f}.png"))

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.colors import LogNorm
 
-from eyelume.report.plots import agg_figure
+from eyelume.report.plots import agg_figure, save_figure
 
 __all__ = [
     "save_sweep_heatmaps",
@@ -26,18 +26,26 @@ def save_sweep_heatmaps(
     merit: np.ndarray,
     path: str | Path,
     title: str,
+    caption: str = "",
 ) -> None:
-    """One Z × θ heatmap of the generator merit per LED height Y, on one colour scale (log).
+    """One Z × θ heatmap of the generator merit per LED height Y, on one colour scale (log,
+    viridis reversed: dark is better), with one colour bar; the best configuration is circled
+    (legend). ``merit`` has shape (len(heights), len(distances), len(pitches)); NaN marks
+    impossible configurations (drawn blank). ``caption`` (scene, seed, budget) goes under the
+    title."""
+    from matplotlib.lines import Line2D
 
-    ``merit`` has shape (len(heights), len(distances), len(pitches)); NaN marks impossible
-    configurations (drawn blank). The best configuration is circled.
-    """
     finite = merit[np.isfinite(merit)]
     vmin, vmax = float(finite.min()), float(finite.max())
-    norm = LogNorm(vmin=max(vmin, vmax * 1e-6), vmax=vmax)
-    fig = agg_figure(3.0 * len(heights) + 1.2, 3.6)
+    norm = LogNorm(vmin=max(vmin, vmax * 1e-6), vmax=vmax if vmax > vmin else vmin * 1.01)
+    fig = agg_figure(3.0 * len(heights) + 1.6, 4.0)
     axes = fig.subplots(1, len(heights), sharey=True, squeeze=False)
     best = np.unravel_index(np.nanargmin(merit), merit.shape)
+
+    def edges(v: np.ndarray) -> tuple[float, float]:
+        half = float(np.min(np.diff(v))) / 2 if v.size > 1 else 2.5
+        return float(v[0]) - half, float(v[-1]) + half
+
     im = None
     for i, (ax, y) in enumerate(zip(axes[0], heights, strict=True)):
         im = ax.imshow(
@@ -46,21 +54,19 @@ def save_sweep_heatmaps(
             aspect="auto",
             norm=norm,
             cmap="viridis_r",
-            extent=(
-                distances[0] - 2.5,
-                distances[-1] + 2.5,
-                pitches[0] - 2.5,
-                pitches[-1] + 2.5,
-            ),
+            extent=(*edges(distances), *edges(pitches)),
         )
-        ax.set_title(f"Y = {y:g} mm")
-        ax.set_xlabel("Z (mm)")
+        ax.set_title(f"LED height Y = {y:g} mm", fontsize=10)
+        ax.set_xlabel("LED distance Z (mm)")
         if i == best[0]:
             ax.plot(distances[best[1]], pitches[best[2]], "o", mfc="none", mec="red", ms=12)
-    axes[0][0].set_ylabel("pitch θ (°)")
-    fig.colorbar(im, ax=axes[0].tolist(), label="generator merit (lower is better)")
-    fig.suptitle(title)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    axes[0][0].set_ylabel("LED pitch θ (°)")
+    fig.colorbar(im, ax=axes[0].tolist(), label="generator merit, lower is better (dimensionless)")
+    marker = Line2D([], [], marker="o", mfc="none", mec="red", ms=9, linestyle="none",
+                    label="best configuration")  # fmt: skip
+    fig.legend(handles=[marker], loc="outside lower left", fontsize="small", frameon=False)
+    fig.suptitle(title + (f"\n{caption}" if caption else ""), fontsize=10)
+    save_figure(fig, path, dpi=110)
 
 
 def save_pattern_vs_target(
@@ -70,17 +76,21 @@ def save_pattern_vs_target(
     path: str | Path,
     title: str,
 ) -> None:
-    """The eye-plane pattern and the target side by side, each scaled to unit mean."""
-    fig = agg_figure(9, 3.6)
-    axes = fig.subplots(1, 2)
-    for ax, data, name in ((axes[0], pattern, "pattern"), (axes[1], target, "target")):
-        im = ax.imshow(data / data.mean(), extent=extent_mm, cmap="inferno", vmin=0)
-        ax.set_title(f"{name} / its mean")
-        ax.set_xlabel("x (mm)")
-        fig.colorbar(im, ax=ax)
-    axes[0].set_ylabel("y (mm)")
-    fig.suptitle(title)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    """The eye-plane pattern and the target side by side, each scaled to unit mean, on one
+    colour scale (inferno) with one colour bar."""
+    a, b = pattern / pattern.mean(), target / target.mean()
+    vmax = float(max(a.max(), b.max()))
+    fig = agg_figure(9, 3.8)
+    axes = fig.subplots(1, 2, sharey=True)
+    im = None
+    for ax, data, name in ((axes[0], a, "best pattern"), (axes[1], b, "target")):
+        im = ax.imshow(data, extent=extent_mm, cmap="inferno", vmin=0, vmax=vmax)
+        ax.set_title(name, fontsize=10)
+        ax.set_xlabel("eye plane x (mm)")
+    axes[0].set_ylabel("eye plane y (mm)")
+    fig.colorbar(im, ax=axes.tolist(), label="irradiance / its own mean (dimensionless)")
+    fig.suptitle(title, fontsize=10)
+    save_figure(fig, path, dpi=110)
 
 
 def save_merit_vs_delta(
@@ -89,22 +99,35 @@ def save_merit_vs_delta(
     paper_deltas: Sequence[float],
     paper_merits: Sequence[float],
     path: str | Path,
+    merit_se: Sequence[float] | None = None,
+    caption: str = "",
 ) -> None:
-    """Our evaluator merit against δ (left axis) and the paper's published LightTools merits
-    (right axis: another, undocumented scale — compare shapes and minima, not values)."""
-    fig = agg_figure(6.4, 4)
+    """Our evaluator merit and the paper's published LightTools merits against δ, each divided
+    by its own minimum, on one axis. The paper's merit scale is undocumented, so only where each
+    curve is lowest and how steeply it rises relative to its minimum can be compared; the axis
+    says so. ``merit_se`` (our standard errors) draws error bars, scaled alike."""
+    ours = np.asarray(merits, dtype=float)
+    paper = np.asarray(paper_merits, dtype=float)
+    fig = agg_figure(6.4, 4.4)
     ax = fig.subplots()
-    ax.plot(deltas, merits, "o-", color="tab:blue", label="eyelume evaluator merit")
-    ax.set_xlabel("falloff δ at the eye plane's corner")
-    ax.set_ylabel("eyelume evaluator merit", color="tab:blue")
-    ax2 = ax.twinx()
-    ax2.plot(paper_deltas, paper_merits, "s--", color="tab:red", label="paper (LightTools)")
-    ax2.set_ylabel("paper's merit (LightTools scale)", color="tab:red")
-    lines = ax.get_lines() + ax2.get_lines()
-    ax.legend(lines, [ln.get_label() for ln in lines], loc="upper center")
-    ax.set_title("Evaluator merit against the target's falloff δ")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    m0 = float(np.min(ours))
+    yerr = None if merit_se is None else np.asarray(merit_se, dtype=float) / m0
+    ax.errorbar(deltas, ours / m0, yerr=yerr, fmt="o-", color="tab:blue", capsize=3,
+                label="eyelume evaluator merit (± 1 standard error)")  # fmt: skip
+    if paper.size:
+        ax.plot(paper_deltas, paper / float(np.min(paper)), "s--", color="tab:red",
+                label="paper, SPIE 5875 (LightTools merit)")  # fmt: skip
+    ax.set_xlabel("target falloff δ at the eye plane's corner (dimensionless)")
+    ax.set_ylabel("merit / its own minimum (dimensionless)")
+    ax.legend(loc="upper center", fontsize="small")
+    ax.grid(True, linewidth=0.3, alpha=0.5)
+    ax.set_title(
+        "Evaluator merit against δ, each curve divided by its own minimum\n"
+        "(the paper's merit scale is unknown: compare minima and shapes, not values)"
+        + (f"\n{caption}" if caption else ""),
+        fontsize=9,
+    )
+    save_figure(fig, path, dpi=110)
 
 
 def save_delta_gallery(
@@ -113,20 +136,32 @@ def save_delta_gallery(
     images: Sequence[np.ndarray],
     labels: Sequence[str],
     path: str | Path,
+    caption: str = "",
 ) -> None:
-    """For each δ, its best eye-plane pattern (top) and the simulated eye image (bottom)."""
+    """For each δ, its best eye-plane pattern (top, inferno) and the simulated eye image
+    (bottom, grey, glints clipped at the 99.5th percentile), each row on one colour scale with a
+    colour bar in W/mm²; axes in pixels (columns and rows of the arrays)."""
     n = len(deltas)
-    fig = agg_figure(2.2 * n, 4.4)
-    axes = fig.subplots(2, n, squeeze=False)
+    fig = agg_figure(2.6 * n + 1.4, 5.2)
+    axes = fig.subplots(2, n, squeeze=False, sharex="row", sharey="row")
+    p_max = max(float(np.max(p)) for p in patterns)
+    i_max = max(float(np.percentile(i, 99.5)) for i in images)
+    rows = (
+        (0, patterns, "inferno", p_max, "eye-plane irradiance (W/mm²)"),
+        (1, images, "gray", i_max, "eye-image irradiance (W/mm²)"),
+    )
+    for row, arrays, cmap, vmax, label in rows:
+        im = None
+        for j in range(n):
+            ax = axes[row][j]
+            im = ax.imshow(arrays[j], cmap=cmap, vmin=0, vmax=vmax if vmax > 0 else 1.0)
+            ax.set_xlabel("column (px)", fontsize=8)
+            ax.tick_params(labelsize=7)
+        axes[row][0].set_ylabel(("eye plane" if row == 0 else "eye image") + "\nrow (px)",
+                                fontsize=8)  # fmt: skip
+        fig.colorbar(im, ax=axes[row].tolist(), label=label, shrink=0.9)
     for j in range(n):
-        axes[0][j].imshow(patterns[j], cmap="inferno")
-        axes[0][j].set_title(f"δ = {deltas[j]:.1f}", fontsize=9)
-        axes[1][j].imshow(images[j], cmap="gray", vmin=0, vmax=np.percentile(images[j], 99.5))
-        axes[1][j].set_xlabel(labels[j], fontsize=7)
-        for ax in (axes[0][j], axes[1][j]):
-            ax.set_xticks([])
-            ax.set_yticks([])
-    axes[0][0].set_ylabel("eye plane")
-    axes[1][0].set_ylabel("eye image")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+        axes[0][j].set_title(f"δ = {deltas[j]:.1f}\n{labels[j]}", fontsize=8)
+    fig.suptitle("Best pattern and eye image per δ" + (f"\n{caption}" if caption else ""),
+                 fontsize=10)  # fmt: skip
+    save_figure(fig, path, dpi=110)

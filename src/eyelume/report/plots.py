@@ -18,9 +18,11 @@ when missing.
 
 from __future__ import annotations
 
+import io
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,10 +31,14 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import FuncFormatter
 from PIL import Image
 
 __all__ = [
     "CATEGORY_COLORS",
+    "agg_figure",
+    "observe_figures",
+    "save_figure",
     "SectionCurve",
     "save_error_time_plot",
     "save_grey_png",
@@ -100,20 +106,51 @@ def _prepare_path(path: PathLike) -> Path:
     return out
 
 
-def agg_figure(width_in: float, height_in: float) -> Figure:
-    """A new figure (inches) on its own Agg canvas, outside pyplot's global state."""
-    fig = Figure(figsize=(width_in, height_in))
+def agg_figure(width_in: float, height_in: float, layout: str | None = "constrained") -> Figure:
+    """A new figure (inches) on its own Agg canvas, outside pyplot's global state; constrained
+    layout by default, so titles, labels and colour bars do not collide."""
+    fig = Figure(figsize=(width_in, height_in), layout=layout)
     FigureCanvasAgg(fig)
     return fig
 
 
-def _save_figure(fig: Figure, path: PathLike) -> None:
-    """Render ``fig`` with the Agg canvas to ``path`` and release it."""
+#: Callables told of every figure eyelume writes (see :func:`observe_figures`).
+_OBSERVERS: list[Callable[[Figure, str], None]] = []
+
+
+@contextmanager
+def observe_figures(callback: Callable[[Figure, str], None]) -> Iterator[None]:
+    """Within the block, call ``callback(fig, name)`` for every figure written through
+    :func:`save_figure` (every matplotlib figure eyelume writes), after it is drawn and saved
+    and before it is released, so a test can inspect its final layout (text extents, colour
+    bars). ``name`` is the file name, or ``"<buffer>"`` for an in-memory PNG."""
+    _OBSERVERS.append(callback)
+    try:
+        yield
+    finally:
+        _OBSERVERS.remove(callback)
+
+
+def save_figure(fig: Figure, path: PathLike | io.BytesIO, *, dpi: float = _DPI) -> None:
+    """Render ``fig`` with the Agg canvas as a PNG to ``path`` (a file, parent folders created,
+    or a binary buffer), tell the observers (:func:`observe_figures`) and release it."""
     FigureCanvasAgg(fig)
     try:
-        fig.savefig(_prepare_path(path), dpi=_DPI, bbox_inches="tight", format="png")
+        if isinstance(path, io.IOBase):
+            fig.savefig(path, dpi=dpi, bbox_inches="tight", format="png")
+            name = "<buffer>"
+        else:
+            target = _prepare_path(path)
+            fig.savefig(target, dpi=dpi, bbox_inches="tight", format="png")
+            name = target.name
+        for observer in list(_OBSERVERS):
+            observer(fig, name)
     finally:
         fig.clear()
+
+
+def _save_figure(fig: Figure, path: PathLike) -> None:
+    save_figure(fig, path)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -513,6 +550,13 @@ def save_layout(
 # --------------------------------------------------------------------------------------------------
 
 
+def _minor_log_label(value: float, _pos: int) -> str:
+    if value <= 0:
+        return ""
+    mantissa = value / 10 ** math.floor(math.log10(value) + 1e-9)
+    return f"{value:g}" if round(mantissa, 6) in (2.0, 5.0) else ""
+
+
 def save_error_time_plot(
     curves: Sequence[tuple[str, Sequence[float], Sequence[float]]],
     path: PathLike,
@@ -615,6 +659,10 @@ def save_error_time_plot(
             label="slope −½ (error ∝ 1/√time)",
         )
         ax.set_xlim(lo, hi)
+    # plain numbers; of the minor ticks only 2 and 5 of each decade are labelled (3, 4, … collide)
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        axis.set_minor_formatter(FuncFormatter(_minor_log_label))
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(title)

@@ -11,7 +11,7 @@ import numpy as np
 
 from eyelume.analysis.tracking.evaluate import error_map_rows
 from eyelume.json_files import write_json
-from eyelume.report.plots import agg_figure
+from eyelume.report.plots import agg_figure, save_figure
 
 __all__ = ["save_error_maps", "write_population_outputs", "write_tracking_outputs"]
 
@@ -26,38 +26,82 @@ def _grid(rows: list[dict], key: str) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return np.array(hs), np.array(vs), out
 
 
-def save_error_maps(rows: list[dict], path) -> None:
-    """Four maps over the gaze grid: pupil-centre error (px), glints found, PCCR and geometric
-    gaze errors (°); blank where the frame failed. ``rows`` are
-    :func:`eyelume.analysis.tracking.evaluate.error_map_rows` (one per frame)."""
+def _caption(meta: dict | None) -> str:
+    """The scene, seed and budget of a run, for a figure's caption."""
+    if not meta:
+        return ""
+    parts = []
+    for key, say in (("scene", "scene {}"), ("member", "member {}"), ("seed", "seed {}"),
+                     ("samples_per_pixel", "{} camera samples per pixel")):  # fmt: skip
+        if meta.get(key) is not None:
+            parts.append(say.format(meta[key]))
+    if meta.get("sensor"):
+        parts.append("sensor {} × {} px".format(*meta["sensor"]))
+    return ", ".join(parts)
+
+
+def _half_step(values: np.ndarray) -> float:
+    return float(np.min(np.diff(values))) / 2 if values.size > 1 else 5.0
+
+
+def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
+    """Four maps over the gaze grid (2 × 2 panels): pupil-centre error (px), glints found, PCCR
+    and geometric gaze errors (°), each with its colour bar (viridis) and each cell's value
+    written in it; a red × marks a frame that failed (legend below), and a panel with no value
+    at all says so instead of drawing an empty scale. ``rows`` are
+    :func:`eyelume.analysis.tracking.evaluate.error_map_rows` (one per frame); ``caption``
+    (scene, seed, budget) is written under the panels. ``path``: a file or a binary buffer."""
+    from matplotlib.lines import Line2D
+
     maps = [
-        ("pupil-centre error (px)", "pupil_error_px"),
-        ("glints found and matched", "glints_found"),
-        ("PCCR gaze error (°)", "pccr_error_deg"),
-        ("geometric gaze error (°)", "geometric_error_deg"),
+        ("pupil-centre error", "pupil_error_px", "px"),
+        ("glints found and matched", "glints_found", "count"),
+        ("PCCR gaze error", "pccr_error_deg", "°"),
+        ("geometric gaze error", "geometric_error_deg", "°"),
     ]
-    fig = agg_figure(13, 3.4)
-    axes = fig.subplots(1, 4)
-    for ax, (title, key) in zip(axes, maps, strict=True):
+    fig = agg_figure(10, 7.6)
+    axes = fig.subplots(2, 2).ravel()
+    failed = False
+    for ax, (title, key, unit) in zip(axes, maps, strict=True):
         hs, vs, z = _grid(rows, key)
-        im = ax.imshow(
-            z,
-            origin="lower",
-            cmap="viridis",
-            extent=(hs[0] - 5, hs[-1] + 5, vs[0] - 5, vs[-1] + 5),
-            aspect="auto",
-        )
+        dh, dv = _half_step(hs), _half_step(vs)
+        extent = (hs[0] - dh, hs[-1] + dh, vs[0] - dv, vs[-1] + dv)
+        ax.set_title(f"{title} ({unit})", fontsize=10)
+        ax.set_xlabel("horizontal gaze (°)")
+        ax.set_ylabel("vertical gaze (°)")
+        ax.set_xlim(extent[0], extent[1])
+        ax.set_ylim(extent[2], extent[3])
+        finite = np.isfinite(z)
+        # each cell's number in a font that fits its cell (5 characters wide at most)
+        cell_in = 4.0 / max(len(hs), 1)
+        size = float(np.clip(cell_in * 72 / 3.2, 4.0, 8.0))
+        if finite.any():
+            im = ax.imshow(z, origin="lower", cmap="viridis", extent=extent, aspect="auto")
+            fig.colorbar(im, ax=ax, label=f"{title} ({unit})")
+            mid = 0.5 * (np.nanmin(z) + np.nanmax(z))
+        else:
+            ax.text(
+                0.5, 0.5, "no frame gave a value", transform=ax.transAxes, ha="center",
+                va="center", fontsize=9, bbox={"facecolor": "white", "edgecolor": "0.6"},
+            )  # fmt: skip
         for i, v in enumerate(vs):
             for j, h in enumerate(hs):
-                if np.isfinite(z[i, j]):
-                    ax.text(h, v, f"{z[i, j]:.2g}", ha="center", va="center", fontsize=7)
-                else:
-                    ax.text(h, v, "×", ha="center", va="center", color="red")
-        ax.set_title(title, fontsize=10)
-        ax.set_xlabel("horizontal gaze (°)")
-        fig.colorbar(im, ax=ax)
-    axes[0].set_ylabel("vertical gaze (°)")
-    fig.savefig(path, dpi=110, bbox_inches="tight", format="png")
+                if finite[i, j]:
+                    dark = z[i, j] < mid or np.nanmin(z) == np.nanmax(z)
+                    ax.text(h, v, f"{z[i, j]:.2g}", ha="center", va="center", fontsize=size,
+                            color="white" if dark else "black")  # fmt: skip
+                elif finite.any():
+                    ax.plot(h, v, "x", color="red", ms=7, mew=1.5)
+                    failed = True
+    handles = []
+    if failed:
+        handles.append(Line2D([], [], marker="x", color="red", linestyle="none", mew=1.5,
+                              label="no value: detection failed or no estimate"))  # fmt: skip
+    if handles:
+        fig.legend(handles=handles, loc="outside lower left", fontsize="small", frameon=False)
+    if caption:
+        fig.suptitle(caption, fontsize=9)
+    save_figure(fig, path, dpi=110)
 
 
 def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
@@ -88,7 +132,7 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
             )  # fmt: skip
     summary = {"meta": meta, **report.summary}
     write_json(written[1], summary)
-    save_error_maps(error_map_rows(report.frames), written[2])
+    save_error_maps(error_map_rows(report.frames), written[2], _caption(meta))
     return written
 
 

@@ -1,0 +1,125 @@
+"""Checks of a drawn matplotlib figure from matplotlib's own extents (used by test_figures.py).
+
+- :func:`text_overlaps`: every pair of drawn, non-empty text elements (titles, suptitle, axis
+  labels, tick labels that are drawn, colour-bar labels, annotations, legend entries) whose
+  window extents (``Text.get_window_extent`` with the canvas renderer) intersect by more than
+  ``tolerance_px`` in both directions.
+- :func:`images_without_unit_colorbar`: every image panel (``AxesImage`` or ``QuadMesh``) whose
+  colour scale has no colour bar (one drawn for it, or for another image of the same norm and
+  colour map), or whose colour bar label names no unit in parentheses.
+"""
+
+from __future__ import annotations
+
+import re
+
+from matplotlib.collections import QuadMesh
+from matplotlib.figure import Figure
+from matplotlib.text import Text
+
+#: A colour-bar label must end with a unit in parentheses, e.g. "irradiance (W/mm²)".
+UNIT = re.compile(r"\(([^()]+)\)\s*$")
+
+
+def _all_axes(fig: Figure) -> list:
+    out, todo = [], list(fig.axes)
+    while todo:
+        ax = todo.pop()
+        if ax in out:
+            continue
+        out.append(ax)
+        todo.extend(getattr(ax, "child_axes", []))
+    return out
+
+
+def _tick_labels(fig: Figure) -> tuple[set[int], set[int]]:
+    """(ids of every tick label, ids of the tick labels matplotlib draws)."""
+    every, drawn = set(), set()
+    for ax in _all_axes(fig):
+        for axis in (ax.xaxis, ax.yaxis):
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                every.update((id(tick.label1), id(tick.label2)))
+            if not (ax.get_visible() and ax.axison and axis.get_visible()):
+                continue  # a hidden axis (a twin's shared x axis) draws no tick label
+            for tick in axis._update_ticks():  # the ticks inside the view
+                drawn.update(
+                    id(lab) for lab in (tick.label1, tick.label2)
+                    if lab.get_visible() and tick.get_visible()
+                )  # fmt: skip
+    return every, drawn
+
+
+def _drawn_texts(fig: Figure) -> list[tuple[str, object]]:
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    every, drawn = _tick_labels(fig)
+    out, seen = [], set()
+    for t in fig.findobj(match=Text):
+        parent = getattr(t, "axes", None)
+        skip = (
+            id(t) in seen  # findobj can reach one text twice
+            or not t.get_visible()
+            or not t.get_text().strip()
+            or (id(t) in every and id(t) not in drawn)
+            or (parent is not None and not parent.get_visible())
+        )
+        seen.add(id(t))
+        if skip:
+            continue
+        bb = t.get_window_extent(renderer)
+        if bb.width > 0 and bb.height > 0:
+            out.append((t.get_text(), bb))
+    return out
+
+
+def text_overlaps(fig: Figure, tolerance_px: float = 1.0) -> list[tuple[str, str]]:
+    """Pairs of drawn text elements whose extents overlap by more than ``tolerance_px``."""
+    texts = _drawn_texts(fig)
+    bad = []
+    for i, (a, ba) in enumerate(texts):
+        for b, bb in texts[i + 1 :]:
+            dx = min(ba.x1, bb.x1) - max(ba.x0, bb.x0)
+            dy = min(ba.y1, bb.y1) - max(ba.y0, bb.y0)
+            if dx > tolerance_px and dy > tolerance_px:
+                bad.append((a, b))
+    return bad
+
+
+def _same_scale(a, b) -> bool:
+    """Two images drawn on one colour scale: same colour map, same kind of norm and limits."""
+    return (
+        a.cmap.name == b.cmap.name
+        and type(a.norm) is type(b.norm)
+        and (a.norm.vmin, a.norm.vmax) == (b.norm.vmin, b.norm.vmax)
+    )
+
+
+def images_without_unit_colorbar(fig: Figure) -> list[str]:
+    """Descriptions of the image panels whose colour scale has no colour bar with a unit."""
+    colorbars = []
+    for ax in _all_axes(fig):
+        for im in [*ax.images, *(c for c in ax.collections if isinstance(c, QuadMesh))]:
+            if getattr(im, "colorbar", None) is not None:
+                colorbars.append(im)
+    bad = []
+    for ax in _all_axes(fig):
+        if ax in {getattr(c.colorbar, "ax", None) for c in colorbars}:
+            continue  # the colour bar's own axes
+        images = [*ax.images, *(c for c in ax.collections if isinstance(c, QuadMesh))]
+        for im in images:
+            if not im.get_visible():
+                continue
+            owner = (
+                im
+                if im.colorbar is not None
+                else next((c for c in colorbars if _same_scale(c, im)), None)
+            )
+            where = ax.get_title() or ax.get_ylabel() or "untitled panel"
+            if owner is None:
+                bad.append(f"{where!r}: an image without a colour bar")
+                continue
+            cax = owner.colorbar.ax
+            label = cax.get_ylabel() or cax.get_xlabel()
+            if not UNIT.search(label):
+                bad.append(f"{where!r}: colour bar label {label!r} names no unit in parentheses")
+    return bad
