@@ -172,6 +172,16 @@ def _camera_sections(cs: CompiledScene, cut: int, vertical: int) -> list[Section
                 continue
         r = np.linspace(-sd, sd, 201)
         add(f"lens S{j + 1}", "lens", r, cs.lf[j, Q.L_Z] + sag(c, k, np.abs(r)))
+        nxt = j + 1
+        if nxt < cs.lf.shape[0] and cs.lf[j, Q.L_N1] > 1.0 + 1e-6:
+            # glass between S(j+1) and S(j+2): the element's edges close its outline
+            sd2 = cs.lf[nxt, Q.L_SD]
+            c2, k2 = cs.lf[nxt, Q.L_CURV], cs.lf[nxt, Q.L_CONIC]
+            z1 = cs.lf[j, Q.L_Z] + sag(c, k, np.array([sd]))[0]
+            z2 = cs.lf[nxt, Q.L_Z] + sag(c2, k2, np.array([sd2]))[0]
+            for sign in (1.0, -1.0):
+                add(f"lens S{j + 1}-S{nxt + 1} edge", "lens",
+                    sign * np.array([sd, sd2]), np.array([z1, z2]))  # fmt: skip
     w, h = cs.picture.width_mm, cs.picture.height_mm
     half = math.hypot(w * m[0], h * m[1]) / 2  # the picture's half-extent along the meridian
     add("sensor", "sensor", np.array([-half, half]), np.full(2, cs.image_z))
@@ -187,6 +197,24 @@ def _camera_sections(cs: CompiledScene, cut: int, vertical: int) -> list[Section
     return out
 
 
+#: Tissues drawn only in front of the periorbital skin: behind it they are inside the head.
+_BEHIND_SKIN_HIDDEN = ("upper eyelid", "lower eyelid", "brow", "cheek", "nose")
+
+
+def _skin_front(cs: CompiledScene, sf: np.ndarray, emit: np.ndarray) -> tuple[float, float] | None:
+    """(world z of the periorbital skin plane, +1 or −1: the side of the LEDs), or None when
+    the scene has no flat skin facing ±z (then nothing is clipped)."""
+    if "periorbital skin" not in cs.surface_names:
+        return None
+    s = cs.surface_names.index("periorbital skin")
+    normal = sf[s, G.R20 : G.R22 + 1]
+    if cs.si[s, G.SHAPE] != G.SHAPE_CONIC or sf[s, G.CURV] != 0.0 or abs(normal[2]) < 0.999:
+        return None
+    z0 = float(sf[s, G.OZ])
+    side = 1.0 if len(emit) == 0 or float(np.mean(emit[:, 2])) >= z0 else -1.0
+    return z0, side
+
+
 def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -> list[Section]:
     """Every part of the system in one view (module docstring), world mm: the eye and face
     surfaces and LED bodies cut by the view's plane, the LEDs' axes (10 mm), the camera, its
@@ -199,6 +227,8 @@ def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -
         sf[:, G.OX + cut] -= plane_o[cut]
         sf[:, G.BX + cut] -= plane_o[cut]
     out: list[Section] = []
+    emit = cs.frame.world_point(cs.led.points)
+    front = _skin_front(cs, sf, emit)
     for s, name in enumerate(cs.surface_names):
         if cs.si[s, G.ACTION] == G.ACT_LENS:
             continue  # drawn with the camera below
@@ -206,10 +236,13 @@ def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -
         if len(pts) == 0:
             continue
         keep = _clip_mask(sf, s, pts) & (np.abs(pts[:, vertical]) <= extent)
+        if front is not None and name in _BEHIND_SKIN_HIDDEN:
+            # inside the head, behind the skin: the tissue there is neither seen nor drawn
+            z0, side = front
+            keep &= side * (pts[:, 2] - z0) >= -1e-9
         for run in _runs(pts, keep):
             category = _category(name, int(cs.si[s, G.ACTION]))
             out.append(Section(name, category, run[:, 2], run[:, vertical]))
-    emit = cs.frame.world_point(cs.led.points)
     axes = cs.frame.world_vector(cs.led.axes)
     for k, (p, a) in enumerate(zip(emit, axes, strict=True)):
         line = np.stack([p, p + 10.0 * a])

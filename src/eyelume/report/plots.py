@@ -433,6 +433,17 @@ def _ray_segments(rays: Sequence[np.ndarray], vertical: int = 1) -> list[np.ndar
     return segments
 
 
+def _layout_width_in(curves: Sequence[SectionCurve], segments: list[np.ndarray]) -> float:
+    """The layout's width (in) for a 5 in height: the system's aspect at equal scale, 6 to 16."""
+    zs = [c.z for c in curves] + [s[:, 0] for s in segments]
+    vs = [c.y for c in curves] + [s[:, 1] for s in segments]
+    if not zs:
+        return 6.0
+    span_z = float(np.ptp(np.concatenate(zs))) or 1.0
+    span_v = float(np.ptp(np.concatenate(vs))) or 1.0
+    return float(np.clip(4.2 * span_z / span_v + 2.2, 6.0, 16.0))
+
+
 def save_layout(
     curves: Sequence[SectionCurve],
     rays: Sequence[np.ndarray],
@@ -500,7 +511,7 @@ def save_layout(
                 f"ray_colors has {len(colors)} entries but there are {len(segments)} rays"
             )
 
-    fig = Figure(figsize=(16.0, 5.0), layout="constrained")
+    fig = Figure(figsize=(_layout_width_in(curves, segments), 5.0), layout="constrained")
     ax = fig.add_subplot()
     if segments:
         ax.add_collection(
