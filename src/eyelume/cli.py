@@ -566,7 +566,7 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
     with an ETA, Ctrl-C/SIGTERM answered within about a second (nothing written when no sample
     set had finished), and a warning when a --rel-error target stops at --max-samples."""
     from eyelume.compile import wavelength_groups
-    from eyelume.estimators.fast_run import array_bytes, pilot_rates, planned_sets
+    from eyelume.estimators.fast_run import PILOT_ABOVE, array_bytes, pilot_rates, planned_sets
     from eyelume.render import RenderOptions
     from eyelume.render import render as render_scene
 
@@ -591,10 +591,16 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
         each = f" ({groups} wavelength groups, a render each)" if groups > 1 else ""
         return f"~{_seconds(s)}{each} and ~{_bytes(need)} of arrays (a pilot's projection)"
 
-    if rel_error is not None:
+    if rel_error is not None and pixels > PILOT_ABOVE:  # the pilot sizes the first round
         goal = (
-            f"to a {rel_error:.2%} relative error in the median skin pixel, at most "
-            f"{max_samples:,} samples per pixel (first round {sets * grid * grid})"
+            f"to a {rel_error:.2%} relative error in the median skin pixel of the delivered "
+            f"picture, at most {max_samples:,} samples per pixel (first round sized by a pilot)"
+        )
+        plan = f"{projection(sets * grid * grid)} per {sets * grid * grid} samples per pixel"
+    elif rel_error is not None:
+        goal = (
+            f"to a {rel_error:.2%} relative error in the median skin pixel of the delivered "
+            f"picture, at most {max_samples:,} samples per pixel (first round {sets * grid * grid})"
         )
         plan = f"first round {projection(sets * grid * grid)}"
     else:

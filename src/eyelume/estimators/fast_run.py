@@ -212,8 +212,9 @@ class _Run:
         )
 
 
-#: Images with more pixels than this size their first round by a pilot on a sample of pixels.
-_PILOT_ABOVE = 50_000
+#: Images with more pixels than this size a ``rel_error`` run's first round by a pilot on a
+#: sample of :data:`_PILOT_PIXELS` target pixels (:func:`_pilot`).
+PILOT_ABOVE = 50_000
 _PILOT_PIXELS = 2048
 
 
@@ -420,7 +421,7 @@ def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, control:
 
     grid, sets = planned_sets(samples_per_pixel)[0], 0
     if (
-        cs.picture.cols * cs.picture.rows > _PILOT_ABOVE
+        cs.picture.cols * cs.picture.rows > PILOT_ABOVE
         and target_pixels is not None
         and (target_pixels.any())
     ):
