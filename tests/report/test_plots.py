@@ -312,3 +312,29 @@ def test_layout_bad_ray_raises_naming_index(tmp_path, ray):
     curves, rays = _system()
     with pytest.raises(ValueError, match="ray 9"):
         save_layout(curves, [*rays, ray], tmp_path / "bad.png", title="t")
+
+
+def test_grey_png_says_its_enlargement(tmp_path):
+    path = tmp_path / "eye.png"
+    save_grey_png(np.ones((65, 87)), path)
+    with Image.open(path) as im:
+        assert im.size == (87 * 8, 65 * 8)
+        assert "87 x 65 array, each element drawn as a 8 x 8 pixel block" in im.info["Comment"]
+
+
+def test_irradiance_plot_pixel_axes_count_the_array(tmp_path):
+    from eyelume.report.plots import observe_figures
+
+    seen = []
+
+    def grab(fig, name):
+        ax = fig.axes[0]
+        sec = [c for c in ax.child_axes if type(c).__name__ == "SecondaryAxis"]
+        seen.append({c.get_xlabel() or c.get_ylabel() for c in sec})
+
+    with observe_figures(grab):
+        save_irradiance_plot(
+            np.ones((30, 40)), tmp_path / "p.png", extent_mm=(-2, 2, -1.5, 1.5), title="t",
+            pixel_axes=True,
+        )  # fmt: skip
+    assert seen == [{"column (px of 40)", "row (px of 30)"}]

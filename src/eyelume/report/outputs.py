@@ -71,6 +71,7 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
         xlabel="image x (mm, picture upright)",
         ylabel="image y (mm)",
         clip_percentile=99.5,
+        pixel_axes=True,
     )
     save_irradiance_plot(
         result.eye_plane,

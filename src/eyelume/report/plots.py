@@ -33,6 +33,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import FuncFormatter
 from PIL import Image
+from PIL.PngImagePlugin import PngInfo
 
 __all__ = [
     "CATEGORY_COLORS",
@@ -191,7 +192,8 @@ def save_grey_png(
     min_width_px : int, optional
         The picture is enlarged by the smallest integer nearest-neighbour factor that makes it at
         least this many pixels wide (each array element becomes a square block), so a small
-        detector image is not a thumbnail. Default 640.
+        detector image is not a thumbnail. Default 640. The factor is written in the PNG's
+        ``Comment`` text chunk ("… each element drawn as a 8 x 8 pixel block").
     white : float, optional
         A fixed clip value ``E_c`` (> 0, same unit as the array); ``clip_percentile`` is then
         ignored. Default: the percentile.
@@ -239,7 +241,16 @@ def save_grey_png(
     if factor > 1:
         grey = np.repeat(np.repeat(grey, factor, axis=0), factor, axis=1)
 
-    Image.fromarray(np.ascontiguousarray(grey)).save(_prepare_path(path), format="PNG")
+    # the enlargement said in the file (PNG text chunk), for whoever opens it later
+    info = PngInfo()
+    info.add_text(
+        "Comment",
+        f"eyelume: {grey.shape[1] // factor} x {grey.shape[0] // factor} array, each element "
+        f"drawn as a {factor} x {factor} pixel block (nearest neighbour)",
+    )
+    Image.fromarray(np.ascontiguousarray(grey)).save(
+        _prepare_path(path), format="PNG", pnginfo=info
+    )
 
 
 # --------------------------------------------------------------------------------------------------
@@ -247,7 +258,7 @@ def save_grey_png(
 # --------------------------------------------------------------------------------------------------
 
 
-def save_irradiance_plot(
+def save_irradiance_plot(  # noqa: PLR0913 - each option is one labelled aspect
     irradiance: np.ndarray,
     path: PathLike,
     *,
@@ -257,8 +268,13 @@ def save_irradiance_plot(
     xlabel: str = "x (mm)",
     ylabel: str = "y (mm)",
     clip_percentile: float | None = None,
+    pixel_axes: bool = False,
 ) -> None:
     """Write an irradiance map as a figure with millimetre axes and a colour bar.
+
+    With ``pixel_axes``, a second scale on the top and right edges counts the array's columns
+    and rows (the sensor's pixels of an eye image: 0 at the left and top edges), so the picture's
+    enlargement is labelled in pixels as well as in mm.
 
     The map is drawn with the perceptual colormap ``inferno`` at its physical aspect ratio, the
     colour scale running from ``min(0, E_min)`` to ``E_max`` or, with ``clip_percentile``, to that
@@ -340,9 +356,26 @@ def save_irradiance_plot(
     cax = ax.inset_axes((1.0 + 0.04 * widen, 0.0, 0.045 * widen, 1.0))
     colorbar = fig.colorbar(image, cax=cax, extend="max" if clipped else "neither")
     colorbar.set_label(label)
+    # numbers written out (1.2e-07): an offset text on top of the bar collides with the axes
+    colorbar.formatter = FuncFormatter(lambda v, _: f"{v:.3g}")
+    colorbar.update_ticks()
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    ax.set_title(title)
+    if pixel_axes:
+        rows, cols = arr.shape
+        sx, sy = cols / (right - left), rows / (top - bottom)
+        top_ax = ax.secondary_xaxis(
+            "top", functions=(lambda x: (x - left) * sx, lambda c: left + c / sx)
+        )
+        top_ax.set_xlabel(f"column (px of {cols})")
+        # the right edge is taken by the colour bar: the row scale goes on the left, outside
+        left_ax = ax.secondary_yaxis(
+            -0.2, functions=(lambda y: (top - y) * sy, lambda r: top - r / sy)
+        )
+        left_ax.set_ylabel(f"row (px of {rows})")
+        fig.suptitle(title)  # above the pixel scale, not on it
+    else:
+        ax.set_title(title)
     _save_figure(fig, path)
 
 
