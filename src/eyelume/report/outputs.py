@@ -67,7 +67,8 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
         shown,
         path("eye_image_plot.png"),
         extent_mm=result.picture_extent_mm,
-        title=f"{name}: eye image, {result.rays:,} rays (glints clipped at 99.5 %)",
+        title=f"{name}: eye image, {result.rays:,} rays, seed {result.seed} "
+        "(glints clipped at 99.5 %)",
         xlabel="image x (mm, picture upright)",
         ylabel="image y (mm)",
         clip_percentile=99.5,
@@ -77,7 +78,8 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
         result.eye_plane,
         path("eye_plane_plot.png"),
         extent_mm=result.plane_extent_mm,
-        title=f"{name}: eye-plane irradiance toward the eye",
+        title=f"{name}: eye-plane irradiance toward the eye, {result.rays:,} rays, "
+        f"seed {result.seed}",
     )
     rays = extras.ray_paths
     for view, file, vertical in (("yz", "layout.png", "y"), ("xz", "layout_xz.png", "x")):
