@@ -41,6 +41,7 @@ from eyelume.detectors.psf import (
     region_mean_variance,
 )
 from eyelume.detectors.receivers import BinnedPlane
+from eyelume.detectors.sensor import count_weights
 from eyelume.errors import SceneError
 from eyelume.estimators.fast_run import RunControl, direct_eye_plane, trace_fast, warm_up
 from eyelume.estimators.forward import trace_forward, trace_paths
@@ -186,15 +187,29 @@ class RenderResult:
         """The eye image as the sensor counts it: the irradiance at the scene's
         ``wavelength_nm`` that gives the same mean photo-electrons, (rows, cols) W/mm².
 
-        A pixel's mean photo-electrons are Σ_g E_g p² t QE / (h c / λ_g) over the wavelength
-        groups g (:mod:`eyelume.detectors.sensor`), so this is Σ_g E_g λ_g / λ, ready for
-        :func:`eyelume.detectors.sensor.digitize` at the scene's wavelength. The sensor's
-        ``quantum_efficiency`` is one number, taken at every group's wavelength alike (the
-        scene gives no QE curve). One wavelength: ``eye_image`` itself."""
+        A pixel's mean photo-electrons are Σ_g E_g p² t QE(λ_g) / (h c / λ_g) over the
+        wavelength groups g (:mod:`eyelume.detectors.sensor`; with an LED spectral width, QE λ
+        averaged over each group's spectrum), so this is Σ_g E_g w_g with
+        w_g = :func:`eyelume.detectors.sensor.count_weights` (λ_g QE(λ_g) / (λ QE(λ)); λ_g / λ
+        for a single-number QE), ready for :func:`eyelume.detectors.sensor.digitize` at the
+        scene's wavelength. One wavelength, one QE number, no spectral width: ``eye_image``
+        itself.
+
+        Raises InputFileError or SceneError for a bad QE table or a wavelength outside it
+        (:func:`render` checks these before tracing)."""
+        sc = self.scene
+        lam = float(sc.wavelength_nm)
+        width = sc.leds.spectral_width_nm
+        line = isinstance(sc.sensor.quantum_efficiency, float) and width == 0
         if not self.groups:
-            return self.eye_image
-        lam = float(self.scene.wavelength_nm)
-        return sum(g.eye_image * (g.wavelength_nm / lam) for g in self.groups)
+            if line:
+                return self.eye_image
+            (w,) = count_weights(sc.sensor, [lam], width, lam)
+            return self.eye_image * w
+        if line:
+            return sum(g.eye_image * (g.wavelength_nm / lam) for g in self.groups)
+        weights = count_weights(sc.sensor, [g.wavelength_nm for g in self.groups], width, lam)
+        return sum(g.eye_image * w for g, w in zip(self.groups, weights, strict=True))
 
     @property
     def missing_pixels(self) -> int:
@@ -394,6 +409,8 @@ def render(
     ------
     ValueError
         ``options.estimator`` is neither ``"fast"`` nor ``"forward"``.
+    InputFileError, SceneError
+        A bad sensor QE table, or a wavelength (an LED spectrum) outside it, before tracing.
     """
     opt = RenderOptions() if options is None else options
     rays, seed, samples_per_pixel = opt.rays, opt.seed, opt.samples_per_pixel
@@ -402,6 +419,9 @@ def render(
     seed = sc.run.seed if seed is None else int(seed)
     estimator = opt.estimator or ("forward" if rays is not None else sc.run.estimator)
     check_estimator(sc, estimator)
+    # A bad QE table or a wavelength outside it fails now, not after the tracing.
+    leds_nm = sorted(set(sc.leds.wavelengths_nm(sc.wavelength_nm)))
+    count_weights(sc.sensor, leds_nm, sc.leds.spectral_width_nm, float(sc.wavelength_nm))
     if cs.led_ids is None and not single_wavelength(sc):
         if estimator not in ("fast", "forward"):
             raise ValueError(f"estimator = {estimator!r}: must be 'fast' or 'forward'")

@@ -12,6 +12,15 @@ and reads out as
 
 with W the full well and σ the read noise (e⁻), g the gain (e⁻/DN) and b the black level (DN).
 
+The quantum efficiency is one number or a QE(λ) curve (``sensor.quantum_efficiency``: a
+built-in curve's name or a CSV table; :func:`quantum_efficiency_curve`). LEDs of spectral width
+(FWHM) w > 0 (``leds.spectral_width_nm``) emit a Gaussian spectrum S(λ) of that width, unit
+area, centred on their wavelength λ₀; a watt of it gives
+
+    ∫ QE(λ) λ/(h c) S(λ) dλ   photo-electrons per second   (:func:`spectral_response_nm`)
+
+instead of QE(λ₀) λ₀/(h c).
+
 A pixel is *saturated* when its electrons reach the full well or its reading reaches the ADC's
 full scale: its value no longer tells how much light it received. The noise draws come from a
 NumPy generator keyed by (seed, a fixed tag), so the digital picture depends on the seed alone.
@@ -21,13 +30,36 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
 
 import numpy as np
 from scipy.constants import c, h
 
-from eyelume.scene.model import Sensor
+from eyelume.errors import InputFileError, SceneError
+from eyelume.scene.model import QE_CURVES, Sensor
+from eyelume.scene.textfile import read_csv_table
 
-__all__ = ["DigitalImage", "camera_summary", "digitize", "electrons_per_w_mm2", "photon_energy_j"]
+__all__ = [
+    "DigitalImage",
+    "SPECTRUM_HALF_WIDTH_SIGMA",
+    "camera_summary",
+    "count_weights",
+    "digitize",
+    "electrons_per_w_mm2",
+    "gaussian_spectrum_sigma_nm",
+    "photon_energy_j",
+    "quantum_efficiency_at",
+    "quantum_efficiency_curve",
+    "spectral_response_nm",
+]
+
+_QE_FIELD = "sensor.quantum_efficiency"
+#: An LED's Gaussian spectrum is taken over λ₀ ± this many standard deviations (renormalised
+#: to unit area there; the tails beyond hold 5.7e-7 of it), which the QE table must cover.
+SPECTRUM_HALF_WIDTH_SIGMA = 5.0
+#: Points of the uniform grid the spectrum is integrated on (trapezoid rule).
+_SPECTRUM_POINTS = 4001
 
 #: Second word of the noise generator's seed, so the camera's stream is not the tracer's.
 _SEED_TAG = 0x5E7503
@@ -69,15 +101,180 @@ def photon_energy_j(wavelength_nm: float) -> float:
     return h * c / (wavelength_nm * 1e-9)
 
 
-def electrons_per_w_mm2(sensor: Sensor, wavelength_nm: float) -> float:
+def quantum_efficiency_curve(sensor: Sensor) -> tuple[np.ndarray, np.ndarray] | None:
+    """The sensor's QE(λ) table, (wavelengths nm (n,), QE (n,)), or None for one number.
+
+    ``sensor.quantum_efficiency`` names a built-in curve (:data:`eyelume.scene.model.QE_CURVES`,
+    files in ``eyelume/scene/presets/sensors/`` stating their source) or a CSV file of two
+    columns ``wavelength_nm, quantum_efficiency`` read by
+    :func:`eyelume.scene.textfile.read_csv_table` (``#`` comment lines, an optional header).
+
+    Raises
+    ------
+    InputFileError
+        One line naming the file and ``sensor.quantum_efficiency``: unreadable, fewer than two
+        rows, a wavelength that is not finite and > 0, wavelengths not strictly increasing (QE
+        not a function of λ), a QE outside [0, 1].
+    """
+    qe = sensor.quantum_efficiency
+    if not isinstance(qe, str):
+        return None
+    if qe in QE_CURVES:
+        where = Path(str(resources.files("eyelume.scene.presets") / "sensors" / QE_CURVES[qe]))
+    else:
+        where = Path(qe)
+    table = read_csv_table(where, _QE_FIELD, ("wavelength_nm", "quantum_efficiency"))
+    lam, q = table[:, 0], table[:, 1]
+    if len(lam) < 2:
+        raise InputFileError(
+            f"{len(lam)} row(s): a QE curve needs at least two wavelengths",
+            file=where,
+            field=_QE_FIELD,
+        )
+    for n, (x, y) in enumerate(table, 1):
+        if not (math.isfinite(x) and x > 0):
+            raise InputFileError(
+                f"row {n}: wavelength {x!r} nm must be finite and > 0", file=where, field=_QE_FIELD
+            )
+        if not (math.isfinite(y) and 0 <= y <= 1):
+            raise InputFileError(
+                f"row {n} ({x:g} nm): quantum efficiency {y!r} lies outside [0, 1]",
+                file=where,
+                field=_QE_FIELD,
+            )
+    steps = np.diff(lam)
+    if np.any(steps <= 0):
+        n = int(np.argmax(steps <= 0)) + 2
+        raise InputFileError(
+            f"row {n}: wavelength {lam[n - 1]:g} nm after {lam[n - 2]:g} nm: the wavelengths "
+            "must increase strictly (QE must be a function of wavelength)",
+            file=where,
+            field=_QE_FIELD,
+        )
+    return lam, q
+
+
+def _outside(sensor: Sensor, lam: np.ndarray, what: str) -> SceneError:
+    return SceneError(
+        f"{what} lies outside the QE curve's {lam[0]:g}-{lam[-1]:g} nm (it is not extrapolated)",
+        field=_QE_FIELD,
+        value=sensor.quantum_efficiency,
+    )
+
+
+def quantum_efficiency_at(sensor: Sensor, wavelength_nm: float) -> float:
+    """QE at ``wavelength_nm``: the one number, or the curve linearly interpolated.
+
+    Raises
+    ------
+    InputFileError
+        A bad QE table (:func:`quantum_efficiency_curve`).
+    SceneError
+        ``wavelength_nm`` outside the table's range (one line naming
+        ``sensor.quantum_efficiency`` and the wavelength).
+    """
+    curve = quantum_efficiency_curve(sensor)
+    if curve is None:
+        return float(sensor.quantum_efficiency)
+    lam, q = curve
+    if not lam[0] <= wavelength_nm <= lam[-1]:
+        raise _outside(sensor, lam, f"{wavelength_nm:g} nm")
+    return float(np.interp(wavelength_nm, lam, q))
+
+
+def gaussian_spectrum_sigma_nm(fwhm_nm: float) -> float:
+    """Standard deviation of a Gaussian of full width at half maximum ``fwhm_nm``:
+    σ = FWHM / (2 √(2 ln 2))."""
+    return fwhm_nm / (2.0 * math.sqrt(2.0 * math.log(2.0)))
+
+
+def spectral_response_nm(sensor: Sensor, wavelength_nm: float, fwhm_nm: float = 0.0) -> float:
+    """∫ QE(λ) λ S(λ) dλ (nm): the photo-electrons per joule times h c (λ in nm).
+
+    S is a Gaussian spectrum of full width at half maximum ``fwhm_nm`` centred on
+    λ₀ = ``wavelength_nm``, taken over λ₀ ± :data:`SPECTRUM_HALF_WIDTH_SIGMA` σ and normalised to
+    unit area there; the integral is the trapezoid rule on a uniform grid of 4001 points
+    (QE linearly interpolated between the table's rows). ``fwhm_nm`` = 0: QE(λ₀) λ₀. For a QE
+    that is constant over the spectrum the result is QE λ₀ (S is symmetric); for a QE linear
+    in λ, QE(λ₀) λ₀ + b σ_t², b its slope and σ_t² the truncated Gaussian's variance.
+
+    Raises
+    ------
+    InputFileError, SceneError
+        As :func:`quantum_efficiency_at`; SceneError when the table does not cover the
+        spectrum λ₀ ± 5σ.
+    """
+    if fwhm_nm == 0:
+        return quantum_efficiency_at(sensor, wavelength_nm) * wavelength_nm
+    sigma = gaussian_spectrum_sigma_nm(fwhm_nm)
+    half = SPECTRUM_HALF_WIDTH_SIGMA * sigma
+    lo, hi = wavelength_nm - half, wavelength_nm + half
+    x = np.linspace(-SPECTRUM_HALF_WIDTH_SIGMA, SPECTRUM_HALF_WIDTH_SIGMA, _SPECTRUM_POINTS)
+    lam = wavelength_nm + sigma * x
+    weight = np.exp(-0.5 * x * x)
+    curve = quantum_efficiency_curve(sensor)
+    if curve is None:
+        qe = np.full_like(lam, float(sensor.quantum_efficiency))
+    else:
+        table_lam, table_q = curve
+        if lo < table_lam[0] or hi > table_lam[-1]:
+            raise _outside(
+                sensor,
+                table_lam,
+                f"the LED spectrum {lo:.4g}-{hi:.4g} nm (centre {wavelength_nm:g} nm, FWHM "
+                f"{fwhm_nm:g} nm, ±{SPECTRUM_HALF_WIDTH_SIGMA:g} sigma)",
+            )
+        qe = np.interp(lam, table_lam, table_q)
+    return float(np.trapezoid(qe * lam * weight, x) / np.trapezoid(weight, x))
+
+
+def electrons_per_w_mm2(sensor: Sensor, wavelength_nm: float, fwhm_nm: float = 0.0) -> float:
     """Mean photo-electrons per pixel per W/mm² of irradiance: p² · t · QE / (h c / λ).
 
     p = ``pixel_pitch_um`` (µm → mm, so p² is in mm²), t = ``exposure_ms`` (ms → s); the result
-    times an irradiance in W/mm² is N̄ in electrons.
+    times an irradiance in W/mm² is N̄ in electrons. With a QE curve, QE at ``wavelength_nm``;
+    with an LED spectrum of FWHM ``fwhm_nm`` > 0, p² t ∫ QE(λ) λ/(h c) S(λ) dλ
+    (:func:`spectral_response_nm`). A single-number QE and ``fwhm_nm`` = 0 give exactly the
+    plain formula.
+
+    Raises
+    ------
+    InputFileError, SceneError
+        A bad QE table or a wavelength (spectrum) outside it (:func:`spectral_response_nm`).
     """
     pitch_mm = sensor.pixel_pitch_um * 1e-3
     joules_per_w_mm2 = pitch_mm**2 * sensor.exposure_ms * 1e-3
-    return joules_per_w_mm2 * sensor.quantum_efficiency / photon_energy_j(wavelength_nm)
+    if isinstance(sensor.quantum_efficiency, float) and fwhm_nm == 0:
+        return joules_per_w_mm2 * sensor.quantum_efficiency / photon_energy_j(wavelength_nm)
+    response_nm = spectral_response_nm(sensor, wavelength_nm, fwhm_nm)
+    return joules_per_w_mm2 * response_nm * 1e-9 / (h * c)
+
+
+def count_weights(
+    sensor: Sensor, wavelengths_nm: list[float], fwhm_nm: float, scene_wavelength_nm: float
+) -> list[float]:
+    """For light of each wavelength (an LED spectrum of FWHM ``fwhm_nm`` centred on it), the
+    factor w_g that turns its irradiance into the irradiance at ``scene_wavelength_nm`` giving
+    the same mean photo-electrons: w_g = :func:`electrons_per_w_mm2` (λ_g, FWHM) /
+    :func:`electrons_per_w_mm2` (λ_scene). A single-number QE and no width: λ_g / λ_scene.
+
+    Raises
+    ------
+    InputFileError, SceneError
+        A bad QE table, a wavelength or spectrum outside it, or QE = 0 at the scene's
+        wavelength (whose digital picture could then count nothing).
+    """
+    if isinstance(sensor.quantum_efficiency, float) and fwhm_nm == 0:
+        return [lam / scene_wavelength_nm for lam in wavelengths_nm]
+    if quantum_efficiency_at(sensor, scene_wavelength_nm) <= 0:
+        raise SceneError(
+            f"the QE curve is 0 at the scene's wavelength_nm = {scene_wavelength_nm:g}, at "
+            "which the digital picture is counted: choose a wavelength the sensor sees",
+            field=_QE_FIELD,
+            value=sensor.quantum_efficiency,
+        )
+    ref = electrons_per_w_mm2(sensor, scene_wavelength_nm)
+    return [electrons_per_w_mm2(sensor, lam, fwhm_nm) / ref for lam in wavelengths_nm]
 
 
 def _check_irradiance(irradiance_w_mm2: np.ndarray) -> np.ndarray:
@@ -142,6 +339,7 @@ def camera_summary(sensor: Sensor, wavelength_nm: float, digital: DigitalImage) 
         "pixel_pitch_um": sensor.pixel_pitch_um,
         "exposure_ms": sensor.exposure_ms,
         "quantum_efficiency": sensor.quantum_efficiency,
+        "quantum_efficiency_at_wavelength": quantum_efficiency_at(sensor, wavelength_nm),
         "full_well_e": sensor.full_well_e,
         "read_noise_e": sensor.read_noise_e,
         "gain_e_per_dn": sensor.gain_e_per_dn,

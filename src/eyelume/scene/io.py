@@ -18,7 +18,7 @@ from pydantic import ValidationError
 
 from eyelume.errors import GeometryError, SceneError
 from eyelume.scene.eye import check_eye_geometry
-from eyelume.scene.model import RING_FIELDS, Scene
+from eyelume.scene.model import QE_CURVES, RING_FIELDS, Scene
 from eyelume.scene.textfile import decode_text
 
 __all__ = ["SceneError", "apply_overrides", "load_scene", "preset_names", "save_scene"]
@@ -62,6 +62,10 @@ def _resolve_paths(data: dict[str, Any], base: Path) -> None:
             if isinstance(coat, dict) and isinstance(coat.get("table_csv"), str):
                 field = f"elements.{k}.{side}.coating.table_csv"
                 coat["table_csv"] = _resolved(base, coat["table_csv"], field)
+    sensor = data.get("sensor")
+    qe = sensor.get("quantum_efficiency") if isinstance(sensor, dict) else None
+    if isinstance(qe, str) and qe.strip() and qe not in QE_CURVES:
+        sensor["quantum_efficiency"] = _resolved(base, qe, "sensor.quantum_efficiency")
     lens = data.get("lens")
     if isinstance(lens, dict) and isinstance(lens.get("glass_catalogs"), list):
         lens["glass_catalogs"] = [

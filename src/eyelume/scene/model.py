@@ -43,6 +43,7 @@ __all__ = [
     "LedProfile",
     "LensSurface",
     "PER_LED_NUMBERS",
+    "QE_CURVES",
     "RING_FIELDS",
     "Run",
     "Scene",
@@ -75,6 +76,10 @@ Vector3 = tuple[_Coordinate, _Coordinate, _Coordinate]
 #: infrared. The eye's indices (from its d, F, C values) and a glass's (its catalog formula) are
 #: evaluated anywhere in it; a glass whose catalog range is narrower gets a warning at compile.
 WAVELENGTH_RANGE_NM = (300.0, 2500.0)
+
+#: Built-in sensor QE(λ) curves (``sensor.quantum_efficiency = "<name>"``): name → file in
+#: ``eyelume/scene/presets/sensors/`` (each file states its source).
+QE_CURVES = {"nir-global-shutter": "nir-global-shutter.csv"}
 
 #: The per-LED numeric fields of :class:`LedArray`: one value for every LED, or one per LED.
 PER_LED_NUMBERS = (
@@ -186,7 +191,13 @@ class LedArray(_Model):
     rendered as a sum over wavelength groups, each group traced at its own wavelength (indices of
     the eye and the lens, the cornea's Fresnel reflection) with only its LEDs emitting, and each
     LED's eye-safety weight taken at its own wavelength (:func:`eyelume.render.render`,
-    :func:`eyelume.compile.wavelength_groups`). The ring's fields (``height_mm``,
+    :func:`eyelume.compile.wavelength_groups`). ``spectral_width_nm`` is the LEDs' emission
+    spectrum's full width at half maximum (one value for every LED; datasheets give about 30–40
+    nm at 850 nm, 50 nm at 940 nm): the sensor counts each group's light over a Gaussian
+    spectrum of that width centred on its wavelength (QE(λ) λ/(hc) averaged over it,
+    :func:`eyelume.detectors.sensor.electrons_per_w_mm2`); the tracing, the eye's indices and
+    the eye-safety weights stay at the centre wavelength. 0 (the default): a line spectrum. The
+    ring's fields (``height_mm``,
     ``distance_mm``, ``pitch_deg``, ``azimuths_deg``, ``ring_centre_mm``, ``ring_axis``) given
     beside ``positions_mm`` are refused (they would place nothing).
     Light leaves from the apex of the spherical body (a point source at centre + r·axis, r each
@@ -207,6 +218,7 @@ class LedArray(_Model):
     radiant_intensity_w_sr: Positive | list[Positive] = 0.015
     profile: LedProfile | list[LedProfile] = LedProfile()
     wavelength_nm: float | list[float] | None = None
+    spectral_width_nm: float = Field(0.0, ge=0, le=200)
     ring_centre_mm: Vector3 = (0.0, 0.0, 0.0)
     ring_axis: Vector3 = (0.0, 0.0, 1.0)
     positions_mm: list[Vector3] | None = None
@@ -833,9 +845,17 @@ class Sensor(_Model):
     then Poisson shot noise, the well clipped at ``full_well_e``, Gaussian read noise
     ``read_noise_e`` (electrons rms), conversion at ``gain_e_per_dn`` electrons per digital
     number plus ``black_level_dn``, rounding, and the ADC range 0 … 2^``adc_bits`` − 1
-    (see :mod:`eyelume.detectors.sensor`). ``quantum_efficiency`` is at the scene's wavelength;
-    with LEDs of several wavelengths it is taken the same at each (the photo-electrons are the
-    groups' sum, :attr:`eyelume.render.RenderResult.eye_image_at_scene_wavelength`).
+    (see :mod:`eyelume.detectors.sensor`).
+
+    ``quantum_efficiency`` is either one number in (0, 1], the same at every wavelength (as
+    before QE curves existed), or a QE(λ) curve: the name of a built-in curve
+    (:data:`QE_CURVES`: ``"nir-global-shutter"``, a typical NIR-enhanced global-shutter CMOS
+    pixel, a model from silicon's absorption, see its file) or the path of a CSV table of two
+    columns ``wavelength_nm, quantum_efficiency`` (relative to the scene file; wavelengths
+    increasing, QE within [0, 1]), linearly interpolated and never extrapolated. Each wavelength
+    group's photo-electrons use QE at its wavelength, or over its LEDs' spectrum
+    (``leds.spectral_width_nm``; :func:`eyelume.detectors.sensor.electrons_per_w_mm2`; the sum is
+    :attr:`eyelume.render.RenderResult.eye_image_at_scene_wavelength`).
     """
 
     width_mm: Positive | None = None
@@ -844,12 +864,32 @@ class Sensor(_Model):
     rows: int = Field(65, ge=1, le=4096)
     pixel_pitch_um: float = Field(3.0, gt=0, le=100)
     exposure_ms: float = Field(20.0, gt=0, le=60_000)
-    quantum_efficiency: float = Field(0.30, gt=0, le=1)
+    quantum_efficiency: float | str = 0.30
     full_well_e: float = Field(6000.0, gt=0, le=1e8)
     read_noise_e: NonNegative = 3.0
     gain_e_per_dn: Positive = 6.0
     adc_bits: int = Field(10, ge=1, le=16)
     black_level_dn: NonNegative = 16.0
+
+    @field_validator("quantum_efficiency", mode="before")
+    @classmethod
+    def _qe_number_or_curve(cls, value):
+        """One number in (0, 1], or a non-empty curve name / CSV path (read when used)."""
+        if isinstance(value, bool):
+            raise ValueError(f"{value!r}: give a number in (0, 1] or a QE curve (name or CSV)")
+        if isinstance(value, int | float):
+            if not (math.isfinite(value) and 0 < value <= 1):
+                raise ValueError(f"{value!r}: a quantum efficiency must lie in (0, 1]")
+            return float(value)
+        if isinstance(value, str):
+            if not value.strip():
+                raise ValueError("'': give a number in (0, 1], a built-in curve or a CSV path")
+            try:
+                float(value)
+            except ValueError:
+                return value
+            raise ValueError(f"{value!r} is text: give a number unquoted, or a curve (name or CSV)")
+        raise ValueError(f"{value!r}: give a number in (0, 1], a built-in curve or a CSV path")
 
     @model_validator(mode="after")
     def _black_level_in_range(self) -> Sensor:
