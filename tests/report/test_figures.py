@@ -164,3 +164,22 @@ def test_the_checks_find_overlapping_texts_and_a_missing_colour_bar():
     bad = images_without_unit_colorbar(fig)
     assert len(bad) == 2 and "without a colour bar" in bad[0] + bad[1]
     assert any("names no unit" in d for d in bad)
+
+
+def test_sweep_outputs_of_a_real_two_point_sweep(tmp_path):
+    """``write_sweep_outputs`` as ``eyelume sweep-leds`` calls it, on a 1 × 2 × 1 grid of the
+    paper's generator: landscape.png and best_pattern.png pass the checks."""
+    from eyelume.analysis.targets import gaussian_target
+    from eyelume.optimize.sweep import sweep_leds
+    from eyelume.report.optimize_outputs import write_sweep_outputs
+    from eyelume.scene.io import load_scene
+
+    scene = load_scene("paper2005")
+    goal = gaussian_target(0.3, scene.eye_plane)
+    result = sweep_leds(scene, goal, [30.0], [50.0, 70.0], [10.0])
+    b = result.best
+    refined = (b["height_mm"], b["distance_mm"], b["pitch_deg"], b["merit"])
+    plane = scene.eye_plane
+    extent = (-plane.width_mm / 2, plane.width_mm / 2, -plane.height_mm / 2, plane.height_mm / 2)
+    caught = _check(lambda: write_sweep_outputs(result, goal, refined, 0.3, extent, tmp_path))
+    assert sorted(caught.names) == ["best_pattern.png", "landscape.png"]

@@ -58,6 +58,8 @@ def write_sweep_outputs(sweep, target: np.ndarray, refined, delta, plane_extent,
         sweep.merit_grid(),
         written[2],
         f"generator merit against the {name} target",
+        caption=f"{len(sweep.merit)} LED placements: {len(sweep.heights)} heights × "
+        f"{len(sweep.distances)} distances × {len(sweep.pitches)} pitches",
     )
     save_pattern_vs_target(
         sweep.patterns[sweep.best_index],

@@ -88,8 +88,8 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
             curves,
             [p for p, _ in rays],
             path(file),
-            title=f"{name}: {vertical}–z section (world, camera projected), rays reaching the "
-            "sensor (red) and others (orange)",
+            title=f"{name}: {vertical}–z section (world; camera projected)\n"
+            f"traced rays (seed {result.seed}): reaching the sensor red, others orange",
             ray_colors=["tab:red" if hit else "tab:orange" for _, hit in rays],
             vertical=vertical,
         )
