@@ -17,6 +17,7 @@ pose, compiled into the surface table the forward estimator traces, checked agai
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -249,9 +250,36 @@ def test_scene_without_elements_compiles_as_before():
     assert not any(n.startswith("element") for n in cs.surface_names + cs.tallies)
 
 
-def test_fast_estimator_refuses_a_scene_with_elements():
-    with pytest.raises(SceneError, match="forward estimator only"):
-        eyelume.render(_scene([PLATE]), eyelume.RenderOptions(estimator="fast"))
+CURVED_MIRROR = {
+    "kind": "mirror",
+    "name": "concave",
+    "position_mm": [0.0, 13.0, 30.0],
+    "semi_diameter_mm": 11.5,
+    "front": {"radius_mm": 60.0},
+}
+CONVERGING = {
+    "kind": "lens",
+    "name": "eyepiece",
+    "position_mm": [0.0, 0.0, 20.0],
+    "thickness_mm": 4.0,
+    "glass": "N-BK7",
+    "semi_diameter_mm": 15.0,
+    "front": {"radius_mm": 60.0},
+    "back": {"radius_mm": -60.0},
+}
+
+
+@pytest.mark.parametrize(
+    ("element", "says"),
+    [(CURVED_MIRROR, "elements.0 (concave) is a curved mirror"),
+     (CONVERGING, "elements.0 (eyepiece) is a converging lens")],
+)  # fmt: skip
+def test_fast_estimator_refuses_what_it_does_not_connect(element, says):
+    """The fast estimator connects LEDs by Newton's method through plates, diverging lenses
+    and plane mirrors (tests/estimators/test_element_nee.py, test_elements_agreement.py); a
+    curved mirror or a converging lens is refused in one line naming it."""
+    with pytest.raises(SceneError, match=re.escape(says)):
+        eyelume.render(_scene([element]), eyelume.RenderOptions(estimator="fast"))
 
 
 @pytest.mark.parametrize(
@@ -568,12 +596,12 @@ def test_info_lists_each_element_with_its_paraxial_power():
     assert info[1]["focal_length_mm"] == 20.0 and info[1]["ledger_entry"] == "element 1 (mirror)"
 
 
-def test_cli_render_with_the_fast_estimator_refuses_elements_in_one_line(tmp_path):
-    path = _scene_file(tmp_path, [PLATE])
+def test_cli_render_with_the_fast_estimator_refuses_a_curved_mirror_in_one_line(tmp_path):
+    path = _scene_file(tmp_path, [CURVED_MIRROR])
     res = runner.invoke(app, ["render", "--scene", path, "--out", str(tmp_path / "out")])
     assert res.exit_code == 2, res.output
     lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
-    assert len(lines) == 1 and "forward estimator only" in lines[0], res.stderr
+    assert len(lines) == 1 and "is a curved mirror" in lines[0], res.stderr
     assert not (tmp_path / "out").exists()  # refused before anything is made or run
 
 

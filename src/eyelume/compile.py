@@ -34,7 +34,12 @@ from eyelume.kernels import sequential as Q
 from eyelume.kernels.bins import PlaneGrid, eye_plane_grid, picture_grid
 from eyelume.kernels.sampling import cos_power_tables, profile_tables
 from eyelume.kernels.tables import (
+    CHAIN_COLS,
+    CHAIN_STEPS,
     N_AIM,
+    REFLECT,
+    TRANSMIT,
+    TRANSMIT_A,
     CameraTables,
     LedTable,
     LensTable,
@@ -1233,7 +1238,7 @@ def element_pose(scene: Scene, element: Element) -> tuple[np.ndarray, np.ndarray
     return origin, _frame(axis)
 
 
-def _element_index(scene: Scene, k: int, element: Element) -> float:
+def element_index(scene: Scene, k: int, element: Element) -> float:
     """The refractive index of element ``k``'s glass at the scene's wavelength, from the glass
     catalogs the lens prescription uses (``lens.glass_catalogs``, else the shipped one); 1 for
     a mirror. Raises SceneError naming ``elements.k.glass`` for a glass not in them."""
@@ -1277,7 +1282,7 @@ def _add_elements(t: _Table, scene: Scene) -> None:
     inside a lens or plate) and a lens's or plate's absorbing edge, world frame; each
     element's absorption is its own ledger entry (:func:`element_label`)."""
     for k, el in enumerate(scene.elements):
-        n = _element_index(scene, k, el)
+        n = element_index(scene, k, el)
         origin, rot = element_pose(scene, el)
         sd = el.semi_diameter_mm
         tally = element_label(k, el)
@@ -1478,6 +1483,79 @@ def _cornea_image(
     return c + (radius - z_eye) * u, abs(mag) * pupil_r
 
 
+def connected_by_newton(element: Element, n: float) -> bool:
+    """Whether next-event estimation connects LEDs through ``element`` by Newton's method
+    (:mod:`eyelume.estimators.cornea_nee`): a plate, a plane mirror or a lens of paraxial power
+    ≤ 0 (thick lens, index ``n``: φ = φ₁ + φ₂ − (t/n) φ₁ φ₂), whose map of directions to points
+    is one to one, so the root Newton finds is the only one. The light through a converging
+    lens or off a curved mirror (caustics: several roots) is left to the light paths."""
+    if element.kind == "plate":
+        return True
+    if element.kind == "mirror":
+        return math.isinf(element.front.radius_mm)
+    front, back = element.surfaces
+    p1 = (n - 1.0) * curvature(front.radius_mm)
+    p2 = (1.0 - n) * curvature(back.radius_mm)
+    t = float(element.thickness_mm or 0.0)
+    return p1 + p2 - t / n * p1 * p2 <= 0.0
+
+
+def _chain_options(sf: np.ndarray, si: np.ndarray, rows: list[int], mirror: bool) -> list[list]:
+    """The chains through one element's optical ``rows`` (in the order an LED meets them):
+    a mirror's reflection (unless its fixed R is 0) and its transmission (unless its fixed
+    T is 0); a plate's or lens's two surfaces, each transmitting."""
+    if mirror:
+        r = rows[0]
+        out = []
+        fixed = si[r, G.FRESNEL] == I.R_FIXED
+        if not (fixed and sf[r, G.REFL] <= 0.0):
+            out.append([(r, REFLECT)])
+        if not (fixed and 1.0 - sf[r, G.REFL] - sf[r, G.ABSORB] <= 0.0):
+            out.append([(r, TRANSMIT)])
+        return out
+    return [[(rows[0], TRANSMIT), (rows[1], TRANSMIT)]]
+
+
+def _element_chains(
+    scene: Scene, surfaces: SurfaceTable, names: list[str], points: np.ndarray, cornea: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """(element_rows, chains) of :class:`CameraTables`: the rows of the elements' optical
+    surfaces, and per LED (camera-frame ``points``) the chains of the elements
+    :func:`connected_by_newton` connects — an element's surfaces in the order the LED meets
+    them (the one it faces first: its local z below the first vertex's plane → front first),
+    then, for the iris, the anterior and posterior cornea."""
+    sf, si = surfaces.sf, surfaces.si
+    element_rows: list[int] = []
+    per_element = []
+    for k, el in enumerate(scene.elements):
+        label = element_label(k, el)
+        rows = [names.index(f"{label} {side}") for side in _SIDES[: len(el.surfaces)]]
+        element_rows += rows
+        if connected_by_newton(el, float(sf[rows[0], G.N_B])):
+            per_element.append((rows, el.kind == "mirror"))
+    chains = []
+    for p in points:
+        mine = []
+        for rows, mirror in per_element:
+            r0 = rows[0]
+            local_z = sf[r0, G.R20 : G.R22 + 1] @ (p - sf[r0, G.OX : G.OZ + 1])
+            order = rows if local_z < 0.0 else rows[::-1]
+            for steps in _chain_options(sf, si, order, mirror):
+                row = np.zeros(CHAIN_COLS, dtype=np.int64)
+                full = [*steps, (cornea, TRANSMIT_A), (cornea + 1, TRANSMIT_A)]
+                row[0], row[1] = len(steps), len(full)
+                for j, (r, mode) in enumerate(full):
+                    row[2 + j], row[2 + CHAIN_STEPS + j] = r, mode
+                mine.append(row)
+        chains.append(mine)
+    width = max((len(c) for c in chains), default=0)
+    table = np.zeros((len(points), width, CHAIN_COLS), dtype=np.int64)
+    for k, mine in enumerate(chains):
+        for c, row in enumerate(mine):
+            table[k, c] = row
+    return np.asarray(element_rows, dtype=np.int64), table
+
+
 def _camera_tables(
     scene: Scene,
     surfaces: SurfaceTable,
@@ -1486,6 +1564,7 @@ def _camera_tables(
     first: FirstOrder,
     stop: int,
     frame: Frame,
+    led_points: np.ndarray,
 ) -> CameraTables:
     """The camera as the camera-side estimator sees it (:class:`CameraTables`; the physics in
     :mod:`eyelume.estimators.camera`)."""
@@ -1499,6 +1578,7 @@ def _camera_tables(
     aim = np.zeros((surfaces.sf.shape[0], 2, N_AIM))
     iris_c, iris_r = _cornea_image(scene, frame, ep_z, ep_r)
     through = np.array([name in _IRIS for name in names], dtype=np.int64)
+    cornea = names.index(scene.eye.surfaces[0].name)
     for s, name in enumerate(names):
         if surfaces.si[s, G.ACTION] != G.ACT_OPAQUE:
             continue
@@ -1523,8 +1603,9 @@ def _camera_tables(
         float(ep_z),
         aim,
         through,
-        names.index(scene.eye.surfaces[0].name),
+        cornea,
         int(scene.run.continuation_grid),
+        *_element_chains(scene, surfaces, names, led_points, cornea),
     )
 
 
@@ -1652,7 +1733,7 @@ def compile_scene(
     return CompiledScene(
         scene=scene,
         tables=tables,
-        camera=_camera_tables(scene, surfaces, t.names, lens, first, stop, frame),
+        camera=_camera_tables(scene, surfaces, t.names, lens, first, stop, frame, led.points),
         surface_names=t.names,
         lens_indices=idx,
         stop_index=stop,

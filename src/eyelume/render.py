@@ -32,7 +32,14 @@ import numpy as np
 from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
-from eyelume.compile import CompiledScene, compile_scene, single_wavelength, wavelength_groups
+from eyelume.compile import (
+    CompiledScene,
+    compile_scene,
+    connected_by_newton,
+    element_index,
+    single_wavelength,
+    wavelength_groups,
+)
 from eyelume.detectors.psf import (
     PixelPsf,
     camera_psf,
@@ -369,14 +376,19 @@ class RenderOptions:
 
 def check_estimator(scene: Scene, estimator: str) -> None:
     """Refuse (SceneError) an estimator that cannot render ``scene``: the fast one for a scene
-    with optical elements (its aimed light paths, cornea next-event estimation and closed-form
-    eye plane do not know them yet)."""
-    if estimator == "fast" and scene.elements:
-        raise SceneError(
-            f"estimator = 'fast': the scene has {len(scene.elements)} optical element(s), and "
-            "elements are traced by the forward estimator only, for now (--estimator forward, "
-            "or run.estimator = 'forward')"
-        )
+    with an optical element whose LED light it does not connect by Newton's method (a curved
+    mirror or a converging lens: :func:`eyelume.compile.connected_by_newton`) — its light would
+    be left to the light paths alone, which no test checks yet."""
+    if estimator != "fast" or not scene.elements:
+        return
+    for k, el in enumerate(scene.elements):
+        if not connected_by_newton(el, element_index(scene, k, el)):
+            what = "a curved mirror" if el.kind == "mirror" else "a converging lens"
+            raise SceneError(
+                f"estimator = 'fast': elements.{k} ({el.name or el.kind}) is {what}, which the "
+                "fast estimator does not handle yet (--estimator forward, or run.estimator = "
+                "'forward')"
+            )
 
 
 def render(

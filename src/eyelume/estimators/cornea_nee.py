@@ -1,21 +1,26 @@
-"""Next-event estimation through the cornea: the LED light that reaches a point of the iris by
-refraction at the anterior and posterior cornea (a specular, "manifold" connection).
+"""Next-event estimation through a specular chain: the LED light that reaches a point of a
+Lambertian face after a fixed sequence of specular events — refraction at the anterior and
+posterior cornea onto the iris, through the two surfaces of a plate or a diverging lens
+element, by a plane mirror (a "manifold" connection).
 
-A straight shadow ray from the iris to an LED crosses the cornea, where light bends, so the
-light that actually arrives comes along a different, refracted path. For a point x on a
-Lambertian face behind the cornea and an LED at P, we find that path by Newton's method: the
-emission direction is parametrised by the point a where it crosses the eye plane z = 0, the ray
-is refracted by both cornea surfaces (always transmitted) and meets the tangent plane of the
-face at x at h(a); we solve h(a) = x. The irradiance at x is then
+A straight shadow ray from the receiver to an LED crosses the cornea (or the element), where
+light bends, so the light that actually arrives comes along a different path. For a point x on
+a Lambertian face and an LED at P, we find that path by Newton's method: the emission direction
+is parametrised by the point a where it crosses a plane (:class:`Plane`: for the cornea the
+camera frame's z = 0, else the plane through the straight guess at the distance of x, normal to
+it), the ray is refracted or reflected by each surface of the chain (:class:`Chain`) and meets
+the tangent plane of the face at x at h(a); we solve h(a) = x. The irradiance at x is then
 
-    E = I(α) · T · (cos γ / |a − P|²) / |det ∂h/∂a|,
+    E = I(α) · Π T_j or R_j · (cos γ / |a − P|²) / |det ∂h/∂a|,
 
-the LED's radiant intensity times the transmittance T of the two interfaces times the solid
-angle per unit area of the face (cos γ / |a − P|² is dω/dA at the eye plane, γ the direction's
+the LED's radiant intensity times each event's transmittance or reflectance times the solid
+angle per unit area of the face (cos γ / |a − P|² is dω/dA at the plane, γ the direction's
 angle with its normal). The path counts only when each leg meets what it should: the emission
-ray first meets the anterior cornea inside its aperture (no lid or LED body in the way), then
-the posterior cornea, then the face at x from its lit side. The cornea, convex and well before
-its focus, maps directions to iris points one to one, so the root is unique.
+ray first meets the chain's first surface inside its aperture (no lid or LED body in the way),
+then each next one, then the face at x from its lit side. The chains used map directions to
+receiver points one to one (the cornea, convex and well before its focus; a plate; a diverging
+lens; a plane mirror), so the root is unique; what a converging element or a curved mirror
+sends on is left to the light paths (:mod:`.fast`).
 """
 
 from __future__ import annotations
@@ -26,15 +31,46 @@ from typing import NamedTuple
 from numba import njit
 
 from eyelume.kernels import geometry as G
-from eyelume.kernels.interact import interface_at, refract
+from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.jit import per_ray
-from eyelume.kernels.sampling import led_cos_alpha, radiant_intensity
-from eyelume.kernels.tables import Ray
+from eyelume.kernels.sampling import led_cos_alpha, orthonormal_basis, radiant_intensity
+from eyelume.kernels.tables import CHAIN_STEPS, REFLECT, TRANSMIT_A, Ray
 
-__all__ = ["irradiance_through_cornea", "led_through_cornea"]
+__all__ = [
+    "irradiance_through_cornea",
+    "led_through_cornea",
+    "led_through_chain",
+    "Chain",
+    "Plane",
+    "Receiver",
+    "chain_row",
+    "straight_plane",
+]
 
-_H = 1e-4  # mm: forward-difference step on the eye plane
+_H = 1e-4  # mm: forward-difference step on the parametrisation plane
 _TOL2 = 1e-10  # mm²: converged when h(a) is within 1e-5 mm of x
+
+
+class Chain(NamedTuple):
+    """A sequence of ``n`` specular events: surface rows ``surf`` and modes ``mode``
+    (:data:`~eyelume.kernels.tables.TRANSMIT_A`, ``TRANSMIT``, ``REFLECT``), the first ``n``
+    of each used."""
+
+    n: int
+    surf: tuple
+    mode: tuple
+
+
+class Plane(NamedTuple):
+    """Where the emission direction is parametrised: the direction from the LED toward
+    o + a₁ e1 + a₂ e2 (mm), w the plane's unit normal; Newton starts where the segment from
+    the LED to point g crosses it."""
+
+    o: tuple
+    e1: tuple
+    e2: tuple
+    w: tuple
+    g: tuple
 
 
 class Receiver(NamedTuple):
@@ -51,9 +87,10 @@ class Receiver(NamedTuple):
     e2: tuple
 
 
-class CorneaHit(NamedTuple):
-    """The ray toward eye-plane point a through both cornea surfaces: ``ok``, its miss (u, v) in
-    the receiver's tangent plane, the transmittance T and the initial direction."""
+class ChainHit(NamedTuple):
+    """The ray toward plane point a through the chain: ``ok``, its miss (u, v) in the
+    receiver's tangent plane, the product of the events' T or R, the initial direction and
+    the plane point (mm)."""
 
     ok: bool
     u: float
@@ -62,67 +99,96 @@ class CorneaHit(NamedTuple):
     dx: float
     dy: float
     dz: float
+    qx: float
+    qy: float
+    qz: float
 
 
 @njit(cache=True, inline="always")
-def _transmit(surfaces, s, ray):
-    """Refract ``ray`` (its origin on surface s, arriving from side A). Returns (ok, dx, dy,
-    dz, T)."""
+def chain_row(row, n):
+    """The :class:`Chain` of the first ``n`` steps of a chain row
+    (:attr:`~eyelume.kernels.tables.CameraTables.chains`)."""
+    k = CHAIN_STEPS
+    return Chain(
+        n,
+        (row[2], row[3], row[4], row[5]),
+        (row[2 + k], row[3 + k], row[4 + k], row[5 + k]),
+    )
+
+
+@njit(cache=True, inline="always")
+def _event(surfaces, s, mode, ray):
+    """The specular event ``mode`` of ``ray`` (its origin on surface s). Returns (ok, dx, dy,
+    dz, T or R)."""
     x, y, z, dx, dy, dz = ray
     nx, ny, nz = G.surface_normal(surfaces.sf, surfaces.si, s, x, y, z)
     cos_d = dx * nx + dy * ny + dz * nz
-    if cos_d <= 0.0:
+    if cos_d <= 0.0 and mode == TRANSMIT_A:
         return False, dx, dy, dz, 0.0
     f = interface_at(surfaces.sf, surfaces.si, s, cos_d)
+    if mode == REFLECT:
+        rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
+        return True, rx, ry, rz, f.reflectance
     ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
     return ok, tx, ty, tz, 1.0 - f.reflectance - f.absorptance
 
 
 @per_ray
-def _through(surfaces, cornea, led, ax, ay, rc):
-    """The ray from LED point ``led`` (px, py, pz) toward (ax, ay, 0) through both cornea
-    surfaces, met with the receiver's tangent plane. Returns a :class:`CorneaHit`."""
+def _through(surfaces, chain, led, plane, a1, a2, rc):
+    """The ray from LED point ``led`` (px, py, pz) toward plane point a = (a1, a2) through the
+    chain, met with the receiver's tangent plane. Returns a :class:`ChainHit`."""
     px, py, pz = led
-    dx, dy, dz = ax - px, ay - py, -pz
+    o, e1, e2 = plane.o, plane.e1, plane.e2
+    qx = o[0] + a1 * e1[0] + a2 * e2[0]
+    qy = o[1] + a1 * e1[1] + a2 * e2[1]
+    qz = o[2] + a1 * e1[2] + a2 * e2[2]
+    dx, dy, dz = qx - px, qy - py, qz - pz
     inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
     dx, dy, dz = dx * inv, dy * inv, dz * inv
+    fail = ChainHit(False, 0.0, 0.0, 0.0, dx, dy, dz, qx, qy, qz)
     ox, oy, oz = px, py, pz
     rx, ry, rz = dx, dy, dz
     trans = 1.0
-    for s in (cornea, cornea + 1):
+    for j in range(chain.n):
+        s = chain.surf[j]
         t = G.intersect_surface(surfaces.sf, surfaces.si, s, ox, oy, oz, rx, ry, rz, math.inf)
         if t < 0.0:
-            return CorneaHit(False, 0.0, 0.0, 0.0, dx, dy, dz)
+            return fail
         ox, oy, oz = ox + t * rx, oy + t * ry, oz + t * rz
-        ok, rx, ry, rz, tr = _transmit(surfaces, s, Ray(ox, oy, oz, rx, ry, rz))
+        ok, rx, ry, rz, tr = _event(surfaces, s, chain.mode[j], Ray(ox, oy, oz, rx, ry, rz))
         if not ok:
-            return CorneaHit(False, 0.0, 0.0, 0.0, dx, dy, dz)
+            return fail
         trans *= tr
     den = rx * rc.nx + ry * rc.ny + rz * rc.nz
     if den >= 0.0:  # must arrive on the lit side, against n
-        return CorneaHit(False, 0.0, 0.0, 0.0, dx, dy, dz)
+        return fail
     t = ((rc.x - ox) * rc.nx + (rc.y - oy) * rc.ny + (rc.z - oz) * rc.nz) / den
     hx, hy, hz = ox + t * rx - rc.x, oy + t * ry - rc.y, oz + t * rz - rc.z
     u = hx * rc.e1[0] + hy * rc.e1[1] + hz * rc.e1[2]
     v = hx * rc.e2[0] + hy * rc.e2[1] + hz * rc.e2[2]
-    return CorneaHit(t > 0.0, u, v, trans, dx, dy, dz)
+    return ChainHit(t > 0.0, u, v, trans, dx, dy, dz, qx, qy, qz)
 
 
 @per_ray
-def _path_is_clear(surfaces, cornea, target, ray, rc):
-    """Whether the refracted path from the LED (``ray``) meets, in turn, the anterior cornea,
-    the posterior cornea and surface ``target`` at the receiver point with nothing else in
-    between."""
+def _path_is_clear(surfaces, chain, target, ray, rc):
+    """Whether the path from the LED (``ray``) meets, in turn, each surface of the chain and
+    then surface ``target`` at the receiver point with nothing else in between (``target``
+    −1: a receiver on no surface, the eye plane: nothing in the way up to it)."""
     sf, si = surfaces.sf, surfaces.si
     ox, oy, oz, dx, dy, dz = ray
-    for s in (cornea, cornea + 1):
+    for j in range(chain.n):
+        s = chain.surf[j]
         hit, t = G.nearest_hit(sf, si, ox, oy, oz, dx, dy, dz)
         if hit != s:
             return False
         ox, oy, oz = ox + t * dx, oy + t * dy, oz + t * dz
-        ok, dx, dy, dz, _ = _transmit(surfaces, s, Ray(ox, oy, oz, dx, dy, dz))
+        ok, dx, dy, dz, _ = _event(surfaces, s, chain.mode[j], Ray(ox, oy, oz, dx, dy, dz))
         if not ok:
             return False
+    if target < 0:
+        ex, ey, ez = rc.x - ox, rc.y - oy, rc.z - oz
+        d = math.sqrt(ex * ex + ey * ey + ez * ez)
+        return not G.occluded(sf, si, ox, oy, oz, dx, dy, dz, d * (1.0 - 1e-9) - 1e-6)
     hit, t = G.nearest_hit(sf, si, ox, oy, oz, dx, dy, dz)
     if hit != target:
         return False
@@ -131,24 +197,31 @@ def _path_is_clear(surfaces, cornea, target, ray, rc):
 
 
 @per_ray
-def led_through_cornea(surfaces, cornea, target, leds, k, rc):
+def led_through_chain(surfaces, chain, plane, target, leds, k, rc):
     """Irradiance (W/mm²) at receiver point ``rc`` (a :class:`Receiver`) on surface ``target``
-    from LED ``k`` of ``leds`` (:class:`~eyelume.kernels.tables.LedTable`) along the path
-    refracted by the anterior (surface ``cornea``) and posterior (``cornea + 1``) cornea; 0
+    (−1: none, the eye plane) from LED ``k`` of ``leds``
+    (:class:`~eyelume.kernels.tables.LedTable`) along the path through ``chain`` (a
+    :class:`Chain`), its emission direction parametrised on ``plane`` (a :class:`Plane`); 0
     when there is none. See the module docstring."""
-    x, y, z = rc.x, rc.y, rc.z
     led = (leds.points[k, 0], leds.points[k, 1], leds.points[k, 2])
     px, py, pz = led
-    # straight-line guess: where the segment LED → x crosses the eye plane
-    f = pz / (pz - z)
-    ax, ay = px + (x - px) * f, py + (y - py) * f
+    o, e1, e2, w, g = plane
+    # straight-line guess: where the segment LED → g crosses the plane
+    f = (w[0] * (o[0] - px) + w[1] * (o[1] - py) + w[2] * (o[2] - pz)) / (
+        w[0] * (g[0] - px) + w[1] * (g[1] - py) + w[2] * (g[2] - pz)
+    )
+    gx = px + (g[0] - px) * f - o[0]
+    gy = py + (g[1] - py) * f - o[1]
+    gz = pz + (g[2] - pz) * f - o[2]
+    a1 = gx * e1[0] + gy * e1[1] + gz * e1[2]
+    a2 = gx * e2[0] + gy * e2[1] + gz * e2[2]
     found = False
     for _ in range(30):
-        h = _through(surfaces, cornea, led, ax, ay, rc)
+        h = _through(surfaces, chain, led, plane, a1, a2, rc)
         if not h.ok:
             break
-        h1 = _through(surfaces, cornea, led, ax + _H, ay, rc)
-        h2 = _through(surfaces, cornea, led, ax, ay + _H, rc)
+        h1 = _through(surfaces, chain, led, plane, a1 + _H, a2, rc)
+        h2 = _through(surfaces, chain, led, plane, a1, a2 + _H, rc)
         if not (h1.ok and h2.ok):
             break
         j11, j21 = (h1.u - h.u) / _H, (h1.v - h.v) / _H
@@ -159,18 +232,58 @@ def led_through_cornea(surfaces, cornea, target, leds, k, rc):
         if h.u * h.u + h.v * h.v < _TOL2:
             found = True
             break
-        ax -= (j22 * h.u - j12 * h.v) / det
-        ay -= (-j21 * h.u + j11 * h.v) / det
+        a1 -= (j22 * h.u - j12 * h.v) / det
+        a2 -= (-j21 * h.u + j11 * h.v) / det
     if not found:
         return 0.0
     dx, dy, dz = h.dx, h.dy, h.dz
     if led_cos_alpha(leds, k, dx, dy, dz) <= 0.0:
         return 0.0
-    if not _path_is_clear(surfaces, cornea, target, Ray(px, py, pz, dx, dy, dz), rc):
+    if not _path_is_clear(surfaces, chain, target, Ray(px, py, pz, dx, dy, dz), rc):
         return 0.0
-    d2 = (ax - px) ** 2 + (ay - py) ** 2 + pz * pz
-    dw_da = abs(dz) / d2  # solid angle per unit eye-plane area at a
+    d2 = (h.qx - px) ** 2 + (h.qy - py) ** 2 + (h.qz - pz) ** 2
+    dw_da = abs(dx * w[0] + dy * w[1] + dz * w[2]) / d2  # solid angle per unit plane area at a
     return radiant_intensity(leds, k, dx, dy, dz) * h.trans * dw_da / abs(det)
+
+
+@njit(cache=True, inline="always")
+def _eye_plane(rc):
+    """The cornea's parametrisation plane: the camera frame's z = 0, Newton starting on the
+    segment from the LED to the receiver point."""
+    o, ex, ey, ez = (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
+    return Plane(o, ex, ey, ez, (rc.x, rc.y, rc.z))
+
+
+@per_ray
+def straight_plane(leds, k, chain, surfaces, rc):
+    """The parametrisation plane of an element's chain for LED k and receiver ``rc``: normal
+    to the straight guess — from the LED toward x, or toward x mirrored in a plane mirror of
+    the chain (its vertex plane) — through that point, Newton starting there."""
+    px, py, pz = leds.points[k, 0], leds.points[k, 1], leds.points[k, 2]
+    x, y, z = rc.x, rc.y, rc.z
+    sf = surfaces.sf
+    for j in range(chain.n - 1, -1, -1):
+        if chain.mode[j] == REFLECT:
+            s = chain.surf[j]
+            mx, my, mz = sf[s, G.R20], sf[s, G.R21], sf[s, G.R22]
+            d = (x - sf[s, G.OX]) * mx + (y - sf[s, G.OY]) * my + (z - sf[s, G.OZ]) * mz
+            x, y, z = x - 2.0 * d * mx, y - 2.0 * d * my, z - 2.0 * d * mz
+    wx, wy, wz = x - px, y - py, z - pz
+    dist = math.sqrt(wx * wx + wy * wy + wz * wz)
+    wx, wy, wz = wx / dist, wy / dist, wz / dist
+    e1, e2 = orthonormal_basis(wx, wy, wz)
+    return Plane((x, y, z), e1, e2, (wx, wy, wz), (x, y, z))
+
+
+@per_ray
+def led_through_cornea(surfaces, cornea, target, leds, k, rc):
+    """Irradiance (W/mm²) at receiver point ``rc`` (a :class:`Receiver`) on surface ``target``
+    from LED ``k`` of ``leds`` (:class:`~eyelume.kernels.tables.LedTable`) along the path
+    refracted by the anterior (surface ``cornea``) and posterior (``cornea + 1``) cornea, its
+    direction parametrised on the camera frame's z = 0; 0 when there is none. See the module
+    docstring."""
+    chain = Chain(2, (cornea, cornea + 1, 0, 0), (TRANSMIT_A, TRANSMIT_A, 0, 0))
+    return led_through_chain(surfaces, chain, _eye_plane(rc), target, leds, k, rc)
 
 
 @per_ray

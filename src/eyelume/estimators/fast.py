@@ -75,12 +75,28 @@ from eyelume.kernels.sampling import (
     orthonormal_basis,
     radiant_intensity,
     uniform_cone,
+    uniform_cone_pdf,
 )
 from eyelume.kernels.sequential import LENS_PASSED, trace_lens
-from eyelume.kernels.tables import Facet, Ray, SceneTables, scene_parts
+from eyelume.kernels.tables import (
+    CHAIN_STEPS,
+    REFLECT,
+    TRANSMIT_A,
+    Facet,
+    Ray,
+    SceneTables,
+    scene_parts,
+)
 
 from .camera import aim_at_stop, aim_chief, into_scene
-from .cornea_nee import Receiver, irradiance_through_cornea, led_through_cornea
+from .cornea_nee import (
+    Receiver,
+    chain_row,
+    irradiance_through_cornea,
+    led_through_chain,
+    led_through_cornea,
+    straight_plane,
+)
 
 __all__ = [
     "camera_pass",
@@ -95,6 +111,9 @@ _LIGHT_TAG = 0x4C49474854  # separates the light paths' streams from the camera 
 _DIRECT_TAG = 0x444952454354  # the light paths' direct legs (LED → lens) have their own
 _PLANE_TAG = 0x504C414E45  # … and the eye-plane points'
 _CORNEA_TAG = 0x434F524E4541  # the LED of a later vertex's connection through the cornea
+_CHAIN_TAG = 0x434841494E  # … and through an element
+_ELEMENT_TAG = 0x454C454D  # the light paths' legs toward an element surface (+ its row)
+_GHOST_TAG = 0x47484F5354  # … and toward the lens's pupil mirrored in it (+ its row)
 
 
 class Branch(NamedTuple):
@@ -220,6 +239,65 @@ def direct_irradiance(surfaces, leds, facet):
     return e
 
 
+@per_ray
+def _is_element(cam, s):
+    """Whether surface row ``s`` belongs to an optical element (they come last in the table)."""
+    return cam.element_rows.shape[0] > 0 and s >= cam.element_rows[0]
+
+
+@per_ray
+def led_through_elements(surfaces, cam, s, leds, k, rc):
+    """Irradiance (W/mm²) at receiver ``rc`` (a :class:`~.cornea_nee.Receiver`) on surface
+    ``s`` (−1: none, the eye plane) from LED k through each of its element chains
+    (``cam.chains``, :mod:`.cornea_nee`): the element's own chain, or on a surface seen through
+    the cornea (the iris) the element's and then the cornea's."""
+    e = 0.0
+    iris = s >= 0 and cam.through_cornea[s] != 0
+    for c in range(cam.chains.shape[1]):
+        row = cam.chains[k, c]
+        n = row[1] if iris else row[0]
+        if n == 0:
+            continue
+        chain = chain_row(row, n)
+        plane = straight_plane(leds, k, chain, surfaces, rc)
+        e += led_through_chain(surfaces, chain, plane, s, leds, k, rc)
+    return e
+
+
+@per_ray
+def _connects(surfaces, cam, s, leds, k, row, n, facet):
+    """Whether next-event estimation at ``facet`` (its normal toward the light's side) on
+    surface ``s`` finds LED k's path through the first ``n`` steps of chain ``row`` (and it
+    carries light): exactly the light paths that are then the camera paths' — a light path
+    that followed the chain to a face ends there only if so, so a root Newton's method misses
+    (a start that misses the element near its edge) stays the light paths', never lost."""
+    x, y, z, nx, ny, nz = facet
+    e1, e2 = orthonormal_basis(nx, ny, nz)
+    rc = Receiver(x, y, z, nx, ny, nz, e1, e2)
+    chain = chain_row(row, n)
+    plane = straight_plane(leds, k, chain, surfaces, rc)
+    return led_through_chain(surfaces, chain, plane, s, leds, k, rc) > 0.0
+
+
+@per_ray
+def _element_nee(state, surfaces, cam, s, leds, facet, every_led):
+    """Next-event estimation through the elements at a Lambertian vertex (``facet``, its
+    normal toward the arriving path) on surface ``s`` (−1: the eye plane): from every LED
+    (``every_led``) or from one drawn uniformly beside the stream ``state`` (× the LED count).
+    W/mm²."""
+    x, y, z, nx, ny, nz = facet
+    e1, e2 = orthonormal_basis(nx, ny, nz)
+    rc = Receiver(x, y, z, nx, ny, nz, e1, e2)
+    n_leds = leds.points.shape[0]
+    if every_led:
+        e = 0.0
+        for k in range(n_leds):
+            e += led_through_elements(surfaces, cam, s, leds, k, rc)
+        return e
+    k = min(int(side_uniform(state, _CHAIN_TAG) * n_leds), n_leds - 1)
+    return n_leds * led_through_elements(surfaces, cam, s, leds, k, rc)
+
+
 @njit(cache=True, inline="always")
 def _specular(state, f, dx, dy, dz, nx, ny, nz):
     """Analog choice at a refracting interface ``f`` (:func:`interface_at`), as in the forward
@@ -238,15 +316,40 @@ def _specular(state, f, dx, dy, dz, nx, ny, nz):
     return Specular(state, True, True, tx, ty, tz)
 
 
+@njit(cache=True, inline="always")
+def _glint_choice(state, f, dx, dy, dz, nx, ny, nz):
+    """A choice at a refracting interface ``f`` that reflects with probability 1/2, returning
+    (:class:`Specular`, weight factor): reflected, weight 2R; else absorbed or transmitted in
+    proportion A : T, transmitted with weight 2 (T + A); total internal reflection, weight 1.
+    Unbiased: each outcome's weight × its probability is its R, T or A."""
+    ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
+    rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
+    if not ok:
+        return Specular(state, True, False, rx, ry, rz), 1.0
+    state, u = next_uniform(state)
+    if u < 0.5:
+        return Specular(state, True, False, rx, ry, rz), 2.0 * f.reflectance
+    rest = 1.0 - f.reflectance
+    if rest <= 0.0:
+        return Specular(state, False, False, dx, dy, dz), 0.0
+    if (u - 0.5) * 2.0 * rest < f.absorptance:
+        return Specular(state, False, False, dx, dy, dz), 0.0
+    return Specular(state, True, True, tx, ty, tz), 2.0 * rest
+
+
 @per_ray
 def _camera_branch(state, scene, cam, ray, beta, split, first_vertex):
     """Follow one camera path along ``ray`` with throughput ``beta``.
 
     With ``split``, the first refracting interface met before any Lambertian vertex is not
     chosen between by chance: the path goes on transmitted (× T) and the reflected part (× R)
-    is handed back to be followed next. With ``first_vertex`` the path stops after the NEE at
-    its first Lambertian vertex and hands that vertex back for its continuation; otherwise
-    every vertex continues by Russian roulette. Returns a :class:`CameraPath`."""
+    is handed back to be followed next. An optical element's surface is not split, but chosen
+    between by chance (R, A, T) like later interfaces: what its reflected part sees is the
+    headset side, where the LEDs are points a camera path never meets (~4 % of mostly
+    nothing), and a mirror (R ≈ 1) all but always reflects; the split is kept for the
+    cornea, whose reflected part sees the lit face. With ``first_vertex`` the path stops after
+    the NEE at its first Lambertian vertex and hands that vertex back for its continuation;
+    otherwise every vertex continues by Russian roulette. Returns a :class:`CameraPath`."""
     sf, si = scene.surfaces.sf, scene.surfaces.si
     leds = scene.leds
     x, y, z, dx, dy, dz = ray
@@ -288,6 +391,9 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex):
                     n_leds = leds.points.shape[0]
                     k = min(int(side_uniform(state, _CORNEA_TAG) * n_leds), n_leds - 1)
                     e += n_leds * led_through_cornea(scene.surfaces, cam.cornea, s, leds, k, rc)
+            if cam.chains.shape[1] > 0:
+                facet = Facet(x, y, z, nx, ny, nz)
+                e += _element_nee(state, scene.surfaces, cam, s, leds, facet, first_vertex)
             radiance += beta * rho * _INV_PI * e
             if first_vertex:
                 vertex = Vertex(s, x, y, z, nx, ny, nz, beta * rho)
@@ -301,7 +407,7 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex):
             dx, dy, dz = about_axis(lx, ly, lz, nx, ny, nz)
         else:
             f = interface_at(sf, si, s, cos_d)
-            if split and not has_branch:
+            if split and not has_branch and not _is_element(cam, s):
                 ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
                 rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
                 if not ok:  # total internal reflection: nothing to split
@@ -520,14 +626,50 @@ class Tally(NamedTuple):
 
 
 @per_ray
-def _follow(state, w, ray, scene, cam, tally, glint, chain):
+def _step_matches(row, j, s, transmitted, from_b):
+    """Whether a specular event (surface s, transmitted or not, arriving from side B or not)
+    is step j of chain row ``row`` (``cam.chains``)."""
+    if row[2 + j] != s:
+        return False
+    mode = row[2 + CHAIN_STEPS + j]
+    if mode == REFLECT:
+        return not transmitted
+    if mode == TRANSMIT_A:
+        return transmitted and not from_b
+    return transmitted
+
+
+@per_ray
+def _track(chains, k, track, s, transmitted, from_b):
+    """The next state of a light path's match against LED k's element chains after a
+    specular event: ``track`` −2 before its first event, c × 8 + j once the path has followed
+    the first j steps of chain c, −1 once it has left every chain."""
+    if track == -2:
+        for c in range(chains.shape[1]):
+            row = chains[k, c]
+            if row[1] > 0 and _step_matches(row, 0, s, transmitted, from_b):
+                return c * 8 + 1
+        return -1
+    c, j = track // 8, track % 8
+    row = chains[k, c]
+    if j < row[1] and _step_matches(row, j, s, transmitted, from_b):
+        return track + 1
+    return -1
+
+
+@per_ray
+def _follow(state, w, ray, scene, cam, tally, glint, chain, track):  # noqa: PLR0913 - three flags
     """Carry a light path of weight ``w`` (W per unit path) until it ends; deposit at the
     sensor. ``glint`` ≥ 0 while the path has met no Lambertian face (LED index). ``chain`` is 1
     when the path has just been transmitted by the anterior cornea: if it is then transmitted by
     the posterior cornea and meets a ``cam.through_cornea`` surface, the camera paths' specular
     connection has it, and it ends here; −1 when it has just been reflected by the cornea: at
     its first Lambertian face it survives with probability WEAK_SURVIVAL (weight /
-    WEAK_SURVIVAL)."""
+    WEAK_SURVIVAL). ``track`` (−1: off; −2 for a path leaving LED ``glint`` toward an element,
+    :func:`_track`): a path that has followed one of its LED's element chains (``cam.chains``)
+    to its end and then meets a Lambertian face — the element's own chain, any face but the
+    iris; with the cornea's steps, the iris — where the camera paths' next-event estimation
+    (:func:`led_through_elements`) finds it (:func:`_connects`) is theirs and ends here."""
     sf, si = scene.surfaces.sf, scene.surfaces.si
     x, y, z, dx, dy, dz = ray
     first_diffuse = True
@@ -567,6 +709,15 @@ def _follow(state, w, ray, scene, cam, tally, glint, chain):
         if action == G.ACT_OPAQUE:
             if chain == 2 and cam.through_cornea[s]:
                 return state
+            if track >= 0:
+                row = cam.chains[glint, track // 8]
+                done = row[1] if cam.through_cornea[s] else row[0]
+                if track % 8 == done:
+                    m = 1.0 if from_b else -1.0  # the normal toward the side it arrives on
+                    facet = Facet(x, y, z, m * nx, m * ny, m * nz)
+                    if _connects(scene.surfaces, cam, s, scene.leds, glint, row, done, facet):
+                        return state
+                track = -1
             rho = sf[s, G.RHO_B] if from_b else sf[s, G.RHO_A]
             if rho <= 0.0:
                 return state
@@ -593,10 +744,20 @@ def _follow(state, w, ray, scene, cam, tally, glint, chain):
                 return state
             w *= f
         else:
-            c = _specular(state, interface_at(sf, si, s, cos_d), dx, dy, dz, nx, ny, nz)
+            f = interface_at(sf, si, s, cos_d)
+            if glint >= 0 and s == cam.cornea and not from_b and cam.element_rows.shape[0] > 0:
+                # a light path from an element meets the cornea unsplit: reflect with
+                # probability 1/2 (× 2R), else transmit or absorb (× 2T, 2A): a glint seen
+                # through an element is then drawn 1/(2R) ≈ 20 × as often as by chance
+                c, gain = _glint_choice(state, f, dx, dy, dz, nx, ny, nz)
+                w *= gain
+            else:
+                c = _specular(state, f, dx, dy, dz, nx, ny, nz)
             state, dx, dy, dz = c.state, c.dx, c.dy, c.dz
             if not c.alive:
                 return state
+            if track != -1:
+                track = _track(cam.chains, glint, track, s, c.transmitted, from_b)
             through = c.transmitted and s == cam.cornea + 1 and not from_b
             chain = 2 if chain == 1 and through else 0
         inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
@@ -607,7 +768,72 @@ def _follow(state, w, ray, scene, cam, tally, glint, chain):
 
 
 @per_ray
-def _light_path(i, seed, scene, cam, tally):
+def _sphere_cone_pdf(centre, rb, ray):
+    """Density per steradian of direction (dx, dy, dz) of ``ray`` from its origin P drawn
+    uniformly inside the cone that holds the sphere (``centre``, radius rb; the whole sphere
+    of directions when P is inside it), as the light paths' legs draw it."""
+    px, py, pz, dx, dy, dz = ray
+    wx, wy, wz = centre[0] - px, centre[1] - py, centre[2] - pz
+    dist = math.sqrt(wx * wx + wy * wy + wz * wz)
+    if dist <= rb:
+        return 1.0 / (4.0 * math.pi)
+    cos_max = math.sqrt(1.0 - rb * rb / (dist * dist))
+    return uniform_cone_pdf((dx * wx + dy * wy + dz * wz) / dist, cos_max)
+
+
+@per_ray
+def _cone_pdf(sf, row, ray):
+    """:func:`_sphere_cone_pdf` of surface ``row``'s bounding sphere."""
+    return _sphere_cone_pdf((sf[row, G.BX], sf[row, G.BY], sf[row, G.BZ]), sf[row, G.BR], ray)
+
+
+@per_ray
+def _mirrored_port(sf, si, row, port, px, py, pz):
+    """Where the lens surface ``port``'s bounding-sphere centre appears, seen from the LED at
+    P in element surface ``row``: mirrored in the surface's tangent plane at the point the
+    LED's reflection toward it leaves from — three fixed-point steps from the vertex plane
+    (exact for a plane surface; a deterministic function of P, so a density). (cx, cy, cz)."""
+    cx, cy, cz = sf[port, G.BX], sf[port, G.BY], sf[port, G.BZ]
+    ox, oy, oz = sf[row, G.OX], sf[row, G.OY], sf[row, G.OZ]
+    ax, ay, az = sf[row, G.R20], sf[row, G.R21], sf[row, G.R22]
+    for _ in range(3):
+        h = (cx - ox) * ax + (cy - oy) * ay + (cz - oz) * az
+        mx, my, mz = cx - 2.0 * h * ax - px, cy - 2.0 * h * ay - py, cz - 2.0 * h * az - pz
+        d = math.sqrt(mx * mx + my * my + mz * mz)
+        if d <= 0.0:
+            break
+        mx, my, mz = mx / d, my / d, mz / d
+        t = G.intersect_surface(sf, si, row, px, py, pz, mx, my, mz, math.inf)
+        if t < 0.0:
+            break
+        ox, oy, oz = px + t * mx, py + t * my, pz + t * mz
+        ax, ay, az = G.surface_normal(sf, si, row, ox, oy, oz)
+    h = (cx - ox) * ax + (cy - oy) * ay + (cz - oz) * az
+    return cx - 2.0 * h * ax, cy - 2.0 * h * ay, cz - 2.0 * h * az
+
+
+@per_ray
+def _mirror_pdf(sf, si, row, port, ray):
+    """Density of :func:`_ghost_path`'s directions (the cone about the mirrored pupil)."""
+    centre = _mirrored_port(sf, si, row, port, ray.x, ray.y, ray.z)
+    return _sphere_cone_pdf(centre, sf[port, G.BR], ray)
+
+
+@per_ray
+def _element_share(sf, si, cam, port, s, ray, pdf):
+    """The balance-heuristic weight (Veach 1997) of a light path's first leg, drawn with
+    density ``pdf``, whose first hit is element surface ``s``: four legs draw such paths —
+    the cornea leg, surface s's own leg (:func:`_element_path`), and with a lens (``port`` ≥
+    0) the lens leg (:func:`_direct_path`) and s's ghost leg (:func:`_ghost_path`) — and
+    each weights them pdf / Σ pdf, so that together they count each path once."""
+    total = _cone_pdf(sf, cam.cornea, ray) + _cone_pdf(sf, s, ray)
+    if port >= 0:
+        total += _cone_pdf(sf, port, ray) + _mirror_pdf(sf, si, s, port, ray)
+    return pdf / total
+
+
+@per_ray
+def _light_path(i, seed, scene, cam, tally, port):
     """Light path ``i``: LED i mod N toward the cornea, split there (see module docstring)."""
     sf, si = scene.surfaces.sf, scene.surfaces.si
     leds = scene.leds
@@ -631,6 +857,12 @@ def _light_path(i, seed, scene, cam, tally):
         return
     s, t = G.nearest_hit(sf, si, px, py, pz, dx, dy, dz)
     if s != cornea:
+        if s >= 0 and si[s, G.ACTION] == G.ACT_REFRACT and _is_element(cam, s):
+            # first hit an element's surface: one of three legs that draw these paths (the
+            # glints seen through an element are mostly drawn here, aimed at the cornea)
+            pdf = 1.0 / (2.0 * math.pi * (1.0 - cos_max))
+            w *= _element_share(sf, si, cam, port, s, Ray(px, py, pz, dx, dy, dz), pdf)
+            _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, k, 0, -2)
         return  # first hit elsewhere: the camera paths' share (or nothing)
     x, y, z = px + t * dx, py + t * dy, pz + t * dz
     nx, ny, nz = G.surface_normal(sf, si, s, x, y, z)
@@ -641,9 +873,9 @@ def _light_path(i, seed, scene, cam, tally):
     _, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
     rx, ry, rz = reflect(dx, dy, dz, nx, ny, nz)
     r = f.reflectance
-    state = _follow(state, w * r, Ray(x, y, z, rx, ry, rz), scene, cam, tally, k, -1)
+    state = _follow(state, w * r, Ray(x, y, z, rx, ry, rz), scene, cam, tally, k, -1, -1)
     tau = 1.0 - r - f.absorptance
-    _follow(state, w * tau, Ray(x, y, z, tx, ty, tz), scene, cam, tally, k, 1)
+    _follow(state, w * tau, Ray(x, y, z, tx, ty, tz), scene, cam, tally, k, 1, -1)
 
 
 @per_ray
@@ -653,9 +885,10 @@ def _direct_path(i, seed, scene, cam, tally, port):
     LED ring). Uniform inside the cone that holds the lens surface's bounding sphere (the whole
     sphere of directions if the LED is inside it), weighted I(α)/pdf like the cornea leg; it
     counts only when the lens is the first thing it meets, so it shares no path with the cornea
-    leg or the camera paths. Its own random stream, so the other legs' numbers do not change;
-    an LED that sends nothing toward the lens (I(α) = 0, the paper's ring) costs one profile
-    evaluation."""
+    leg or the camera paths — or an optical element's surface (the LED seen through a window
+    or by a mirror), weighted then by :func:`_element_share`. Its own random stream, so the
+    other legs' numbers do not change; an LED that sends nothing toward the lens (I(α) = 0,
+    the paper's ring) costs one profile evaluation."""
     sf, si = scene.surfaces.sf, scene.surfaces.si
     leds = scene.leds
     n_leds = leds.points.shape[0]
@@ -677,9 +910,91 @@ def _direct_path(i, seed, scene, cam, tally, port):
     if w <= 0.0:
         return
     s, _ = G.nearest_hit(sf, si, px, py, pz, dx, dy, dz)
+    if s >= 0 and s != port and si[s, G.ACTION] == G.ACT_REFRACT and _is_element(cam, s):
+        # an element in the way: the LED seen through it or by it (one of three legs)
+        pdf = _cone_pdf(sf, port, Ray(px, py, pz, dx, dy, dz))
+        w *= _element_share(sf, si, cam, port, s, Ray(px, py, pz, dx, dy, dz), pdf)
+        _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, k, 0, -2)
+        return
     if s != port:
         return
-    _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, -1, 0)
+    _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, -1, 0, -1)
+
+
+@per_ray
+def _element_path(i, seed, scene, cam, tally, row, port):
+    """Light path ``i``'s leg toward element surface ``row``: LED i mod N uniformly inside the
+    cone that holds the surface's bounding sphere (all directions if the LED is inside it),
+    weighted I(α)/pdf, counted only when that surface is the first thing it meets — so the legs
+    of the surfaces, the lens leg and the camera paths' straight next-event estimation share
+    no path; the cornea leg's and the lens leg's draws that meet the surface first count too,
+    all weighted by the balance heuristic (:func:`_element_share`). It then goes on like any
+    light path (:func:`_follow`), the glints and ghosts seen through or by the elements among
+    them, except what the camera paths' connections through an element take (its ``track``).
+    Its own random stream per surface."""
+    sf, si = scene.surfaces.sf, scene.surfaces.si
+    leds = scene.leds
+    n_leds = leds.points.shape[0]
+    k = i % n_leds
+    px, py, pz = leds.points[k, 0], leds.points[k, 1], leds.points[k, 2]
+    wx, wy, wz = sf[row, G.BX] - px, sf[row, G.BY] - py, sf[row, G.BZ] - pz
+    dist = math.sqrt(wx * wx + wy * wy + wz * wz)
+    rb = sf[row, G.BR]
+    cos_max = math.sqrt(1.0 - rb * rb / (dist * dist)) if dist > rb else -1.0
+    state = stream_start(seed, i)
+    state, u1 = next_uniform(state)
+    state, u2 = next_uniform(state)
+    lx, ly, lz = uniform_cone(u1, u2, cos_max)
+    if dist > 0.0:
+        dx, dy, dz = about_axis(lx, ly, lz, wx / dist, wy / dist, wz / dist)
+    else:
+        dx, dy, dz = lx, ly, lz
+    w = n_leds * radiant_intensity(leds, k, dx, dy, dz) * 2.0 * math.pi * (1.0 - cos_max)
+    if w <= 0.0:
+        return
+    s, _ = G.nearest_hit(sf, si, px, py, pz, dx, dy, dz)
+    if s != row:
+        return
+    pdf = _cone_pdf(sf, row, Ray(px, py, pz, dx, dy, dz))
+    w *= _element_share(sf, si, cam, port, row, Ray(px, py, pz, dx, dy, dz), pdf)
+    _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, k, 0, -2)
+
+
+@per_ray
+def _ghost_path(i, seed, scene, cam, tally, row, port):
+    """Light path ``i``'s leg toward the camera's pupil mirrored in element surface ``row``
+    (:func:`_mirrored_port`): the ghosts (LED → surface → lens) and, for a mirror, the LED
+    seen by it, which the surface's own leg draws rarely (its cone holds the whole element).
+    Uniform inside the cone of the mirrored lens surface's bounding sphere, weighted I(α)/pdf
+    and by :func:`_element_share`, counted only when ``row`` is the first thing it meets. Its
+    own random stream per surface."""
+    sf, si = scene.surfaces.sf, scene.surfaces.si
+    leds = scene.leds
+    n_leds = leds.points.shape[0]
+    k = i % n_leds
+    px, py, pz = leds.points[k, 0], leds.points[k, 1], leds.points[k, 2]
+    cx, cy, cz = _mirrored_port(sf, si, row, port, px, py, pz)
+    wx, wy, wz = cx - px, cy - py, cz - pz
+    dist = math.sqrt(wx * wx + wy * wy + wz * wz)
+    rb = sf[port, G.BR]
+    cos_max = math.sqrt(1.0 - rb * rb / (dist * dist)) if dist > rb else -1.0
+    state = stream_start(seed, i)
+    state, u1 = next_uniform(state)
+    state, u2 = next_uniform(state)
+    lx, ly, lz = uniform_cone(u1, u2, cos_max)
+    if dist > 0.0:
+        dx, dy, dz = about_axis(lx, ly, lz, wx / dist, wy / dist, wz / dist)
+    else:
+        dx, dy, dz = lx, ly, lz
+    w = n_leds * radiant_intensity(leds, k, dx, dy, dz)
+    if w <= 0.0:
+        return
+    s, _ = G.nearest_hit(sf, si, px, py, pz, dx, dy, dz)
+    if s != row:
+        return
+    pdf = _mirror_pdf(sf, si, row, port, Ray(px, py, pz, dx, dy, dz))
+    w *= _element_share(sf, si, cam, port, row, Ray(px, py, pz, dx, dy, dz), pdf) / pdf
+    _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, k, 0, -2)
 
 
 @njit(cache=True)
@@ -709,9 +1024,15 @@ def _light_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
         hi = first + (count * (c + 1)) // n_chunks
         tally = Tally(img[c], img2[c], led_img[c], q, q2)
         for i in range(lo, hi):
-            _light_path(i, lseed, tables, camera, tally)
+            _light_path(i, lseed, tables, camera, tally, port)
             if port >= 0:
                 _direct_path(i, dseed, tables, camera, tally, port)
+            for r in camera.element_rows:
+                eseed = mix64(np.uint64(seed) ^ np.uint64(_ELEMENT_TAG + r))
+                _element_path(i, eseed, tables, camera, tally, r, port)
+                if port >= 0:
+                    gseed = mix64(np.uint64(seed) ^ np.uint64(_GHOST_TAG + r))
+                    _ghost_path(i, gseed, tables, camera, tally, r, port)
 
 
 @njit(cache=True)
@@ -760,15 +1081,16 @@ def _primary_surfaces(surfaces, picture, camera, row0, labels, sides):
 
 
 @njit(cache=True)
-def plane_direct(seed, scene, n_sub, out):
+def plane_direct(seed, scene, cam, n_sub, out):
     """Direct LED irradiance (W/mm²) toward the eye on the eye-plane bins (row 0 at +y): the
     mean over n_sub × n_sub jittered points per bin (one uniform point in each cell, so the
-    mean is unbiased where an occluder's edge cuts the bin), each lit by the LEDs that see it."""
-    _plane_direct(seed, scene.surfaces, scene.leds, scene.eye_plane, n_sub, out)
+    mean is unbiased where an occluder's edge cuts the bin), each lit by the LEDs that see it,
+    straight or through an element's chain (``cam``'s, :func:`led_through_elements`)."""
+    _plane_direct(seed, scene.surfaces, scene.leds, scene.eye_plane, cam, n_sub, out)
 
 
 @njit(cache=True, parallel=True)
-def _plane_direct(seed, surfaces, leds, g, n_sub, out):
+def _plane_direct(seed, surfaces, leds, g, cam, n_sub, out):
     """:func:`plane_direct` with the scene's parts it reads (numba#10139)."""
     ec = g.cols
     for p in prange(g.rows * ec):
@@ -783,4 +1105,7 @@ def _plane_direct(seed, surfaces, leds, g, n_sub, out):
                 x, y = from_grid(g, col + (a + u1) / n_sub, row + (b + u2) / n_sub)
                 px, py, pz = plane_point(g, x, y)
                 acc += direct_irradiance(surfaces, leds, Facet(px, py, pz, g.nx, g.ny, g.nz))
+                if cam.chains.shape[1] > 0:
+                    facet = Facet(px, py, pz, g.nx, g.ny, g.nz)
+                    acc += _element_nee(state, surfaces, cam, -1, leds, facet, True)
         out[row, col] = acc / (n_sub * n_sub)

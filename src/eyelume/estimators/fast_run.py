@@ -537,5 +537,5 @@ def direct_eye_plane(cs: CompiledScene, seed: int, n_sub: int = 16) -> np.ndarra
     """Direct LED irradiance (W/mm²) toward the eye over the eye-plane bins, row 0 at +y
     (n_sub² jittered points per bin, each with shadow rays to the LEDs)."""
     out = np.empty((cs.eye_plane.rows, cs.eye_plane.cols))
-    F.plane_direct(seed, cs.tables, n_sub, out)
+    F.plane_direct(seed, cs.tables, cs.camera, n_sub, out)
     return out

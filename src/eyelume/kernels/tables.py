@@ -45,11 +45,25 @@ __all__ = [
     "A_R",
     "A_P",
     "N_AIM",
+    "TRANSMIT_A",
+    "TRANSMIT",
+    "REFLECT",
+    "CHAIN_STEPS",
+    "CHAIN_COLS",
 ]
 
 # aim table columns: disk centre xyz (its normal is world +z), radius (mm), probability
 A_X, A_Y, A_Z, A_R, A_P = range(5)
 N_AIM = 5
+
+#: A specular chain's step (CameraTables.chains): transmitted arriving from side A only (the
+#: cornea, entered from outside), transmitted from either side, or reflected.
+TRANSMIT_A, TRANSMIT, REFLECT = 0, 1, 2
+#: Most steps of a chain (an element's two surfaces, then the cornea's two), and the columns of
+#: a chain row: the steps toward any face (0: none), the steps toward a face seen through the
+#: cornea (the iris), then CHAIN_STEPS surface rows and CHAIN_STEPS modes.
+CHAIN_STEPS = 4
+CHAIN_COLS = 2 + 2 * CHAIN_STEPS
 
 
 class Ray(NamedTuple):
@@ -125,7 +139,15 @@ class CameraTables(NamedTuple):
     ``through_cornea`` (n_surfaces,) int64: 1 where next-event estimation goes through the
     cornea (the iris); ``cornea``: the surface index of the anterior cornea (``cornea + 1`` is
     the posterior one); ``split_grid``: a camera path continues from its first Lambertian
-    vertex in split_grid² stratified directions (``run.continuation_grid``)."""
+    vertex in split_grid² stratified directions (``run.continuation_grid``).
+
+    Optical elements (issue 14): ``element_rows`` (m,) int64 the rows of their optical
+    surfaces (increasing; elements come last in the surface table), each the start of a light
+    path leg; ``chains`` (n_leds, n_chains, CHAIN_COLS) int64: per LED, the specular chains
+    through one element that next-event estimation connects by Newton's method
+    (:mod:`eyelume.estimators.cornea_nee`): an element's first step is the surface the LED
+    faces, its own chain toward any face and, with the cornea's two steps appended, toward the
+    iris; ``n_chains`` 0 without elements."""
 
     lf_rev: np.ndarray
     lf_open: np.ndarray
@@ -140,6 +162,8 @@ class CameraTables(NamedTuple):
     through_cornea: np.ndarray
     cornea: int
     split_grid: int
+    element_rows: np.ndarray
+    chains: np.ndarray
 
 
 class SceneTables(NamedTuple):
