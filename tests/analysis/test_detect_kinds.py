@@ -390,3 +390,91 @@ def test_a_blob_dark_on_one_side_only_is_refused():
     img[:, 62:] = 40.0  # the picture as dark as the blob beyond its right-hand end
     wp = work_picture(img, None, none, params)
     assert "dark on one side only" in _one_sided(img, wp, e, 40.0, none, params)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_unlit_surround_filling_most_of_the_picture(seed):
+    """A wide-angle headset camera (eyetrackvr): only a disc around the eye is lit, the rest
+    (~70 % of the picture) is at the black level, as dark as the pupil. The ladder's top, the
+    60th percentile, then sat on the black level and the ladder never reached the iris ("no
+    compact dark blob", or the unlit surround called a pupil cut by the frame); it now runs at
+    least a quarter of the range up (``ladder_min_span``) and the pupil is found."""
+    img = closeup(
+        skin=200.0, iris=30.0, pupil=6.0, iris_radius=30.0, pupil_axes=(22.0, 20.0), seed=seed
+    )
+    yy, xx = np.mgrid[:SIZE, :SIZE]
+    r = np.hypot(xx - CENTRE[0], yy - CENTRE[1])
+    dark = 6.0 + np.random.default_rng(seed + 10).normal(0.0, 2.0, img.shape)
+    w = np.clip((r - 44.0) / 4.0, 0.0, 1.0)  # a lit disc of ~46 px radius
+    img = u8((1.0 - w) * img + w * dark)
+    assert (img < 12).mean() > 0.65
+    d = detect(img)
+    assert_pupil(d)
+    assert d.pupil.axes_px[0] < 25  # the pupil, not the 60 px iris
+
+
+def _ellipse_fit(cx, cy, a, b):
+    from eyelume.analysis.tracking.pupil import Ellipse
+
+    return Ellipse(cx, cy, a, b, 0.0)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_darker_core_inside_a_fit_names_the_iris(seed):
+    """An ellipse fitted to the iris with the pupil inside it (vr-offaxis at (−10°, −20°) at
+    400 × 400: bright skin sets the ladder's spacing, the pupil–iris step was crossed in one
+    level and the iris answered 4.8 px off the pupil's centre): its interior's 5th percentile
+    is at the black level, its median the iris's, many σ apart — refused by name. The same
+    ellipse over a uniform noisy pupil (its 5th percentile 1.6 σ under its median) is not."""
+    from eyelume.analysis.tracking.detect import DetectParams
+    from eyelume.analysis.tracking.pupil import darker_core, work_picture
+
+    params = DetectParams()
+    img = np.round(
+        closeup(skin=900.0, iris=45.0, pupil=16.0, noise=3.0, iris_radius=40.0, seed=seed)
+    ).astype(np.uint16)
+    bright = np.zeros(img.shape, np.uint8)
+    wp = work_picture(img, None, bright, params)
+    iris = _ellipse_fit(CENTRE[0], CENTRE[1], 40.0, 40.0)
+    why = darker_core(img, wp, iris, bright, params)
+    assert why.startswith("pupil merged with iris: ") and "darker core" in why, why
+    pupil = _ellipse_fit(CENTRE[0], CENTRE[1], 15.0, 14.0)
+    assert darker_core(img, wp, pupil, bright, params) == ""
+
+
+def test_a_bright_patch_beside_a_dark_area_is_not_a_glint():
+    """A patch of a bright area (a lid's lit margin, skin) where it meets the dark iris stands
+    out of its window's mean — the iris pulls the mean down, the margin's own pixels further
+    out do not pass — and once passed as a glint, with more light than the real ones, which
+    were then dropped as specks (vr-offaxis at (−10°, −20°) at 400 × 400), or grown over the
+    pupil's outline (eyetrackvr). When its surround's upper quartile reaches the glint floor
+    (``surround_max``, the picture's 99th percentile in :func:`find_glints`) it is not a
+    glint (marked ``"patch"``: the detector counts its light as a speck's); a saturated spot with
+    a dark surround stays one. (The blobs' masks are given as the bright mask would have them:
+    the patch and the spot, not the rest of the margin.)"""
+    from eyelume.analysis.tracking.detect import DetectParams
+    from eyelume.analysis.tracking.glints import _blob
+
+    img = np.full((60, 60), 40.0)
+    img[:, 30:] = 230.0  # the dark iris on the left, the lid's lit margin on the right
+    img[20:26, 30:35] = 252.0  # the margin's brightest patch, at the iris's edge
+    yy, xx = np.mgrid[:60, :60]
+    img += 400.0 * np.exp(-((xx - 12) ** 2 + (yy - 45) ** 2) / (2 * 2.0**2))  # a glint
+    img = np.clip(img, 0, 255)
+    mask = np.zeros(img.shape, np.uint8)
+    mask[20:26, 30:35] = 255
+    mask[(xx - 12) ** 2 + (yy - 45) ** 2 <= 6] = 255
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    params = DetectParams()
+
+    def centres(surround_max):
+        out = []
+        for c in contours:
+            b = _blob(c, cv2.contourArea(c) + 0.5 * len(c) + 1, mask, mask, img,
+                      (500, 5.0, surround_max), params)  # fmt: skip
+            if b is not None and not b["patch"]:
+                out.append(tuple(round(v) for v in b["centre_px"]))
+        return sorted(out)
+
+    assert centres(None) == [(12, 45), (32, 22)]
+    assert centres(225.0) == [(12, 45)]

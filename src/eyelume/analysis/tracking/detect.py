@@ -120,7 +120,11 @@ class DetectParams:
     ladder_rows, ladder_levels, ladder_top_percentile : the ladder runs on the picture reduced
         by round(min(rows, cols) / 80) (a pupil of ≥ 16 px stays ≥ 3 px across; the cost is
         one labelling per level), at levels spaced (P60 − P0.5) / 32 from its darkest pixel
-        to its 60th percentile (the pupil is ≪ 40 % of an eye picture).
+        to its 60th percentile (the pupil is ≪ 40 % of an eye picture), and at least
+        ``ladder_min_span`` (¼) of the 8-bit range above the darkest pixel: when most of the
+        picture is an unlit surround at the black level (a wide-angle headset camera's view
+        past the lit eye region, eyetrackvr), its 60th percentile is that black level and the
+        ladder would never reach the iris.
     ladder_max_growth : largest MSER stability q = (A₊ − A₋) / A of the pupil's blob over the
         neighbouring levels (1: at 32 levels the pupil's blurred edge band is crossed in one or
         two steps; a merge with the iris multiplies the area).
@@ -133,6 +137,17 @@ class DetectParams:
         finer level can pick a lid-cut pupil's darkest core, whose outline passes the usual
         0.45 with the centre over a pixel off: paper2005 at (−30°, −20°)). (1 = off.)
     max_candidates : stable blobs fitted in turn, darkest first, before giving up (3).
+    core_quantile, core_max_fraction, core_min_sigma : a fitted pupil whose interior (inside
+        0.9 × its ellipse, off glints and missing pixels) has a darker core — its
+        ``core_quantile`` (5th percentile) within ``core_max_fraction`` (¼) of the way from
+        the black level (the darkest valid pixel) to its median, and ``core_min_sigma`` (8) σ
+        of the interior's pixel noise below that median — is an iris (or a dark fold) holding
+        the real pupil: the finer ladder is tried, else it is refused ("pupil merged with
+        iris: a darker core …"). A real pupil is uniform to its noise: its 5th percentile is
+        1.6 σ under its median for Gaussian noise, 2–4 σ with glints' skirts and the edge band
+        inside it (the tests' 15 px pupils with four glints); the iris fits holding the pupil
+        on the off-axis presets' renders were 15–18 σ (vr-offaxis at (−10°, −20°): the iris,
+        4.8 px off the pupil's centre, was answered).
     pupil_min_area_px, pupil_max_area_frac : area bounds of the dark blob (px; fraction of the
         picture, 10 %: an iris seen without a pupil is larger at the framing of an eye tracker);
         the fitted ellipse (π a b) must hold ``pupil_min_area_px`` too ("pupil too small").
@@ -245,10 +260,14 @@ class DetectParams:
     ladder_rows: float = 80.0
     ladder_levels: int = 32
     ladder_top_percentile: float = 60.0
+    ladder_min_span: float = 0.25
     ladder_max_growth: float = 1.0
     ladder_fine: int = 4
     ladder_fine_span: int = 3
     ladder_fine_support: float = 0.75
+    core_quantile: float = 5.0
+    core_max_fraction: float = 0.25
+    core_min_sigma: float = 8.0
     max_candidates: int = 3
     pupil_min_area_px: int = 30
     pupil_tiny_area_px: int = 6
@@ -485,11 +504,19 @@ def _pupil_result(fit, params) -> tuple[Pupil | None, list[str]]:
 
 def _split_specks(blobs: list[dict], params) -> tuple[list[Glint], list[Glint]]:
     """Step 5a: the glints, and the specks — blobs with less than ``glint_min_flux_frac`` of the
-    brightest blob's light (above its background), which no LED's corneal reflection is."""
-    every = [Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"]) for b in blobs]
+    brightest glint's light (above its background), which no LED's corneal reflection is, and
+    the patches of a bright area (``"patch"``, :func:`~.glints.glint_blobs`: no glint, and
+    they do not set the brightest glint's light)."""
+    patches = [b for b in blobs if b.get("patch")]
+    every = [
+        Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"])
+        for b in blobs
+        if not b.get("patch")
+    ]
     top = max((g.flux for g in every), default=0.0)
     glints = [g for g in every if g.flux >= params.glint_min_flux_frac * top]
     specks = [g for g in every if g.flux < params.glint_min_flux_frac * top]
+    specks += [Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"]) for b in patches]
     return glints, specks
 
 

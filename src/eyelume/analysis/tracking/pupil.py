@@ -564,7 +564,7 @@ def ladder(
         _, lab, stats, cent = cv2.connectedComponentsWithStats(dark, connectivity=8, ltype=ltype)
         areas.append((lab, stats[:, cv2.CC_STAT_AREA]))
         touch = np.unique(lab[inv]) if inv is not None else None
-        edge_dark = edge_dark or _edge_dark(lab, stats, touch, min_area, f, t)
+        edge_dark = edge_dark or _edge_dark(lab, stats, touch, (min_area, max_area), f, t)
         for c in _level_candidates(lab, stats, cent, tiny_area, max_area, touch):
             c.level, c.index = t, li
             if c.area < min_area:
@@ -588,9 +588,11 @@ def _levels(small: np.ndarray, params, fine: int) -> tuple[float, float, float]:
     out the missing ones, which the working picture holds at 255 and which would otherwise
     push the percentiles up: with 40 % of a headset frame outside its lens, P60 was 255): from
     the darkest pixel (lo + step the first level) to the ``ladder_top_percentile`` in steps of
-    (P60 − P0.5) / ``ladder_levels`` (≥ 1); with ``fine`` > 1, only the first
-    ``ladder_fine_span`` steps, ``fine`` times finer (≥ 1)."""
+    (P60 − P0.5) / ``ladder_levels`` (≥ 1), the top at least ``ladder_min_span`` × 255 above
+    P0.5 (an unlit surround filling most of the picture holds P60 at the black level); with
+    ``fine`` > 1, only the first ``ladder_fine_span`` steps, ``fine`` times finer (≥ 1)."""
     p_lo, top = percentile(small, 0.5), percentile(small, params.ladder_top_percentile)
+    top = max(top, p_lo + params.ladder_min_span * 255.0)
     step = max(1.0, (top - p_lo) / params.ladder_levels)
     lo = p_lo - step * math.ceil((p_lo - float(small.min())) / step)  # down to the darkest
     if fine > 1:
@@ -599,17 +601,19 @@ def _levels(small: np.ndarray, params, fine: int) -> tuple[float, float, float]:
     return lo, top, step
 
 
-def _edge_dark(lab, stats, touch, min_area: int, f: int, level: float) -> tuple:
-    """(level, area in full-resolution px) of the largest dark region of a pupil's size or
-    more touching the picture's border or the missing pixels at this level, or () when none:
-    the ladder leaves such regions out, so a pupil cut by the frame is not a refusal's "too
-    small" blob."""
+def _edge_dark(lab, stats, touch, areas: tuple[int, float], f: int, level: float) -> tuple:
+    """(level, area in full-resolution px) of the largest dark region of a pupil's size
+    (``areas`` = (min, max), ladder px) touching the picture's border or the missing pixels at
+    this level, or () when none: the ladder leaves such regions out, so a pupil cut by the
+    frame is not a refusal's "too small" blob. A region larger than any pupil (an unlit
+    surround filling half a wide-angle headset camera's picture, eyetrackvr) is no cut pupil,
+    and is not named as one."""
     rows, cols = lab.shape
     x, y, w, h, a = (stats[1:, i] for i in range(5))
     on_edge = (x == 0) | (y == 0) | (x + w == cols) | (y + h == rows)
     if touch is not None and len(touch):
         on_edge |= np.isin(np.arange(1, len(stats)), touch)
-    big = on_edge & (a >= min_area)
+    big = on_edge & (a >= areas[0]) & (a <= areas[1])
     if not big.any():
         return ()
     return (level, int(a[big].max()) * f * f)
@@ -1122,27 +1126,27 @@ def _one_sided(img, wp: WorkPicture, e: Ellipse, pupil_level: float, bright, par
     r0, r1 = params.surround_sector_ring
     rows, cols = img.shape
     reach = r1 * max(e.a, e.b) + 2
+    # Every s-th pixel each way (≤ ~80 × 80 samples of the box): eight sector medians need a few
+    # hundred pixels each, not the thousands of a large pupil's ring.
+    s = max(1, int(reach / 40.0))
     x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
     y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
-    yy, xx = np.mgrid[y0:y1, x0:x1]
+    yy, xx = np.mgrid[y0:y1:s, x0:x1:s]
     u, v = e.local(xx.astype(np.float64), yy.astype(np.float64))
     rho = np.hypot(u / e.a, v / e.b)
-    ring = (rho > r0) & (rho < r1) & (bright[y0:y1, x0:x1] == 0)
+    ring = (rho > r0) & (rho < r1) & (bright[y0:y1:s, x0:x1:s] == 0)
     if wp.invalid is not None:
-        ring &= ~wp.invalid[y0:y1, x0:x1]
+        ring &= ~wp.invalid[y0:y1:s, x0:x1:s]
     if not ring.any():
         return None
-    sub = img[y0:y1, x0:x1]
-    step = median(sub[ring]) - pupil_level
+    vals = img[y0:y1:s, x0:x1:s][ring]
+    step = median(vals) - pupil_level
     if step <= 0:
         return None
     n = params.surround_sectors
-    k = ((np.arctan2(v / e.b, u / e.a) + math.pi) / (2 * math.pi) * n).astype(int) % n
-    worst = min(
-        (median(sub[ring & (k == i)]) - pupil_level) / step
-        for i in range(n)
-        if (ring & (k == i)).sum() >= 3
-    )
+    k = ((np.arctan2(v[ring] / e.b, u[ring] / e.a) + math.pi) / (2 * math.pi) * n).astype(int) % n
+    counts = np.bincount(k, minlength=n)
+    worst = min((median(vals[k == i]) - pupil_level) / step for i in range(n) if counts[i] >= 3)
     if worst < params.surround_sector_min:
         return (
             f"no pupil: the dark blob at ({e.cx:.0f}, {e.cy:.0f}) px is dark on one side only "
@@ -1167,6 +1171,57 @@ def _fit_candidates(img, wp, picks, f: int, bright, params, reasons: list[str]):
     return None
 
 
+def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params) -> str:
+    """Why a fitted ellipse holds a darker core (an iris with the pupil inside it), or "".
+
+    Over the pixels inside 0.9 × the ellipse (off glints grown by their margin and missing
+    pixels), in the input's units: with b the black level (the darkest valid pixel, ``wp.lo``),
+    m the interior's median and p its ``core_quantile`` (5th percentile), a core is there when
+    p − b ≤ ``core_max_fraction`` (m − b) and m − p ≥ ``core_min_sigma`` × the interior's pixel
+    noise σ (Immerkær's estimate over it, as :func:`noise_sigma`; the step between a core and the
+    rest is a thin edge, which that median ignores; ≥ 1 for an integer picture, whose
+    percentiles move in whole steps). A real pupil is uniform to its noise: its
+    5th percentile is a couple of σ under its median."""
+    rows, cols = img.shape
+    reach = max(e.a, e.b) + 1
+    x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
+    y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
+    if x1 - x0 < 3 or y1 - y0 < 3:
+        return ""
+    yy, xx = np.mgrid[y0:y1, x0:x1]
+    u, v = e.local(xx.astype(np.float64), yy.astype(np.float64))
+    inside = (u / e.a) ** 2 + (v / e.b) ** 2 < 0.81
+    glints = bright[y0:y1, x0:x1]
+    if glints.any():
+        inside &= _grown_glints(glints, params) == 0
+    if wp.invalid is not None:
+        inside &= ~wp.invalid[y0:y1, x0:x1]
+    if inside.sum() < params.pupil_min_area_px:
+        return ""
+    vals = img[y0:y1, x0:x1][inside]
+    black = wp.lo
+    m = median(vals)
+    p = percentile(vals, params.core_quantile)
+    # On the input (the working picture's glints are filled flat, which would hide noise).
+    win = img[y0:y1, x0:x1].astype(np.float32)
+    lap = cv2.filter2D(win, cv2.CV_32F, _IMMERKAER, borderType=cv2.BORDER_REFLECT)
+    noise = 1.4826 * median(np.abs(lap[inside])) / 6.0
+    # An integer picture's median and percentiles move in whole steps: ≥ 1 step (an 8-bit
+    # close-up's pupil, median 2 DN over black, 5th percentile at it, is uniform).
+    noise = max(noise, 0.5 * (wp.hi - wp.lo) / 255.0, 1.0 if img.dtype.kind in "iu" else 0.0)
+    if p - black <= params.core_max_fraction * (m - black) and m - p >= (
+        params.core_min_sigma * noise
+    ):
+        return (
+            f"pupil merged with iris: the fitted blob at ({e.cx:.0f}, {e.cy:.0f}) px "
+            f"({2 * max(e.a, e.b):.0f} × {2 * min(e.a, e.b):.0f} px) has a darker core: its "
+            f"{params.core_quantile:g}th percentile is {p - black:.3g} above the black level "
+            f"against its median's {m - black:.3g} ({(m - p) / noise:.0f} σ of the noise): the "
+            "pupil inside an iris (or a dark fold) it was not told from"
+        )
+    return ""
+
+
 def _whole(fit: PupilFit, params) -> bool:
     """Whether a fit's outline is backed enough to be trusted (``detect``'s support check)."""
     return fit.support >= params.min_boundary_support and fit.gap <= params.max_boundary_gap
@@ -1186,7 +1241,11 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit
     picks = choose(chains, f, tiny, wp, params)
     reasons: list[str] = []
     fit = _fit_candidates(img, wp, picks, f, bright, params, reasons) if picks else None
-    if fit is not None and _whole(fit, params):
+    # A whole fit with a darker core inside is an iris holding the pupil (a cut one is
+    # refused as cut already, and a lid inside its ellipse would look like a core).
+    whole = fit is not None and _whole(fit, params)
+    core = darker_core(img, wp, fit.ellipse, bright, params) if whole else ""
+    if whole and not core:
         return fit
     # Nothing whole: the ladder's dark end again, finer; its fit replaces the first only when
     # whole. The first pass misses a pupil near the black level whose step to the iris it
@@ -1207,8 +1266,14 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit
         again, _, _ = ladder(wp, params, reduced, fine=params.ladder_fine)
         picks2 = choose(again, f, ([], ()), wp, params)
         fit2 = _fit_candidates(img, wp, picks2, f, bright, params, []) if picks2 else None
-        if fit2 is not None and _whole(fit2, strict):
+        if (
+            fit2 is not None
+            and _whole(fit2, strict)
+            and not darker_core(img, wp, fit2.ellipse, bright, params)
+        ):
             return fit2
+    if core:
+        return PupilFit(None, reason=core)
     if fit is not None:
         return fit
     if not picks:
