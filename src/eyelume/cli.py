@@ -404,8 +404,9 @@ def _warm_up_forward(cs) -> float | None:
     """Compile (or load) the forward tracer, saying so when it is the slow first compilation."""
     from eyelume.estimators import forward
     from eyelume.estimators.fast_run import kernels_cached
-    from eyelume.render import warm_up_forward
+    from eyelume.render import check_sensor_spectra, warm_up_forward
 
+    check_sensor_spectra(cs.scene)  # a bad QE table: one line before the long compilation
     kernel = getattr(forward, "_trace_batch", None)
     if kernel is not None and kernels_cached((kernel,)) is False:
         err.print("compiling kernels (first run only; about a minute)…")
@@ -415,7 +416,9 @@ def _warm_up_forward(cs) -> float | None:
 def _warm_up(cs) -> float:
     """Compile (or load) the fast kernels, saying so when it is the slow first compilation."""
     from eyelume.estimators.fast_run import kernels_cached, warm_up
+    from eyelume.render import check_sensor_spectra
 
+    check_sensor_spectra(cs.scene)  # a bad QE table: one line before the long compilation
     if kernels_cached() is False:
         err.print("compiling kernels (first run only; about a minute)…")
     return warm_up(cs)

@@ -48,7 +48,7 @@ from eyelume.detectors.psf import (
     region_mean_variance,
 )
 from eyelume.detectors.receivers import BinnedPlane
-from eyelume.detectors.sensor import count_weights
+from eyelume.detectors.sensor import count_weights, quantum_efficiency_at
 from eyelume.errors import SceneError
 from eyelume.estimators.fast_run import RunControl, direct_eye_plane, trace_fast, warm_up
 from eyelume.estimators.forward import trace_forward, trace_paths
@@ -61,6 +61,7 @@ __all__ = [
     "RenderExtras",
     "RenderOptions",
     "RenderResult",
+    "check_sensor_spectra",
     "group_seed",
     "render",
     "render_extras",
@@ -206,16 +207,17 @@ class RenderResult:
         (:func:`render` checks these before tracing)."""
         sc = self.scene
         lam = float(sc.wavelength_nm)
-        width = sc.leds.spectral_width_nm
-        line = isinstance(sc.sensor.quantum_efficiency, float) and width == 0
+        line = isinstance(sc.sensor.quantum_efficiency, float) and not sc.leds.has_spectral_width
         if not self.groups:
             if line:
                 return self.eye_image
-            (w,) = count_weights(sc.sensor, [lam], width, lam)
+            (w,) = count_weights(sc.sensor, [lam], sc.leds.spectral_width_at(lam, lam), lam)
             return self.eye_image * w
         if line:
             return sum(g.eye_image * (g.wavelength_nm / lam) for g in self.groups)
-        weights = count_weights(sc.sensor, [g.wavelength_nm for g in self.groups], width, lam)
+        lams = [g.wavelength_nm for g in self.groups]
+        widths = [sc.leds.spectral_width_at(x, lam) for x in lams]
+        weights = count_weights(sc.sensor, lams, widths, lam)
         return sum(g.eye_image * w for g, w in zip(self.groups, weights, strict=True))
 
     @property
@@ -247,6 +249,25 @@ class RenderResult:
             self.variance_dof,
             mean_variance,
         )
+
+    def _groups_summary(self) -> list[dict]:
+        """Each wavelength group's summary, with how the sensor counts it: QE at its
+        wavelength, its LEDs' spectral width and its photo-electrons per watt relative to
+        light at the scene's wavelength (:func:`eyelume.detectors.sensor.count_weights`)."""
+        sc, lam = self.scene, float(self.scene.wavelength_nm)
+        lams = [g.wavelength_nm for g in self.groups or []]
+        widths = [sc.leds.spectral_width_at(x, lam) for x in lams]
+        weights = count_weights(sc.sensor, lams, widths, lam)
+        out = []
+        for g, w, k in zip(self.groups or [], widths, weights, strict=True):
+            entry = g.summary()
+            entry["sensor"] = {
+                "quantum_efficiency": quantum_efficiency_at(sc.sensor, g.wavelength_nm),
+                "spectral_width_nm": w,
+                "electrons_relative_to_scene_wavelength": k,
+            }
+            out.append(entry)
+        return out
 
     def summary(self) -> dict:
         """The run's summary as plain JSON-ready data (``summary.json``)."""
@@ -285,7 +306,7 @@ class RenderResult:
         else:
             out["surface_interactions"] = self.interactions
         if self.groups:
-            out["wavelength_groups"] = [g.summary() for g in self.groups]
+            out["wavelength_groups"] = self._groups_summary()
         power = {"emitted": self.emitted_w, "sensor": float(self.eye_image.sum())}  # NaN: partial
         power["sensor"] *= self.pixel_area_mm2
         if self.ledger is not None:
@@ -391,6 +412,16 @@ def check_estimator(scene: Scene, estimator: str) -> None:
             )
 
 
+def check_sensor_spectra(scene: Scene) -> None:
+    """Read and check the sensor's QE curve at every LED wavelength and spectrum and at the
+    scene's wavelength (:func:`eyelume.detectors.sensor.count_weights`), so that a bad table
+    fails before any tracing. Raises InputFileError or SceneError (one line)."""
+    lam = float(scene.wavelength_nm)
+    leds_nm = sorted(set(scene.leds.wavelengths_nm(lam)))
+    widths = [scene.leds.spectral_width_at(x, lam) for x in leds_nm]
+    count_weights(scene.sensor, leds_nm, widths, lam)
+
+
 def render(
     scene: Scene | CompiledScene,
     options: RenderOptions | None = None,
@@ -431,9 +462,7 @@ def render(
     seed = sc.run.seed if seed is None else int(seed)
     estimator = opt.estimator or ("forward" if rays is not None else sc.run.estimator)
     check_estimator(sc, estimator)
-    # A bad QE table or a wavelength outside it fails now, not after the tracing.
-    leds_nm = sorted(set(sc.leds.wavelengths_nm(sc.wavelength_nm)))
-    count_weights(sc.sensor, leds_nm, sc.leds.spectral_width_nm, float(sc.wavelength_nm))
+    check_sensor_spectra(sc)  # a bad QE table fails now, not after the tracing
     if cs.led_ids is None and not single_wavelength(sc):
         if estimator not in ("fast", "forward"):
             raise ValueError(f"estimator = {estimator!r}: must be 'fast' or 'forward'")

@@ -201,7 +201,7 @@ def test_eye_image_counts_each_group_with_its_qe_and_spectrum(tmp_path):
         "vr-offaxis",
         {
             "sensor.quantum_efficiency": "nir-global-shutter",
-            "leds.spectral_width_nm": 40.0,
+            "leds.spectral_width_nm": [35.0] * 4 + [50.0] * 4,
             "leds.wavelength_nm": [850.0] * 4 + [940.0] * 4,
         },
     )
@@ -220,13 +220,13 @@ def test_eye_image_counts_each_group_with_its_qe_and_spectrum(tmp_path):
     object.__setattr__(r, "groups", [_G(850.0, e850), _G(940.0, e940)])
     ref = electrons_per_w_mm2(scene.sensor, 850.0)
     want = (
-        e850 * electrons_per_w_mm2(scene.sensor, 850.0, 40.0)
-        + e940 * electrons_per_w_mm2(scene.sensor, 940.0, 40.0)
+        e850 * electrons_per_w_mm2(scene.sensor, 850.0, 35.0)
+        + e940 * electrons_per_w_mm2(scene.sensor, 940.0, 50.0)
     ) / ref
     np.testing.assert_allclose(r.eye_image_at_scene_wavelength, want, rtol=1e-13)
     # one wavelength, a width: the image scaled by its spectrum's count over the line's
     object.__setattr__(r, "groups", None)
-    w = electrons_per_w_mm2(scene.sensor, 850.0, 40.0) / ref
+    w = electrons_per_w_mm2(scene.sensor, 850.0, 35.0) / ref  # the 850 nm LEDs' width
     np.testing.assert_allclose(r.eye_image_at_scene_wavelength, (e850 + e940) * w, rtol=1e-13)
     assert w != 1.0
 
@@ -240,8 +240,8 @@ def test_cli_bad_qe_table_exit_2_one_line(tmp_path):
          f"sensor.quantum_efficiency={json.dumps(str(bad))}"],
     )  # fmt: skip
     assert res.exit_code == 2, res.output
-    lines = [ln for ln in res.output.splitlines() if "qe.csv" in ln]  # after status lines
-    assert len(lines) == 1 and "must increase strictly" in lines[0]
+    lines = [ln for ln in res.output.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "qe.csv" in lines[0] and "must increase strictly" in lines[0]
     assert "sensor.quantum_efficiency" in lines[0]
     assert not out.exists() or not (out / "summary.json").exists()  # failed before tracing
     assert "Traceback" not in res.output
@@ -257,3 +257,50 @@ def test_cli_wavelength_outside_the_table_exit_2(tmp_path):
     )  # fmt: skip
     assert res.exit_code == 2, res.output
     assert "sensor.quantum_efficiency" in res.output and "940 nm lies outside" in res.output
+
+
+def test_spectral_width_per_led():
+    """One width per LED, the same within a wavelength; a different width in one wavelength
+    group, a bad item or a wrong count is refused naming the item."""
+    sc = load_scene(
+        "paper2005",
+        {"leds.wavelength_nm": [850, 940, 850, 940], "leds.spectral_width_nm": [35, 50, 35, 50]},
+    )
+    assert sc.leds.spectral_width_at(940.0, 850.0) == 50.0
+    assert sc.leds.spectral_width_at(850.0, 850.0) == 35.0 and sc.leds.has_spectral_width
+    assert not load_scene("paper2005").leds.has_spectral_width
+    bad = [
+        ({"leds.spectral_width_nm": [35, 50, 35, 50]}, r"spectral_width_nm\[1\] = 50 differs"),
+        ({"leds.spectral_width_nm": [35, 35]}, "has 2 entries but there are 4 LEDs"),
+        ({"leds.spectral_width_nm": [35, -1, 35, 35]}, r"spectral_width_nm\[1\] = -1"),
+        ({"leds.spectral_width_nm": 500}, "0-200 nm"),
+    ]
+    for overrides, message in bad:
+        with pytest.raises(SceneError, match=message):
+            load_scene("paper2005", overrides)
+
+
+def test_cli_render_reports_each_groups_qe(tmp_path):
+    """A two-wavelength render with the built-in curve and per-wavelength widths: summary.json
+    gives each group's QE, width and count weight, as the sensor module computes them."""
+    out = tmp_path / "r"
+    sets = {
+        "sensor.cols": 32, "sensor.rows": 32, "sensor.pixel_pitch_um": 25.0,
+        "sensor.quantum_efficiency": "nir-global-shutter",
+        "leds.wavelength_nm": [850.0] * 4 + [940.0] * 4,
+        "leds.spectral_width_nm": [35.0] * 4 + [50.0] * 4,
+    }  # fmt: skip
+    args = ["render", "--scene", "vr-offaxis", "--samples", "2", "--seed", "1", "--out", str(out)]
+    for k, v in sets.items():
+        args += ["--set", f"{k}={json.dumps(v)}"]
+    res = runner.invoke(app, args)
+    assert res.exit_code == 0, res.output
+    summary = json.loads((out / "summary.json").read_text())
+    s = Sensor(quantum_efficiency="nir-global-shutter")
+    weights = count_weights(s, [850.0, 940.0], [35.0, 50.0], 850.0)
+    said = [g["sensor"] for g in summary["wavelength_groups"]]
+    assert [g["quantum_efficiency"] for g in said] == [0.30, quantum_efficiency_at(s, 940.0)]
+    assert [g["spectral_width_nm"] for g in said] == [35.0, 50.0]
+    got = [g["electrons_relative_to_scene_wavelength"] for g in said]
+    assert got == pytest.approx(weights, rel=1e-15)
+    assert 0.3 < weights[1] < 0.6  # QE 0.127 x 940/850 / 0.30, spectrum-averaged

@@ -251,12 +251,16 @@ def electrons_per_w_mm2(sensor: Sensor, wavelength_nm: float, fwhm_nm: float = 0
 
 
 def count_weights(
-    sensor: Sensor, wavelengths_nm: list[float], fwhm_nm: float, scene_wavelength_nm: float
+    sensor: Sensor,
+    wavelengths_nm: list[float],
+    fwhm_nm: float | list[float],
+    scene_wavelength_nm: float,
 ) -> list[float]:
-    """For light of each wavelength (an LED spectrum of FWHM ``fwhm_nm`` centred on it), the
-    factor w_g that turns its irradiance into the irradiance at ``scene_wavelength_nm`` giving
-    the same mean photo-electrons: w_g = :func:`electrons_per_w_mm2` (λ_g, FWHM) /
-    :func:`electrons_per_w_mm2` (λ_scene). A single-number QE and no width: λ_g / λ_scene.
+    """For light of each wavelength (an LED spectrum of FWHM ``fwhm_nm`` centred on it: one
+    width for all, or one per wavelength), the factor w_g that turns its irradiance into the
+    irradiance at ``scene_wavelength_nm`` giving the same mean photo-electrons:
+    w_g = :func:`electrons_per_w_mm2` (λ_g, FWHM) / :func:`electrons_per_w_mm2` (λ_scene).
+    A single-number QE and no width: λ_g / λ_scene.
 
     Raises
     ------
@@ -264,7 +268,10 @@ def count_weights(
         A bad QE table, a wavelength or spectrum outside it, or QE = 0 at the scene's
         wavelength (whose digital picture could then count nothing).
     """
-    if isinstance(sensor.quantum_efficiency, float) and fwhm_nm == 0:
+    widths = list(fwhm_nm) if isinstance(fwhm_nm, list | tuple) else [fwhm_nm] * len(wavelengths_nm)
+    if len(widths) != len(wavelengths_nm):
+        raise ValueError(f"{len(widths)} widths for {len(wavelengths_nm)} wavelengths")
+    if isinstance(sensor.quantum_efficiency, float) and not any(widths):
         return [lam / scene_wavelength_nm for lam in wavelengths_nm]
     if quantum_efficiency_at(sensor, scene_wavelength_nm) <= 0:
         raise SceneError(
@@ -274,7 +281,10 @@ def count_weights(
             value=sensor.quantum_efficiency,
         )
     ref = electrons_per_w_mm2(sensor, scene_wavelength_nm)
-    return [electrons_per_w_mm2(sensor, lam, fwhm_nm) / ref for lam in wavelengths_nm]
+    return [
+        electrons_per_w_mm2(sensor, lam, w) / ref
+        for lam, w in zip(wavelengths_nm, widths, strict=True)
+    ]
 
 
 def _check_irradiance(irradiance_w_mm2: np.ndarray) -> np.ndarray:

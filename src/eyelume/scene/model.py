@@ -192,10 +192,11 @@ class LedArray(_Model):
     the eye and the lens, the cornea's Fresnel reflection) with only its LEDs emitting, and each
     LED's eye-safety weight taken at its own wavelength (:func:`eyelume.render.render`,
     :func:`eyelume.compile.wavelength_groups`). ``spectral_width_nm`` is the LEDs' emission
-    spectrum's full width at half maximum (one value for every LED; datasheets give about 30–40
-    nm at 850 nm, 50 nm at 940 nm): the sensor counts each group's light over a Gaussian
-    spectrum of that width centred on its wavelength (QE(λ) λ/(hc) averaged over it,
-    :func:`eyelume.detectors.sensor.electrons_per_w_mm2`); the tracing, the eye's indices and
+    spectrum's full width at half maximum, 0 to 200 nm (datasheets give about 30–40 nm at 850
+    nm, 50 nm at 940 nm): one for every LED, or a list of ``count``, the same for LEDs of the
+    same wavelength (a wavelength group is counted as one). The sensor counts each group's light
+    over a Gaussian spectrum of that width centred on its wavelength (QE(λ) λ/(hc) averaged over
+    it, :func:`eyelume.detectors.sensor.electrons_per_w_mm2`); the tracing, the eye's indices and
     the eye-safety weights stay at the centre wavelength. 0 (the default): a line spectrum. The
     ring's fields (``height_mm``,
     ``distance_mm``, ``pitch_deg``, ``azimuths_deg``, ``ring_centre_mm``, ``ring_axis``) given
@@ -218,7 +219,7 @@ class LedArray(_Model):
     radiant_intensity_w_sr: Positive | list[Positive] = 0.015
     profile: LedProfile | list[LedProfile] = LedProfile()
     wavelength_nm: float | list[float] | None = None
-    spectral_width_nm: float = Field(0.0, ge=0, le=200)
+    spectral_width_nm: float | list[float] = 0.0
     ring_centre_mm: Vector3 = (0.0, 0.0, 0.0)
     ring_axis: Vector3 = (0.0, 0.0, 1.0)
     positions_mm: list[Vector3] | None = None
@@ -241,6 +242,62 @@ class LedArray(_Model):
                 if v <= 0:
                     raise ValueError(f"{info.field_name}[{k}] = {v!r}: must be > 0")
         return value
+
+    @field_validator("spectral_width_nm", mode="before")
+    @classmethod
+    def _widths_one_by_one(cls, value):
+        """Each width a finite number of 0 to 200 nm, a bad item named by its index."""
+        items = list(enumerate(value)) if isinstance(value, list | tuple) else [(None, value)]
+        if not items:
+            raise ValueError("spectral_width_nm = []: give a number or one per LED")
+        for k, v in items:
+            name = "" if k is None else f"spectral_width_nm[{k}] = {v!r}: "
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                raise ValueError(f"{name}must be a finite number (nm)")
+            if not 0 <= v <= 200:
+                raise ValueError(f"{name}an LED's spectral FWHM lies within 0-200 nm")
+        return [float(v) for v in value] if isinstance(value, list | tuple) else float(value)
+
+    @model_validator(mode="after")
+    def _one_width_per_wavelength(self) -> LedArray:
+        """LEDs of one wavelength form one group, counted over one spectrum: same width."""
+        widths = self.spectral_widths_nm()
+        if len(widths) != self.count:
+            raise ValueError(
+                f"spectral_width_nm has {len(widths)} entries but there are {self.count} LEDs "
+                "(count): give one value for every LED or one per LED"
+            )
+        lams = self.wavelengths_nm(0.0)  # the scene's wavelength stands for None: one value
+        if len(lams) != self.count:
+            return self  # _per_led_lengths names the wavelength list's count
+        first: dict[float, int] = {}
+        for k, (lam, w) in enumerate(zip(lams, widths, strict=True)):
+            j = first.setdefault(lam, k)
+            if widths[j] != w:
+                raise ValueError(
+                    f"spectral_width_nm[{k}] = {w:g} differs from spectral_width_nm[{j}] = "
+                    f"{widths[j]:g} of an LED of the same wavelength: LEDs of one wavelength are "
+                    "counted over one spectrum, give them one width"
+                )
+        return self
+
+    def spectral_widths_nm(self) -> list[float]:
+        """Every LED's spectral FWHM (nm), ``count`` values (0: a line)."""
+        v = self.spectral_width_nm
+        return list(v) if isinstance(v, list) else [float(v)] * self.count
+
+    def spectral_width_at(self, wavelength_nm: float, scene_wavelength_nm: float) -> float:
+        """The spectral FWHM (nm) of the LEDs shining at ``wavelength_nm`` (0 if none do)."""
+        lams = self.wavelengths_nm(scene_wavelength_nm)
+        for lam, w in zip(lams, self.spectral_widths_nm(), strict=True):
+            if lam == wavelength_nm:
+                return w
+        return 0.0
+
+    @property
+    def has_spectral_width(self) -> bool:
+        """Whether any LED has a spectral width (> 0)."""
+        return any(w > 0 for w in self.spectral_widths_nm())
 
     @field_validator("profile", mode="before")
     @classmethod
