@@ -51,7 +51,7 @@ def test_preset_renders_an_eye(name):
     assert 0 <= cx < scene.sensor.cols and 0 <= cy < scene.sensor.rows
     assert truth["glints_on_cornea"] == scene.leds.count
     if scene.elements:
-        # the fast estimator refuses elements for now (issue 14): the forward one, 4 million
+        # the presets' estimator, the forward one (the fast one refuses the eyepiece): 4 million
         # rays (~20 s), is too noisy for the iris (seen only through the cornea, 0 counts at
         # this budget): the pupil is checked against the skin, and the ledger is exact
         r = eyelume.render(cs, eyelume.RenderOptions(estimator="forward", rays=4_000_000))
