@@ -131,3 +131,14 @@ def test_without_chromium_the_browser_test_skips_unless_ci_requires_it(monkeypat
     monkeypatch.setenv("EYELUME_REQUIRE_CHROMIUM", "1")
     with pytest.raises(pytest.fail.Exception, match="EYELUME_REQUIRE_CHROMIUM"):
         _browser()
+
+
+def test_axis_labels_take_the_unit_their_name_ends_with():
+    from eyelume.report.html import axis_label
+
+    assert axis_label("leds.height_mm") == "leds.height_mm (mm)"
+    assert axis_label("leds.radiant_intensity_w_sr") == "leds.radiant_intensity_w_sr (W/sr)"
+    assert axis_label("leds.pitch_deg") == "leds.pitch_deg (°)"
+    assert axis_label("corneal_margin") == "corneal_margin (limit / exposure)"
+    assert axis_label("eye_plane_merit") == "eye_plane_merit (dimensionless)"
+    assert axis_label("glints") == "glints"  # no unit in the name: none invented

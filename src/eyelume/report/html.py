@@ -37,6 +37,29 @@ def _png(fig: Figure) -> str:
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
+#: Units read from a parameter's or metric's name ending (the scene's and metrics' own naming:
+#: ``leds.height_mm``, ``pitch_deg``, ``corneal_margin`` = exposure limit / exposure).
+_NAME_UNITS = (
+    ("_w_mm2", "W/mm²"),
+    ("_w_sr", "W/sr"),
+    ("_mm", "mm"),
+    ("_deg", "°"),
+    ("_nm", "nm"),
+    ("_px", "px"),
+    ("_ms", "ms"),
+    ("_margin", "limit / exposure"),
+    ("_merit", "dimensionless"),
+)
+
+
+def axis_label(name: str) -> str:
+    """``name`` with its unit in parentheses when its ending says it (``_NAME_UNITS``)."""
+    for end, unit in _NAME_UNITS:
+        if name.endswith(end):
+            return f"{name} ({unit})"
+    return name
+
+
 def _landscapes(rows: list[dict], params: list[str], metrics: list[str]) -> list[tuple[str, str]]:
     out = []
     n = max(1, len(params))
@@ -50,10 +73,10 @@ def _landscapes(rows: list[dict], params: list[str], metrics: list[str]) -> list
                    if isinstance(y, int | float) and isinstance(x, int | float)]  # fmt: skip
             if pts:
                 ax.plot(*zip(*pts, strict=True), "o", ms=4)
-            ax.set_xlabel(p, fontsize=8)
+            ax.set_xlabel(axis_label(p), fontsize=8)
             ax.tick_params(labelsize=7)
             ax.grid(True, linewidth=0.3, alpha=0.5)
-        axes[0].set_ylabel(m, fontsize=8)
+        axes[0].set_ylabel(axis_label(m), fontsize=8)
         caption = (
             f"{m} of each committed run (one dot per run) against each varied parameter "
             f"({', '.join(params) or 'none'}), the other parameters at the run's own values; "
