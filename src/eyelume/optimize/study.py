@@ -28,6 +28,10 @@ A study file (TOML)::
     samples = 4                    # ... this many draws (seed)
     # latin = [lo, hi] with samples: a Latin hypercube over all `latin` parameters together
 
+    [population]                   # optional: N people (eyelume.scene.population.Population);
+    size = 50                      # read and validated only, not yet used by the runs
+    seed = 1
+
 Each run is one dict of overrides; its key is the SHA-256 of the base scene's JSON, the
 overrides, the metrics and their settings, so a changed input is a new run and an unchanged one
 is found in the store (:mod:`.store`) and not run again.
@@ -50,6 +54,7 @@ from eyelume.errors import EyelumeError
 from eyelume.scene.io import SceneError, apply_overrides, load_scene, preset_names
 from eyelume.scene.model import Scene
 from eyelume.scene.model import _Model as _Table  # extra keys, NaN and true-for-a-number refused
+from eyelume.scene.population import Population, sample_people
 from eyelume.scene.textfile import decode_text
 
 __all__ = [
@@ -120,6 +125,7 @@ class Study(_Table):
     delta: float = Field(0.3, ge=0.0, lt=1.0)
     samples_per_pixel: int = Field(16, ge=1)
     vary: list[Vary] = []
+    population: Population | None = None
 
 
 def load_study(path: str | Path) -> Study:
@@ -153,7 +159,20 @@ def load_study(path: str | Path) -> Study:
     except EyelumeError as exc:
         raise SceneError(f"study {p}: field 'scene': {exc}") from None
     _check_runs(study, base, p)
+    if study.population is not None:
+        _check_population(study.population, base, p)
     return study
+
+
+def _check_population(population: Population, base: Scene, path: Path) -> None:
+    """The population's distributions resolved on the base scene and its first person built
+    (a mean outside its bounds, lids asked of a scene without them, a person whose eye cannot
+    exist): SceneError naming the study file. Read and checked only: the runs do not sample
+    people yet (issue 15's later step)."""
+    try:
+        sample_people(base, 1, population.seed, population)
+    except EyelumeError as exc:
+        raise SceneError(f"study {path}: field 'population': {exc}") from None
 
 
 #: Most runs a study may plan: at seconds to minutes a run, 10⁵ runs is already days of work;
