@@ -645,6 +645,21 @@ def _assign_leds(centres: np.ndarray, led_azimuths_deg, max_ang: float):
     return leds, "", between
 
 
+def _all_matched(glints, led_azimuths_deg, pattern, max_ang: float, params) -> list[str]:
+    """Every LED has a glint: with the predicted layout ``pattern`` they must fit it too (a
+    stray matched to an LED whose own glint was not found — vr-offaxis at (30°, 0°): a skin
+    highlight 63 px from LED 3's glint — is no glint); the error, or none."""
+    misfit = (
+        ""
+        if pattern is None
+        else _pattern_misfit(glints, led_azimuths_deg, pattern, max_ang, params)
+    )
+    if misfit:
+        n = len(led_azimuths_deg)
+        return [f"glint lost: all {n} LEDs have a glint but {misfit}: a stray taken for a glint?"]
+    return []
+
+
 def _match_glints(
     glints: list[Glint], led_azimuths_deg, params, pattern=None
 ) -> tuple[list[str], list[int]]:
@@ -652,7 +667,8 @@ def _match_glints(
     glints :func:`~.glints.match_pattern` when it matches as many); the messages and the LEDs
     left without a glint: an error when fewer than ``min_matched_glints`` (or, with fewer
     LEDs, all of them) are matched or when the matched do not fit the LEDs' pattern
-    (:func:`_pattern_misfit`), else a warning."""
+    (:func:`_pattern_misfit`; with ``pattern`` given, also when every LED has one), else a
+    warning."""
     n_led = len(led_azimuths_deg)
     centres = np.array([g.centre_px for g in glints]).reshape(-1, 2)
     max_ang = params.match_max_angle_deg
@@ -671,7 +687,7 @@ def _match_glints(
     matched = {g.led for g in glints if g.led is not None}
     missing = [k for k in range(n_led) if k not in matched]
     if not missing:
-        return [], []
+        return _all_matched(glints, led_azimuths_deg, pattern, max_ang, params), []
     need = min(params.min_matched_glints, n_led)
     which = f"no glint for LED {', '.join(str(k) for k in missing)}"
     if len(matched) < need:
