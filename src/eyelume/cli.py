@@ -704,7 +704,7 @@ def sweep_leds_cmd(
     pattern beside the target, into OUT."""
     from eyelume.analysis.targets import gaussian_target, load_target
     from eyelume.optimize.sweep import refine, sweep_leds
-    from eyelume.report.optimize_outputs import write_sweep_outputs
+    from eyelume.report.optimize_outputs import sweep_caption, write_sweep_outputs
 
     if target is not None and delta is not None:
         _fail(f"--delta {delta} with --target {target}: give one (the target replaces δ's)")
@@ -730,8 +730,9 @@ def sweep_leds_cmd(
     plane = sc.eye_plane
     extent = (-plane.width_mm / 2, plane.width_mm / 2, -plane.height_mm / 2, plane.height_mm / 2)
     written = write_sweep_outputs(
-        result, goal, refined, None if target is not None else delta, extent, out
-    )
+        result, goal, refined, None if target is not None else delta, extent, out,
+        caption=sweep_caption(sc.name),
+    )  # fmt: skip
     err.print(
         f"best of {len(result.merit)}: Y {b['height_mm']:g} mm, Z {b['distance_mm']:g} mm, "
         f"θ {b['pitch_deg']:g}° (merit {b['merit']:.4g}); refined: Y {refined[0]:.2f}, "
@@ -1136,7 +1137,10 @@ def _tracking_parts(sc, samples: int, seed: int, population: bool, out: Path):
         members, partial = exc.done, str(exc)
     for name, rep in members.items():
         err.print(member_line(name, rep), highlight=False)
-    write_population_outputs(members, sc.name, out, partial)
+    write_population_outputs(
+        members, sc.name, out, partial,
+        {"samples_per_pixel": samples, "seed": seed, "sensor": [sc.sensor.cols, sc.sensor.rows]},
+    )  # fmt: skip
     return members["nominal"], partial
 
 

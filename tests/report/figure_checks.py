@@ -7,6 +7,12 @@
 - :func:`images_without_unit_colorbar`: every image panel (``AxesImage`` or ``QuadMesh``) whose
   colour scale has no colour bar (one drawn for it, or for another image of the same norm and
   colour map), or whose colour bar label names no unit in parentheses.
+- :func:`axes_without_unit_label`: every axis (x or y, colour bars apart: see above) that
+  draws tick labels — a numeric scale shown — whose label does not end with a unit in
+  parentheses, e.g. "(mm)", "(°)", "(px)" or "(dimensionless)".
+- :func:`caption_missing`: the figure draws no caption (its suptitle, a ``fig.text`` or, for a
+  one-panel figure, the panel's title: where eyelume's writers put it) naming the scene and the
+  seed (``seed N``, or ``no random seed`` for a closed-form, deterministic result).
 """
 
 from __future__ import annotations
@@ -122,4 +128,50 @@ def images_without_unit_colorbar(fig: Figure) -> list[str]:
             label = cax.get_ylabel() or cax.get_xlabel()
             if not UNIT.search(label):
                 bad.append(f"{where!r}: colour bar label {label!r} names no unit in parentheses")
+    return bad
+
+
+def caption_missing(fig: Figure, scene: str, seed: int | None) -> str | None:
+    """Why the figure's caption fails to name ``scene`` and the seed, or None when it does.
+
+    The caption is a drawn figure-level text (the suptitle or a ``fig.text``) or an axes title;
+    it must contain ``scene`` and ``seed {seed}`` as a word (``no random seed`` when ``seed`` is
+    None)."""
+    fig.canvas.draw()
+    titles = [t for ax in _all_axes(fig) if ax.get_visible()
+              for t in (ax.title, ax._left_title, ax._right_title)]  # fmt: skip
+    texts = [t for t in [fig._suptitle, *fig.texts, *titles] if t is not None and t.get_visible()]
+    said = [" ".join(t.get_text().split()) for t in texts if t.get_text().strip()]  # unwrapped
+    want = re.compile(r"\bno random seed\b" if seed is None else rf"\bseed {seed}\b")
+    if any(scene in s and want.search(s) for s in said):
+        return None
+    return f"no caption names scene {scene!r} and {want.pattern!r}; figure-level texts: {said!r}"
+
+
+def axes_without_unit_label(fig: Figure) -> list[str]:
+    """Descriptions of the axes whose drawn numeric scale has no label ending with a unit in
+    parentheses (colour bars' axes are :func:`images_without_unit_colorbar`'s)."""
+    _drawn_texts(fig)  # draws the figure: ticks and their labels are laid out
+    _, drawn = _tick_labels(fig)
+    bars = set()
+    for ax in _all_axes(fig):
+        for im in [*ax.images, *ax.collections]:
+            cb = getattr(im, "colorbar", None)
+            if cb is not None:
+                bars.add(cb.ax)
+    bad = []
+    for ax in _all_axes(fig):
+        if ax in bars or not (ax.get_visible() and ax.axison):
+            continue
+        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            ticks = axis.get_major_ticks() + axis.get_minor_ticks()
+            shown = any(
+                (id(t.label1) in drawn and t.label1.get_text().strip())
+                or (id(t.label2) in drawn and t.label2.get_text().strip())
+                for t in ticks
+            )
+            label = axis.get_label_text()
+            if shown and not UNIT.search(label):
+                where = ax.get_title() or "untitled panel"
+                bad.append(f"{where!r}: {name} axis label {label!r} names no unit in parentheses")
     return bad

@@ -8,6 +8,7 @@ which installs it): then a missing browser is a failure, so CI always runs the r
 
 from __future__ import annotations
 
+import html
 import os
 import re
 import shutil
@@ -60,7 +61,7 @@ def test_report_renders_in_headless_chromium_with_its_figures(tmp_path):
     p.write_text(STUDY, encoding="utf-8")
     run_study(load_study(p), tmp_path / "out", workers=1)
     save_best_run(tmp_path / "out", "paper2005")  # the best run's pictures, stored
-    caught = Caught()
+    caught = Caught(None)  # their captions are the page's: checked below
     with observe_figures(caught):  # the page's figures, checked from matplotlib's extents
         page = write_report(tmp_path / "out")
     assert not caught.defects, caught.defects
@@ -69,6 +70,12 @@ def test_report_renders_in_headless_chromium_with_its_figures(tmp_path):
     assert n_img >= 3  # two metric landscapes (+ margins) and the best run's images
     assert len(caught.names) == n_img
     assert text.count("<figcaption>") == n_img
+    captions = [html.unescape(c) for c in re.findall(r"<figcaption>(.*?)</figcaption>", text)]
+    landscapes, best = captions[:-1], captions[-1]
+    for c in landscapes:  # the study's scene and seed, as run_study recorded them
+        assert "Study report: scene paper2005, seed 1, 16 camera samples per pixel." in c, c
+    # the best run is rendered anew, with its own seed: said so
+    assert "scene paper2005 with the run's overrides, seed 0, 16 camera samples" in best, best
     shots = tmp_path / "screenshots"  # the test's artefacts, kept in pytest's tmp folder
     shots.mkdir()
     for width in (1280, 1920):
@@ -113,6 +120,8 @@ def test_report_escapes_user_text_and_scrolls_wide_tables(tmp_path):
     assert "<b>" not in text and "<i>" not in text
     assert "leds.&lt;b&gt;parameter_number_0&lt;/b&gt;" in text and "s&lt;i&gt;" in text
     assert '<div class="scroll"><table>' in text
+    # no study.json (a store written by another program): the captions say the seed is unknown
+    assert "records no study scene or seed (study.json missing" in text
     browser = _browser()
     dom = subprocess.run(
         [browser, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",

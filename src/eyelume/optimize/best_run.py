@@ -7,7 +7,8 @@ the tracking errors over the gaze grid — is computed here and stored in the st
 - ``best_run.npz``: ``eye_plane`` (rows, cols) W/mm² (closed form,
   :func:`eyelume.estimators.closed_form.eye_plane_irradiance`) and ``eye_image`` (rows, cols)
   W/mm² (fast estimator, 16 samples per pixel, seed 0);
-- ``best_run.json``: the run's index, overrides, the merit it is best by and its value, and
+- ``best_run.json``: the run's index, overrides, the merit it is best by and its value, the
+  scene, ``seed`` and ``samples_per_pixel`` of the eye image and the tracking frames, and
   ``tracking_rows`` (:func:`eyelume.analysis.tracking.evaluate.error_map_rows` over the 3 × 3
   gaze grid of :mod:`.tracking`) or null.
 
@@ -30,6 +31,8 @@ __all__ = ["BEST_RUN_FILES", "MERITS", "best_runs", "save_best_run"]
 MERITS = ("eye_image_merit", "eye_plane_merit")
 #: The files :func:`save_best_run` writes into the study's folder.
 BEST_RUN_FILES = ("best_run.npz", "best_run.json")
+#: The best run's eye image: seed and camera samples per pixel; its tracking frames' samples.
+_SEED, _SPP, _TRACKING_SPP = 0, 16, 8
 
 
 def best_runs(rows: list[dict], count: int = 5) -> tuple[str | None, list[dict]]:
@@ -74,10 +77,10 @@ def save_best_run(folder: str | Path, scene: str) -> Path | None:
     run = best[0]
     sc = eyelume.load_scene(scene, run["overrides"])
     pattern = eye_plane_irradiance(sc)
-    image = eyelume.render(sc, eyelume.RenderOptions(samples_per_pixel=16, seed=0)).eye_image
+    image = eyelume.render(sc, eyelume.RenderOptions(samples_per_pixel=_SPP, seed=_SEED)).eye_image
     tracking = None
     if any("tracking_score_deg" in r["metrics"] for r in rows):
-        rep = evaluate_tracking(sc, GAZE_H, GAZE_V, 8, 0, calibrate=False)
+        rep = evaluate_tracking(sc, GAZE_H, GAZE_V, _TRACKING_SPP, _SEED, calibrate=False)
         tracking = error_map_rows(rep.frames)
     np.savez(folder / BEST_RUN_FILES[0], eye_plane=pattern, eye_image=image)
     value = run["metrics"][merit]
@@ -87,6 +90,10 @@ def save_best_run(folder: str | Path, scene: str) -> Path | None:
         "merit": merit,
         "value": value if math.isfinite(value) else None,
         "scene": str(scene),
+        "scene_name": sc.name,
+        "seed": _SEED,
+        "samples_per_pixel": _SPP,
+        "tracking_samples_per_pixel": _TRACKING_SPP if tracking is not None else None,
         "tracking_rows": tracking,
     }
     path = folder / BEST_RUN_FILES[1]

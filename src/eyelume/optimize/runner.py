@@ -28,6 +28,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 from eyelume.errors import StoreError
+from eyelume.json_files import write_json
 from eyelume.optimize.store import LOCK_TIMEOUT_S, ResultStore
 from eyelume.optimize.study import Study, plan_runs, run_key, run_metrics
 from eyelume.scene.io import load_scene
@@ -83,6 +84,11 @@ def _one(scene_json: dict, overrides: dict, study_json: dict) -> tuple[dict, flo
     return metrics, time.perf_counter() - t0
 
 
+#: What :func:`run_study` records of the study in its folder, for the report's captions: the
+#: study's name, the base scene's name and file, seed, samples per pixel, δ and metrics.
+STUDY_FILE = "study.json"
+
+
 def run_study(
     study: Study,
     out: str | Path,
@@ -95,6 +101,7 @@ def run_study(
 ) -> list[dict]:
     """Run every planned run not yet in ``out``'s store; returns the store's rows.
 
+    The study's scene, seed and budget are written to ``out/study.json`` (:data:`STUDY_FILE`).
     Without ``resume`` a folder that already holds runs is refused (ValueError); with it, the
     finished runs are skipped. ``progress(done, total)`` after each commit; ``note(message)``
     when a commit waits for another program's write lock (up to ``lock_timeout_s``, then
@@ -113,6 +120,12 @@ def run_study(
         others = store.studies() - {study.name}
         if others:
             raise StoreError(f"{out}: holds runs of another study ({', '.join(sorted(others))})")
+        write_json(
+            Path(out) / STUDY_FILE,
+            {"study": study.name, "scene": base.name, "scene_file": study.scene,
+             "seed": study.seed, "samples_per_pixel": study.samples_per_pixel,
+             "delta": study.delta, "metrics": list(study.metrics)},
+        )  # fmt: skip
         todo = [(i, r, k) for i, (r, k) in enumerate(zip(runs, keys, strict=True)) if k not in done]
         finished = len(runs) - len(todo)
         if progress:

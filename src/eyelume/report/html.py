@@ -60,7 +60,25 @@ def axis_label(name: str) -> str:
     return name
 
 
-def _landscapes(rows: list[dict], params: list[str], metrics: list[str]) -> list[tuple[str, str]]:
+def study_caption(folder: Path) -> str:
+    """The study's scene, seed and budget, as its runner recorded them in ``study.json``
+    (:data:`eyelume.optimize.runner.STUDY_FILE`), for the captions; says so when the folder has
+    none (a study run before eyelume wrote it) or it cannot be read."""
+    from eyelume.optimize.runner import STUDY_FILE
+
+    try:
+        info = json.loads((folder / STUDY_FILE).read_text(encoding="utf-8"))
+        return (
+            f"Study {info['study']}: scene {info['scene']}, seed {info['seed']}, "
+            f"{info['samples_per_pixel']} camera samples per pixel."
+        )
+    except (OSError, ValueError, KeyError, TypeError):
+        return f"The folder records no study scene or seed ({STUDY_FILE} missing or unreadable)."
+
+
+def _landscapes(
+    rows: list[dict], params: list[str], metrics: list[str], study: str
+) -> list[tuple[str, str]]:
     out = []
     n = max(1, len(params))
     for m in metrics:
@@ -80,7 +98,7 @@ def _landscapes(rows: list[dict], params: list[str], metrics: list[str]) -> list
         caption = (
             f"{m} of each committed run (one dot per run) against each varied parameter "
             f"({', '.join(params) or 'none'}), the other parameters at the run's own values; "
-            "read from the study's store, not recomputed."
+            f"read from the study's store, not recomputed. {study}"
         )
         out.append((caption, _png(fig)))
     return out
@@ -94,6 +112,12 @@ def _best_images(folder: Path) -> list[tuple[str, str]]:
     with np.load(arrays) as data:
         pattern, image = data["eye_plane"], data["eye_image"]
     info = json.loads(meta.read_text(encoding="utf-8"))
+    how = (
+        f"scene {info.get('scene_name', info.get('scene'))} with the run's overrides, "
+        f"seed {info['seed']}, {info['samples_per_pixel']} camera samples per pixel"
+        if "seed" in info
+        else "seed not recorded (best_run.json written before eyelume recorded it)"
+    )
     fig = agg_figure(9, 3.4)
     a, b = fig.subplots(1, 2)
     im = a.imshow(pattern, cmap="inferno", vmin=0)
@@ -110,15 +134,18 @@ def _best_images(folder: Path) -> list[tuple[str, str]]:
         (
             f"Best run (#{info['index']}): its eye-plane irradiance toward the eye and the "
             "simulated eye image, rendered anew with the fast estimator after the study "
-            "(eyelume report --scene) and stored beside its results.",
+            f"(eyelume report --scene) and stored beside its results: {how}.",
             _png(fig),
         )
     ]
     if info.get("tracking_rows"):
         buf = io.BytesIO()
         save_error_maps(info["tracking_rows"], buf)
+        spp = info.get("tracking_samples_per_pixel")
+        track = how.replace(f"{info.get('samples_per_pixel')} camera", f"{spp} camera")
         out.append(("Best run: pupil-centre, glint and gaze errors of the tracking evaluation "
-                    "over the gaze grid (one cell per gaze; a red × where the frame failed).",
+                    "over the gaze grid (one cell per gaze; a red × where the frame failed): "
+                    f"{track}.",
                     base64.b64encode(buf.getvalue()).decode("ascii")))  # fmt: skip
     return out
 
@@ -140,7 +167,7 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
     params = sorted({k for r in rows for k in r["overrides"]})
     metrics = sorted({k for r in rows for k, v in r["metrics"].items()
                       if isinstance(v, int | float) and not isinstance(v, bool)})  # fmt: skip
-    figures = _landscapes(rows, params, metrics)
+    figures = _landscapes(rows, params, metrics, study_caption(folder))
     merit, best = best_runs(rows)
     if best:
         figures += _best_images(folder)

@@ -20,15 +20,26 @@ from eyelume.report.plots import save_grey_png
 
 __all__ = [
     "write_delta_study_outputs",
+    "sweep_caption",
     "write_study_table",
     "write_sweep_outputs",
     "write_tracking_sweep_outputs",
 ]
 
 
-def write_sweep_outputs(sweep, target: np.ndarray, refined, delta, plane_extent, out) -> list[Path]:
+def sweep_caption(scene_name: str) -> str:
+    """The caption of ``eyelume sweep-leds``'s figures: the scene, and no seed (the generator's
+    closed-form irradiance draws no random number)."""
+    return f"scene {scene_name}, closed-form irradiance (no random seed)"
+
+
+def write_sweep_outputs(
+    sweep, target: np.ndarray, refined, delta, plane_extent, out, caption: str = ""
+) -> list[Path]:
     """``sweep.csv`` (every configuration), ``best.json``, ``landscape.png`` (Z × θ heatmaps per
-    Y) and ``best_pattern.png`` (the best eye-plane pattern beside the target)."""
+    Y) and ``best_pattern.png`` (the best eye-plane pattern beside the target). ``caption``
+    (the scene, seed and budget: ``eyelume sweep-leds`` says its scene and that the closed form
+    draws no random number) heads both figures' captions."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = [
@@ -58,7 +69,8 @@ def write_sweep_outputs(sweep, target: np.ndarray, refined, delta, plane_extent,
         sweep.merit_grid(),
         written[2],
         f"generator merit against the {name} target",
-        caption=f"{len(sweep.merit)} LED placements: {len(sweep.heights)} heights × "
+        caption=(f"{caption}; " if caption else "")
+        + f"{len(sweep.merit)} LED placements: {len(sweep.heights)} heights × "
         f"{len(sweep.distances)} distances × {len(sweep.pitches)} pitches",
     )
     save_pattern_vs_target(
@@ -68,6 +80,7 @@ def write_sweep_outputs(sweep, target: np.ndarray, refined, delta, plane_extent,
         written[3],
         f"best of {len(sweep.merit)}: Y {best['height_mm']:g} mm, Z {best['distance_mm']:g} mm, "
         f"θ {best['pitch_deg']:g}° (merit {best['merit']:.4g})",
+        caption=caption,
     )
     return written
 

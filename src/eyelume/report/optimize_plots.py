@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.colors import LogNorm
+from matplotlib.ticker import LogFormatterSciNotation, LogLocator, NullFormatter
 
 from eyelume.report.plots import agg_figure, save_figure
 
@@ -38,7 +39,10 @@ def save_sweep_heatmaps(
     finite = merit[np.isfinite(merit)]
     vmin, vmax = float(finite.min()), float(finite.max())
     norm = LogNorm(vmin=max(vmin, vmax * 1e-6), vmax=vmax if vmax > vmin else vmin * 1.01)
-    fig = agg_figure(3.0 * len(heights) + 1.6, 4.0)
+    # at least 6.4 in wide: one height's panel leaves room for the caption; taller per title line
+    width = max(3.0 * len(heights) + 1.6, 6.4)
+    heading = _wrapped(title, caption, width)
+    fig = agg_figure(width, 3.4 + 0.2 * heading.count("\n") + 0.2)
     axes = fig.subplots(1, len(heights), sharey=True, squeeze=False)
     best = np.unravel_index(np.nanargmin(merit), merit.shape)
 
@@ -61,12 +65,29 @@ def save_sweep_heatmaps(
         if i == best[0]:
             ax.plot(distances[best[1]], pitches[best[2]], "o", mfc="none", mec="red", ms=12)
     axes[0][0].set_ylabel("LED pitch θ (°)")
-    fig.colorbar(im, ax=axes[0].tolist(), label="generator merit, lower is better (dimensionless)")
+    cb = fig.colorbar(im, ax=axes[0].tolist(),
+                      label="generator merit, lower is better (dimensionless)")  # fmt: skip
+    # labels at 1, 2 and 5 × 10^k only: matplotlib's default labels every minor tick of a short
+    # log range, and on a short colour bar those labels run into each other
+    cb.ax.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    cb.ax.yaxis.set_major_formatter(LogFormatterSciNotation(labelOnlyBase=False))
+    cb.ax.yaxis.set_minor_formatter(NullFormatter())
     marker = Line2D([], [], marker="o", mfc="none", mec="red", ms=9, linestyle="none",
                     label="best configuration")  # fmt: skip
     fig.legend(handles=[marker], loc="outside lower left", fontsize="small", frameon=False)
-    fig.suptitle(title + (f"\n{caption}" if caption else ""), fontsize=10)
+    fig.suptitle(heading, fontsize=10)
     save_figure(fig, path, dpi=110)
+
+
+def _wrapped(title: str, caption: str, width_in: float) -> str:
+    """``title`` and ``caption`` on their own lines, each wrapped to the figure's width (about
+    12 characters of a 10 pt font per inch), so a narrow figure's suptitle does not run into its
+    colour bar."""
+    import textwrap
+
+    width = max(20, int(width_in * 12))
+    lines = [title, caption] if caption else [title]
+    return "\n".join(textwrap.fill(line, width) for line in lines)
 
 
 def save_pattern_vs_target(
@@ -75,9 +96,11 @@ def save_pattern_vs_target(
     extent_mm: tuple[float, float, float, float],
     path: str | Path,
     title: str,
+    caption: str = "",
 ) -> None:
     """The eye-plane pattern and the target side by side, each scaled to unit mean, on one
-    colour scale (inferno) with one colour bar."""
+    colour scale (inferno) with one colour bar. ``caption`` (scene, seed, budget) goes under the
+    title."""
     a, b = pattern / pattern.mean(), target / target.mean()
     vmax = float(max(a.max(), b.max()))
     fig = agg_figure(9, 3.8)
@@ -89,7 +112,7 @@ def save_pattern_vs_target(
         ax.set_xlabel("eye plane x (mm)")
     axes[0].set_ylabel("eye plane y (mm)")
     fig.colorbar(im, ax=axes.tolist(), label="irradiance / its own mean (dimensionless)")
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(_wrapped(title, caption, fig.get_figwidth()), fontsize=10)
     save_figure(fig, path, dpi=110)
 
 

@@ -608,7 +608,7 @@ def save_error_time_plot(
     title: str,
     targets: Sequence[tuple[str, float, float]] = (),
     xlabel: str = "wall time (s)",
-    ylabel: str = "relative standard error",
+    ylabel: str = "relative standard error (dimensionless)",
 ) -> None:
     """Write relative error against wall time of Monte Carlo runs as a log–log figure.
 

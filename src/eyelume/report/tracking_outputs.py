@@ -44,9 +44,28 @@ def _half_step(values: np.ndarray) -> float:
     return float(np.min(np.diff(values))) / 2 if values.size > 1 else 5.0
 
 
+def _draw_map(fig, ax, z: np.ndarray, extent, label: str, discrete: bool) -> None:
+    """``z`` (viridis) with its colour bar labelled ``label``; ``discrete`` (a count): one
+    colour per whole number and ticks on whole numbers only (BoundaryNorm)."""
+    from matplotlib.colors import BoundaryNorm
+    from matplotlib.ticker import MaxNLocator
+
+    norm = None
+    if discrete:
+        lo, hi = int(np.nanmin(z)), int(np.nanmax(z))
+        norm = BoundaryNorm(np.arange(lo - 0.5, hi + 1.0), ncolors=256)
+    im = ax.imshow(z, origin="lower", cmap="viridis", extent=extent, aspect="auto", norm=norm)
+    cb = fig.colorbar(im, ax=ax, label=label)
+    if norm is not None:  # every count up to 10 of them, else whole numbers MaxNLocator picks
+        ticks = MaxNLocator(nbins=min(hi - lo + 1, 10), integer=True).tick_values(lo, hi)
+        cb.set_ticks(np.unique(ticks[(ticks >= lo) & (ticks <= hi)]))
+        cb.ax.minorticks_off()
+
+
 def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
-    """Four maps over the gaze grid (2 × 2 panels): pupil-centre error (px), glints found, PCCR
-    and geometric gaze errors (°), each with its colour bar (viridis) and each cell's value
+    """Four maps over the gaze grid (2 × 2 panels): pupil-centre error (px), glints found (a
+    count: one colour per whole number, integer ticks), PCCR and geometric gaze errors (°), each
+    with its colour bar (viridis) and each cell's value
     written in it; a red × marks a frame that failed (legend below), and a panel with no value
     at all says so instead of drawing an empty scale. ``rows`` are
     :func:`eyelume.analysis.tracking.evaluate.error_map_rows` (one per frame); ``caption``
@@ -76,8 +95,7 @@ def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
         cell_in = 4.0 / max(len(hs), 1)
         size = float(np.clip(cell_in * 72 / 3.2, 4.0, 8.0))
         if finite.any():
-            im = ax.imshow(z, origin="lower", cmap="viridis", extent=extent, aspect="auto")
-            fig.colorbar(im, ax=ax, label=f"{title} ({unit})")
+            _draw_map(fig, ax, z, extent, f"{title} ({unit})", discrete=unit == "count")
             mid = 0.5 * (np.nanmin(z) + np.nanmax(z))
         else:
             ax.text(
@@ -137,17 +155,20 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
 
 
 def write_population_outputs(
-    members: dict, scene_name: str, out, partial: str | None = None
+    members: dict, scene_name: str, out, partial: str | None = None, meta: dict | None = None
 ) -> list[Path]:
     """Each member's tracking outputs (:func:`write_tracking_outputs`) in its own folder of
     ``out`` (its name with spaces, + and - spelled out) and ``population.json``: each member's
     summary without its failures, and ``"partial"``: what was cut when ``partial`` is given
-    (an interrupted run: the members missing were not evaluated)."""
+    (an interrupted run: the members missing were not evaluated). ``meta`` (e.g. ``seed``,
+    ``samples_per_pixel``) joins each member's ``scene`` and ``member`` in its summary and
+    figure caption."""
     out = Path(out)
     written, table = [], {}
     for name, rep in members.items():
         folder = out / name.replace(" ", "_").replace("+", "plus").replace("-", "minus")
-        written += write_tracking_outputs(rep, {"scene": scene_name, "member": name}, folder)
+        member = {**(meta or {}), "scene": scene_name, "member": name}
+        written += write_tracking_outputs(rep, member, folder)
         table[name] = {k: v for k, v in rep.summary.items() if k != "failures"}
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "population.json", {**table, "partial": partial} if partial else table)
