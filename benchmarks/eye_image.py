@@ -872,7 +872,7 @@ def bench_curve(a, out, S: Summary) -> None:
         w.writerows(csv_rows)
     png_path = C.RESULTS / f"eye_image_curve{suffix}.png"
     try:
-        _plot_curve(r["points"], png_path)
+        _plot_curve(r["points"], png_path, r["seed"])
         print(f"   wrote {csv_path.relative_to(C.REPO)} and {png_path.relative_to(C.REPO)}")
     except Exception as exc:  # a figure is optional; the CSV is the record
         png_path = None
@@ -956,7 +956,7 @@ def bench_noise(a, out, S: Summary) -> None:
     out["noise_check"] = r
 
 
-def _plot_curve(points: list[dict], path: Path) -> None:
+def _plot_curve(points: list[dict], path: Path, seed: int) -> None:
     from eyelume.report.plots import save_error_time_plot
 
     curves = []
@@ -975,7 +975,7 @@ def _plot_curve(points: list[dict], path: Path) -> None:
     save_error_time_plot(
         curves,
         path,
-        title="paper2005, 87×65: median pixel relative error against wall time",
+        title=f"paper2005, 87×65, seed {seed}: median pixel relative error against wall time",
         targets=[("issue 3: ≤ 1 % in ≤ 1 s", 1.0, 0.01)],
     )
 

@@ -146,7 +146,7 @@ def test_error_time_plot(tmp_path):
             title="relative error of the eye image against wall time",
             targets=[("target", 1.0, 0.01)],
         ),
-        None,  # a benchmark's figure (benchmarks/eye_image.py): its title names the case
+        None,  # a benchmark's figure: benchmarks/eye_image.py's title names the scene and seed
     )
 
 
