@@ -122,8 +122,10 @@ def find_glints(img: np.ndarray, value_range, noise: float, params):
             return [], np.zeros_like(u8), None
         min_rise = params.glint_min_contrast * (value_range[1] - value_range[0])
     floor = 1e-6 * (value_range[1] - value_range[0])
-    # Not over-exposed: a glint's surround lies below the glint floor (the 99th percentile).
-    surround_max = None if min_rise > 0 else lo + (tg8 + 0.5) / 255.0 * (hi - lo)
+    # The patch rule (``surround_max``, :func:`glint_blobs`) is off: on paper2005's 87 × 65
+    # pictures it took real glints against the lower lid's skin at −20° gaze for patches (the
+    # whole −20° row of the tracking evaluation refused, its PCCR calibration lost).
+    surround_max = None
     blobs, bright = glint_blobs(
         u8, img, tg8, params, noise=max(noise, floor), min_rise=min_rise, surround_max=surround_max
     )
