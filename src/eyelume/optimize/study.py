@@ -108,17 +108,7 @@ class Study(_Table):
     name: str
     scene: str = "paper2005"
     seed: int = Field(0, ge=0)
-    metrics: list[
-        Literal[
-            "eye_plane_merit",
-            "eye_image_merit",
-            "skin_uniformity",
-            "tracking",
-            "safety",
-            "glints",
-            "ghosts",
-        ]
-    ] = [
+    metrics: list[Literal[METRICS]] = [
         "eye_plane_merit",
         "safety",
     ]
