@@ -26,6 +26,7 @@ from eyelume.scene.eye import eye_indices
 from eyelume.scene.eye_models import (
     atchison_smith_index,
     eye_model_names,
+    tear_film_index,
     tear_film_reflectance,
 )
 from eyelume.scene.io import preset_names
@@ -197,6 +198,29 @@ def test_compiled_cornea_carries_the_tear_film_glint():
         assert r == pytest.approx(tear_film_reflectance(lam), rel=1e-12)
     paper = eyelume.load_scene("paper2005").eye  # the paper's 2.4 % stays
     assert (paper.cornea_reflection, paper.cornea_reflectance) == ("fixed", 0.024)
+
+
+NEW_PRESETS = [
+    "vr-offaxis",
+    "vr-offaxis-glasses",
+    "vr-offaxis-glasses-ar",
+    "glasses-frame",
+    "eyetrackvr",
+    "paper2005-integrated",
+]
+
+
+@pytest.mark.parametrize("name", NEW_PRESETS)
+def test_new_presets_take_the_tear_film_glint(name):
+    """Issue 15: the tear film's reflection is the default of the presets after the paper's;
+    the compiled glint reflectance is Fresnel's at the tear film's index (not a typed 2.1 %)."""
+    scene = eyelume.load_scene(name)
+    assert scene.eye.cornea_reflection == "tear_film"
+    cs = compile_scene(scene)
+    s = cs.surface_names.index("anterior cornea")
+    r = interface_at(cs.sf, cs.si, s, -1.0).reflectance
+    n = tear_film_index(scene.wavelength_nm)
+    assert r == pytest.approx(((n - 1) / (n + 1)) ** 2, rel=1e-12)
 
 
 @pytest.mark.parametrize("name", ["arizona", "navarro1999", "legrand1980"])
