@@ -55,11 +55,14 @@ from eyelume.scene.elements import (
     vertex_z_mm,
 )
 from eyelume.scene.eye import (
+    anterior_cornea_pose,
+    anterior_quadric,
     check_eye_geometry,
     eye_indices,
     glint_reflectance,
     iris_root_radius,
     limbus_geometry,
+    meridian_sag,
     with_contact_lens,
 )
 from eyelume.scene.focus import check_focus
@@ -975,6 +978,33 @@ def _check_eye_apertures(scene: Scene) -> None:
     check_eye_geometry(scene.eye)
 
 
+def _astigmatic(eye) -> bool:
+    """Whether the anterior cornea's two meridians differ (else the rotationally symmetric
+    conicoid, compiled as it always was, bit for bit)."""
+    c1, c2, _ = anterior_quadric(eye)
+    return c2 != c1
+
+
+def _anterior_cornea(scene: Scene, eye_rot: np.ndarray):
+    """The astigmatic, decentred or tilted anterior cornea's row data (``eye.cornea``,
+    :func:`eyelume.scene.eye.anterior_cornea_pose`): (shape, world apex, world → local
+    rotation, c_y, bounding sphere). The astigmatic quadric (``G.SHAPE_QUADRIC``, local x the
+    flat meridian) when the two radii differ, else the conicoid, moved and tilted; its bounding
+    sphere that of the deeper (steep) meridian's cap."""
+    eye = scene.eye
+    c1, c2, k = anterior_quadric(eye)
+    _, to_local = anterior_cornea_pose(eye)
+    rot = to_local @ eye_rot
+    dx, dy = eye.cornea.decentration_mm
+    origin = eye_point(scene, [dx, dy, 0.0])
+    h = eye.surfaces[0].semi_diameter_mm
+    depth = float(np.nanmax(meridian_sag(c1, c2, k, h, np.array([0.0, math.pi / 2]))))
+    centre = np.asarray(origin) + rot[2] * (depth / 2.0)
+    bound = (centre, math.hypot(h, depth / 2.0) * 1.000001 + 1e-9)
+    shape = G.SHAPE_CONIC if c2 == c1 else G.SHAPE_QUADRIC
+    return shape, origin, rot, (c2 if shape == G.SHAPE_QUADRIC else 0.0), bound
+
+
 def _add_eye(t: _Table, scene: Scene) -> None:
     """The eye's refracting surfaces, iris, retina and sclera (eye frame: z' = −z), placed by
     the gaze rotation and the head offset."""
@@ -1002,14 +1032,19 @@ def _add_eye(t: _Table, scene: Scene) -> None:
         c = curvature(s.radius_mm)
         origin = on_eye(surf_z[j])
         anterior = j == 0
+        shape, rot, c_y = G.SHAPE_CONIC, eye_rot, 0.0
+        bound = None
+        if anterior and (_astigmatic(eye) or eye.cornea.placed):
+            shape, origin, rot, c_y, bound = _anterior_cornea(scene, eye_rot)
         t.add(
             s.name,
-            G.SHAPE_CONIC,
+            shape,
             origin,
-            eye_rot,
-            _conic_bound(origin, eye_rot, c, s.conic, s.semi_diameter_mm),
+            rot,
+            bound or _conic_bound(origin, eye_rot, c, s.conic, s.semi_diameter_mm),
             curv=c,
             conic=s.conic,
+            radius=c_y,
             clip_r=(0.0, s.semi_diameter_mm),
             action=G.ACT_REFRACT,
             n_a=n_eye[j],

@@ -85,11 +85,14 @@ def _surface_points(sf: np.ndarray, si: np.ndarray, s: int, extent: float, cut: 
     rot = sf[s, G.R00 : G.R22 + 1].reshape(3, 3)
     o = sf[s, G.OX : G.OZ + 1]
     shape = si[s, G.SHAPE]
-    if shape == G.SHAPE_CONIC:
+    if shape in (G.SHAPE_CONIC, G.SHAPE_QUADRIC):
         rmax = min(math.sqrt(sf[s, G.RMAX2]), extent)
         c, k = sf[s, G.CURV], sf[s, G.CONIC]
         # the meridian in the plane: local direction (cos ψ, sin ψ, 0) whose world p[cut] vanishes
         psi = math.atan2(-rot[0, cut], rot[1, cut])
+        if shape == G.SHAPE_QUADRIC:  # that meridian of an astigmatic quadric is a conic
+            c_psi = c * math.cos(psi) ** 2 + sf[s, G.CURV_Y] * math.sin(psi) ** 2
+            c, k = c_psi, (1.0 + k) * c / c_psi - 1.0
         r = np.linspace(-rmax, rmax, 801)
         z = sag(c, k, np.abs(r))
         local = np.stack([r * math.cos(psi), r * math.sin(psi), z], 1)

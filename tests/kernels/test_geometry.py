@@ -86,6 +86,11 @@ def _implicit(f, shape, q):
         g = c * (x * x + y * y) + (1.0 + k) * c * z * z - 2.0 * z
         s = abs(c) * (x * x + y * y) + abs((1.0 + k) * c) * z * z + 2.0 * abs(z)
         grad = np.stack([2 * c * x, 2 * c * y, 2 * (1.0 + k) * c * z - 2.0], axis=-1)
+    elif shape == G.SHAPE_QUADRIC:
+        c, cy, k = f[G.CURV], f[G.CURV_Y], f[G.CONIC]
+        g = c * x * x + cy * y * y + (1.0 + k) * c * z * z - 2.0 * z
+        s = abs(c) * x * x + abs(cy) * y * y + abs((1.0 + k) * c) * z * z + 2.0 * abs(z)
+        grad = np.stack([2 * c * x, 2 * cy * y, 2 * (1.0 + k) * c * z - 2.0], axis=-1)
     elif shape == G.SHAPE_SPHERE:
         r2 = f[G.RADIUS] ** 2
         g = x * x + y * y + z * z - r2
@@ -107,7 +112,7 @@ def _boundary_distance(f, shape, q):
     scale_r = max(1.0, f[G.RMAX2] if math.isfinite(f[G.RMAX2]) else r2)
     d = [(r2 - f[G.RMIN2]) / scale_r, (f[G.RMAX2] - r2) / scale_r]
     d += [(z - f[G.ZLO]) / (1.0 + abs(z)), (f[G.ZHI] - z) / (1.0 + abs(z))]
-    if shape == G.SHAPE_CONIC:
+    if shape in (G.SHAPE_CONIC, G.SHAPE_QUADRIC):
         d.append(1.0 - (1.0 + f[G.CONIC]) * f[G.CURV] * z)
     return min(d)
 
@@ -279,6 +284,99 @@ def test_conic_other_sheet_is_not_a_hit():
     # … but coming from behind it finds the vertex
     t = intersect_surface(sf, si, 0, 0.0, 0.0, 25.0, 0.0, 0.0, -1.0, math.inf)
     assert t == 25.0
+
+
+# --- astigmatic quadrics (a toric cornea) --------------------------------------------------------
+
+QUADRICS = [  # (c 1/mm along x, c_y 1/mm along y, k, aperture radius mm)
+    (1 / 7.8, 1 / 7.4, -0.25, 6.0),  # a cornea with ~2.3 D of astigmatism
+    (1 / 7.8, 1 / 6.5, -0.25, 6.0),  # strongly astigmatic
+    (1 / 8.0, 1 / 7.9, 0.3, 5.5),  # oblate flat meridian
+    (1 / 12.0, 1 / 6.0, -1.0, 5.0),  # paraboloid-like in z
+    (-1 / 20.0, 1 / 15.0, 0.0, 8.0),  # a saddle (curvatures of opposite signs)
+]
+
+
+def _quadric_sag(c, cy, k, x, y):
+    """Vertex-sheet z of c x² + c_y y² + (1+k) c z² − 2 z = 0, solved from the formula."""
+    q = c * x * x + cy * y * y
+    arg = 1.0 - (1.0 + k) * c * q
+    with np.errstate(invalid="ignore"):
+        return q / (1.0 + np.sqrt(arg))
+
+
+def test_quadric_hits_and_normals_match_brute_force():
+    """The astigmatic quadric (SHAPE_QUADRIC) against the brute-force root search, its hits on
+    the vertex sheet, its normals orthogonal to the tangents (central differences)."""
+    rng = np.random.default_rng(15)
+    n_rays, total_skipped = 120, 0
+    for c, cy, k, ap in QUADRICS:
+        rot, origin = _random_rotation(rng), rng.uniform(-5, 5, 3)
+        surface = _surface(
+            G.SHAPE_QUADRIC, origin=origin, rot=rot, curv=c, conic=k, radius=cy, clip_r=(0, ap)
+        )
+        sf, si = _table(surface)
+
+        def targets(n, c=c, cy=cy, k=k, ap=ap):
+            r = ap * np.sqrt(rng.random(n)) * 1.3
+            phi = rng.uniform(0, 2 * np.pi, n)
+            x, y = np.minimum(r, ap) * np.cos(phi), np.minimum(r, ap) * np.sin(phi)
+            z = np.nan_to_num(_quadric_sag(c, cy, k, x, y))
+            return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+        p, d = _to_world(rot, origin, *_aimed_rays(rng, n_rays, targets))
+        hits, skipped = _compare_with_reference(sf, si, (p, d))
+        total_skipped += skipped
+        assert len(hits) > n_rays // 4, (c, cy, k)
+        step = 1e-4  # as _check_conic_normal: truncation and rounding ≪ 1e-6
+        for h in hits:
+            x, y, z = rot @ (h - origin)
+            assert abs(z - _quadric_sag(c, cy, k, x, y)) < 1e-9, (c, cy, k, x, y, z)
+            n = rot @ np.array(surface_normal(sf, si, 0, *h))
+            assert abs(np.linalg.norm(n) - 1.0) < 1e-12 and n[2] > 0.0
+
+            def surf(u, v, c=c, cy=cy, k=k):
+                return np.array([u, v, _quadric_sag(c, cy, k, u, v)])
+
+            tx = (surf(x + step, y) - surf(x - step, y)) / (2 * step)
+            ty = (surf(x, y + step) - surf(x, y - step)) / (2 * step)
+            assert abs(n @ tx) / np.linalg.norm(tx) < 1e-6
+            assert abs(n @ ty) / np.linalg.norm(ty) < 1e-6
+    assert total_skipped <= 0.02 * n_rays * len(QUADRICS)
+
+
+def test_quadric_with_equal_curvatures_is_the_conicoid():
+    """c_y = c: the quadric is the conicoid — the same hits and normals to rounding (the
+    rotationally symmetric cornea is compiled as SHAPE_CONIC, so its renders are untouched;
+    this checks the two shapes describe the same surface)."""
+    rng = np.random.default_rng(7)
+    c, k, ap = 1 / 7.8, -0.25, 6.0
+    rot, origin = _random_rotation(rng), rng.uniform(-5, 5, 3)
+    conic = _surface(G.SHAPE_CONIC, origin=origin, rot=rot, curv=c, conic=k, clip_r=(0, ap))
+    quad = _surface(
+        G.SHAPE_QUADRIC, origin=origin, rot=rot, curv=c, conic=k, radius=c, clip_r=(0, ap)
+    )
+    sf, si = _table(conic, quad)
+
+    def targets(n):
+        r = ap * np.sqrt(rng.random(n))
+        phi = rng.uniform(0, 2 * np.pi, n)
+        return np.column_stack([r * np.cos(phi), r * np.sin(phi), _sag(c, k, r)])
+
+    p, d = _to_world(rot, origin, *_aimed_rays(rng, 400, targets))
+    met = 0
+    for pi, di in zip(p, d, strict=True):
+        t0 = intersect_surface(sf, si, 0, *pi, *di, math.inf)
+        t1 = intersect_surface(sf, si, 1, *pi, *di, math.inf)
+        assert (t0 > 0) == (t1 > 0)
+        if t0 > 0:
+            met += 1
+            assert abs(t0 - t1) <= 1e-12 * max(1.0, t0)
+            q = pi + t0 * di
+            np.testing.assert_allclose(
+                surface_normal(sf, si, 1, *q), surface_normal(sf, si, 0, *q), atol=1e-13
+            )
+    assert met > 100
 
 
 # --- spheres and cylinders ----------------------------------------------------------------------

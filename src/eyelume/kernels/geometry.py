@@ -5,6 +5,10 @@ Surfaces live in a float table ``sf[s, :]`` and an int table ``si[s, :]`` (colum
 rows of R the local axes in world coordinates. Shapes, in their local frame:
 
 * conicoid (plane when c = 0): sag z = c r² / (1 + √(1 − (1+k) c² r²)), vertex at the origin;
+* astigmatic quadric (an astigmatic cornea, Navarro's "general ellipsoid"): c x² + c_y y² +
+  (1+k) c z² − 2 z = 0, apical curvatures c along x and c_y along y, vertex at the origin (the
+  conicoid when c_y = c; kept a shape of its own so that the conicoid's arithmetic, and the
+  rotationally symmetric renders, stay bit for bit what they were);
 * sphere: |p| = radius;  cylinder: x² + y² = radius² about local z.
 
 Each exists where the local radial distance r ∈ [rmin, rmax] and local z ∈ [zlo, zhi]. Normals
@@ -24,6 +28,7 @@ from eyelume.kernels.jit import per_ray
 OX, OY, OZ = 0, 1, 2
 R00, R01, R02, R10, R11, R12, R20, R21, R22 = 3, 4, 5, 6, 7, 8, 9, 10, 11
 CURV, CONIC, RADIUS = 12, 13, 14
+CURV_Y = RADIUS  # an astigmatic quadric's curvature along local y (it has no radius)
 RMIN2, RMAX2, ZLO, ZHI = 15, 16, 17, 18
 BX, BY, BZ, BR = 19, 20, 21, 22  # bounding sphere, world frame
 N_A, N_B = 23, 24  # refractive index on sides A and B
@@ -35,7 +40,7 @@ N_FLOAT = 29
 SHAPE, ACTION, FRESNEL, TALLY_A, TALLY_B = 0, 1, 2, 3, 4
 N_INT = 5
 
-SHAPE_CONIC, SHAPE_SPHERE, SHAPE_CYLINDER = 0, 1, 2
+SHAPE_CONIC, SHAPE_SPHERE, SHAPE_CYLINDER, SHAPE_QUADRIC = 0, 1, 2, 3
 ACT_REFRACT, ACT_OPAQUE, ACT_LENS = 0, 1, 2
 
 T_MIN = 1e-7  # mm: a hit closer than this to a ray's origin is the surface it just left
@@ -99,6 +104,26 @@ def conic_coefficients(c, k, px, py, pz, dx, dy, dz):
 
 
 @njit(cache=True, inline="always")
+def quadric_coefficients(c, cy, k, px, py, pz, dx, dy, dz):
+    """Coefficients of the astigmatic quadric c x² + c_y y² + (1+k) c z² − 2 z = 0 along
+    p + t d (:func:`conic_coefficients` when c_y = c)."""
+    e = (1.0 + k) * c
+    a = c * dx * dx + cy * dy * dy + e * dz * dz
+    b = 2.0 * (c * px * dx + cy * py * dy + e * pz * dz - dz)
+    cc = c * px * px + cy * py * py + e * pz * pz - 2.0 * pz
+    return a, b, cc
+
+
+@njit(cache=True, inline="always")
+def quadric_normal(c, cy, k, x, y, z):
+    """Unit normal of the astigmatic quadric at a local point, toward +z at the vertex: the
+    gradient of 2 z − c x² − c_y y² − (1+k) c z², halved."""
+    nx, ny, nz = -c * x, -cy * y, 1.0 - c * (1.0 + k) * z
+    inv = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
+    return nx * inv, ny * inv, nz * inv
+
+
+@njit(cache=True, inline="always")
 def on_vertex_branch(c, k, z):
     """Whether a point of the conicoid lies on the sheet through the vertex: (1+k) c z ≤ 1."""
     return (1.0 + k) * c * z <= 1.0
@@ -117,7 +142,7 @@ def _valid(sf, s, shape, x, y, z):
     r2 = x * x + y * y
     if r2 < sf[s, RMIN2] or r2 > sf[s, RMAX2] or z < sf[s, ZLO] or z > sf[s, ZHI]:
         return False
-    if shape == SHAPE_CONIC:
+    if shape == SHAPE_CONIC or shape == SHAPE_QUADRIC:
         return on_vertex_branch(sf[s, CURV], sf[s, CONIC], z)
     return True
 
@@ -137,6 +162,10 @@ def intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max):
         a = 1.0
         b = 2.0 * (px * ux + py * uy + pz * uz)
         c = px * px + py * py + pz * pz - sf[s, RADIUS] * sf[s, RADIUS]
+    elif shape == SHAPE_QUADRIC:
+        a, b, c = quadric_coefficients(
+            sf[s, CURV], sf[s, CURV_Y], sf[s, CONIC], px, py, pz, ux, uy, uz
+        )
     else:
         a = ux * ux + uy * uy
         b = 2.0 * (px * ux + py * uy)
@@ -161,6 +190,8 @@ def surface_normal(sf, si, s, x, y, z):
     elif shape == SHAPE_SPHERE:
         inv = 1.0 / sf[s, RADIUS]
         nx, ny, nz = px * inv, py * inv, pz * inv
+    elif shape == SHAPE_QUADRIC:
+        nx, ny, nz = quadric_normal(sf[s, CURV], sf[s, CURV_Y], sf[s, CONIC], px, py, pz)
     else:
         inv = 1.0 / math.sqrt(px * px + py * py)
         nx, ny, nz = px * inv, py * inv, 0.0

@@ -16,12 +16,17 @@ __all__ = [
     "LAMBDA_C",
     "LAMBDA_D",
     "LAMBDA_F",
+    "LIMBUS_MISMATCH_MM",
+    "anterior_cornea_points",
+    "anterior_cornea_pose",
+    "anterior_quadric",
     "check_eye_geometry",
     "eye_index",
     "eye_indices",
     "glint_reflectance",
     "iris_root_radius",
     "limbus_geometry",
+    "meridian_sag",
     "with_contact_lens",
 ]
 
@@ -83,6 +88,91 @@ def glint_reflectance(eye: Eye, wavelength_nm: float) -> float:
     if eye.cornea_reflection == "tear_film":
         return tear_film_reflectance(wavelength_nm)
     return eye.cornea_reflectance
+
+
+#: The farthest (mm) a decentred, tilted or astigmatic anterior cornea's edge may lie from the
+#: sclera sphere it should meet at the limbus (ASSUMPTION: the corneoscleral limbus, where the
+#: clear cornea turns into the sclera, is a band 1–2 mm wide, so a step of up to 1 mm stays
+#: within it; the light that a step lets past the cornea's edge falls in that band).
+LIMBUS_MISMATCH_MM = 1.0
+
+#: Physical range of a meridian's asphericity Q for an astigmatic cornea (the population's,
+#: ``presets/eyes/population.toml``).
+_Q_RANGE = (-1.5, 1.0)
+
+
+def anterior_quadric(eye: Eye) -> tuple[float, float, float]:
+    """(c_flat, c_steep, k) of the anterior cornea's quadric (1/mm, 1/mm, —):
+
+        c_flat x² + c_steep y² + (1 + k) c_flat z² − 2 z = 0
+
+    in its own frame (x along the flat meridian, :class:`~eyelume.scene.model.AnteriorCornea`);
+    c_steep = c_flat for a rotationally symmetric cornea (then the conicoid of
+    ``eye.surfaces.0``)."""
+    front = eye.surfaces[0]
+    c = curvature(front.radius_mm)
+    steep = eye.cornea.radius_steep_mm
+    return c, (c if steep is None else 1.0 / steep), front.conic
+
+
+def meridian_sag(c_flat: float, c_steep: float, k: float, h, psi):
+    """Sag z (mm) of the quadric of :func:`anterior_quadric` at distance ``h`` (mm) from its
+    apex along the meridian at angle ``psi`` (rad) from the flat one: that meridian is the
+    conic of curvature c_ψ = c_flat cos²ψ + c_steep sin²ψ and conic constant
+    (1 + k) c_flat / c_ψ − 1, so z = c_ψ h² / (1 + √(1 − (1 + k) c_flat c_ψ h²)); NaN where
+    the surface has no point."""
+    c_psi = c_flat * np.cos(psi) ** 2 + c_steep * np.sin(psi) ** 2
+    disc = 1.0 - (1.0 + k) * c_flat * c_psi * np.asarray(h, dtype=float) ** 2
+    with np.errstate(invalid="ignore"):
+        return c_psi * np.asarray(h) ** 2 / (1.0 + np.sqrt(disc))
+
+
+def _rot_x(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _rot_y(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def _rot_z(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+_EYE_FLIP = np.diag([-1.0, 1.0, -1.0])  # file frame (as written, primary gaze) ↔ eye frame
+
+
+def anterior_cornea_pose(eye: Eye) -> tuple[np.ndarray, np.ndarray]:
+    """(o, M): the anterior cornea's apex o (eye frame: x′ = −x, y′ = y, z′ mm behind the
+    nominal vertex) and the rotation M (eye frame → the quadric's own frame, x along the
+    flat meridian): a point p′ of the eye frame is M (p′ − o) in the quadric's frame.
+
+    The decentration (x, y) of the file frame is o = (−x, y, 0); the tilt turns the corneal
+    axis as gaze turns the eye (vertical about x toward +y, then horizontal about y toward
+    +x), T = R_y(h) R_x(−v) in the file frame; the flat meridian at TABO ``axis_deg`` θ (file
+    frame direction (cos θ, sin θ, 0)) lies at φ = 180° − θ from the eye frame's x′ axis:
+    M = R_z(−φ) (F T F)ᵀ with F = diag(−1, 1, −1)."""
+    cor = eye.cornea
+    dx, dy = cor.decentration_mm
+    v, h = (math.radians(a) for a in cor.tilt_deg)
+    tilt = _EYE_FLIP @ (_rot_y(h) @ _rot_x(-v)) @ _EYE_FLIP
+    phi = math.pi - math.radians(cor.axis_deg)
+    return np.array([-dx, dy, 0.0]), _rot_z(-phi) @ tilt.T
+
+
+def anterior_cornea_points(eye: Eye, h, psi) -> np.ndarray:
+    """Eye-frame points (…, 3) of the anterior cornea at distance ``h`` from its apex along
+    its meridian ``psi`` (rad from the flat meridian) (:func:`anterior_cornea_pose`,
+    :func:`meridian_sag`)."""
+    c1, c2, k = anterior_quadric(eye)
+    h, psi = np.broadcast_arrays(np.asarray(h, float), np.asarray(psi, float))
+    z = meridian_sag(c1, c2, k, h, psi)
+    local = np.stack([h * np.cos(psi), h * np.sin(psi), z], axis=-1)
+    o, m = anterior_cornea_pose(eye)
+    return local @ m + o
 
 
 def limbus_geometry(eye: Eye) -> tuple[float, float, float]:
@@ -175,7 +265,11 @@ def check_eye_geometry(eye: Eye) -> None:
        plane, the surface that carries it and those after lie behind it;
     7. the surfaces from the iris back (the lens and the retina; the cornea bulges beyond the
        sclera sphere, as a real one does) lie inside the eyeball, the sclera sphere of
-       :func:`limbus_geometry`, over their clear apertures.
+       :func:`limbus_geometry`, over their clear apertures;
+    8. an astigmatic, decentred or tilted anterior cornea (``eye.cornea``): each meridian's
+       Q in −1.5 … 1 and reaching the clear aperture, its edge within
+       :data:`LIMBUS_MISMATCH_MM` of the sclera, the cap in front of the iris plane and the
+       posterior cornea (:func:`_check_cornea`).
 
     Raises
     ------
@@ -187,6 +281,74 @@ def check_eye_geometry(eye: Eye) -> None:
     _check_crossings(eye)
     _check_iris(eye)
     _check_eyeball(eye)
+    _check_cornea(eye)
+
+
+def _cornea_field(eye: Eye) -> tuple[str, object]:
+    """The field (and value) to name for an astigmatic or placed cornea that cannot exist."""
+    cor = eye.cornea
+    if cor.placed:
+        return "eye.cornea.decentration_mm / tilt_deg", (
+            list(cor.decentration_mm),
+            list(cor.tilt_deg),
+        )
+    return "eye.cornea.radius_steep_mm", cor.radius_steep_mm
+
+
+def _check_cornea(eye: Eye) -> None:
+    """Item 8 of :func:`check_eye_geometry`, for an astigmatic, decentred or tilted anterior
+    cornea (:class:`~eyelume.scene.model.AnteriorCornea`; a rotationally symmetric one on the
+    axis is items 1–7's): each meridian's asphericity within the physical range −1.5 … 1
+    (population.toml) and its surface reaching the clear aperture; its edge within
+    :data:`LIMBUS_MISMATCH_MM` of the sclera sphere (it must still meet the limbus); the whole
+    cap in front of the iris plane and of the posterior cornea (probed on 17 rings × 72
+    meridians)."""
+    cor = eye.cornea
+    if cor.radius_steep_mm is None and not cor.placed:
+        return
+    field, value = _cornea_field(eye)
+    c1, c2, k = anterior_quadric(eye)
+    h_max = eye.surfaces[0].semi_diameter_mm
+    for name, c in (("flat", c1), ("steep", c2)):
+        q = (1.0 + k) * c1 / c - 1.0
+        if not _Q_RANGE[0] <= q <= _Q_RANGE[1]:
+            raise GeometryError(
+                f"the {name} meridian's asphericity Q = {q:.3f} lies outside the physical range "
+                f"[{_Q_RANGE[0]:g}, {_Q_RANGE[1]:g}]",
+                field="eye.cornea.radius_steep_mm",
+                value=cor.radius_steep_mm,
+            )
+        psi_m = 0.0 if name == "flat" else math.pi / 2
+        if math.isnan(float(meridian_sag(c1, c2, k, h_max, psi_m))):
+            raise GeometryError(
+                f"the anterior cornea's {name} meridian has no point at its clear aperture "
+                f"(eye.surfaces.0.semi_diameter_mm = {h_max})",
+                field=field,
+                value=value,
+            )
+    psi = np.linspace(0.0, 2 * math.pi, 72, endpoint=False)
+    _, _, z_c = limbus_geometry(eye)
+    edge = anterior_cornea_points(eye, h_max, psi)
+    miss = np.abs(np.linalg.norm(edge - [0.0, 0.0, z_c], axis=1) - eye.sclera_radius_mm)
+    if float(miss.max()) > LIMBUS_MISMATCH_MM:
+        raise GeometryError(
+            f"the anterior cornea's edge lies up to {float(miss.max()):.3f} mm from the sclera "
+            f"it should meet at the limbus (at most {LIMBUS_MISMATCH_MM} mm)",
+            field=field,
+            value=value,
+        )
+    cap = anterior_cornea_points(eye, (_PROBES[::4] * h_max)[:, None], psi[None, :])
+    z_i = sum(t.thickness_mm for t in eye.surfaces[: eye.iris_surface])
+    rho = np.hypot(cap[..., 0], cap[..., 1])
+    inside = rho <= eye.surfaces[1].semi_diameter_mm
+    behind = _profile(eye, 1, rho) - cap[..., 2]
+    if float(cap[..., 2].max()) >= z_i or np.any(behind[inside] <= 0.0):
+        raise GeometryError(
+            "the anterior cornea reaches the posterior cornea or the iris plane "
+            f"({z_i:.3g} mm behind the vertex)",
+            field=field,
+            value=value,
+        )
 
 
 def _check_shapes(eye: Eye) -> None:
@@ -299,6 +461,8 @@ def with_contact_lens(scene):
     the rotation centre stays put: ``rotation_centre_mm`` + t; the face moves with the eye
     frame by t) and the first surface's thickness grows by t; its clear aperture ends where it
     meets the sclera sphere (so the eyeball, :func:`limbus_geometry`, stays where it was).
+    An astigmatic cornea's lens is astigmatic alike (its steep radius + t, same axis and
+    placement: a soft lens drapes over the cornea; ASSUMPTION for a rigid one).
 
     Its reflection: the front's Fresnel reflectance at normal incidence, R = ((n − 1)/(n + 1))²
     (n the lens's index; 4.0 % for 1.50 against the tear film's 2.1 %), as a fixed split
@@ -330,9 +494,14 @@ def with_contact_lens(scene):
             "semi_diameter_mm": edge,
         }
     )
+    steep = eye.cornea.radius_steep_mm
+    cornea_shape = eye.cornea.model_copy(
+        update={"radius_steep_mm": None if steep is None else steep + t}
+    )
     fitted = eye.model_copy(
         update={
             "surfaces": [front, *eye.surfaces[1:]],
+            "cornea": cornea_shape,
             "cornea_reflection": "fixed",
             "cornea_reflectance": ((n - 1.0) / (n + 1.0)) ** 2,
             "rotation_centre_mm": eye.rotation_centre_mm + t,

@@ -503,6 +503,58 @@ class ContactLens(_Model):
     thickness_mm: float = Field(0.10, gt=0.0, le=1.0)
 
 
+class AnteriorCornea(_Model):
+    """The anterior cornea's astigmatism and its placement on the eye (issue 15).
+
+    Shape: the *general ellipsoid* of Navarro, González & Hernández-Matamoros, "On the
+    prediction of optical aberrations by personalized eye models", Optom. Vis. Sci. 83:371
+    (2006): in the surface's own frame (apex at the origin, z into the eye, x along the flat
+    meridian) the quadric
+
+        x²/R_flat + y²/R_steep + (1 + Q) z²/R_flat − 2 z = 0,
+
+    whose apical radii are R_flat = ``eye.surfaces.0.radius_mm`` along the flat meridian and
+    R_steep = ``radius_steep_mm`` along the steep one, and whose meridional asphericities are
+    Q_flat = ``eye.surfaces.0.conic`` and Q_steep = (1 + Q_flat) R_steep / R_flat − 1 (a
+    quadric has one z² coefficient: the two Q are not independent; for 1 D of corneal
+    astigmatism they differ by ~0.02). With ``radius_steep_mm`` unset (or equal to R_flat) it
+    is the rotationally symmetric conicoid of ``eye.surfaces.0``.
+
+    ``axis_deg``: the flat meridian's axis in the optometric TABO convention (degrees
+    0–180, counter-clockwise from the examiner's right, i.e. from world +x toward +y, as seen
+    facing the eye), for the eye as the file is written (a right eye). A left eye
+    (``eye_pose.which = "left"``) mirrors the whole scene, so its axis is 180° − ``axis_deg``:
+    fellow eyes' astigmatism is mostly mirror-symmetric (enantiomorphic; Hashemi et al.,
+    J. Optom. 12:44, 2019). With-the-rule corneal astigmatism (steep vertical) is
+    ``axis_deg`` ≈ 0 or 180; against-the-rule ≈ 90.
+
+    ``decentration_mm``: the anterior cornea's apex offset (x, y) from the eye's optical axis
+    (x toward the nose of the right eye as written, y up), mm; ``tilt_deg``: its axis tilted
+    (vertical: toward +y; horizontal: toward +x) about the apex, degrees. The posterior cornea,
+    iris, lens and sclera stay on the optical axis. Typical values: the corneal apex lies a few
+    tenths of a mm from the pupil centre and the corneal topographic axis a few degrees from the
+    pupillary axis (Mandell, Chiang & Klein, "Location of the major corneal reference points",
+    Optom. Vis. Sci. 72:776, 1995; magnitudes quoted from memory, ASSUMPTION). Refused
+    (:func:`eyelume.scene.eye.check_eye_geometry`): a cornea whose edge no longer meets the
+    sclera within 1 mm (ASSUMPTION: within the limbus, a band 1–2 mm wide), reaches
+    the iris plane or crosses the posterior cornea.
+    """
+
+    radius_steep_mm: float | None = Field(None, gt=0.0, le=MAX_MAGNITUDE)
+    axis_deg: float = Field(0.0, ge=0.0, le=180.0)
+    decentration_mm: tuple[
+        Annotated[float, Field(ge=-2.0, le=2.0)], Annotated[float, Field(ge=-2.0, le=2.0)]
+    ] = (0.0, 0.0)
+    tilt_deg: tuple[
+        Annotated[float, Field(ge=-15.0, le=15.0)], Annotated[float, Field(ge=-15.0, le=15.0)]
+    ] = (0.0, 0.0)
+
+    @property
+    def placed(self) -> bool:
+        """Whether the apex is decentred or its axis tilted."""
+        return any(self.decentration_mm) or any(self.tilt_deg)
+
+
 class Eye(_Model):
     """A schematic eye with its Lambertian tissues.
 
@@ -520,6 +572,9 @@ class Eye(_Model):
     +x, the nose of a right eye). The world frame stays that of primary gaze (ARCHITECTURE.md §2).
 
     ``contact_lens``: a contact lens on the cornea (:class:`ContactLens`; unset: none).
+
+    ``cornea``: the anterior cornea's astigmatism (a second radius and its axis), decentration
+    and tilt (:class:`AnteriorCornea`; default: rotationally symmetric, on the axis).
 
     ``model``: with no ``surfaces`` written, the schematic eye of that name in the library
     (:func:`eyelume.scene.eye_models.eye_model_names`: ``arizona``, ``navarro1999``,
@@ -558,6 +613,7 @@ class Eye(_Model):
     gaze_vertical_deg: float = Field(0.0, ge=-30.0, le=30.0)
     rotation_centre_mm: Positive = 13.5
     contact_lens: ContactLens | None = None
+    cornea: AnteriorCornea = AnteriorCornea()
 
     @model_validator(mode="before")
     @classmethod
@@ -615,6 +671,17 @@ class Eye(_Model):
             )
         return self
 
+    @model_validator(mode="after")
+    def _steep_meridian(self) -> Eye:
+        steep = self.cornea.radius_steep_mm
+        if steep is not None and steep > self.surfaces[0].radius_mm:
+            raise ValueError(
+                f"cornea.radius_steep_mm = {steep} exceeds the flat meridian's radius "
+                f"eye.surfaces.0.radius_mm = {self.surfaces[0].radius_mm}: the steep meridian "
+                "has the smaller radius (swap them and turn axis_deg by 90)"
+            )
+        return self
+
 
 _Offset = Annotated[float, Field(ge=-200.0, le=200.0)]
 
@@ -638,7 +705,8 @@ class EyePose(_Model):
     nasal stays nasal (the presets' "nasal-below" camera), a positive horizontal gaze is toward
     the nose for both eyes, and everything reported in world coordinates (truth, layout,
     ``eyelume info``) is in the mirrored, physical headset frame. The schematic eye is
-    rotationally symmetric, so the eye model itself needs no mirroring.
+    rotationally symmetric but for its cornea's astigmatism axis and placement
+    (:class:`AnteriorCornea`), which the mirror carries with the rest.
     """
 
     which: Literal["right", "left"] = "right"
