@@ -173,7 +173,12 @@ def test_each_sample_reaches_its_scene(scene):
     )
     for p in sample_people(scene, 20, 11):
         e, v = p.scene.eye, p.values
-        assert e.surfaces[0].radius_mm == v["corneal_radius_mm"]
+        # the sampled radius is the mean-power one (K = 337.5/R), split by the astigmatism
+        flat, steep = e.surfaces[0].radius_mm, e.cornea.radius_steep_mm
+        assert 2 / (1 / flat + 1 / steep) == pytest.approx(v["corneal_radius_mm"], rel=1e-12)
+        cyl, axis = 337.5 / steep - 337.5 / flat, math.radians(2 * e.cornea.axis_deg)
+        j0, j45 = v["corneal_astigmatism_j0_d"], v["corneal_astigmatism_j45_d"]
+        assert (cyl / 2 * math.cos(axis), cyl / 2 * math.sin(axis)) == pytest.approx((j0, j45))
         assert e.surfaces[0].conic == v["corneal_asphericity_q"]
         assert e.pupil_diameter_mm == v["pupil_diameter_mm"]
         assert e.rotation_centre_mm == v["rotation_centre_mm"]

@@ -3,7 +3,8 @@
 An illumination designed for one schematic eye can fail for a real user; this module draws N
 people from measured (or, where marked, assumed) distributions and makes each one a scene
 (issue 15, part 2). Data, each distribution with its source in the file:
-``scene/presets/eyes/population.toml`` — anterior corneal radius and asphericity Q, pupil
+``scene/presets/eyes/population.toml`` — anterior corneal radius and asphericity Q, corneal
+astigmatism (the power vector J0, J45: :func:`corneal_split`), pupil
 diameter by ambient level (its mean from Watson & Yellott's 2012 unified formula), angle kappa,
 centre of rotation, iris, sclera and skin NIR reflectance (skin by wavelength, Cooksey, Allen &
 Tsai 2017), lid aperture and headset slip (x, y, z).
@@ -48,6 +49,7 @@ from pydantic import Field, ValidationError, model_validator
 from scipy.special import ndtr, ndtri
 
 from eyelume.errors import EyelumeError, SceneError
+from eyelume.scene.eye import LIMBUS_MISMATCH_MM
 from eyelume.scene.io import apply_overrides
 from eyelume.scene.model import Scene
 from eyelume.scene.model import _Model as _Table
@@ -59,6 +61,7 @@ __all__ = [
     "DistributionOverride",
     "Person",
     "Population",
+    "corneal_split",
     "parameter_source",
     "parse_population",
     "resolved_distributions",
@@ -333,20 +336,90 @@ class Person:
     not_applied: tuple[str, ...] = field(default=())
 
 
-#: Redraws of a person's cornea (radius, asphericity) before giving up (sample_people).
+#: Redraws of a person's cornea (radius, asphericity, astigmatism) before giving up.
 _CORNEA_TRIES = 100
+
+#: The corneal parameters redrawn together when a person's cornea cannot exist.
+_CORNEA = ("corneal_radius_mm", "corneal_asphericity_q")
+_ASTIGMATISM = ("corneal_astigmatism_j0_d", "corneal_astigmatism_j45_d")
+
+#: Keratometric index's power scale (mm·D): K = 337.5 / R, the standard keratometer calibration
+#: n = 1.3375 ((n − 1) × 1000), in which corneal astigmatism is reported.
+KERATOMETRIC_MM_D = 337.5
+
+
+def corneal_split(radius_mm: float, j0_d: float, j45_d: float) -> tuple[float, float, float]:
+    """(flat radius mm, steep radius mm, TABO axis of the flat meridian deg) of a cornea whose
+    mean keratometric power is K = 337.5 / ``radius_mm`` and whose astigmatism is the power
+    vector (J0, J45) (D): cylinder C = 2 √(J0² + J45²), flat meridian θ = ½ atan2(J45, J0)
+    (so J0 = (C/2) cos 2θ > 0 is with-the-rule, θ near 0°), K_flat,steep = K ∓ C/2.
+
+    Examples
+    --------
+    >>> [round(x, 4) for x in corneal_split(7.8, 0.5, 0.0)]
+    [7.8912, 7.7109, 0.0]
+    """
+    k = KERATOMETRIC_MM_D / radius_mm
+    c = 2.0 * math.hypot(j0_d, j45_d)
+    axis = math.degrees(0.5 * math.atan2(j45_d, j0_d)) % 180.0
+    return KERATOMETRIC_MM_D / (k - c / 2), KERATOMETRIC_MM_D / (k + c / 2), axis
+
+
+def _mean_radius(scene: Scene) -> float:
+    """The base cornea's mean-power radius 337.5 / ((K_flat + K_steep)/2) (its radius when it is
+    rotationally symmetric)."""
+    front = scene.eye.surfaces[0]
+    steep = scene.eye.cornea.radius_steep_mm
+    if steep is None:
+        return front.radius_mm
+    return 2.0 / (1.0 / front.radius_mm + 1.0 / steep)
+
+
+def _person_cornea(scene: Scene, values: dict[str, float], used: tuple[str, ...]):
+    """(flat radius, steep radius or None, Q of the flat meridian, axis or None) of the person's
+    anterior cornea: the sampled radius (a mean-power radius) split by the sampled astigmatism
+    (a component not sampled is 0; :func:`corneal_split`), or the base scene's."""
+    front = scene.eye.surfaces[0]
+    conic = values["corneal_asphericity_q"] if "corneal_asphericity_q" in used else front.conic
+    if not set(_ASTIGMATISM) & set(used):
+        radius = values["corneal_radius_mm"] if "corneal_radius_mm" in used else front.radius_mm
+        return radius, scene.eye.cornea.radius_steep_mm, conic, None
+    radius = values["corneal_radius_mm"] if "corneal_radius_mm" in used else _mean_radius(scene)
+    j0, j45 = (values[n] if n in used else 0.0 for n in _ASTIGMATISM)
+    flat, steep, axis = corneal_split(radius, j0, j45)
+    return flat, steep, conic, axis
 
 
 def _cornea_fits(scene: Scene, values: dict[str, float], used: tuple[str, ...]) -> bool:
     """Whether the person's anterior cornea exists at its semi-diameter h (the limbus) and its
     sag there lies in front of the iris plane (:func:`eyelume.scene.eye.iris_root_radius`'s
-    condition): a steep, oblate cornea (R ≈ 6.8 mm, Q ≈ +0.25) does not."""
-    front = scene.eye.surfaces[0]
-    radius = values["corneal_radius_mm"] if "corneal_radius_mm" in used else front.radius_mm
-    conic = values["corneal_asphericity_q"] if "corneal_asphericity_q" in used else front.conic
-    s = _conic_sag(radius, conic, front.semi_diameter_mm)
-    z_iris = sum(x.thickness_mm for x in scene.eye.surfaces[: scene.eye.iris_surface])
-    return not math.isnan(s) and s < z_iris
+    condition): a steep, oblate cornea (R ≈ 6.8 mm, Q ≈ +0.25) does not. An astigmatic one
+    also in its steep meridian (the conic of R_steep and Q_steep = (1 + Q) R_steep / R_flat −
+    1, Q_steep in −1.5 … 1), that meridian's edge at most 0.8 × the limbus mismatch
+    (:data:`eyelume.scene.eye.LIMBUS_MISMATCH_MM`) deeper than the flat one's (the sclera is
+    fitted through the flat edge: a margin for the exact check of
+    :func:`eyelume.scene.eye.check_eye_geometry`) and in front of the posterior cornea."""
+    eye = scene.eye
+    h = eye.surfaces[0].semi_diameter_mm
+    flat, steep, conic, _ = _person_cornea(scene, values, used)
+    s = _conic_sag(flat, conic, h)
+    z_iris = sum(x.thickness_mm for x in eye.surfaces[: eye.iris_surface])
+    if math.isnan(s) or s >= z_iris:
+        return False
+    if steep is None or steep == flat:
+        return True
+    q_steep = (1.0 + conic) * steep / flat - 1.0
+    s_steep = _conic_sag(steep, q_steep, h)
+    if not (-1.5 <= q_steep <= 1.0) or math.isnan(s_steep) or s_steep >= z_iris:
+        return False
+    if s_steep - s > 0.8 * LIMBUS_MISMATCH_MM:
+        return False
+    back = eye.surfaces[1]
+    for r in np.linspace(0.0, min(h, back.semi_diameter_mm), 9)[1:]:
+        behind = eye.surfaces[0].thickness_mm + _conic_sag(back.radius_mm, back.conic, r)
+        if not _conic_sag(steep, q_steep, r) < behind:
+            return False
+    return True
 
 
 def _lid_indices(scene: Scene) -> tuple[int, int] | None:
@@ -369,6 +442,11 @@ def _overrides(
         elif target.startswith("slip."):
             slip["xyz".index(target[-1])] += v
             over["head_offset_mm"] = list(slip)
+        elif target.startswith("corneal_astigmatism."):
+            flat, steep, _, axis = _person_cornea(scene, values, used)
+            over["eye.surfaces.0.radius_mm"] = flat
+            over["eye.cornea.radius_steep_mm"] = steep
+            over["eye.cornea.axis_deg"] = axis
         elif target == "lid_aperture":
             lids = _lid_indices(scene)
             if lids is None:
@@ -472,18 +550,17 @@ def sample_people(
         rng = np.random.default_rng(child)
         u = rng.random(len(PARAMETERS))
         values = {name: float(dists[name].ppf(u[k])) for k, name in enumerate(PARAMETERS)}
+        redraw = _CORNEA + (_ASTIGMATISM if set(_ASTIGMATISM) & set(pop.used) else ())
         for _ in range(_CORNEA_TRIES):
-            if not ({"corneal_radius_mm", "corneal_asphericity_q"} & set(pop.used)) or (
-                _cornea_fits(scene, values, pop.used)
-            ):
+            if not (set(redraw) & set(pop.used)) or _cornea_fits(scene, values, pop.used):
                 break
-            for name in ("corneal_radius_mm", "corneal_asphericity_q"):
+            for name in redraw:
                 values[name] = float(dists[name].ppf(rng.random()))
         else:
             raise SceneError(
-                f"person {i}: {_CORNEA_TRIES} draws of the anterior cornea's radius and "
-                "asphericity all make a cornea that does not reach its limbus in front of the "
-                "iris; narrow their bounds",
+                f"person {i}: {_CORNEA_TRIES} draws of the anterior cornea's radius, "
+                "asphericity and astigmatism all make a cornea that does not reach its limbus "
+                "in front of the iris; narrow their bounds",
                 field="population.distributions.corneal_radius_mm / corneal_asphericity_q",
             )
         over, skipped = _overrides(scene, values, pop.used, dists)
