@@ -23,7 +23,7 @@ from eyelume.compile import (
 )
 from eyelume.kernels import geometry as G
 from eyelume.kernels import sequential as Q
-from eyelume.scene.eye import LAMBDA_D, eye_indices, glint_reflectance
+from eyelume.scene.eye import LAMBDA_D, anterior_quadric, eye_indices, glint_reflectance
 from eyelume.scene.focus import focus
 from eyelume.scene.model import Element, LedProfile, Scene
 from eyelume.scene.optics import ParaxialSystem, curvature
@@ -191,6 +191,28 @@ def _prescription_info(scene: Scene, cs: CompiledScene) -> tuple[dict, dict]:
     }, glasses
 
 
+def _cornea_info(scene: Scene) -> dict:
+    """The anterior cornea's two meridians (radius mm, asphericity Q), its keratometric
+    cylinder (D, 337.5/R_steep − 337.5/R_flat), the flat meridian's TABO axis of the physical
+    eye (a left eye's is 180° − the file's) and its decentration and tilt as written
+    (``eye.cornea``, :class:`~eyelume.scene.model.AnteriorCornea`)."""
+    eye = scene.eye
+    c1, c2, k = anterior_quadric(eye)
+    axis = eye.cornea.axis_deg
+    if scene.eye_pose.which == "left":
+        axis = (180.0 - axis) % 180.0
+    return {
+        "radius_flat_mm": 1.0 / c1,
+        "radius_steep_mm": 1.0 / c2,
+        "q_flat": k,
+        "q_steep": (1.0 + k) * c1 / c2 - 1.0,
+        "cylinder_d": 337.5 * (c2 - c1),
+        "axis_deg_tabo": axis,
+        "decentration_mm": list(eye.cornea.decentration_mm),
+        "tilt_deg": list(eye.cornea.tilt_deg),
+    }
+
+
 def _eye_info(scene: Scene) -> dict:
     eye_wl = eye_paraxial(scene)
     eye_d = eye_paraxial(scene, LAMBDA_D)
@@ -207,6 +229,7 @@ def _eye_info(scene: Scene) -> dict:
         "corneal_vertex_mm": eye_point(scene, [0.0, 0.0, 0.0]).tolist(),
         "rotation_centre_mm": eye_point(scene, [0.0, 0.0, -scene.eye.rotation_centre_mm]).tolist(),
         "optical_axis": eye_direction(scene, [0.0, 0.0, 1.0]).tolist(),
+        "anterior_cornea": _cornea_info(scene),
         "power_d": eye_wl.power * 1000.0,
         "power_d_at_587nm": eye_d.power * 1000.0,
         "indices": dict(

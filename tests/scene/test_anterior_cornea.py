@@ -115,3 +115,14 @@ def test_decentration_moves_the_apex_and_tilt_turns_the_axis():
     np.testing.assert_allclose(
         axis, [0.0, math.sin(math.radians(2.0)), math.cos(math.radians(2.0))], atol=1e-12
     )
+
+
+def test_info_reports_the_meridians_cylinder_and_the_physical_axis():
+    from eyelume.info import scene_info
+
+    over = {"eye.cornea.radius_steep_mm": 7.5, "eye.cornea.axis_deg": 10.0}
+    right = scene_info(eyelume.load_scene("paper2005", over))["eye"]["anterior_cornea"]
+    left = scene_info(eyelume.load_scene("paper2005", {**over, "eye_pose.which": "left"}))
+    assert right["cylinder_d"] == pytest.approx(337.5 / 7.5 - 337.5 / 7.8)
+    assert right["q_steep"] == pytest.approx(0.75 * 7.5 / 7.8 - 1)
+    assert (right["axis_deg_tabo"], left["eye"]["anterior_cornea"]["axis_deg_tabo"]) == (10, 170)

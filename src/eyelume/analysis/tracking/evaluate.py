@@ -135,7 +135,11 @@ def led_picture_pattern(cs) -> np.ndarray:
     """(k, 2) px: where each LED's glint lies relative to the glints' mean in the picture, the
     eye in primary gaze — the small-glint reflection points of :func:`led_picture_azimuths`
     projected by the pinhole camera of :func:`pinhole_camera`. The detector checks the matched
-    glints against this layout when some are missing (``detect(led_pattern_px=…)``)."""
+    glints against this layout when some are missing (``detect(led_pattern_px=…)``). The
+    cornea here is the sphere of the flat meridian's radius on the optical axis: an astigmatic
+    cornea (``eye.cornea``) squeezes the real pattern across its steep meridian by about
+    R_steep/R_flat (4 % for 2 D) and a decentred one shifts it; whether the detector's
+    pattern tolerance takes that has not been checked."""
     from eyelume.compile import eye_point
 
     scene = cs.scene

@@ -398,6 +398,10 @@ class ModelEye:
 class GeometricGaze:
     """Gaze by the geometric model of Guestrin & Eizenman (2006), from ≥ 2 glints.
 
+    The model's cornea is a sphere of one radius R centred on the optical axis: an astigmatic,
+    decentred or tilted cornea in the scene (``eye.cornea``) is outside it, and its gaze error
+    is part of what ``evaluate-tracking`` measures (the renders use the real quadric).
+
     Parameters
     ----------
     camera : PinholeCamera
