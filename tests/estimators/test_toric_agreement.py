@@ -12,6 +12,15 @@ forward rays collect enough in a slow test), the traced pictures compared (``cam
 "none"``). Both are unbiased estimators of the same picture: per-bin z = (fast − forward) /
 √(var_fast + var_forward) over bins with at least 25 forward rays gives Σz² ~ χ² with one
 degree of freedom per bin, inside its central 99.8 %.
+
+What this does not resolve: at 12 × 12 bins the glints are a small part of a few bins, so the
+fast estimator run on the *symmetric* cornea passes against this forward render too (measured:
+Σz² 149 against 148 over 124 bins); at 36 × 36 the one bin that collects 25 forward rays, a
+glint's, tells them apart (Σz² 2.2 toric against 23.7 symmetric, bound 10.8), but the rest of
+that picture is too sparse for 20 M rays. The cornea-specific checks are elsewhere: the Newton
+connection against a brute-force count (test_cornea_nee_toric.py, which the symmetric cornea
+fails by 10–15 %) and the glints against the mirror equation
+(tests/analysis/test_truth_toric.py).
 """
 
 from __future__ import annotations
