@@ -159,3 +159,28 @@ def test_decentration_moves_the_glint_by_d_times_one_minus_m():
         # the test resolves the factor (1 − m): a glint that moved with the mirror (by d
         # itself, m d more) would fail it
         assert m * size / (1 - m) > 5 * tol
+
+
+def test_tilt_moves_the_glint_as_the_centre_of_curvature_moves():
+    """A cornea tilted by τ about its apex is, to paraxial order, its sphere of curvature moved
+    across by R sin τ (the centre of curvature C lies R behind the apex on the tilted axis):
+    tilting the axis up (toward +y) moves C, and with it the glint's virtual image, down —
+    the decentration law with d = C′ − C (the asphericity enters at third order, Q (h/R)² ≈
+    2·10⁻⁴ here)."""
+    tau = math.radians(1.5)
+    cs0 = compile_scene(_scene({}))
+    cs1 = compile_scene(_scene({"tilt_deg": [1.5, 0.0]}))
+    focal = [R_FLAT / 2] * 4
+    got0, want0 = _glint_and_prediction(cs0, focal)
+    # the moved sphere's vertex toward the camera: C′ + R ẑ, C′ = −R (0, sin τ, cos τ)
+    vertex = np.array([0.0, -R_FLAT * math.sin(tau), R_FLAT * (1.0 - math.cos(tau))])
+    got1, want1 = _glint_and_prediction(cs1, focal, vertex=vertex)
+    moved, predicted = got1 - got0, want1 - want0
+    for k in range(4):
+        size = np.linalg.norm(predicted[k])
+        assert size > 0.3
+        tol = TOL * (
+            np.linalg.norm(want0[k] - want0.mean(axis=0))
+            + np.linalg.norm(want1[k] - want1.mean(axis=0))
+        )
+        assert np.linalg.norm(moved[k] - predicted[k]) <= tol, (k, moved[k], predicted[k])
