@@ -123,6 +123,16 @@ class Ellipse:
         return 2 * self.b, 2 * self.a, (math.degrees(self.theta) + 90.0) % 180.0
 
 
+def _grid_local(e: Ellipse, x0: int, x1: int, y0: int, y1: int, step: int = 1):
+    """:meth:`Ellipse.local` of every ``step``-th pixel centre of the box [x0, x1) × [y0, y1):
+    two (rows, cols) arrays, broadcast from the box's row and column coordinates (the same
+    values as on ``np.mgrid``'s full grids, without building them)."""
+    c, s = math.cos(e.theta), math.sin(e.theta)
+    dx = np.arange(x0, x1, step, dtype=np.float64)[None, :] - e.cx
+    dy = np.arange(y0, y1, step, dtype=np.float64)[:, None] - e.cy
+    return dx * c + dy * s, -dx * s + dy * c
+
+
 def sampson_distance(e: Ellipse, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Signed first-order distance (px) of points to the ellipse, > 0 outside.
 
@@ -189,16 +199,46 @@ def median(a: np.ndarray) -> float:
 def percentile(a: np.ndarray, q: float) -> float:
     """The ``q``-th percentile of ``a``'s values (float), NumPy's default (linear) rule, without
     ``np.percentile``'s overhead (~0.25 ms a call): :func:`_order_stats`."""
+    return percentiles(a, (q,))[0]
+
+
+def percentiles(a: np.ndarray, qs: tuple[float, ...]) -> list[float]:
+    """:func:`percentile` for each of ``qs``, from one :func:`_order_stats` (one count)."""
     a = np.asarray(a).ravel()
     n = a.size
     if n == 0:
-        return math.nan
+        return [math.nan] * len(qs)
+    ranks = []
+    for q in qs:
+        vi = q / 100.0 * (n - 1)
+        lo = int(math.floor(vi))
+        ranks += [lo, min(lo + 1, n - 1)]
+    v = _order_stats(a, tuple(ranks))
+    out = []
+    for i, q in enumerate(qs):
+        vi = q / 100.0 * (n - 1)
+        g = vi - math.floor(vi)
+        a_lo, a_hi = v[2 * i], v[2 * i + 1]
+        out.append(a_lo + (a_hi - a_lo) * g if g < 0.5 else a_hi - (a_hi - a_lo) * (1.0 - g))
+    return out
+
+
+def median_and_percentile(a: np.ndarray, q: float) -> tuple[float, float]:
+    """(:func:`median`, :func:`percentile` ``q``) of ``a``'s values, the same numbers from one
+    :func:`_order_stats` (one count or partition)."""
+    a = np.asarray(a).ravel()
+    n = a.size
+    if n == 0:
+        return math.nan, math.nan
+    k = n // 2
     vi = q / 100.0 * (n - 1)
     lo = int(math.floor(vi))
-    hi = min(lo + 1, n - 1)
-    a_lo, a_hi = _order_stats(a, (lo, hi))
+    ks = (k, lo, min(lo + 1, n - 1)) if n % 2 else (k - 1, k, lo, min(lo + 1, n - 1))
+    v = _order_stats(a, ks)
+    m = v[0] if n % 2 else 0.5 * (v[0] + v[1])
+    a_lo, a_hi = v[-2:]
     g = vi - lo
-    return a_lo + (a_hi - a_lo) * g if g < 0.5 else a_hi - (a_hi - a_lo) * (1.0 - g)
+    return m, a_lo + (a_hi - a_lo) * g if g < 0.5 else a_hi - (a_hi - a_lo) * (1.0 - g)
 
 
 def _row_medians(v: np.ndarray) -> np.ndarray:
@@ -259,13 +299,18 @@ def _refine_edge(
     outer = _row_medians(v[:, t >= 0.5 * reach])
     outer = np.minimum(outer, median(outer))
     v = v - (pupil_level + fraction * (outer - pupil_level))[:, None]
-    rising = (v[:, :-1] < 0) & (v[:, 1:] >= 0)
-    frac = v[:, :-1] / np.where(rising, v[:, :-1] - v[:, 1:], 1.0)
-    tc = t[None, :-1] + 0.5 * frac
-    dist = np.where(rising, np.abs(tc), np.inf)
-    j = np.argmin(dist, axis=1)
-    ok = np.isfinite(dist[np.arange(len(j)), j])
-    tj = tc[np.arange(len(j)), j]
+    # The rising crossings (a few a profile), interpolated, and each profile's nearest to 0.
+    i, j = np.nonzero((v[:, :-1] < 0) & (v[:, 1:] >= 0))
+    v0 = v[i, j]
+    tc = t[j] + 0.5 * (v0 / (v0 - v[i, j + 1]))
+    order = np.lexsort((np.abs(tc), i))  # by profile, then distance (ties: the first crossing)
+    i, tc = i[order], tc[order]
+    first = np.ones(len(i), bool)
+    first[1:] = i[1:] != i[:-1]
+    ok = np.zeros(n, bool)
+    ok[i[first]] = True
+    tj = np.zeros(n)
+    tj[i[first]] = tc[first]
     return x + nx * tj, y + ny * tj, ok
 
 
@@ -303,7 +348,10 @@ def _trim_near_outliers(x, y, e: Ellipse, inl: np.ndarray, diam: float, params):
     n = len(x)
     trim = params.outlier_trim_points
     if trim > 0 and 0 < (~inl).sum() < n:
-        near = np.convolve(np.r_[~inl[-trim:], ~inl, ~inl[:trim]], np.ones(2 * trim + 1), "valid")
+        out = ~inl
+        near = np.convolve(
+            np.concatenate((out[-trim:], out, out[:trim])), np.ones(2 * trim + 1), "valid"
+        )
         trimmed = inl & (near == 0)
         if trimmed.sum() >= params.min_edge_points:
             e_new = _fit(x[trimmed], y[trimmed], diam)
@@ -334,7 +382,7 @@ def _robust_fit(x: np.ndarray, y: np.ndarray, diam: float, params):
     d = np.abs(ds)
     # Point-to-point edge noise, blind to any smooth misfit: the second difference along the
     # outline (var = 1.5 σ² for independent points).
-    hf = ds - 0.5 * (np.r_[ds[-1:], ds[:-1]] + np.r_[ds[1:], ds[:1]])
+    hf = ds - 0.5 * (np.concatenate((ds[-1:], ds[:-1])) + np.concatenate((ds[1:], ds[:1])))
     sigma = 1.4826 * median(np.abs(hf)) / math.sqrt(1.5)
     tol = max(params.inlier_tol_px, 3.0 * sigma, params.inlier_tol_frac * diam)
     if (d <= tol).mean() >= 0.95:
@@ -509,23 +557,23 @@ def _level_candidates(lab, stats, cent, min_area, max_area, touch):
     box ≥ 0.5 (a tilted 2:1 ellipse fills 0.63), box aspect ≤ 3, not touching the picture's border
     or the invalid area (``touch``: labels that do)."""
     rows, cols = lab.shape
-    x, y, w, h, a = (stats[1:, i] for i in range(5))
-    ok = (a >= min_area) & (a <= max_area)
-    ok &= (x > 0) & (y > 0) & (x + w < cols) & (y + h < rows)
-    ok &= a >= 0.5 * w * h
-    ok &= np.maximum(w, h) <= 3 * np.minimum(w, h)
-    idx = np.nonzero(ok)[0] + 1
+    a = stats[1:, cv2.CC_STAT_AREA]
+    idx = np.flatnonzero((a >= min_area) & (a <= max_area)) + 1
     if touch is not None and len(idx):
         idx = idx[~np.isin(idx, touch)]
-    if not len(idx):
-        return []
-    # round half to even, as Python's round(); a centroid outside its blob: not convex enough
-    cx, cy = np.rint(cent[idx, 0]).astype(np.intp), np.rint(cent[idx, 1]).astype(np.intp)
-    inside = lab[cy, cx] == idx
-    return [
-        Candidate(0.0, int(a[k - 1]), tuple(int(v) for v in stats[k, :4]), (int(x_), int(y_)))
-        for k, x_, y_ in zip(idx[inside], cx[inside], cy[inside], strict=True)
-    ]
+    # The few components left (a handful a level) one by one: cheaper than array operations.
+    out = []
+    for k in idx.tolist():
+        x, y, w, h, area = stats[k].tolist()
+        if x <= 0 or y <= 0 or x + w >= cols or y + h >= rows:
+            continue
+        if area < 0.5 * w * h or max(w, h) > 3 * min(w, h):
+            continue
+        # round half to even (as np.rint); a centroid outside its blob: not convex enough
+        cx, cy = round(float(cent[k, 0])), round(float(cent[k, 1]))
+        if lab[cy, cx] == k:
+            out.append(Candidate(0.0, area, (x, y, w, h), (cx, cy)))
+    return out
 
 
 def ladder(
@@ -591,7 +639,7 @@ def _levels(small: np.ndarray, params, fine: int) -> tuple[float, float, float]:
     (P60 − P0.5) / ``ladder_levels`` (≥ 1), the top at least ``ladder_min_span`` × 255 above
     P0.5 (an unlit surround filling most of the picture holds P60 at the black level); with
     ``fine`` > 1, only the first ``ladder_fine_span`` steps, ``fine`` times finer (≥ 1)."""
-    p_lo, top = percentile(small, 0.5), percentile(small, params.ladder_top_percentile)
+    p_lo, top = percentiles(small, (0.5, params.ladder_top_percentile))
     top = max(top, p_lo + params.ladder_min_span * 255.0)
     step = max(1.0, (top - p_lo) / params.ladder_levels)
     lo = p_lo - step * math.ceil((p_lo - float(small.min())) / step)  # down to the darkest
@@ -609,14 +657,17 @@ def _edge_dark(lab, stats, touch, areas: tuple[int, float], f: int, level: float
     surround filling half a wide-angle headset camera's picture, eyetrackvr) is no cut pupil,
     and is not named as one."""
     rows, cols = lab.shape
-    x, y, w, h, a = (stats[1:, i] for i in range(5))
-    on_edge = (x == 0) | (y == 0) | (x + w == cols) | (y + h == rows)
-    if touch is not None and len(touch):
-        on_edge |= np.isin(np.arange(1, len(stats)), touch)
-    big = on_edge & (a >= areas[0]) & (a <= areas[1])
-    if not big.any():
+    a = stats[1:, cv2.CC_STAT_AREA]
+    idx = np.flatnonzero((a >= areas[0]) & (a <= areas[1])) + 1
+    if not len(idx):
         return ()
-    return (level, int(a[big].max()) * f * f)
+    touching = set(touch.tolist()) if touch is not None else set()
+    largest = -1
+    for k in idx.tolist():
+        x, y, w, h, area = stats[k].tolist()
+        if x == 0 or y == 0 or x + w == cols or y + h == rows or k in touching:
+            largest = max(largest, area)
+    return (level, largest * f * f) if largest >= 0 else ()
 
 
 def _reduced(wp: WorkPicture, params) -> tuple[np.ndarray, np.ndarray | None, int]:
@@ -1031,7 +1082,7 @@ def support_of(e: Ellipse, x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     if not occ.any():
         return 0.0, 1.0
     filled = np.flatnonzero(occ)  # circular gaps between occupied bins
-    longest = int((np.diff(np.r_[filled, filled[0] + n_bins]) - 1).max())
+    longest = int((np.diff(np.append(filled, filled[0] + n_bins)) - 1).max())
     return float(occ.mean()), longest / n_bins
 
 
@@ -1116,6 +1167,20 @@ def _implausible(e: Ellipse, params) -> str | None:
     return None
 
 
+def _group_medians(vals: np.ndarray, k: np.ndarray, n: int, min_count: int = 3) -> np.ndarray:
+    """The median (as :func:`median`) of ``vals`` in each group ``k`` = 0 … n − 1, NaN for a
+    group of fewer than ``min_count`` values: one sort by (group, value) for all the groups."""
+    sv = vals[np.lexsort((vals, k))].astype(np.float64)
+    counts = np.bincount(k, minlength=n)
+    starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    hi = starts + counts // 2
+    lo = np.where(counts % 2, hi, hi - 1)
+    ok = counts >= min_count
+    out = np.full(n, np.nan)
+    out[ok] = 0.5 * (sv[lo[ok]] + sv[hi[ok]])
+    return out
+
+
 def _one_sided(img, wp: WorkPicture, e: Ellipse, pupil_level: float, bright, params) -> str | None:
     """Why a fitted ellipse is dark on one side only, or None: the ring between
     ``surround_sector_ring`` (1.15–1.5) × the ellipse outside it is cut into
@@ -1131,8 +1196,7 @@ def _one_sided(img, wp: WorkPicture, e: Ellipse, pupil_level: float, bright, par
     s = max(1, int(reach / 40.0))
     x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
     y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
-    yy, xx = np.mgrid[y0:y1:s, x0:x1:s]
-    u, v = e.local(xx.astype(np.float64), yy.astype(np.float64))
+    u, v = _grid_local(e, x0, x1, y0, y1, s)
     rho = np.hypot(u / e.a, v / e.b)
     ring = (rho > r0) & (rho < r1) & (bright[y0:y1:s, x0:x1:s] == 0)
     if wp.invalid is not None:
@@ -1145,8 +1209,11 @@ def _one_sided(img, wp: WorkPicture, e: Ellipse, pupil_level: float, bright, par
         return None
     n = params.surround_sectors
     k = ((np.arctan2(v[ring] / e.b, u[ring] / e.a) + math.pi) / (2 * math.pi) * n).astype(int) % n
-    counts = np.bincount(k, minlength=n)
-    worst = min((median(vals[k == i]) - pupil_level) / step for i in range(n) if counts[i] >= 3)
+    meds = _group_medians(vals, k, n)
+    meds = meds[np.isfinite(meds)]
+    if not len(meds):
+        return None
+    worst = float(np.min((meds - pupil_level) / step))
     if worst < params.surround_sector_min:
         return (
             f"no pupil: the dark blob at ({e.cx:.0f}, {e.cy:.0f}) px is dark on one side only "
@@ -1188,8 +1255,7 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
     if x1 - x0 < 3 or y1 - y0 < 3:
         return ""
-    yy, xx = np.mgrid[y0:y1, x0:x1]
-    u, v = e.local(xx.astype(np.float64), yy.astype(np.float64))
+    u, v = _grid_local(e, x0, x1, y0, y1)
     inside = (u / e.a) ** 2 + (v / e.b) ** 2 < 0.81
     glints = bright[y0:y1, x0:x1]
     if glints.any():
@@ -1200,8 +1266,7 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
         return ""
     vals = img[y0:y1, x0:x1][inside]
     black = wp.lo
-    m = median(vals)
-    p = percentile(vals, params.core_quantile)
+    m, p = median_and_percentile(vals, params.core_quantile)
     # On the input (the working picture's glints are filled flat, which would hide noise).
     win = img[y0:y1, x0:x1].astype(np.float32)
     lap = cv2.filter2D(win, cv2.CV_32F, _IMMERKAER, borderType=cv2.BORDER_REFLECT)
