@@ -504,19 +504,11 @@ def _pupil_result(fit, params) -> tuple[Pupil | None, list[str]]:
 
 def _split_specks(blobs: list[dict], params) -> tuple[list[Glint], list[Glint]]:
     """Step 5a: the glints, and the specks — blobs with less than ``glint_min_flux_frac`` of the
-    brightest glint's light (above its background), which no LED's corneal reflection is, and
-    the patches of a bright area (``"patch"``, :func:`~.glints.glint_blobs`: no glint, and
-    they do not set the brightest glint's light)."""
-    patches = [b for b in blobs if b.get("patch")]
-    every = [
-        Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"])
-        for b in blobs
-        if not b.get("patch")
-    ]
+    brightest glint's light (above its background), which no LED's corneal reflection is."""
+    every = [Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"]) for b in blobs]
     top = max((g.flux for g in every), default=0.0)
     glints = [g for g in every if g.flux >= params.glint_min_flux_frac * top]
     specks = [g for g in every if g.flux < params.glint_min_flux_frac * top]
-    specks += [Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"]) for b in patches]
     return glints, specks
 
 

@@ -45,7 +45,7 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from eyelume.analysis.tracking.pupil import median, percentile
+from eyelume.analysis.tracking.pupil import median
 
 __all__ = [
     "find_glints",
@@ -122,13 +122,7 @@ def find_glints(img: np.ndarray, value_range, noise: float, params):
             return [], np.zeros_like(u8), None
         min_rise = params.glint_min_contrast * (value_range[1] - value_range[0])
     floor = 1e-6 * (value_range[1] - value_range[0])
-    # The patch rule (``surround_max``, :func:`glint_blobs`) is off: on paper2005's 87 × 65
-    # pictures it took real glints against the lower lid's skin at −20° gaze for patches (the
-    # whole −20° row of the tracking evaluation refused, its PCCR calibration lost).
-    surround_max = None
-    blobs, bright = glint_blobs(
-        u8, img, tg8, params, noise=max(noise, floor), min_rise=min_rise, surround_max=surround_max
-    )
+    blobs, bright = glint_blobs(u8, img, tg8, params, noise=max(noise, floor), min_rise=min_rise)
     return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
 
 
@@ -139,7 +133,6 @@ def glint_blobs(
     params,
     noise: float = 0.0,
     min_rise: float = 0.0,
-    surround_max: float | None = None,
 ) -> tuple[list[dict], np.ndarray]:
     """Bright blobs as dicts (centre_px, area_px, peak) and the (closed) bright mask (0/255).
 
@@ -153,15 +146,6 @@ def glint_blobs(
     also stand ``min_rise`` (input units) above its local background — a saturated fragment of
     skin or sclera, whose surround is saturated too, is not a glint — and the bright mask
     returned holds only the glints found (not the saturated skin).
-
-    With ``surround_max`` (input units; :func:`find_glints` gives the glint floor, the 99th
-    percentile) a blob whose surround's upper quartile (the background ring's 75th percentile)
-    reaches it is part of a bright area, not a glint: a patch of saturated skin or sclera beside
-    a dark iris stands out of its window's mean (the iris pulls it down) but has bright skin on
-    one side; a glint, even on the pupil's or the iris's edge, has a darker surround on most
-    sides. Such a blob is returned with ``"patch": True``: the detector takes it for no LED's
-    glint but counts its light as a speck's (a glint broken into fragments by few Monte Carlo
-    samples has fragments whose surround is bright too: they still tell it is broken up).
     """
     rows, cols = u8.shape
     above, bright = _bright_mask(u8, floor8, params)
@@ -176,7 +160,7 @@ def glint_blobs(
     for c in tops:
         approx_area = cv2.contourArea(c) + 0.5 * len(c) + 1.0
         if params.glint_min_area_px <= approx_area <= 1.5 * max_area + 4:
-            b = _blob(c, approx_area, above, bright, img, (max_area, rise, surround_max), params)
+            b = _blob(c, approx_area, above, bright, img, (max_area, rise), params)
             if b is not None:
                 blobs.append(b)
                 kept.append(c)
@@ -211,13 +195,12 @@ def _bright_mask(u8: np.ndarray, floor8: int, params) -> tuple[np.ndarray, np.nd
 
 def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     """One glint from its outline ``c``: area, peak and skirt-weighted centroid (module doc), or
-    None when its area is out of bounds (``limits`` = (max_area, rise, surround_max)) or its
+    None when its area is out of bounds (``limits`` = (max_area, rise)) or its
     peak does not stand ``rise`` (input units:
     ``glint_min_snr`` × the noise, or more in an over-exposed picture) above its local
-    background (a noise speck, or saturated skin). ``"patch"`` is True when its surround's upper
-    quartile reaches ``surround_max`` (a patch of a bright area, :func:`glint_blobs`)."""
+    background (a noise speck, or saturated skin)."""
     rows, cols = img.shape
-    max_area, rise, surround_max = limits
+    max_area, rise = limits
     m = max(2, int(math.ceil(math.sqrt(approx_area / math.pi))))
     bx, by, bw, bh = cv2.boundingRect(c)
     x0, y0 = max(0, bx - m - 2), max(0, by - m - 2)
@@ -237,11 +220,6 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
         region &= d_own <= d_oth
         background &= d_oth > m
     base = median(win[background]) if background.any() else float(win.min())
-    patch = bool(
-        surround_max is not None
-        and background.any()
-        and percentile(win[background], 75.0) >= surround_max
-    )  # a patch of a bright area (skin, sclera) beside a dark one: kept, marked
     peak = float(win[own > 0].max())
     if peak - base < rise:
         return None  # a noise speck (or, over-exposed, saturated skin), not a glint
@@ -252,7 +230,7 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     xs = np.arange(x0, x1, dtype=np.float64)
     ys = np.arange(y0, y1, dtype=np.float64)
     centre = (float((wgt.sum(axis=0) * xs).sum() / tot), float((wgt.sum(axis=1) * ys).sum() / tot))
-    return {"centre_px": centre, "area_px": float(area), "peak": peak, "flux": tot, "patch": patch}
+    return {"centre_px": centre, "area_px": float(area), "peak": peak, "flux": tot}
 
 
 def default_max_angle(led_azimuths_deg: Sequence[float]) -> float:
