@@ -46,12 +46,27 @@ def test_pupil_truth_matches_the_labelled_pupil(gaze):
     assert np.hypot(x - cx, y - cy) < 1.0
 
 
+#: An astigmatic (~2.3 D at 30°), decentred and tilted anterior cornea (issue 15): its glints
+#: lie 3.6–4.7 px from the symmetric cornea's here, so the 0.5 px check below resolves them.
+TORIC = {
+    "eye.cornea.radius_steep_mm": 7.4,
+    "eye.cornea.axis_deg": 30.0,
+    "eye.cornea.decentration_mm": [0.4, -0.3],
+    "eye.cornea.tilt_deg": [1.0, 1.0],
+}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("gaze", [(15.0, 10.0)])
-def test_glint_truth_matches_the_rendered_glints(gaze):
+@pytest.mark.parametrize(("gaze", "cornea"), [((15.0, 10.0), {}), ((0.0, 0.0), TORIC)])
+def test_glint_truth_matches_the_rendered_glints(gaze, cornea):
     scene = eyelume.load_scene(
         "paper2005",
-        {**FINE, "eye.gaze_horizontal_deg": gaze[0], "eye.gaze_vertical_deg": gaze[1]},
+        {
+            **FINE,
+            **cornea,
+            "eye.gaze_horizontal_deg": gaze[0],
+            "eye.gaze_vertical_deg": gaze[1],
+        },
     )
     cs = compile_scene(scene)
     truth = eye_truth(cs)
