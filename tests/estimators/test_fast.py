@@ -142,8 +142,9 @@ def test_direct_irradiance_is_inverse_square_with_both_cosines():
 def _sampled(surfaces, leds, facet, n):
     out = np.empty(n)
     state = stream_start(7, 0)
+    e_led = np.empty(leds.points.shape[0])
     for i in range(n):
-        state, out[i] = F.sampled_irradiance(state, surfaces, leds, facet)
+        state, out[i] = F.sampled_irradiance(state, surfaces, leds, facet, e_led)
     return out
 
 
@@ -314,7 +315,14 @@ def test_one_led_through_the_cornea_is_the_sum_on_average():
             chief = aim_chief(cam, xs, ys)
             r = into_scene(cam, xs, ys, chief.qx, chief.qy)
             out = F._camera_branch(
-                np.uint64(1), cs.tables, cam, Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz), 1.0, True, True
+                np.uint64(1),
+                cs.tables,
+                cam,
+                Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz),
+                1.0,
+                True,
+                True,
+                np.empty(8),
             )
             v = out.vertex
             if v.s != iris:
@@ -362,3 +370,42 @@ def median_pixel_rel_error_of(r, traced_var, mask):
     from eyelume.estimators.statistics import median_pixel_rel_error
 
     return median_pixel_rel_error(r.eye_image[mask], traced_var[mask], r.variance_dof)
+
+
+@pytest.mark.parametrize("rel_error", [0.2, 0.004])
+def test_pilot_skips_only_grids_that_could_not_be_chosen(paper_compiled, monkeypatch, rel_error):
+    """The pilot does not trace a grid whose least cost (two sets) is not below the best choice
+    so far: its choice is the one of tracing every grid (computed here as the pilot did before
+    the skip), and the grids it traced are exactly those whose least cost beat the best so far."""
+    from eyelume.estimators import fast_run
+    from eyelume.estimators.statistics import median_pixel_rel_error
+
+    cs = paper_compiled
+    target = np.zeros((cs.picture.rows, cs.picture.cols), dtype=bool)
+    target[20:45:2, 25:60:3] = True  # ~150 scattered pixels of the eye and skin
+    seed, ratio = 3, 0.5
+    idx = np.flatnonzero(target.reshape(-1)).astype(np.int64)
+    costs = []
+    for grid, n in fast_run.PILOT_OPTIONS:
+        s1, s2 = np.zeros(idx.size), np.zeros(idx.size)
+        F.camera_pass(seed, 0, n, cs.tables, cs.camera, grid, F.CameraSums(idx, s1, s2))
+        mean = s1 / n
+        var = np.maximum(s2 - n * mean**2, 0.0) / (n * (n - 1))
+        err = median_pixel_rel_error(mean[mean > 0], var[mean > 0], n - 1) * math.sqrt(ratio)
+        costs.append((max(2, math.ceil(n * (err / rel_error) ** 2)), grid))
+    best, expect_traced = (fast_run.GRID_FINE, 2, math.inf), []
+    for sets, grid in costs:
+        if 2 * grid * grid < best[2]:
+            expect_traced.append(grid)
+        if sets * grid * grid < best[2]:
+            best = (grid, sets, sets * grid * grid)
+    traced = []
+    real = F.camera_pass
+
+    def spy(seed_, first, n_sets, tables, cam, grid, sums):
+        traced.append(grid)
+        return real(seed_, first, n_sets, tables, cam, grid, sums)
+
+    monkeypatch.setattr(F, "camera_pass", spy)
+    assert fast_run._pilot(cs, seed, target, rel_error, ratio) == best[:2]
+    assert traced == expect_traced

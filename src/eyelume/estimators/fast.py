@@ -197,15 +197,19 @@ def _unshadowed(leds, k, facet):
 
 
 @per_ray
-def sampled_irradiance(state, surfaces, leds, facet):
+def sampled_irradiance(state, surfaces, leds, facet, e_led):
     """An unbiased one-shadow-ray estimate of :func:`direct_irradiance`: LED k drawn with
     probability p_k = E_k / ΣE, E_k its unshadowed irradiance (:func:`_unshadowed`), and
     E_k V_k / p_k = ΣE · V_k returned (V_k = 1 if nothing is in the way). Its only variance is
-    from shadows. Returns (state, irradiance W/mm²)."""
+    from shadows. ``e_led`` (n_leds,) is scratch space the caller owns: each E_k is evaluated
+    once (an arccosine of the LED's profile each) and read back for the draw. Returns (state,
+    irradiance W/mm²)."""
     n = leds.points.shape[0]
     total = 0.0
     for k in range(n):
-        total += _unshadowed(leds, k, facet)
+        e = _unshadowed(leds, k, facet)
+        e_led[k] = e
+        total += e
     if total <= 0.0:
         return state, 0.0
     state, u = next_uniform(state)
@@ -213,7 +217,7 @@ def sampled_irradiance(state, surfaces, leds, facet):
     acc = 0.0
     pick = -1
     for k in range(n):
-        e = _unshadowed(leds, k, facet)
+        e = e_led[k]
         if e > 0.0:
             pick = k
             acc += e
@@ -338,7 +342,7 @@ def _glint_choice(state, f, dx, dy, dz, nx, ny, nz):
 
 
 @per_ray
-def _camera_branch(state, scene, cam, ray, beta, split, first_vertex):
+def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, e_led):
     """Follow one camera path along ``ray`` with throughput ``beta``.
 
     With ``split``, the first refracting interface met before any Lambertian vertex is not
@@ -349,7 +353,8 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex):
     nothing), and a mirror (R ≈ 1) all but always reflects; the split is kept for the
     cornea, whose reflected part sees the lit face. With ``first_vertex`` the path stops after
     the NEE at its first Lambertian vertex and hands that vertex back for its continuation;
-    otherwise every vertex continues by Russian roulette. Returns a :class:`CameraPath`."""
+    otherwise every vertex continues by Russian roulette. ``e_led`` (n_leds,): scratch space
+    for :func:`sampled_irradiance`. Returns a :class:`CameraPath`."""
     sf, si = scene.surfaces.sf, scene.surfaces.si
     leds = scene.leds
     x, y, z, dx, dy, dz = ray
@@ -379,7 +384,7 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex):
                 e = direct_irradiance(scene.surfaces, leds, Facet(x, y, z, nx, ny, nz))
             else:
                 facet = Facet(x, y, z, nx, ny, nz)
-                state, e = sampled_irradiance(state, scene.surfaces, leds, facet)
+                state, e = sampled_irradiance(state, scene.surfaces, leds, facet, e_led)
             if cam.through_cornea[s]:
                 e1, e2 = orthonormal_basis(nx, ny, nz)
                 rc = Receiver(x, y, z, nx, ny, nz, e1, e2)
@@ -446,11 +451,11 @@ IRIS_GRID = 3
 
 
 @per_ray
-def _path_radiance(state, scene, cam, ray, beta, split, grid):
+def _path_radiance(state, scene, cam, ray, beta, split, grid, e_led):
     """A camera path with its first Lambertian vertex's continuation(s) in ``grid``² strata
     (at least IRIS_GRID² on the iris); see _camera_branch. Returns (state, radiance,
     has_branch, branch)."""
-    out = _camera_branch(state, scene, cam, ray, beta, split, True)
+    out = _camera_branch(state, scene, cam, ray, beta, split, True, e_led)
     state, radiance = out.state, out.radiance
     v = out.vertex
     if v.s >= 0:
@@ -463,7 +468,7 @@ def _path_radiance(state, scene, cam, ray, beta, split, grid):
             lx, ly, lz = cosine_hemisphere((j // g + u1) / g, (j % g + u2) / g)
             ex, ey, ez = about_axis(lx, ly, lz, v.nx, v.ny, v.nz)
             more = _camera_branch(
-                state, scene, cam, Ray(v.x, v.y, v.z, ex, ey, ez), v.beta / k, False, False
+                state, scene, cam, Ray(v.x, v.y, v.z, ex, ey, ez), v.beta / k, False, False, e_led
             )
             state = more.state
             radiance += more.radiance
@@ -471,7 +476,7 @@ def _path_radiance(state, scene, cam, ray, beta, split, grid):
 
 
 @per_ray
-def _camera_radiance(state, scene, cam, ray):
+def _camera_radiance(state, scene, cam, ray, e_led):
     """Radiance (W/(mm²·sr)) arriving at the lens along −d from the origin of ``ray``.
 
     At a Lambertian vertex on a surface with ``cam.through_cornea[s]`` (the iris), the light
@@ -480,10 +485,14 @@ def _camera_radiance(state, scene, cam, ray):
     camera path is split at the first interface it meets (the cornea's 2.4 % reflection would
     otherwise be a rare, bright event in every pupil and iris pixel)."""
     g = cam.split_grid
-    state, radiance, has_branch, branch = _path_radiance(state, scene, cam, ray, 1.0, True, g)
+    state, radiance, has_branch, branch = _path_radiance(
+        state, scene, cam, ray, 1.0, True, g, e_led
+    )
     if has_branch and branch.beta > 0.0:
         # the reflected branch (beta = R, ~2 %) continues in one direction, not g²
-        state, more, _, _ = _path_radiance(state, scene, cam, branch.ray, branch.beta, False, 1)
+        state, more, _, _ = _path_radiance(
+            state, scene, cam, branch.ray, branch.beta, False, 1, e_led
+        )
         radiance += more
     return state, radiance
 
@@ -543,6 +552,7 @@ def _camera_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139
         adet = a.a11 * a.a22 - a.a12 * a.a21
         shift = 1.0 - (cam_z - rear_z) / (cam_z - xp_z)
         pseed = mix64(mix64(np.uint64(seed)) + np.uint64(p))
+        e_led = np.empty(leds.points.shape[0])  # scratch of sampled_irradiance, per pixel
         for m in range(first_set, first_set + n_sets):
             state = stream_start(pseed, m)
             state, ua = next_uniform(state)
@@ -574,7 +584,7 @@ def _camera_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139
                 if not r.passed:
                     continue
                 state, radiance = _camera_radiance(
-                    state, tables, camera, Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz)
+                    state, tables, camera, Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz), e_led
                 )
                 total += area * r.g / aim.det * radiance
             mean = total / strata
