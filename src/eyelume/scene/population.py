@@ -561,7 +561,8 @@ def sample_people(
                 f"person {i}: {_CORNEA_TRIES} draws of the anterior cornea's radius, "
                 "asphericity and astigmatism all make a cornea that does not reach its limbus "
                 "in front of the iris; narrow their bounds",
-                field="population.distributions.corneal_radius_mm / corneal_asphericity_q",
+                field="population.distributions.corneal_radius_mm / corneal_asphericity_q"
+                + (" / corneal_astigmatism_j0_d / _j45_d" if len(redraw) > 2 else ""),
             )
         over, skipped = _overrides(scene, values, pop.used, dists)
         person = Person(i, values, over, None, skipped)
