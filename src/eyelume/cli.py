@@ -512,8 +512,32 @@ def render(
         f"on the sensor {summary['power_w']['sensor']:.3g} W of "
         f"{summary['power_w']['emitted']:.4g} W emitted; wrote {len(written)} files to {out}"
     )
+    if "ambient" in summary:
+        err.print(_ambient_line(summary["ambient"]), highlight=False)
     if result.interrupted:
         _exit_interrupted()
+
+
+def _ratio_text(x) -> str:
+    return "unbounded (no ambient there)" if x is None else f"{x:.3g}"
+
+
+def _ambient_line(amb: dict) -> str:
+    """One line of the sunlight's signal to ambient (summary.json's ``ambient``)."""
+    sun = amb["sun"]
+    parts = [
+        f"sunlight {sun['spectrum']} ({sun['seen_w_m2']:.3g} W/m² through the filter, "
+        f"{sun['band_nm'][0]:g}-{sun['band_nm'][1]:g} nm)"
+    ]
+    if amb["glints"]:
+        parts.append(f"glint/ambient min {_ratio_text(amb['glint_signal_to_ambient_min'])}")
+        weakest = _ratio_text(amb["glint_peak_over_ambient_peak"])
+        parts.append(f"weakest glint/sun's brightest pixel {weakest}")
+    if amb["pupil"] is not None:
+        parts.append(
+            f"pupil-iris contrast/ambient {_ratio_text(amb['pupil']['signal_to_ambient'])}"
+        )
+    return "; ".join(parts)
 
 
 def _check_render_options(estimator, rays, samples, rel_error, max_samples, seed) -> None:

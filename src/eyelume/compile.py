@@ -80,6 +80,9 @@ __all__ = [
     "compile_scene",
     "single_wavelength",
     "wavelength_groups",
+    "SunSource",
+    "SUN_DISTANCE_MM",
+    "SUN_FIELD_RADIUS_MM",
     "scene_frame",
     "gaze_rotation",
     "eye_point",
@@ -213,6 +216,8 @@ class CompiledScene:
     first_order: FirstOrder  # the camera's first-order optics (camera frame)
     # a wavelength group's compile: the scene index of each LED table row (None: all, in order)
     led_ids: tuple[int, ...] | None = None
+    # the sunlight's compile (compile_scene(..., sun=)): its one source is the sun, no LED emits
+    sun: SunSource | None = None
 
     @property
     def led_indices(self) -> list[int]:
@@ -1644,6 +1649,63 @@ def _camera_tables(
     )
 
 
+#: The sun's stand-in point source lies this far from the eye's nominal corneal vertex (mm).
+#: Over the 30 mm of an eye its rays diverge by ±0.09° (the sun's disc: ±0.27°) and the
+#: irradiance varies by ±0.3 % (1/r²); a glint of it is a point image like the sun's.
+SUN_DISTANCE_MM = 1.0e4
+#: Its light reaches the plane through the eye (normal to the sun) out to this radius (mm)
+#: about the vertex, uniformly (a flat-topped cone of half-angle atan(150/10⁴) = 0.86°): the
+#: eye, lids, brow and cheek an eye camera sees; beyond it the face is not lit by the sun.
+SUN_FIELD_RADIUS_MM = 150.0
+
+
+@dataclass(frozen=True)
+class SunSource:
+    """The sun as the kernels trace it (:func:`compile_scene` with ``sun``): a point source at
+    :data:`SUN_DISTANCE_MM` from the eye's nominal corneal vertex along ``direction`` (toward
+    the sun, world frame as the file writes it; mirrored for a left eye), of radiant intensity
+    I = E d² in a flat-topped cone reaching ``field_radius_mm`` (default
+    :data:`SUN_FIELD_RADIUS_MM`) about the vertex, so that the irradiance normal to the sun at
+    the eye is ``irradiance_w_mm2``; traced at ``wavelength_nm``
+    (:class:`eyelume.detectors.sensor.SunlightBand`)."""
+
+    direction: tuple[float, float, float]
+    irradiance_w_mm2: float
+    wavelength_nm: float
+    field_radius_mm: float = SUN_FIELD_RADIUS_MM
+
+
+def _sun_table(
+    scene: Scene, sun: SunSource, frame: Frame
+) -> tuple[LedTable, np.ndarray, np.ndarray]:
+    """The sun's LedTable (one row), Ω_eff (1,) and its world position (1, 3)."""
+    d = np.asarray(sun.direction, dtype=float)
+    d = as_world(scene, d / np.linalg.norm(d))
+    point = eye_point(scene, (0.0, 0.0, 0.0), 0.0, 0.0) + SUN_DISTANCE_MM * d
+    world = point[None, :]
+    points, axes = world, -d[None, :]
+    if not frame.is_identity:
+        points, axes = frame.point(points), frame.vector(axes)
+    cone = math.atan(sun.field_radius_mm / SUN_DISTANCE_MM)
+
+    def flat_top(alpha):
+        return (np.asarray(alpha) <= cone).astype(float)
+
+    alpha_grid, cdf_grid, omega = profile_tables(flat_top)
+    i0 = sun.irradiance_w_mm2 * SUN_DISTANCE_MM**2
+    table = LedTable(
+        np.ascontiguousarray(points),
+        np.ascontiguousarray(axes, dtype=float),
+        np.array([i0]),
+        np.ascontiguousarray(alpha_grid),
+        np.ascontiguousarray(cdf_grid[None, :]),
+        np.ascontiguousarray(flat_top(alpha_grid)[None, :]),
+        np.array([1.0]),
+        True,
+    )
+    return table, np.array([omega]), world
+
+
 @dataclass(frozen=True)
 class WavelengthGroup:
     """The LEDs of one wavelength: ``index`` (0, 1, … in order of increasing wavelength),
@@ -1706,7 +1768,11 @@ def single_wavelength(scene: Scene) -> bool:
 
 
 def compile_scene(
-    scene: Scene, group: WavelengthGroup | None = None, *, nominal: CompiledScene | None = None
+    scene: Scene,
+    group: WavelengthGroup | None = None,
+    *,
+    nominal: CompiledScene | None = None,
+    sun: SunSource | None = None,
 ) -> CompiledScene:
     """Turn a validated scene into the tables the kernels read, one scene part at a time.
     Raises SceneError on geometry that cannot exist (crossing lens surfaces, LEDs inside the
@@ -1722,8 +1788,13 @@ def compile_scene(
     ``led_ids`` their indices in the scene); every LED's body is still there (an absorber,
     whichever LEDs emit). A prescription lens keeps the clear apertures of the lens as built,
     sized at the scene's wavelength (from ``nominal``, that compile, made here if not given).
+
+    With ``sun`` (:class:`SunSource`): the scene traced at the sun's wavelength like a group,
+    its only source the sun (``led_ids`` = (), ``sun`` set); the LEDs' bodies stay.
     """
     scene = with_contact_lens(scene)  # a contact lens is built into the eye (scene/eye.py)
+    if sun is not None:
+        group = WavelengthGroup(-1, float(sun.wavelength_nm), ())
     if group is not None:
         if scene.camera.optics == "prescription" and nominal is None:
             nominal = compile_scene(scene)
@@ -1749,7 +1820,10 @@ def compile_scene(
     world = centres, axes
     if not frame.is_identity:
         centres, axes = frame.point(centres), frame.vector(axes)
-    led, omega = _led_table(scene, centres, axes, None if group is None else group.leds)
+    if sun is not None:
+        led, omega, _ = _sun_table(scene, sun, frame)
+    else:
+        led, omega = _led_table(scene, centres, axes, None if group is None else group.leds)
     if group is None:  # a group's LEDs were looked at in the nominal compile
         _check_leds_light_the_eye(scene, *world, led)
     _add_lens_entrance(t, lens.lf)
@@ -1778,6 +1852,7 @@ def compile_scene(
         frame=frame,
         first_order=first,
         led_ids=None if group is None else group.leds,
+        sun=sun,
     )
 
 

@@ -18,6 +18,14 @@ with its own seed (:func:`group_seed`); the images, eye planes, variances (the g
 independent), ledgers and glints add up, and the sensor's photo-electrons are the groups'
 sum (:attr:`RenderResult.eye_image_at_scene_wavelength`). A scene whose LEDs all shine at its
 ``wavelength_nm`` renders as one, exactly as before groups existed.
+
+Sunlight (``ambient.sun``) is rendered apart, after the LEDs: the scene compiled with the sun
+as its only source (:func:`eyelume.compile.compile_scene` with ``sun``; its irradiance the
+equivalent one at the scene's wavelength, :func:`eyelume.detectors.sensor.sunlight_band`), by
+the same estimator and budget with its own seed (:func:`sun_seed`), kept in
+:attr:`RenderResult.ambient`. ``eye_image`` stays the LEDs' picture; the sensor counts both
+(:attr:`RenderResult.eye_image_at_scene_wavelength`), and the summary reports the glints' and
+the pupil's signal to ambient (:func:`eyelume.analysis.ambient.signal_to_ambient`).
 """
 
 from __future__ import annotations
@@ -25,15 +33,17 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from eyelume.analysis.ambient import signal_to_ambient
 from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import (
     CompiledScene,
+    SunSource,
     compile_scene,
     connected_by_newton,
     element_index,
@@ -48,15 +58,22 @@ from eyelume.detectors.psf import (
     region_mean_variance,
 )
 from eyelume.detectors.receivers import BinnedPlane
-from eyelume.detectors.sensor import count_weights, quantum_efficiency_at
+from eyelume.detectors.sensor import (
+    SunlightBand,
+    count_weights,
+    quantum_efficiency_at,
+    sunlight_band,
+)
 from eyelume.errors import SceneError
 from eyelume.estimators.fast_run import RunControl, direct_eye_plane, trace_fast, warm_up
 from eyelume.estimators.forward import trace_forward, trace_paths
 from eyelume.estimators.statistics import median_pixel_rel_error
 from eyelume.layout import VIEWS, Section, system_sections
+from eyelume.scene.eye_models import DISPERSION_RANGE_NM
 from eyelume.scene.model import Scene
 
 __all__ = [
+    "AmbientRender",
     "GroupRender",
     "RenderExtras",
     "RenderOptions",
@@ -65,6 +82,7 @@ __all__ = [
     "group_seed",
     "render",
     "render_extras",
+    "sun_seed",
 ]
 
 
@@ -85,6 +103,51 @@ def group_seed(seed: int, index: int) -> int:
     """
     state = np.random.SeedSequence([int(seed), _GROUP_SEED_TAG, int(index)])
     return int(state.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
+
+
+#: Mixed into the sunlight's seed (:func:`sun_seed`).
+_SUN_SEED_TAG = 0x5A11CE
+
+
+def sun_seed(seed: int) -> int:
+    """The seed of the sunlight's render beside a render with ``seed``: the first 63 bits of
+    ``numpy.random.SeedSequence([seed, 0x5A11CE])``'s first 64-bit word (a stream apart from
+    the LEDs' and every wavelength group's).
+
+    >>> sun_seed(1) == sun_seed(1) != sun_seed(2)
+    True
+    """
+    state = np.random.SeedSequence([int(seed), _SUN_SEED_TAG])
+    return int(state.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
+
+
+@dataclass
+class AmbientRender:
+    """The sunlight's picture beside a render's LEDs (:func:`render`, ``ambient.sun``).
+
+    ``band``: how the sensor counts it (:class:`eyelume.detectors.sensor.SunlightBand`);
+    ``eye_image`` and ``eye_image_variance`` ((rows, cols), W/mm² and (W/mm²)²): the sunlight's
+    image-plane irradiance as light at the scene's wavelength giving the same photo-electrons
+    (PSF applied at the sun's trace wavelength); ``seed``, ``rays`` (forward rays or camera
+    samples plus light paths), ``interrupted``; ``direction_world``: unit vector toward the sun
+    in the world frame (mirrored for a left eye)."""
+
+    band: SunlightBand
+    eye_image: np.ndarray
+    eye_image_variance: np.ndarray
+    seed: int
+    rays: int
+    interrupted: bool
+    direction_world: tuple[float, float, float]
+
+    def summary(self) -> dict:
+        return {
+            "sun": self.band.summary(),
+            "direction_world": list(self.direction_world),
+            "seed": self.seed,
+            "rays": self.rays,
+            "interrupted": self.interrupted,
+        }
 
 
 @dataclass
@@ -184,6 +247,7 @@ class RenderResult:
     groups: list[GroupRender] | None = None  # LEDs of several wavelengths: each group's share
     psf_parts: list[tuple[PixelPsf, np.ndarray]] | None = None
     psf_skipped: bool = False  # the scene asks for a PSF but missing pixels left it unapplied
+    ambient: AmbientRender | None = None  # ambient.sun: the sunlight's picture, apart
 
     @property
     def psf(self) -> PixelPsf | None:
@@ -192,7 +256,15 @@ class RenderResult:
 
     @property
     def eye_image_at_scene_wavelength(self) -> np.ndarray:
-        """The eye image as the sensor counts it: the irradiance at the scene's
+        """The picture as the sensor counts it, LEDs and sunlight: :attr:`led_image_at_scene_
+        wavelength` plus the ambient's picture (already counted at the scene's wavelength,
+        :class:`AmbientRender`), (rows, cols) W/mm². Without ``ambient.sun``, the LEDs'."""
+        led = self.led_image_at_scene_wavelength
+        return led if self.ambient is None else led + self.ambient.eye_image
+
+    @property
+    def led_image_at_scene_wavelength(self) -> np.ndarray:
+        """The LEDs' eye image as the sensor counts it: the irradiance at the scene's
         ``wavelength_nm`` that gives the same mean photo-electrons, (rows, cols) W/mm².
 
         A pixel's mean photo-electrons are Σ_g E_g p² t QE(λ_g) / (h c / λ_g) over the
@@ -207,7 +279,11 @@ class RenderResult:
         (:func:`render` checks these before tracing)."""
         sc = self.scene
         lam = float(sc.wavelength_nm)
-        line = isinstance(sc.sensor.quantum_efficiency, float) and not sc.leds.has_spectral_width
+        line = (
+            isinstance(sc.sensor.quantum_efficiency, float)
+            and not sc.leds.has_spectral_width
+            and sc.sensor.filter is None
+        )
         if not self.groups:
             if line:
                 return self.eye_image
@@ -269,6 +345,32 @@ class RenderResult:
             out.append(entry)
         return out
 
+    def ambient_summary(self) -> dict:
+        """The sunlight's render and the signal to ambient (:mod:`eyelume.analysis.ambient`)."""
+        amb = self.ambient
+        assert amb is not None
+        out = amb.summary()
+        out.update(
+            signal_to_ambient(self.led_image_at_scene_wavelength, amb.eye_image, self.regions)
+        )
+        if self.estimator == "forward":
+            out["note"] = "the forward estimator labels no glint regions: glints not rated"
+        out["units"] = "W/mm^2 of light at the scene's wavelength giving the same photo-electrons"
+        return out
+
+    def _psf_summary(self) -> dict | list | None:
+        """The PSF applied (each wavelength group's kernel), or why not, or None."""
+        if self.psf_parts:
+            kernels = [k.summary() for k, _ in self.psf_parts]
+            return kernels[0] if len(kernels) == 1 else kernels
+        if self.psf_skipped:
+            return {
+                "kind": self.scene.camera.psf_used,
+                "applied": False,
+                "note": "not applied: the interrupted first round left pixels missing",
+            }
+        return None
+
     def summary(self) -> dict:
         """The run's summary as plain JSON-ready data (``summary.json``)."""
         out = {
@@ -316,16 +418,12 @@ class RenderResult:
             power["escaped"] = self.ledger["escaped"]
             power["sum"] = float(sum(self.ledger.values()))
         out["power_w"] = power
-        if self.psf_parts:
-            kernels = [k.summary() for k, _ in self.psf_parts]
-            out["psf"] = kernels[0] if len(kernels) == 1 else kernels
-        elif self.psf_skipped:
-            out["psf"] = {
-                "kind": self.scene.camera.psf_used,
-                "applied": False,
-                "note": "not applied: the interrupted first round left pixels missing",
-            }
+        psf = self._psf_summary()
+        if psf is not None:
+            out["psf"] = psf
         out["regions"] = self.region_stats()
+        if self.ambient is not None:
+            out["ambient"] = self.ambient_summary()
         out["safety"] = eye_safety(self.scene)
         out["units"] = {"eye_image": "W/mm^2", "eye_plane": "W/mm^2", "power": "W"}
         return out
@@ -415,11 +513,15 @@ def check_estimator(scene: Scene, estimator: str) -> None:
 def check_sensor_spectra(scene: Scene) -> None:
     """Read and check the sensor's QE curve at every LED wavelength and spectrum and at the
     scene's wavelength (:func:`eyelume.detectors.sensor.count_weights`), so that a bad table
-    fails before any tracing. Raises InputFileError or SceneError (one line)."""
+    fails before any tracing; and the sunlight's count (``ambient.sun``,
+    :func:`eyelume.detectors.sensor.sunlight_band`). Raises InputFileError or SceneError (one
+    line)."""
     lam = float(scene.wavelength_nm)
     leds_nm = sorted(set(scene.leds.wavelengths_nm(lam)))
     widths = [scene.leds.spectral_width_at(x, lam) for x in leds_nm]
     count_weights(scene.sensor, leds_nm, widths, lam)
+    if scene.ambient.sun is not None:
+        sunlight_band(scene.sensor, scene.ambient.sun, lam)
 
 
 def render(
@@ -430,7 +532,58 @@ def render(
     status: Callable[[str], None] | None = None,
     advance: Callable[[int, int], None] | None = None,
 ) -> RenderResult:
-    """Render a scene's eye image and eye-plane irradiance.
+    """Render a scene's eye image and eye-plane irradiance, and its sunlight apart
+    (``ambient.sun``: module docstring; :attr:`RenderResult.ambient`).
+
+    The LEDs' render is :func:`_render_leds` (its parameters and errors); the sunlight's band
+    (:func:`eyelume.detectors.sensor.sunlight_band`) is checked before any tracing. A render
+    interrupted in the LEDs' part has no sunlight (``ambient`` None).
+    """
+    opt = RenderOptions() if options is None else options
+    cs = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
+    sc = cs.scene
+    sun = sc.ambient.sun
+    band = None
+    if sun is not None and cs.sun is None and cs.led_ids is None:
+        band = sunlight_band(sc.sensor, sun, float(sc.wavelength_nm))
+    result = _render_leds(cs, opt, progress=progress, status=status, advance=advance)
+    if band is None or result.interrupted:
+        return result
+    if status is not None:
+        status(f"sunlight ({band.spectrum}, traced at {band.trace_wavelength_nm:g} nm)")
+    lam = band.trace_wavelength_nm
+    if sc.eye.dispersion == "atchison_smith_2005" or sc.eye.cornea_reflection == "tear_film":
+        lam = min(max(lam, DISPERSION_RANGE_NM[0]), DISPERSION_RANGE_NM[1])
+    source = SunSource(sun.direction(), band.irradiance_w_mm2, lam)
+    cs_sun = compile_scene(sc, sun=source, nominal=cs)
+    seed = sun_seed(result.seed)
+    sub = _render_leds(
+        cs_sun, replace(opt, seed=seed), progress=progress, status=status, advance=advance
+    )
+    direction = cs_sun.tables.leds.axes[0]
+    world = -cs.frame.rotation.T @ direction  # camera frame → world (a rotation's inverse)
+    result.ambient = AmbientRender(
+        band=band,
+        eye_image=sub.eye_image,
+        eye_image_variance=sub.eye_image_variance,
+        seed=seed,
+        rays=sub.rays,
+        interrupted=sub.interrupted,
+        direction_world=tuple(float(x) for x in world),
+    )
+    return result
+
+
+def _render_leds(
+    scene: Scene | CompiledScene,
+    options: RenderOptions | None = None,
+    *,
+    progress: Callable[[int, int], None] | None = None,
+    status: Callable[[str], None] | None = None,
+    advance: Callable[[int, int], None] | None = None,
+) -> RenderResult:
+    """Render a scene's eye image and eye-plane irradiance (its LEDs', or a sun compile's
+    sunlight).
 
     Parameters
     ----------
@@ -462,7 +615,8 @@ def render(
     seed = sc.run.seed if seed is None else int(seed)
     estimator = opt.estimator or ("forward" if rays is not None else sc.run.estimator)
     check_estimator(sc, estimator)
-    check_sensor_spectra(sc)  # a bad QE table fails now, not after the tracing
+    if cs.sun is None:  # a sun compile's wavelength is its own trace wavelength, not counted
+        check_sensor_spectra(sc)  # a bad QE table fails now, not after the tracing
     if cs.led_ids is None and not single_wavelength(sc):
         if estimator not in ("fast", "forward"):
             raise ValueError(f"estimator = {estimator!r}: must be 'fast' or 'forward'")

@@ -19,7 +19,11 @@ area, centred on their wavelength λ₀; a watt of it gives
 
     ∫ QE(λ) λ/(h c) S(λ) dλ   photo-electrons per second   (:func:`spectral_response_nm`)
 
-instead of QE(λ₀) λ₀/(h c).
+instead of QE(λ₀) λ₀/(h c). A filter in front of the sensor (``sensor.filter``,
+:func:`filter_transmittance`) multiplies QE(λ) by its transmittance T(λ) for every light.
+
+Sunlight (``ambient.sun``, :func:`sunlight_band`) is counted the same way over its whole
+spectrum: E_sun(λ) T(λ) QE(λ) λ/(h c) integrated over the wavelengths the sensor sees.
 
 A pixel is *saturated* when its electrons reach the full well or its reading reaches the ADC's
 full scale: its value no longer tells how much light it received. The noise draws come from a
@@ -37,24 +41,30 @@ import numpy as np
 from scipy.constants import c, h
 
 from eyelume.errors import InputFileError, SceneError
-from eyelume.scene.model import QE_CURVES, Sensor
+from eyelume.scene.model import QE_CURVES, Sensor, Sun
+from eyelume.scene.solar import solar_spectrum
 from eyelume.scene.textfile import read_csv_table
 
 __all__ = [
     "DigitalImage",
+    "SunlightBand",
     "SPECTRUM_HALF_WIDTH_SIGMA",
     "camera_summary",
     "count_weights",
     "digitize",
     "electrons_per_w_mm2",
+    "filter_transmittance",
+    "filter_table",
     "gaussian_spectrum_sigma_nm",
     "photon_energy_j",
     "quantum_efficiency_at",
     "quantum_efficiency_curve",
     "spectral_response_nm",
+    "sunlight_band",
 ]
 
 _QE_FIELD = "sensor.quantum_efficiency"
+_FILTER_FIELD = "sensor.filter.table_csv"
 #: An LED's Gaussian spectrum is taken over λ₀ ± this many standard deviations (renormalised
 #: to unit area there; the tails beyond hold 5.7e-7 of it), which the QE table must cover.
 SPECTRUM_HALF_WIDTH_SIGMA = 5.0
@@ -182,6 +192,89 @@ def quantum_efficiency_at(sensor: Sensor, wavelength_nm: float) -> float:
     return float(np.interp(wavelength_nm, lam, q))
 
 
+def filter_table(sensor: Sensor) -> tuple[np.ndarray, np.ndarray] | None:
+    """A ``kind = "table"`` filter's rows, (wavelengths nm (n,), T (n,)); None otherwise.
+
+    Raises
+    ------
+    InputFileError
+        One line naming the file and ``sensor.filter.table_csv``: unreadable, fewer than two
+        rows, a wavelength not finite and > 0 or not strictly increasing (T not a function of
+        λ), a transmittance outside [0, 1].
+    """
+    f = sensor.filter
+    if f is None or f.kind != "table":
+        return None
+    where = Path(f.table_csv)  # type: ignore[arg-type]
+    table = read_csv_table(where, _FILTER_FIELD, ("wavelength_nm", "transmittance"))
+    lam, t = table[:, 0], table[:, 1]
+    if len(lam) < 2:
+        raise InputFileError(
+            f"{len(lam)} row(s): a filter table needs at least two wavelengths",
+            file=where,
+            field=_FILTER_FIELD,
+        )
+    for n, (x, y) in enumerate(table, 1):
+        if not (math.isfinite(x) and x > 0):
+            raise InputFileError(
+                f"row {n}: wavelength {x!r} nm must be finite and > 0",
+                file=where,
+                field=_FILTER_FIELD,
+            )
+        if not (math.isfinite(y) and 0 <= y <= 1):
+            raise InputFileError(
+                f"row {n} ({x:g} nm): transmittance {y!r} lies outside [0, 1]",
+                file=where,
+                field=_FILTER_FIELD,
+            )
+    steps = np.diff(lam)
+    if np.any(steps <= 0):
+        n = int(np.argmax(steps <= 0)) + 2
+        raise InputFileError(
+            f"row {n}: wavelength {lam[n - 1]:g} nm after {lam[n - 2]:g} nm: the wavelengths "
+            "must increase strictly (T must be a function of wavelength)",
+            file=where,
+            field=_FILTER_FIELD,
+        )
+    return lam, t
+
+
+def filter_transmittance(sensor: Sensor, wavelength_nm) -> np.ndarray:
+    """The sensor filter's transmittance T(λ) at ``wavelength_nm`` (a number or an array, nm):
+    1 without a filter; a long- or band-pass filter's ``transmittance`` inside its band (edges
+    included) and 0 outside; a table's rows linearly interpolated, 0 outside them.
+
+    >>> from eyelume.scene.model import Sensor
+    >>> s = Sensor(filter={"kind": "band_pass", "cut_on_nm": 900, "cut_off_nm": 980,
+    ...                    "transmittance": 0.9})
+    >>> filter_transmittance(s, [850.0, 940.0]).tolist()
+    [0.0, 0.9]
+    """
+    lam = np.asarray(wavelength_nm, dtype=float)
+    f = sensor.filter
+    if f is None:
+        return np.ones_like(lam)
+    if f.kind == "table":
+        t_lam, t = filter_table(sensor)  # type: ignore[misc]
+        return np.interp(lam, t_lam, t, left=0.0, right=0.0)
+    inside = lam >= f.cut_on_nm
+    if f.kind == "band_pass":
+        inside &= lam <= f.cut_off_nm
+    return np.where(inside, f.transmittance, 0.0)
+
+
+def _check_filter_covers(sensor: Sensor, lo: float, hi: float, what: str) -> None:
+    """A table filter must cover an LED's wavelength (spectrum): SceneError otherwise."""
+    table = filter_table(sensor)
+    if table is not None and (lo < table[0][0] or hi > table[0][-1]):
+        raise SceneError(
+            f"{what} lies outside the filter table's {table[0][0]:g}-{table[0][-1]:g} nm "
+            "(it is not extrapolated)",
+            field=_FILTER_FIELD,
+            value=sensor.filter.table_csv,  # type: ignore[union-attr]
+        )
+
+
 def gaussian_spectrum_sigma_nm(fwhm_nm: float) -> float:
     """Standard deviation of a Gaussian of full width at half maximum ``fwhm_nm``:
     σ = FWHM / (2 √(2 ln 2))."""
@@ -189,7 +282,8 @@ def gaussian_spectrum_sigma_nm(fwhm_nm: float) -> float:
 
 
 def spectral_response_nm(sensor: Sensor, wavelength_nm: float, fwhm_nm: float = 0.0) -> float:
-    """∫ QE(λ) λ S(λ) dλ (nm): the photo-electrons per joule times h c (λ in nm).
+    """∫ QE(λ) T(λ) λ S(λ) dλ (nm): the photo-electrons per joule times h c (λ in nm); T the
+    sensor filter's transmittance (:func:`filter_transmittance`, 1 without a filter).
 
     S is a Gaussian spectrum of full width at half maximum ``fwhm_nm`` centred on
     λ₀ = ``wavelength_nm``, taken over λ₀ ± :data:`SPECTRUM_HALF_WIDTH_SIGMA` σ and normalised to
@@ -205,7 +299,11 @@ def spectral_response_nm(sensor: Sensor, wavelength_nm: float, fwhm_nm: float = 
         spectrum λ₀ ± 5σ.
     """
     if fwhm_nm == 0:
-        return quantum_efficiency_at(sensor, wavelength_nm) * wavelength_nm
+        if sensor.filter is None:
+            return quantum_efficiency_at(sensor, wavelength_nm) * wavelength_nm
+        _check_filter_covers(sensor, wavelength_nm, wavelength_nm, f"{wavelength_nm:g} nm")
+        t = float(filter_transmittance(sensor, wavelength_nm))
+        return quantum_efficiency_at(sensor, wavelength_nm) * t * wavelength_nm
     sigma = gaussian_spectrum_sigma_nm(fwhm_nm)
     half = SPECTRUM_HALF_WIDTH_SIGMA * sigma
     lo, hi = wavelength_nm - half, wavelength_nm + half
@@ -225,6 +323,11 @@ def spectral_response_nm(sensor: Sensor, wavelength_nm: float, fwhm_nm: float = 
                 f"{fwhm_nm:g} nm, ±{SPECTRUM_HALF_WIDTH_SIGMA:g} sigma)",
             )
         qe = np.interp(lam, table_lam, table_q)
+    if sensor.filter is not None:
+        _check_filter_covers(
+            sensor, lo, hi, f"the LED spectrum {lo:.4g}-{hi:.4g} nm (centre {wavelength_nm:g} nm)"
+        )
+        qe = qe * filter_transmittance(sensor, lam)
     return float(np.trapezoid(qe * lam * weight, x) / np.trapezoid(weight, x))
 
 
@@ -244,7 +347,7 @@ def electrons_per_w_mm2(sensor: Sensor, wavelength_nm: float, fwhm_nm: float = 0
     """
     pitch_mm = sensor.pixel_pitch_um * 1e-3
     joules_per_w_mm2 = pitch_mm**2 * sensor.exposure_ms * 1e-3
-    if isinstance(sensor.quantum_efficiency, float) and fwhm_nm == 0:
+    if isinstance(sensor.quantum_efficiency, float) and fwhm_nm == 0 and sensor.filter is None:
         return joules_per_w_mm2 * sensor.quantum_efficiency / photon_energy_j(wavelength_nm)
     response_nm = spectral_response_nm(sensor, wavelength_nm, fwhm_nm)
     return joules_per_w_mm2 * response_nm * 1e-9 / (h * c)
@@ -271,8 +374,15 @@ def count_weights(
     widths = list(fwhm_nm) if isinstance(fwhm_nm, list | tuple) else [fwhm_nm] * len(wavelengths_nm)
     if len(widths) != len(wavelengths_nm):
         raise ValueError(f"{len(widths)} widths for {len(wavelengths_nm)} wavelengths")
-    if isinstance(sensor.quantum_efficiency, float) and not any(widths):
+    if isinstance(sensor.quantum_efficiency, float) and not any(widths) and sensor.filter is None:
         return [lam / scene_wavelength_nm for lam in wavelengths_nm]
+    if sensor.filter is not None and spectral_response_nm(sensor, scene_wavelength_nm) <= 0:
+        raise SceneError(
+            f"the filter blocks the scene's wavelength_nm = {scene_wavelength_nm:g}, at which "
+            "the digital picture is counted: choose a wavelength the filter passes",
+            field="sensor.filter",
+            value=sensor.filter.kind,
+        )
     if quantum_efficiency_at(sensor, scene_wavelength_nm) <= 0:
         raise SceneError(
             f"the QE curve is 0 at the scene's wavelength_nm = {scene_wavelength_nm:g}, at "
@@ -285,6 +395,143 @@ def count_weights(
         electrons_per_w_mm2(sensor, lam, w) / ref
         for lam, w in zip(wavelengths_nm, widths, strict=True)
     ]
+
+
+@dataclass(frozen=True)
+class SunlightBand:
+    """How the sensor counts the sunlight of ``ambient.sun`` (:func:`sunlight_band`).
+
+    Attributes
+    ----------
+    irradiance_w_mm2 : float
+        E_eq: the irradiance (W/mm², normal to the sun's direction, at the eye) of light at the
+        scene's wavelength that would give the sensor as many photo-electrons as the sunlight.
+    band_nm : (float, float)
+        The wavelengths integrated (nm).
+    seen_w_m2 : float
+        s ∫ E_λ T dλ over the band: the sunlight the filter passes where the sensor sees (W/m²).
+    trace_wavelength_nm : float
+        λ̄, the electron-weighted mean wavelength of the counted sunlight (0.1 nm), at which its
+        light is traced (the eye's indices, the cornea's reflection).
+    spectrum : str
+        The spectrum's name (``ambient.sun.spectrum``).
+    """
+
+    irradiance_w_mm2: float
+    band_nm: tuple[float, float]
+    seen_w_m2: float
+    trace_wavelength_nm: float
+    spectrum: str
+
+    def summary(self) -> dict:
+        return {
+            "spectrum": self.spectrum,
+            "band_nm": list(self.band_nm),
+            "seen_w_m2": self.seen_w_m2,
+            "equivalent_irradiance_w_m2": self.irradiance_w_mm2 * 1e6,
+            "trace_wavelength_nm": self.trace_wavelength_nm,
+        }
+
+
+def _sun_band(sensor: Sensor) -> tuple[float, float]:
+    """Where the sensor sees sunlight: the QE curve's range, narrowed to the filter's band."""
+    lo, hi = 0.0, math.inf
+    curve = quantum_efficiency_curve(sensor)
+    if curve is not None:
+        lo, hi = float(curve[0][0]), float(curve[0][-1])
+    f = sensor.filter
+    if f is not None and f.kind != "table":
+        lo = max(lo, float(f.cut_on_nm))  # type: ignore[arg-type]
+        if f.kind == "band_pass":
+            hi = min(hi, float(f.cut_off_nm))  # type: ignore[arg-type]
+    elif f is not None:
+        t_lam = filter_table(sensor)[0]  # type: ignore[index]
+        lo, hi = max(lo, float(t_lam[0])), min(hi, float(t_lam[-1]))
+    if curve is None and math.isinf(hi):
+        raise SceneError(
+            "a single-number QE says nothing about where the sensor stops seeing: for sunlight "
+            "give a QE curve (e.g. 'nir-global-shutter') or a band_pass or table sensor.filter",
+            field=_QE_FIELD,
+            value=sensor.quantum_efficiency,
+        )
+    return lo, hi
+
+
+def sunlight_band(sensor: Sensor, sun: Sun, scene_wavelength_nm: float) -> SunlightBand:
+    """The sunlight's count by the sensor, as an equivalent irradiance at the scene's wavelength.
+
+    A surface patch that sends a fraction G of the light arriving on it from the sun's direction
+    to a pixel (the same G at every wavelength of the band: the geometry, and reflectances taken
+    at one wavelength λ̄) gives that pixel
+
+        N̄ = G p² t s ∫ E_λ(λ) T(λ) QE(λ) λ/(h c) dλ   photo-electrons,
+
+    E_λ the spectrum (``ambient.sun.spectrum``, :func:`eyelume.scene.solar.solar_spectrum`), s
+    its ``scale``, T the filter (:func:`filter_transmittance`). Light of the scene's wavelength
+    λ_s and irradiance E_eq gives G p² t E_eq R(λ_s)/(h c), R = :func:`spectral_response_nm`
+    (λ_s) = QE(λ_s) T(λ_s) λ_s; so the sun is traced as a source of irradiance
+
+        E_eq = s ∫ E_λ T QE λ dλ / R(λ_s)
+
+    and its picture counted like light at λ_s (weight 1). The integral runs over where the
+    sensor sees (the QE curve's range, narrowed to a long- or band-pass filter's band or a
+    filter table's rows: :func:`_sun_band`), by the trapezoid rule on the union of the solar
+    table's, the QE curve's and the filter table's rows there (E_λ, QE and T linear between
+    them), exact at the filter's step edges.
+
+    Raises
+    ------
+    SceneError
+        A single-number QE without a band-pass or table filter (no band); a band the solar
+        table does not reach, or through which no sunlight is counted; the QE or filter at the
+        scene's wavelength 0 (:func:`count_weights`).
+    InputFileError
+        A bad QE or filter table.
+    """
+    lo, hi = _sun_band(sensor)
+    lam_sun, e_sun = solar_spectrum(sun.spectrum)
+    lo, hi = max(lo, float(lam_sun[0])), min(hi, float(lam_sun[-1]))
+    if not lo < hi:
+        raise SceneError(
+            f"the sensor's band {lo:g}-{hi:g} nm holds no sunlight of the ASTM G173 table "
+            f"({lam_sun[0]:g}-{lam_sun[-1]:g} nm)",
+            field="ambient.sun",
+            value=sun.spectrum,
+        )
+    nodes = [lam_sun, np.array([lo, hi])]
+    curve = quantum_efficiency_curve(sensor)
+    if curve is not None:
+        nodes.append(curve[0])
+    table = filter_table(sensor)
+    if table is not None:
+        nodes.append(table[0])
+    lam = np.unique(np.concatenate(nodes))
+    lam = lam[(lam >= lo) & (lam <= hi)]
+    e = np.interp(lam, lam_sun, e_sun)
+    qe = (
+        np.full_like(lam, float(sensor.quantum_efficiency))
+        if curve is None
+        else np.interp(lam, curve[0], curve[1])
+    )
+    t = filter_transmittance(sensor, lam)
+    w = e * t * qe * lam
+    counted = float(np.trapezoid(w, lam))
+    if counted <= 0:
+        raise SceneError(
+            f"no sunlight is counted in the sensor's band {lo:g}-{hi:g} nm (QE or filter 0 there)",
+            field="ambient.sun",
+            value=sun.spectrum,
+        )
+    count_weights(sensor, [scene_wavelength_nm], 0.0, scene_wavelength_nm)  # λ_s counts
+    response = spectral_response_nm(sensor, scene_wavelength_nm)
+    mean_nm = float(np.trapezoid(w * lam, lam)) / counted
+    return SunlightBand(
+        irradiance_w_mm2=sun.scale * counted / response * 1e-6,
+        band_nm=(lo, hi),
+        seen_w_m2=sun.scale * float(np.trapezoid(e * t, lam)),
+        trace_wavelength_nm=round(mean_nm, 1),
+        spectrum=sun.spectrum,
+    )
 
 
 def _check_irradiance(irradiance_w_mm2: np.ndarray) -> np.ndarray:

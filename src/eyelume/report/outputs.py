@@ -32,7 +32,10 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
     units, ``layout.png`` (a y–z section with a few dozen traced rays) and ``summary.json`` (run
     facts, power ledger and, under ``"camera"``, the sensor settings and saturated pixels) and
     ``truth.json`` (the true gaze, apparent pupil and glint positions on the picture:
-    :func:`eyelume.analysis.truth.eye_truth`).
+    :func:`eyelume.analysis.truth.eye_truth`). With ``ambient.sun``: ``ambient_image.npy``,
+    ``ambient_image_std.npy`` and ``ambient_image.png`` (the sunlight's picture, W/mm² at the
+    scene's wavelength), the digital picture counting LEDs and sunlight, and the signal to
+    ambient under ``"ambient"`` in summary.json and truth.json.
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -55,9 +58,13 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
     # LEDs of several wavelengths: the photo-electrons are the wavelength groups' sum
     counted = (
         shown
-        if result.groups is None
+        if result.groups is None and result.ambient is None
         else np.where(missing, 0.0, result.eye_image_at_scene_wavelength)
     )
+    if result.ambient is not None:  # the sunlight's picture apart (counted in the digital one)
+        np.save(path("ambient_image.npy"), result.ambient.eye_image)
+        np.save(path("ambient_image_std.npy"), np.sqrt(result.ambient.eye_image_variance))
+        save_grey_png(result.ambient.eye_image, path("ambient_image.png"))
     digital = digitize(counted, sc.sensor, sc.wavelength_nm, result.seed)
     digital.counts[missing] = 0
     np.save(path("eye_image_digital.npy"), digital.counts)
@@ -96,5 +103,8 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
     summary = result.summary()
     summary["camera"] = camera_summary(sc.sensor, sc.wavelength_nm, digital)
     write_json(path("summary.json"), summary)
-    write_json(path("truth.json"), extras.truth)
+    truth = extras.truth
+    if "ambient" in summary:  # where the sun's brightest pixel is, and the ratios
+        truth = {**truth, "ambient": summary["ambient"]}
+    write_json(path("truth.json"), truth)
     return written

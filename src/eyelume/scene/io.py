@@ -66,6 +66,13 @@ def _resolve_paths(data: dict[str, Any], base: Path) -> None:
     qe = sensor.get("quantum_efficiency") if isinstance(sensor, dict) else None
     if isinstance(qe, str) and qe.strip() and qe not in QE_CURVES:
         sensor["quantum_efficiency"] = _resolved(base, qe, "sensor.quantum_efficiency")
+    filt = sensor.get("filter") if isinstance(sensor, dict) else None
+    if (
+        isinstance(filt, dict)
+        and isinstance(filt.get("table_csv"), str)
+        and filt["table_csv"].strip()
+    ):
+        filt["table_csv"] = _resolved(base, filt["table_csv"], "sensor.filter.table_csv")
     lens = data.get("lens")
     if isinstance(lens, dict) and isinstance(lens.get("glass_catalogs"), list):
         lens["glass_catalogs"] = [
@@ -203,6 +210,14 @@ def _drop_eye_for_model(data: dict[str, Any], overrides: dict[str, Any]) -> None
             eye.pop(name, None)
 
 
+def _table_in(node: dict[str, Any], part: str) -> Any:
+    """``node[part]``, made an empty table when absent or None (``ambient.sun`` of a scene
+    without a sun: ``--set ambient.sun.elevation_deg=40`` makes one)."""
+    if node.get(part) is None:
+        node[part] = {}
+    return node[part]
+
+
 def _override_data(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
     data = copy.deepcopy(data)
     _drop_ring_for_positions(data, overrides)
@@ -218,7 +233,7 @@ def _override_data(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str,
                     raise SceneError(f"override '{key}': no item {part} in '{'.'.join(parts[:i])}'")
                 node = node[int(part)]
             else:
-                node = node.setdefault(part, {})
+                node = _table_in(node, part)
             if not isinstance(node, dict | list):
                 raise SceneError(f"override '{key}': '{'.'.join(parts[: i + 1])}' is not a table")
         last = parts[-1]

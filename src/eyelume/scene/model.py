@@ -27,6 +27,7 @@ from pydantic import (
 from eyelume.scene.eye_models import DISPERSION_RANGE_NM, eye_model_data, eye_model_names
 
 __all__ = [
+    "Ambient",
     "Camera",
     "CameraBody",
     "Eye",
@@ -48,6 +49,9 @@ __all__ = [
     "Run",
     "Scene",
     "Sensor",
+    "SensorFilter",
+    "SOLAR_SPECTRA",
+    "Sun",
     "Tissue",
     "WAVELENGTH_RANGE_NM",
 ]
@@ -80,6 +84,13 @@ WAVELENGTH_RANGE_NM = (300.0, 2500.0)
 #: Built-in sensor QE(λ) curves (``sensor.quantum_efficiency = "<name>"``): name → file in
 #: ``eyelume/scene/presets/sensors/`` (each file states its source).
 QE_CURVES = {"nir-global-shutter": "nir-global-shutter.csv"}
+
+#: The sunlight spectra ``ambient.sun.spectrum`` names: name → column of the ASTM G173-03 table
+#: ``eyelume/scene/presets/solar/astm_g173_03.csv`` (W m⁻² nm⁻¹; its source in the file).
+SOLAR_SPECTRA = {
+    "am1.5-direct": "direct_circumsolar_w_m2_nm",
+    "am1.5-global": "global_tilt_w_m2_nm",
+}
 
 #: The per-LED numeric fields of :class:`LedArray`: one value for every LED, or one per LED.
 PER_LED_NUMBERS = (
@@ -951,6 +962,55 @@ class Camera(_Model):
         return pos, view  # type: ignore[return-value]
 
 
+class SensorFilter(_Model):
+    """An optical filter in front of the sensor: its transmittance T(λ) multiplies the sensor's
+    spectral response to every light, the LEDs' and the sun's
+    (:func:`eyelume.detectors.sensor.spectral_response_nm`).
+
+    ``kind``:
+
+    * ``"long_pass"``: T = ``transmittance`` for λ ≥ ``cut_on_nm``, 0 below;
+    * ``"band_pass"``: T = ``transmittance`` for ``cut_on_nm`` ≤ λ ≤ ``cut_off_nm``, 0 outside;
+    * ``"table"``: T(λ) from the CSV file ``table_csv`` (two columns ``wavelength_nm,
+      transmittance``, wavelengths increasing, T in [0, 1]; relative to the scene file),
+      linearly interpolated. An LED spectrum must lie within the table; for sunlight the
+      filter blocks outside the table's rows.
+
+    The long- and band-pass edges are ideal steps (an idealisation: a real interference filter's
+    edge spans 10–30 nm and shifts with the angle of incidence; give a table for a real one).
+    """
+
+    kind: Literal["long_pass", "band_pass", "table"]
+    cut_on_nm: float | None = Field(None, ge=WAVELENGTH_RANGE_NM[0], le=WAVELENGTH_RANGE_NM[1])
+    cut_off_nm: float | None = Field(None, ge=WAVELENGTH_RANGE_NM[0], le=WAVELENGTH_RANGE_NM[1])
+    transmittance: float = Field(1.0, gt=0.0, le=1.0)
+    table_csv: str | None = None
+
+    @model_validator(mode="after")
+    def _fields_of_the_kind(self) -> SensorFilter:
+        given = {
+            k for k in ("cut_on_nm", "cut_off_nm", "table_csv") if getattr(self, k) is not None
+        }
+        need = {
+            "long_pass": {"cut_on_nm"},
+            "band_pass": {"cut_on_nm", "cut_off_nm"},
+            "table": {"table_csv"},
+        }[self.kind]
+        for name in sorted(need - given):
+            raise ValueError(f"kind = {self.kind!r} needs {name}")
+        for name in sorted(given - need):
+            raise ValueError(f"{name} is not a field of a kind = {self.kind!r} filter")
+        if self.kind == "table" and "transmittance" in self.model_fields_set:
+            raise ValueError("transmittance is not a field of a kind = 'table' filter (its T(λ))")
+        if self.kind == "band_pass" and not self.cut_on_nm < self.cut_off_nm:  # type: ignore[operator]
+            raise ValueError(
+                f"cut_on_nm = {self.cut_on_nm:g} must be below cut_off_nm = {self.cut_off_nm:g}"
+            )
+        if self.table_csv is not None and not self.table_csv.strip():
+            raise ValueError("table_csv = '': give the path of a CSV table")
+        return self
+
+
 class Sensor(_Model):
     """The image plane, binned into pixels, and the digital camera that records it.
 
@@ -981,6 +1041,9 @@ class Sensor(_Model):
     group's photo-electrons use QE at its wavelength, or over its LEDs' spectrum
     (``leds.spectral_width_nm``; :func:`eyelume.detectors.sensor.electrons_per_w_mm2`; the sum is
     :attr:`eyelume.render.RenderResult.eye_image_at_scene_wavelength`).
+
+    ``filter``: an optional optical filter in front of the sensor (:class:`SensorFilter`), whose
+    transmittance multiplies the QE for every light counted; none by default (T = 1).
     """
 
     width_mm: Positive | None = None
@@ -995,6 +1058,7 @@ class Sensor(_Model):
     gain_e_per_dn: Positive = 6.0
     adc_bits: int = Field(10, ge=1, le=16)
     black_level_dn: NonNegative = 16.0
+    filter: SensorFilter | None = None
 
     @field_validator("quantum_efficiency", mode="before")
     @classmethod
@@ -1309,6 +1373,42 @@ class Element(_Model):
         return (0.0, 0.0, 1.0)
 
 
+class Sun(_Model):
+    """Direct sunlight on the face and eye: a distant source of the reference AM1.5 spectrum.
+
+    Direction (toward the sun, in the world (headset) frame as the file writes it for a right
+    eye, mirrored with it for a left eye): ŝ = (cos e sin a, sin e, cos e cos a) with elevation
+    e = ``elevation_deg`` above the headset's x–z plane (+90°: straight above the head, world
+    +y) and azimuth a = ``azimuth_deg`` from world +z (straight ahead of the face, toward the
+    headset) toward +x (toward the right eye's nose).
+
+    ``spectrum``: ``"am1.5-direct"`` (ASTM G173-03 direct normal + circumsolar, 900 W/m² over
+    280–4000 nm) or ``"am1.5-global"`` (global on a 37° tilt, 1000 W/m²: direct and sky
+    together, taken here as all coming from the sun's direction — an upper bound on the
+    direct beam). ``scale`` multiplies it (haze, a visor's transmittance, …). The irradiance
+    is normal to the sun's direction at the eye; how it is counted by the sensor and traced:
+    :func:`eyelume.detectors.sensor.sunlight_band`, :func:`eyelume.compile.compile_scene`.
+    """
+
+    elevation_deg: float = Field(45.0, ge=-90.0, le=90.0)
+    azimuth_deg: float = Field(0.0, ge=-360.0, le=360.0)
+    spectrum: Literal["am1.5-direct", "am1.5-global"] = "am1.5-direct"
+    scale: float = Field(1.0, gt=0.0, le=10.0)
+
+    def direction(self) -> tuple[float, float, float]:
+        """Unit vector toward the sun, world frame as written (right eye)."""
+        e, a = math.radians(self.elevation_deg), math.radians(self.azimuth_deg)
+        return (math.cos(e) * math.sin(a), math.sin(e), math.cos(e) * math.cos(a))
+
+
+class Ambient(_Model):
+    """Light that is not the LEDs': ``sun`` (:class:`Sun`), none by default (a closed VR
+    headset). Rendered apart from the LEDs so that the signal-to-ambient ratio of the glints
+    and the pupil is reported (:mod:`eyelume.analysis.ambient`)."""
+
+    sun: Sun | None = None
+
+
 class Scene(_Model):
     """A complete eye illumination and imaging system.
 
@@ -1334,6 +1434,7 @@ class Scene(_Model):
     eye_plane: EyePlane = EyePlane()
     run: Run = Run()
     elements: list[Element] = []
+    ambient: Ambient = Ambient()
 
     @model_validator(mode="after")
     def _in_dispersion_range(self) -> Scene:
