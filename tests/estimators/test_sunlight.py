@@ -130,9 +130,10 @@ def test_850_against_940_nm_follows_the_table():
 
 @pytest.mark.slow
 def test_fast_and_forward_agree_with_the_sun():
-    """glasses-frame's lens opened to F/0.6, its picture's central 1.44 mm square binned 6 × 6, the sun at 35° elevation
-    from 30° to the side (its compile alone: the sunlight's picture): per-bin z = (fast − forward) / √(var_fast + var_forward) over bins
-    with ≥ 25 forward rays; Σz² inside the χ² distribution's central 99.8 %."""
+    """glasses-frame's lens opened to F/0.6, its picture's central 1.44 mm square binned 6 × 6,
+    the sun at 35° elevation from 30° to the side (its compile alone: the sunlight's picture):
+    per-bin z = (fast − forward) / √(var_fast + var_forward) over bins with ≥ 25 forward rays;
+    Σz² inside the χ² distribution's central 99.8 %."""
     scene = apply_overrides(
         load_scene("glasses-frame"),
         {
