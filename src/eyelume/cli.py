@@ -1122,8 +1122,26 @@ def evaluate_tracking_cmd(
         f"wrote {len(written)} files to {out}" + (f" — partial: {partial}" if partial else ""),
         highlight=False,
     )
+    if "signal_to_ambient" in s:
+        err.print(_tracking_ambient_line(s["signal_to_ambient"]), highlight=False)
     if partial:
         _exit_interrupted()
+
+
+def _tracking_ambient_line(rated: dict) -> str:
+    """One line of the frames' signal to ambient (the tracking summary's ``signal_to_ambient``:
+    the smallest over the frames)."""
+    names = {
+        "glint_signal_to_ambient_min": "glint/ambient",
+        "glint_peak_over_ambient_peak": "weakest glint/sun's brightest pixel",
+        "pupil_signal_to_ambient": "pupil-iris contrast/ambient",
+    }
+    parts = [
+        f"{label} min {rated[key]['min']:.3g} over {rated[key]['frames']} frames"
+        for key, label in names.items()
+        if rated[key]["frames"]
+    ]
+    return "sunlight: " + ("; ".join(parts) if parts else "no ratio bounded (no ambient there)")
 
 
 def _tracking_parts(sc, samples: int, seed: int, population: bool, out: Path):

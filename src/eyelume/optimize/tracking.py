@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from eyelume.analysis.ambient import signal_to_ambient
 from eyelume.analysis.tracking.evaluate import (
     CALIBRATION_H,
     CALIBRATION_V,
@@ -28,6 +29,7 @@ from eyelume.analysis.tracking.evaluate import (
     TEST_V,
     Frame,
     TrackingReport,
+    ambient_ratios,
     analyse_frame,
     analyse_frames,
     failure_reason,
@@ -77,6 +79,11 @@ def render_frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> F
         led_pattern_px=led_picture_pattern(cs),
     )
     frame.saturated_share = digital.saturated_pixels / max(digital.counts.size, 1)
+    if result.ambient is not None:  # ambient.sun: the LEDs' signal against the sunlight's
+        rated = signal_to_ambient(
+            result.led_image_at_scene_wavelength, result.ambient.eye_image, result.regions
+        )
+        frame.ambient = ambient_ratios(rated)
     return frame
 
 

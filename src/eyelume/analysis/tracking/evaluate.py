@@ -83,6 +83,7 @@ class Frame:
     saturated_share: float = 0.0  # of the frame's pixels at the full well or full scale
     glints_px: list | None = None
     false_glints: int = 0  # matched glints that are element ghosts (false_glints)
+    ambient: dict | None = None  # ambient.sun: the frame's signal to ambient (ambient_ratios)
 
 
 @dataclass
@@ -352,6 +353,7 @@ def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
         "render_s_per_frame": float(np.mean([f.render_s for f in frames])),
         "detect_ms_per_frame": float(np.nanmean([f.detect_ms for f in frames])),
         "saturated_share": float(np.mean([f.saturated_share for f in frames])) if frames else 0.0,
+        **ambient_stats(frames),
         "failure_causes": failure_causes(frames),
         "failures": {
             f"{f.gaze[0]:+.0f},{f.gaze[1]:+.0f}": f.detection.failures
@@ -359,6 +361,43 @@ def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
             if f.detection.failures
         },
     }
+
+
+#: The signal-to-ambient ratios a frame keeps (:func:`ambient_ratios`).
+AMBIENT_RATIOS = (
+    "glint_signal_to_ambient_min",
+    "glint_peak_over_ambient_peak",
+    "pupil_signal_to_ambient",
+)
+
+
+def ambient_ratios(rated: dict) -> dict:
+    """A frame's ratios (:data:`AMBIENT_RATIOS`) from
+    :func:`eyelume.analysis.ambient.signal_to_ambient`'s result."""
+    pupil = rated.get("pupil")
+    return {
+        "glint_signal_to_ambient_min": rated["glint_signal_to_ambient_min"],
+        "glint_peak_over_ambient_peak": rated["glint_peak_over_ambient_peak"],
+        "pupil_signal_to_ambient": None if pupil is None else pupil["signal_to_ambient"],
+    }
+
+
+def ambient_stats(frames: list[Frame]) -> dict:
+    """``{"signal_to_ambient": {ratio: {frames, min, median}}}`` over the frames rendered with
+    sunlight (a ratio that is unbounded — no ambient on the pixel — or not rated is left out
+    and not counted in ``frames``); {} when no frame had sunlight."""
+    rated = [f.ambient for f in frames if f.ambient is not None]
+    if not rated:
+        return {}
+    out = {}
+    for key in AMBIENT_RATIOS:
+        v = np.array([a[key] for a in rated if a.get(key) is not None], dtype=float)
+        out[key] = (
+            {"frames": int(v.size), "min": float(v.min()), "median": float(np.median(v))}
+            if v.size
+            else {"frames": 0}
+        )
+    return {"signal_to_ambient": out}
 
 
 def failure_causes(frames: list[Frame]) -> dict[str, int]:
