@@ -537,7 +537,9 @@ def render(
 
     The LEDs' render is :func:`_render_leds` (its parameters and errors); the sunlight's band
     (:func:`eyelume.detectors.sensor.sunlight_band`) is checked before any tracing. A render
-    interrupted in the LEDs' part has no sunlight (``ambient`` None).
+    interrupted (``interrupted``) in the LEDs' part, or in the sunlight's first round (pixels
+    missing), has no sunlight (``ambient`` None); interrupted later, the sunlight's finished
+    sample sets (unbiased) are kept.
     """
     opt = RenderOptions() if options is None else options
     cs = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
@@ -557,9 +559,16 @@ def render(
     source = SunSource(sun.direction(), band.irradiance_w_mm2, lam)
     cs_sun = compile_scene(sc, sun=source, nominal=cs)
     seed = sun_seed(result.seed)
-    sub = _render_leds(
-        cs_sun, replace(opt, seed=seed), progress=progress, status=status, advance=advance
-    )
+    try:
+        sub = _render_leds(
+            cs_sun, replace(opt, seed=seed), progress=progress, status=status, advance=advance
+        )
+    except KeyboardInterrupt:  # stopped before the sunlight had a sample: the LEDs' picture stays
+        result.interrupted = True
+        return result
+    result.interrupted = sub.interrupted  # Ctrl-C in the sunlight's part: a partial result
+    if sub.covered_pixels is not None:  # its first round cut: pixels missing, no sunlight kept
+        return result
     direction = cs_sun.tables.leds.axes[0]
     world = -cs.frame.rotation.T @ direction  # camera frame → world (a rotation's inverse)
     result.ambient = AmbientRender(
