@@ -37,6 +37,9 @@ def test_render_reports_the_signal_to_ambient(tmp_path):
     summary = json.loads((tmp_path / "sun" / "summary.json").read_text())
     amb = summary["ambient"]
     assert amb["sun"]["band_nm"] == [800.0, 1100.0]
+    cam = summary["camera"]
+    assert cam["filter"] == {"kind": "long_pass", "cut_on_nm": 800.0, "transmittance": 1.0}
+    assert cam["filter_transmittance_at_wavelength"] == 1.0
     assert len(amb["glints"]) == 4 and amb["pupil"]["signal_to_ambient"] > 0
     truth = json.loads((tmp_path / "sun" / "truth.json").read_text())
     assert truth["ambient"] == amb

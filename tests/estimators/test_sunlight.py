@@ -128,6 +128,26 @@ def test_850_against_940_nm_follows_the_table():
     assert expected == pytest.approx(4.77, abs=0.01)
 
 
+@pytest.mark.parametrize(("which", "sign"), [("right", 1.0), ("left", -1.0)])
+def test_the_sun_is_placed_along_its_direction_and_mirrored_for_a_left_eye(which, sign):
+    """The compiled sun: 10 m from the eye's vertex along ŝ = (cos e sin a, sin e, cos e cos a)
+    (a left eye's scene mirrored, x → −x), aimed back at it, I = E d²."""
+    scene = apply_overrides(
+        load_scene("paper2005"),
+        {"eye_pose.which": which, "ambient.sun.elevation_deg": 30, "ambient.sun.azimuth_deg": 50},
+    )
+    sun = SunSource(scene.ambient.sun.direction(), 1e-5, 850.0)
+    cs = compile_scene(scene, sun=sun)
+    e, a = math.radians(30), math.radians(50)
+    s_world = np.array([sign * math.cos(e) * math.sin(a), math.sin(e), math.cos(e) * math.cos(a)])
+    vertex = cs.frame.point(np.zeros(3)) if not cs.frame.is_identity else np.zeros(3)
+    s_cam = cs.frame.vector(s_world) if not cs.frame.is_identity else s_world
+    np.testing.assert_allclose(cs.tables.leds.points[0], vertex + 1e4 * s_cam, atol=1e-9)
+    np.testing.assert_allclose(cs.tables.leds.axes[0], -s_cam, atol=1e-12)
+    assert cs.tables.leds.i0[0] == pytest.approx(1e-5 * 1e8)
+    assert cs.led_ids == () and cs.sun == sun
+
+
 @pytest.mark.slow
 def test_fast_and_forward_agree_with_the_sun():
     """glasses-frame's lens opened to F/0.6, its picture's central 1.44 mm square binned 6 × 6,

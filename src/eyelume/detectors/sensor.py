@@ -597,6 +597,16 @@ def camera_summary(sensor: Sensor, wavelength_nm: float, digital: DigitalImage) 
         "exposure_ms": sensor.exposure_ms,
         "quantum_efficiency": sensor.quantum_efficiency,
         "quantum_efficiency_at_wavelength": quantum_efficiency_at(sensor, wavelength_nm),
+        **(
+            {}
+            if sensor.filter is None
+            else {
+                "filter": sensor.filter.model_dump(exclude_none=True),
+                "filter_transmittance_at_wavelength": float(
+                    filter_transmittance(sensor, wavelength_nm)
+                ),
+            }
+        ),
         "full_well_e": sensor.full_well_e,
         "read_noise_e": sensor.read_noise_e,
         "gain_e_per_dn": sensor.gain_e_per_dn,
