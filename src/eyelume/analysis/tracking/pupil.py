@@ -489,8 +489,14 @@ def _fill_glints(roi: np.ndarray, bright: np.ndarray, params) -> None:
     radius = np.ceil(np.sqrt(stats[:, cv2.CC_STAT_AREA] / math.pi)).astype(int)
     radius[0] = -1
     src = roi.copy()
+    lab8 = lab.astype(np.uint8) if len(radius) <= 256 else None
     for rc in np.unique(radius[1:]):
-        own = np.where(radius[lab] == rc, 255, 0).astype(np.uint8)
+        if lab8 is not None:  # a look-up table over the labels: one pass, no index array
+            lut = np.zeros(256, np.uint8)
+            lut[: len(radius)][radius == rc] = 255
+            own = cv2.LUT(lab8, lut)
+        else:
+            own = np.where(radius[lab] == rc, 255, 0).astype(np.uint8)
         g = int(math.ceil(max(params.glint_margin_px, rc))) + 2
         grown = cv2.dilate(own, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2))
         k = 2 * (int(rc) + 2) + 1
@@ -862,20 +868,25 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
         lab_seed = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
         raw = np.where(lab == lab_seed, 255, 0).astype(np.uint8)
     comp = raw.copy()
-    near_glint = _grown_glints(bright[y0:y1, x0:x1], params)
-    if near_glint.any():
+    near_glint, (gx0, gy0, gx1, gy1) = _grown_glints_box(bright[y0:y1, x0:x1], params)
+    if gx1 > gx0:
         # Glints touching the blob (with their skirts) join it: no notch however small the
-        # closing.
-        n_glab, glab = cv2.connectedComponents(near_glint, connectivity=8)
+        # closing. Worked on the grown glints' box (nothing joins outside it); the blob's
+        # 3 × 3 dilation there from the box padded by 1 px (the same pixels).
+        box = (slice(gy0, gy1), slice(gx0, gx1))
+        n_glab, glab = cv2.connectedComponents(near_glint[box], connectivity=8)
+        py0, px0 = max(0, gy0 - 1), max(0, gx0 - 1)
+        grown = cv2.dilate(comp[py0 : gy1 + 1, px0 : gx1 + 1], np.ones((3, 3), np.uint8))
+        grown = grown[gy0 - py0 : gy0 - py0 + gy1 - gy0, gx0 - px0 : gx0 - px0 + gx1 - gx0]
         joined = np.zeros(n_glab, bool)
-        joined[glab[(cv2.dilate(comp, np.ones((3, 3), np.uint8)) > 0) & (glab > 0)]] = True
+        joined[glab[(grown > 0) & (glab > 0)]] = True
         if joined.any():
             if n_glab <= 256:  # a look-up table over the labels: one pass, no index array
                 lut = np.zeros(256, np.uint8)
                 lut[:n_glab][joined] = 255
-                cv2.bitwise_or(comp, cv2.LUT(glab.astype(np.uint8), lut), dst=comp)
+                cv2.bitwise_or(comp[box], cv2.LUT(glab.astype(np.uint8), lut), dst=comp[box])
             else:
-                comp[joined[glab]] = 255
+                comp[box][joined[glab]] = 255
     closed = _closing(comp, k)
     contours, _ = cv2.findContours(closed, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea)
@@ -922,6 +933,25 @@ def _grown_glints(bright: np.ndarray, params, extra: int = 0, radius: float | No
         radius = _largest_radius(bright)
     g = int(math.ceil(max(params.glint_margin_px, radius))) + extra
     return cv2.dilate(bright, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2))
+
+
+def _grown_glints_box(bright: np.ndarray, params):
+    """:func:`_grown_glints` of ``bright`` and the box (x0, y0, x1, y1) holding all of it
+    (empty when there are no glints), worked on the glints' bounding box padded by the
+    growth: the same pixels (a dilation reaches no farther), a fraction of the work."""
+    if not cv2.countNonZero(bright):
+        return np.zeros_like(bright), (0, 0, 0, 0)
+    rows, cols = bright.shape
+    bx, by, bw, bh = cv2.boundingRect(bright)
+    # The outlines from the box padded by 1 px (as in the whole mask: none touches its edge).
+    cx0, cy0 = max(0, bx - 1), max(0, by - 1)
+    radius = _largest_radius(bright[cy0 : by + bh + 1, cx0 : bx + bw + 1])
+    g = int(math.ceil(max(params.glint_margin_px, radius)))
+    x0, y0 = max(0, bx - g), max(0, by - g)
+    x1, y1 = min(cols, bx + bw + g), min(rows, by + bh + g)
+    out = np.zeros_like(bright)
+    out[y0:y1, x0:x1] = _grown_glints(bright[y0:y1, x0:x1], params, radius=radius)
+    return out, (x0, y0, x1, y1)
 
 
 def _largest_radius(bright: np.ndarray) -> float:
@@ -980,7 +1010,11 @@ def blob_contrast(img: np.ndarray, wp: WorkPicture, blob: Blob, params):
     surround = median(sub[ring])
     span = wp.hi - wp.lo
     step = surround - pupil_level
-    noise = _local_noise(wp.u8[blob.y0 : blob.y0 + h, blob.x0 : blob.x0 + w], inside, ring)
+    # The noise on the ring's box (the pixels it and the blob's inside reach, ≥ 2 px in: the
+    # same values as on the whole window).
+    box = (slice(y0, y1), slice(x0, x1))
+    win = wp.u8[blob.y0 : blob.y0 + h, blob.x0 : blob.x0 + w][box]
+    noise = _local_noise(win, inside[box], ring[box])
     noise = max(noise, 0.5) * span / 255.0
     if step < params.pupil_min_contrast_sigma * noise or step < params.pupil_min_contrast * span:
         return Refusal(
@@ -1259,7 +1293,7 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     inside = (u / e.a) ** 2 + (v / e.b) ** 2 < 0.81
     glints = bright[y0:y1, x0:x1]
     if glints.any():
-        inside &= _grown_glints(glints, params) == 0
+        inside &= _grown_glints_box(glints, params)[0] == 0
     if wp.invalid is not None:
         inside &= ~wp.invalid[y0:y1, x0:x1]
     if inside.sum() < params.pupil_min_area_px:
