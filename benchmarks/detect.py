@@ -5,6 +5,7 @@ Run from the repository root::
     python benchmarks/detect.py                       # synthetic frame only, ~5 s
     python benchmarks/detect.py --render              # + a paper2005 render (~30 s once)
     python benchmarks/detect.py --frame DIR           # + an existing render's output directory
+    python benchmarks/detect.py --real                # + real pictures' sizes (../shared/realdata)
 
 :func:`eyelume.analysis.tracking.detect` alone (with the four LED azimuths, so the matching is
 included) on one core (``cv2.setNumThreads(1)``), after ``--warmup`` calls: best, median and
@@ -20,6 +21,14 @@ Besides wall time (best, median, worst) the median CPU time of the process per c
 - ``render``: ``eye_image_digital.npy`` (uint16 DN, 10 bit) of ``eyelume render --set
   sensor.cols=640 --set sensor.rows=480 --samples 8`` (``--render`` makes one in a temporary
   directory; ``--frame DIR`` uses yours); errors against the render's ``truth.json`` when there.
+- ``real-<source>`` (``--real N``, N = 5 by default): N pictures of each source of
+  ``realdata/labels.csv`` (found as ``benchmarks/detect_real.py`` finds it; skipped with a
+  message when absent), evenly spread over its rows — the ``itmo`` close-ups (200 × 200, 8 bit)
+  and the ``openeds`` headset frames (640 × 400, 8 bit) — without LED azimuths (the pictures
+  have no LED layout). Per source: the median over the pictures of each one's median CPU and
+  wall time per call, the slowest picture's, and how many were answered ``ok``. The pictures
+  are read where they are; only these aggregates are printed and stored (no picture, crop or
+  per-picture figure: the data set is for internal evaluation only).
 
 Prints the figures and how they were run, and appends a JSON line to
 ``benchmarks/results/detect.jsonl``.
@@ -144,12 +153,77 @@ def bench(name: str, frame: np.ndarray, truth: dict | None, a) -> dict:
     }
 
 
+def bench_real(a) -> list[dict]:
+    """``--real``: detection time on real pictures' sizes (module doc), aggregates only."""
+    import csv
+
+    import detect_real
+
+    data = detect_real.find_data(a.data)
+    if data is None:
+        print("   real      no realdata folder (../shared/realdata, or --data DIR): skipped")
+        return []
+    by_source: dict[str, list[dict]] = {}
+    for r in csv.DictReader((data / "labels.csv").open()):
+        by_source.setdefault(r["source"], []).append(r)
+    out = []
+    for source, rows in by_source.items():
+        pick = rows[:: max(1, len(rows) // a.real)][: a.real]
+        cpu_med, wall_med, shapes, n_ok = [], [], set(), 0
+        for r in pick:
+            img = cv2.imread(str(data / r["file"]), cv2.IMREAD_UNCHANGED)
+            if img is None:
+                raise SystemExit(f"detect: cannot read {data / r['file']}")
+            if img.ndim == 3:
+                img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+            shapes.add(f"{img.shape[1]}×{img.shape[0]} {img.dtype}")
+            for _ in range(2):
+                d = detect(img)
+            n_ok += bool(d.ok)
+            cpu, wall = [], []
+            for _ in range(max(5, a.repeats // 5)):
+                c0, w0 = time.process_time(), time.perf_counter()
+                detect(img)
+                cpu.append(1e3 * (time.process_time() - c0))
+                wall.append(1e3 * (time.perf_counter() - w0))
+            cpu_med.append(statistics.median(cpu))
+            wall_med.append(statistics.median(wall))
+        rec = {
+            "frame": f"real-{source}",
+            "shapes": sorted(shapes),
+            "n_pictures": len(pick),
+            "ok": n_ok,
+            "cpu_median_ms": statistics.median(cpu_med),
+            "cpu_slowest_ms": max(cpu_med),
+            "wall_median_ms": statistics.median(wall_med),
+            "wall_slowest_ms": max(wall_med),
+        }
+        print(
+            f"   real-{source:9s} {', '.join(rec['shapes'])}, {len(pick)} pictures "
+            f"({n_ok} ok): CPU per call {rec['cpu_median_ms']:.2f} ms median over the pictures, "
+            f"{rec['cpu_slowest_ms']:.2f} ms the slowest; wall {rec['wall_median_ms']:.2f} / "
+            f"{rec['wall_slowest_ms']:.2f} ms"
+        )
+        out.append(rec)
+    return out
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--repeats", type=int, default=50)
     p.add_argument("--warmup", type=int, default=5)
     p.add_argument("--frame", type=Path, help="a render's output directory or an .npy picture")
     p.add_argument("--render", action="store_true", help="render a 640 × 480 paper2005 frame")
+    p.add_argument(
+        "--real",
+        type=int,
+        nargs="?",
+        const=5,
+        default=0,
+        metavar="N",
+        help="also time N real pictures of each realdata source (default 5; aggregates only)",
+    )
+    p.add_argument("--data", type=Path, help="the realdata folder (default ../shared/realdata)")
     a = p.parse_args()
 
     cv2.setNumThreads(1)
@@ -173,6 +247,8 @@ def main() -> None:
         frames.append(("render", np.load(npy), truth))
 
     records = [bench(name, frame, truth, a) for name, frame, truth in frames]
+    if a.real > 0:
+        records += bench_real(a)
     if tmp is not None:
         tmp.cleanup()
     path = C.append_result(
