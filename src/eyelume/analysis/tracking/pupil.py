@@ -322,24 +322,49 @@ def _fit(x: np.ndarray, y: np.ndarray, diam: float) -> Ellipse | None:
     return e if ok and max(e.a, e.b) < 5.0 * diam else None
 
 
+def _sampson_many(fits: list[Ellipse], x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """:func:`sampson_distance` of the points to each ellipse of ``fits``: (len(fits), n), the
+    same numbers, in one pass of array operations."""
+    col = lambda v: np.array(v, np.float64)[:, None]  # noqa: E731
+    c, sn = col([math.cos(h.theta) for h in fits]), col([math.sin(h.theta) for h in fits])
+    a2, b2 = col([h.a**2 for h in fits]), col([h.b**2 for h in fits])
+    dx = np.asarray(x, float)[None, :] - col([h.cx for h in fits])
+    dy = np.asarray(y, float)[None, :] - col([h.cy for h in fits])
+    s, q = dx * c + dy * sn, -dx * sn + dy * c
+    f = s * s / a2 + q * q / b2 - 1.0
+    g = 2.0 * np.hypot(s / a2, q / b2)
+    return f / np.maximum(g, 1e-12)
+
+
 def _best_run(x, y, e: Ellipse, d: np.ndarray, diam: float, params):
     """The hypothesis with the most inliers among the fit to all points and fits to contiguous
     runs of 50 % and 30 % of the outline from 12 starts each (:func:`_robust_fit`); returns it,
-    its distances and σ, the smallest spread of a run about its own fit."""
+    its distances and σ, the smallest spread of a run about its own fit. (The runs' distances
+    and spreads are taken for all of them at once.)"""
     n = len(x)
-    hyps = [(e, d, 1.4826 * median(d))]
+    fits, runs = [], []
     for frac in (0.5, 0.3):
         m = max(params.min_edge_points, int(frac * n))
         for s0 in range(0, n, max(1, n // 12)):
             idx = (s0 + np.arange(m)) % n
             h = _fit(x[idx], y[idx], diam)
             if h is not None:
-                dh = np.abs(sampson_distance(h, x, y))
-                hyps.append((h, dh, 1.4826 * median(dh[idx])))
-    sigma = min(h[2] for h in hyps)
+                fits.append(h)
+                runs.append(idx)
+    sigmas = [1.4826 * median(d)]
+    dist = np.abs(_sampson_many(fits, x, y)) if fits else np.zeros((0, n))
+    spread = np.zeros(len(fits))
+    for m in sorted({len(r) for r in runs}):  # the runs of one length together
+        rows = [i for i, r in enumerate(runs) if len(r) == m]
+        own = np.take_along_axis(dist[rows], np.stack([runs[i] for i in rows]), axis=1)
+        spread[rows] = 1.4826 * _row_medians(own)
+    sigma = min(sigmas + spread.tolist())
     tol = max(params.inlier_tol_px, 3.0 * sigma, params.inlier_tol_frac * diam)
-    e, d, _ = max(hyps, key=lambda h: int((h[1] <= tol).sum()))
-    return e, d, sigma
+    counts = [int((d <= tol).sum())] + (dist <= tol).sum(axis=1).tolist()
+    best = int(np.argmax(counts))
+    if best == 0:
+        return e, d, sigma
+    return fits[best - 1], dist[best - 1], sigma
 
 
 def _trim_near_outliers(x, y, e: Ellipse, inl: np.ndarray, diam: float, params):
