@@ -124,7 +124,7 @@ def test_the_population_keeps_the_members_finished(tmp_path, monkeypatch, frame)
     per = tr.frame_count()
     monkeypatch.setattr(tr, "render_frame", _Units(_framer(frame), at=2 * per + 3, kind="SIGTERM"))
     out = tmp_path / "o"
-    res = runner.invoke(app, ["evaluate-tracking", "--population", "--samples", "1", *TINY,
+    res = runner.invoke(app, ["evaluate-tracking", "--named-population", "--samples", "1", *TINY,
                               "--out", str(out)])  # fmt: skip
     assert res.exit_code == 143, res.output
     table = json.loads((out / "population.json").read_text(encoding="utf-8"))

@@ -1072,10 +1072,32 @@ def evaluate_tracking_cmd(
     ] = 16,
     seed: Annotated[int, typer.Option(help="Random seed of every frame.")] = 0,
     population: Annotated[
+        int,
+        typer.Option(
+            help="Sample N people from the anatomy distributions (population.toml) and report "
+            "the distribution over them: population.json, people.csv (0: the scene's one eye)."
+        ),
+    ] = 0,
+    population_seed: Annotated[
+        int | None,
+        typer.Option(help="Seed of the people (default: the population file's, else 0)."),
+    ] = None,
+    population_file: Annotated[
+        Path | None,
+        typer.Option(
+            help="TOML with a [population] table (a study file serves): conditions, "
+            "parameters, distributions; its size and seed unless given here."
+        ),
+    ] = None,
+    tracked_deg: Annotated[
+        float,
+        typer.Option(help="A person is tracked: every test gaze detected, PCCR error ≤ this (°)."),
+    ] = 2.0,
+    named_population: Annotated[
         bool,
         typer.Option(
-            help="Also over a population: iris dark/light, skin dark/light, narrow lids, "
-            "headset slip ±2 mm after calibration (one folder each)."
+            help="Also over a fixed, named population: iris dark/light, skin dark/light, narrow "
+            "lids, headset slip ±2 mm after calibration (one folder each)."
         ),
     ] = False,
     set_: SetOpt = None,
@@ -1083,7 +1105,8 @@ def evaluate_tracking_cmd(
     """Tracking quality of the scene's illumination: render the eye over a 7 × 5 gaze grid
     (and a 3 × 3 calibration grid), detect pupil and glints on the camera's images, estimate
     gaze (PCCR, Guestrin–Eizenman) and compare with the truth; table, summary and error maps
-    into OUT."""
+    into OUT. With --population N: N sampled people instead, each on a 3 × 2 test grid after
+    their own 3 × 3 calibration, and the distribution over them."""
     from eyelume.analysis.tracking.evaluate import failure_reason
     from eyelume.compile import compile_scene
     from eyelume.report.tracking_outputs import write_tracking_outputs
@@ -1091,11 +1114,16 @@ def evaluate_tracking_cmd(
     _refuse_gaze(set_, "evaluate-tracking")
     sc = _load(scene, set_)
     _check_counts(samples=samples, seed=seed)
+    sampled = _people_options(population, population_seed, population_file, tracked_deg,
+                              named_population)  # fmt: skip
     _refuse_elements(sc, "evaluate-tracking")
     _check_out(out)
     compile_scene(sc)
+    if sampled is not None:
+        _people_run(sc, *sampled, samples, seed, tracked_deg, out)
+        return
     t0 = time.perf_counter()
-    report, partial = _tracking_parts(sc, samples, seed, population, out)
+    report, partial = _tracking_parts(sc, samples, seed, named_population, out)
     meta = {
         "scene": sc.name,
         "samples_per_pixel": samples,
@@ -1142,6 +1170,80 @@ def _tracking_ambient_line(rated: dict) -> str:
         if rated[key]["frames"]
     ]
     return "sunlight: " + ("; ".join(parts) if parts else "no ratio bounded (no ambient there)")
+
+
+def _people_options(n: int, seed: int | None, path: Path | None, tracked_deg: float,
+                    named: bool):  # fmt: skip
+    """(Population, size, seed) of --population/--population-seed/--population-file, or None
+    without them; bad values refused in one line (OptionError, or the file's SceneError)."""
+    from eyelume.scene.population import Population, load_population_file
+
+    if n < 0:
+        _fail(f"--population {n}: must be ≥ 0 (people)")
+    if seed is not None and not 0 <= seed < 2**63:
+        _fail(f"--population-seed {seed}: must be ≥ 0")
+    if not (math.isfinite(tracked_deg) and tracked_deg > 0):
+        _fail(f"--tracked-deg {tracked_deg}: must be a positive number of degrees")
+    if n == 0 and path is None:
+        if seed is not None:
+            _fail("--population-seed needs --population N or --population-file")
+        return None
+    if named:
+        _fail("--named-population and --population/--population-file: choose one")
+    pop = load_population_file(path) if path is not None else Population()
+    size = n if n > 0 else pop.size
+    if size > 100_000:
+        _fail(f"--population {size}: at most 100000 people")
+    return pop, size, seed if seed is not None else pop.seed
+
+
+def _people_run(sc, pop, size: int, pop_seed: int, samples: int, seed: int, tracked_deg: float,
+                out: Path) -> None:  # fmt: skip
+    """evaluate-tracking over ``size`` sampled people: progress with an ETA, population.json and
+    people.csv; Ctrl-C or SIGTERM keeps the people finished (nothing before the first)."""
+    from eyelume.estimators.interrupt import PartialRun
+    from eyelume.optimize.tracking import evaluate_people, people_frame_count, population_summary
+    from eyelume.report.tracking_outputs import write_people_outputs
+    from eyelume.scene.population import resolved_distributions, sample_people
+
+    people = sample_people(sc, size, pop_seed, pop)
+    t0 = time.perf_counter()
+    partial = None
+    try:
+        results = _counted("people", size * people_frame_count(), "frames", evaluate_people,
+                           people, samples_per_pixel=samples, seed=seed)  # fmt: skip
+    except PartialRun as exc:
+        if not exc.done:
+            _interrupted_with_nothing("the first person")
+        results, partial = exc.done, str(exc)
+    rows = [r.row(tracked_deg) for r in results]
+    summary = population_summary(rows, tracked_deg)
+    dists = resolved_distributions(sc, pop)
+    meta = {
+        "scene": sc.name,
+        "samples_per_pixel": samples,
+        "seed": seed,
+        "sensor": [sc.sensor.cols, sc.sensor.rows],
+        "population_seed": pop_seed,
+        "population": pop.model_dump(mode="json") | {"size": size, "seed": pop_seed},
+        "parameters_used": list(pop.used),
+        "distributions": {k: vars(d) for k, d in dists.items()},
+        "wall_time_s": round(time.perf_counter() - t0, 2),
+    }
+    if partial:
+        meta["partial"] = partial
+    written = write_people_outputs(rows, summary, meta, out)
+    sc_ = summary["score_deg"]
+    err.print(
+        f"{summary['people']} of {size} people: tracked {summary['share_tracked']:.0%} (every "
+        f"test gaze detected, PCCR ≤ {tracked_deg:g}°); gaze score mean {sc_['mean']:.3g}°, "
+        f"p95 {sc_['p95']:.3g}°; detection mean {summary['detection_rate']['mean']:.0%}; "
+        f"{meta['wall_time_s']} s; wrote {len(written)} files to {out}"
+        + (f" — partial: {partial}" if partial else ""),
+        highlight=False,
+    )
+    if partial:
+        _exit_interrupted()
 
 
 def _tracking_parts(sc, samples: int, seed: int, population: bool, out: Path):

@@ -196,7 +196,8 @@ def test_each_sample_reaches_its_scene(scene):
         assert up2.clip_z_mm[0] / lo2.clip_z_mm[0] == pytest.approx(
             up.clip_z_mm[0] / lo.clip_z_mm[0]
         )
-        assert p.not_applied == ("kappa_horizontal_deg",)
+        assert e.kappa_deg == (v["kappa_horizontal_deg"], scene.eye.kappa_deg[1])
+        assert p.not_applied == ()
 
 
 def test_impossible_corneas_are_redrawn(scene):
@@ -271,7 +272,7 @@ def test_mean_outside_bounds_and_lids_missing(scene):
 
 _STUDY = """name = "people"
 scene = "vr-offaxis"
-metrics = ["safety"]
+metrics = ["safety", "tracking"]
 [population]
 size = 5
 seed = 3

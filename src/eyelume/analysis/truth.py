@@ -32,15 +32,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from eyelume.analysis.tracking.gaze import angles_from_axis, axis_from_angles
 from eyelume.compile import (
     CompiledScene,
     compile_scene,
     eye_direction,
     eye_point,
+    gaze_rotation,
     single_wavelength,
     wavelength_groups,
 )
 from eyelume.detectors.receivers import BinnedPlane
+from eyelume.errors import GeometryError
 from eyelume.estimators.camera import aim_chief, into_scene
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import interface_at, reflect, refract
@@ -359,6 +362,59 @@ def _led_in_view(v: _View, k: int, led: np.ndarray, row: int | None = None) -> d
     }
 
 
+def visual_axis(scene) -> tuple[np.ndarray, tuple[float, float]]:
+    """The eye's visual axis: (unit vector in the world frame, its gaze angles (h, v) in
+    degrees as the scene file writes gaze — a right eye's frame, before a left eye's mirror).
+
+    The angle kappa (``eye.kappa_deg`` = (κh, κv)) is a fixed direction in the eye's frame,
+    k = (cos κv sin κh, sin κv, cos κv cos κh) (:func:`~.tracking.gaze.axis_from_angles`), turned
+    with the gaze: the visual axis is R k (:func:`eyelume.compile.gaze_rotation`), mirrored for a
+    left eye. Kappa 0: the optical axis."""
+    k = axis_from_angles(*scene.eye.kappa_deg)
+    turned = gaze_rotation(scene.eye)[0] @ k
+    return eye_direction(scene, k), angles_from_axis(turned)
+
+
+def optical_gaze_for(scene, h_deg: float, v_deg: float, tol_deg: float = 1e-9):
+    """The optical-axis gaze angles (``eye.gaze_horizontal_deg``, ``eye.gaze_vertical_deg``)
+    with which the visual axis (:func:`visual_axis`) has the angles (``h_deg``, ``v_deg``): the
+    eye fixating that target. Kappa 0: (h, v) themselves. Solved by the fixed-point iteration
+    g ← g + (target − visual(g)) from g = target − κ (the rotation is near the identity's
+    shift by κ; converges to ``tol_deg`` in a few steps for κ within ±15°).
+
+    Raises
+    ------
+    GeometryError
+        The optical gaze it needs lies outside the eye's ±30° or the iteration does not
+        converge in 50 steps."""
+    eye = scene.eye
+    kh, kv = eye.kappa_deg
+    if kh == 0.0 and kv == 0.0:
+        return float(h_deg), float(v_deg)
+    k = axis_from_angles(kh, kv)
+    g = np.array([h_deg - kh, v_deg - kv], dtype=float)
+    for _ in range(50):
+        probe = eye.model_copy(update={"gaze_horizontal_deg": g[0], "gaze_vertical_deg": g[1]})
+        got = np.array(angles_from_axis(gaze_rotation(probe)[0] @ k))
+        miss = np.array([h_deg, v_deg]) - got
+        if np.max(np.abs(miss)) < tol_deg:
+            break
+        g = g + miss
+    else:
+        raise GeometryError(
+            f"fixating ({h_deg:g}°, {v_deg:g}°) with kappa {list(eye.kappa_deg)}: no optical "
+            "gaze found",
+            field="eye.kappa_deg",
+        )
+    if np.max(np.abs(g)) > 30.0:
+        raise GeometryError(
+            f"fixating ({h_deg:g}°, {v_deg:g}°) with kappa {list(eye.kappa_deg)} needs the "
+            f"optical gaze ({g[0]:.2f}°, {g[1]:.2f}°), beyond the eye's ±30°",
+            field="eye.kappa_deg",
+        )
+    return float(g[0]), float(g[1])
+
+
 def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: bool = True) -> dict:
     """The true gaze, apparent pupil (centre and edge) and glints of a compiled scene.
 
@@ -398,6 +454,11 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
         },
         "eye": cs.scene.eye_pose.which,
         "optical_axis": cs.frame.world_vector(v.axis).tolist(),
+        "kappa_deg": list(eye.kappa_deg),
+        "visual_axis": visual_axis(cs.scene)[0].tolist(),
+        "visual_axis_deg": dict(
+            zip(("horizontal", "vertical"), visual_axis(cs.scene)[1], strict=True)
+        ),
         "pixel_convention": "OpenCV: pixel (column c, row r) centred at (x, y) = (c, r); row 0 "
         "at the top of the upright picture",
         "pupil": _pupil_truth(v, v.turned(np.array([0.0, 0.0, -depth]))),

@@ -124,7 +124,9 @@ def run_study(
             Path(out) / STUDY_FILE,
             {"study": study.name, "scene": base.name, "scene_file": study.scene,
              "seed": study.seed, "samples_per_pixel": study.samples_per_pixel,
-             "delta": study.delta, "metrics": list(study.metrics)},
+             "delta": study.delta, "metrics": list(study.metrics),
+             "population": None if study.population is None
+             else study.population.model_dump(mode="json")},
         )  # fmt: skip
         todo = [(i, r, k) for i, (r, k) in enumerate(zip(runs, keys, strict=True)) if k not in done]
         finished = len(runs) - len(todo)

@@ -28,9 +28,9 @@ A study file (TOML)::
     samples = 4                    # ... this many draws (seed)
     # latin = [lo, hi] with samples: a Latin hypercube over all `latin` parameters together
 
-    [population]                   # optional: N people (eyelume.scene.population.Population);
-    size = 50                      # read and validated only, not yet used by the runs
-    seed = 1
+    [population]                   # optional: N people (eyelume.scene.population.Population):
+    size = 50                      # the "tracking" metric (required with it) is then evaluated
+    seed = 1                       # over them on each run's design (run_metrics)
 
 Each run is one dict of overrides; its key is the SHA-256 of the base scene's JSON, the
 overrides, the metrics and their settings, so a changed input is a new run and an unchanged one
@@ -63,6 +63,7 @@ __all__ = [
     "Vary",
     "load_study",
     "plan_runs",
+    "population_metrics",
     "run_count",
     "run_key",
     "run_metrics",
@@ -150,15 +151,21 @@ def load_study(path: str | Path) -> Study:
         raise SceneError(f"study {p}: field 'scene': {exc}") from None
     _check_runs(study, base, p)
     if study.population is not None:
-        _check_population(study.population, base, p)
+        _check_population(study.population, base, p, study)
     return study
 
 
-def _check_population(population: Population, base: Scene, path: Path) -> None:
+def _check_population(population: Population, base: Scene, path: Path, study: Study) -> None:
     """The population's distributions resolved on the base scene and its first person built
     (a mean outside its bounds, lids asked of a scene without them, a person whose eye cannot
-    exist): SceneError naming the study file. Read and checked only: the runs do not sample
-    people yet (issue 15's later step)."""
+    exist), and the ``tracking`` metric asked (what the people are evaluated by): SceneError
+    naming the study file."""
+    if "tracking" not in study.metrics:
+        raise SceneError(
+            "a [population] is evaluated by the 'tracking' metric: add it to metrics",
+            file=f"study {path}",
+            field="population",
+        )
     try:
         sample_people(base, 1, population.seed, population)
     except EyelumeError as exc:
@@ -283,7 +290,53 @@ def run_key(base: Scene, overrides: dict, study: Study) -> str:
         "samples_per_pixel": study.samples_per_pixel,
         "seed": study.seed,
     }
+    if study.population is not None:  # absent otherwise: the keys of studies without one stay
+        payload["population"] = study.population.model_dump(mode="json")
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
+
+
+def population_metrics(scene: Scene, study: Study) -> dict:
+    """The ``tracking`` metric of a study with a ``[population]``: its people sampled on this
+    run's ``scene`` (:func:`eyelume.scene.population.sample_population`: the same people, by
+    their seed, in every run and worker), each evaluated — calibrated in their own eye — on the
+    person grids (:func:`eyelume.optimize.tracking.evaluate_people`, the study's
+    ``samples_per_pixel`` and ``seed``), and the distribution over them
+    (:func:`eyelume.optimize.tracking.population_summary`): ``population_share_tracked``,
+    ``population_score_mean_deg``, ``population_score_p95_deg`` (each person's mean PCCR error,
+    a gaze without an estimate at 10°), ``population_pccr_mean_deg``, ``population_pccr_p95_deg``,
+    ``population_detection_mean``, ``population_detection_p5``, ``population_people``."""
+    from eyelume.optimize.tracking import evaluate_people, population_summary
+    from eyelume.scene.population import sample_population
+
+    people = sample_population(scene, study.population)
+    results = evaluate_people(people, study.samples_per_pixel, study.seed)
+    s = population_summary([r.row() for r in results])
+    return {
+        "population_people": s["people"],
+        "population_share_tracked": s["share_tracked"],
+        "population_score_mean_deg": s["score_deg"]["mean"],
+        "population_score_p95_deg": s["score_deg"]["p95"],
+        "population_pccr_mean_deg": s["pccr_mean_deg"]["mean"],
+        "population_pccr_p95_deg": s["pccr_mean_deg"]["p95"],
+        "population_detection_mean": s["detection_rate"]["mean"],
+        "population_detection_p5": s["detection_rate"]["p5"],
+    }
+
+
+def _tracking_metrics(scene: Scene, study: Study) -> dict:
+    """The ``tracking`` metric: over the study's people (:func:`population_metrics`) when it
+    has a ``[population]``, else the scene's one eye over a 3 × 3 gaze grid, uncalibrated
+    (``tracking_score_deg``: mean geometric gaze error, a failed frame at 10°;
+    ``detection_rate``)."""
+    if study.population is not None:
+        return population_metrics(scene, study)
+    from eyelume.analysis.tracking.evaluate import tracking_score
+    from eyelume.optimize.tracking import GAZE_H, GAZE_V, evaluate_tracking
+
+    rep = evaluate_tracking(scene, GAZE_H, GAZE_V, study.samples_per_pixel, study.seed,
+                            calibrate=False)  # fmt: skip
+    return {"tracking_score_deg": tracking_score(rep),
+            "detection_rate": rep.summary["detection_rate"]}  # fmt: skip
 
 
 def run_metrics(base: Scene, overrides: dict, study: Study) -> dict:
@@ -316,14 +369,7 @@ def run_metrics(base: Scene, overrides: dict, study: Study) -> dict:
             mean, std, cv = skin_score(result.eye_image, result.regions["skin"])
             out["skin_mean_w_mm2"], out["skin_cv"] = mean, cv
     if "tracking" in study.metrics:
-        from eyelume.analysis.tracking.evaluate import tracking_score
-        from eyelume.optimize.tracking import GAZE_H, GAZE_V, evaluate_tracking
-
-        rep = evaluate_tracking(
-            scene, GAZE_H, GAZE_V, study.samples_per_pixel, study.seed, calibrate=False
-        )
-        out["tracking_score_deg"] = tracking_score(rep)
-        out["detection_rate"] = rep.summary["detection_rate"]
+        out.update(_tracking_metrics(scene, study))
     if "glints" in study.metrics:
         from eyelume.analysis.truth import glint_counts
 

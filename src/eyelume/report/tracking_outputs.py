@@ -1,5 +1,5 @@
 """Files written by ``eyelume evaluate-tracking``: the per-frame table, the summary and error
-maps over the gaze grid."""
+maps over the gaze grid; over sampled people, their table and the distribution over them."""
 
 from __future__ import annotations
 
@@ -13,7 +13,12 @@ from eyelume.analysis.tracking.evaluate import error_map_rows
 from eyelume.json_files import write_json
 from eyelume.report.plots import agg_figure, save_figure
 
-__all__ = ["save_error_maps", "write_population_outputs", "write_tracking_outputs"]
+__all__ = [
+    "save_error_maps",
+    "write_people_outputs",
+    "write_population_outputs",
+    "write_tracking_outputs",
+]
 
 
 def _grid(rows: list[dict], key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -173,3 +178,29 @@ def write_population_outputs(
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "population.json", {**table, "partial": partial} if partial else table)
     return [*written, out / "population.json"]
+
+
+#: people.csv's result columns, before the person's sampled parameters.
+_PEOPLE_COLUMNS = ("person", "tracked", "detection_rate", "pccr_mean_deg", "pccr_max_deg",
+                   "geometric_mean_deg", "score_deg")  # fmt: skip
+
+
+def write_people_outputs(rows: list[dict], summary: dict, meta: dict, out) -> list[Path]:
+    """``population.json`` (``meta``: scene, budget, seeds, the population and its resolved
+    distributions; ``summary``: the distribution over people; ``people``: each person's row —
+    sampled parameters and results, :meth:`eyelume.optimize.tracking.PersonResult.row`) and
+    ``people.csv`` (one line per person: the results, then every sampled parameter) in folder
+    ``out``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    written = [out / "population.json", out / "people.csv"]
+    write_json(written[0], {"meta": meta, "summary": summary, "people": rows})
+    params = list(rows[0]["parameters"]) if rows else []
+    with open(written[1], "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow([*_PEOPLE_COLUMNS, *params])
+        for r in rows:
+            cells = ["" if r[k] is None else r[k] for k in _PEOPLE_COLUMNS]
+            cells[1] = int(r["tracked"])
+            w.writerow([*cells, *(f"{r['parameters'][k]:.6g}" for k in params)])
+    return written

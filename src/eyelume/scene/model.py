@@ -581,6 +581,18 @@ class Eye(_Model):
     corneal vertex of primary gaze, first by ``gaze_vertical_deg`` about the x axis (positive:
     looking up, +y), then by ``gaze_horizontal_deg`` about the y axis (positive: looking toward
     +x, the nose of a right eye). The world frame stays that of primary gaze (ARCHITECTURE.md §2).
+    The gaze angles are the optical axis's (the schematic eye's axis of symmetry).
+
+    ``kappa_deg``: the angle kappa, (horizontal, vertical) degrees: the visual axis (the line of
+    sight to what the eye fixates) is the eye-frame direction at these angles from the optical
+    axis (positive horizontal: nasal, toward +x of a right eye; positive vertical: up), turned
+    with the gaze — ``eyelume.analysis.truth.visual_axis``. Default (0, 0): the schematic eyes
+    of the library are rotationally symmetric, their visual and optical axes one; real eyes
+    have about +5° ± 2° horizontally (Atchison & Smith, Optics of the Human Eye, 2000, ch. 4;
+    ``scene/presets/eyes/population.toml`` samples it). The render does not change with it; it
+    tells where the person looks: truth.json's ``visual_axis`` and the tracking evaluation,
+    whose grid gazes are fixation targets of the visual axis
+    (:func:`eyelume.optimize.tracking.render_frame`). Each component within ±15°.
 
     ``contact_lens``: a contact lens on the cornea (:class:`ContactLens`; unset: none).
 
@@ -623,8 +635,16 @@ class Eye(_Model):
     gaze_horizontal_deg: float = Field(0.0, ge=-30.0, le=30.0)
     gaze_vertical_deg: float = Field(0.0, ge=-30.0, le=30.0)
     rotation_centre_mm: Positive = 13.5
+    kappa_deg: tuple[float, float] = (0.0, 0.0)
     contact_lens: ContactLens | None = None
     cornea: AnteriorCornea = AnteriorCornea()
+
+    @field_validator("kappa_deg")
+    @classmethod
+    def _kappa_range(cls, v: tuple[float, float]) -> tuple[float, float]:
+        if not all(math.isfinite(k) and abs(k) <= 15.0 for k in v):
+            raise ValueError(f"kappa_deg = {list(v)!r}: each angle must lie in ±15°")
+        return v
 
     @model_validator(mode="before")
     @classmethod

@@ -62,6 +62,7 @@ __all__ = [
     "Person",
     "Population",
     "corneal_split",
+    "load_population_file",
     "parameter_source",
     "parse_population",
     "resolved_distributions",
@@ -327,7 +328,7 @@ class Person:
     value, used or not, by name), ``overrides`` (dotted scene paths → values, for
     :func:`eyelume.scene.io.apply_overrides` on the base scene), ``scene`` (the base scene with
     them applied; None when not built), ``not_applied`` (used parameters the scene has nothing
-    for: kappa, which no scene field holds, and the lid aperture in a scene without lids)."""
+    for: the lid aperture in a scene without lids)."""
 
     index: int
     values: dict[str, float]
@@ -447,6 +448,8 @@ def _overrides(
             over["eye.surfaces.0.radius_mm"] = flat
             over["eye.cornea.radius_steep_mm"] = steep
             over["eye.cornea.axis_deg"] = axis
+        elif target == "kappa.horizontal":
+            over["eye.kappa_deg"] = [v, scene.eye.kappa_deg[1]]
         elif target == "lid_aperture":
             lids = _lid_indices(scene)
             if lids is None:
@@ -573,6 +576,30 @@ def sample_people(
                 raise SceneError(f"person {i} of population seed {seed}: {exc}") from None
         people.append(person)
     return people
+
+
+def load_population_file(path) -> Population:
+    """A :class:`Population` from a TOML file: its ``[population]`` table (a study file serves)
+    or, without one, the whole file as that table. SceneError naming the file: unreadable, not
+    TOML, or a field refused (:func:`parse_population`)."""
+    from pathlib import Path
+
+    from eyelume.scene.textfile import decode_text
+
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise SceneError(f"population file {p}: {exc.strerror or exc}") from None
+    text = decode_text(raw, p, SceneError).lstrip("\ufeff")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"population file {p}: not valid TOML: {exc}") from None
+    table = data.get("population", data)
+    if not isinstance(table, dict):
+        raise SceneError("must be a table", file=f"population file {p}", field="population")
+    return parse_population(table, origin=f"population file {p}")
 
 
 def sample_population(scene: Scene, population: Population, **kw: Any) -> list[Person]:

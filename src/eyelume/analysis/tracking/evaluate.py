@@ -7,11 +7,17 @@ ellipse's centre against the centre of the ellipse through the true apparent pup
 found and matched. :func:`analyse_frames` estimates gaze with two estimators (:mod:`.gaze`): the
 PCCR polynomial, calibrated on a 3 × 3 grid of calibration frames and evaluated on the held-out
 test frames, and the Guestrin–Eizenman geometric model from the glints, which needs no
-calibration. Both use the glints matched to LEDs only: a frame with some LEDs' glints missing
-(off the cornea, under a lid) but ≥ 3 matched is answered (:func:`~.detect.detect`); its PCCR
-reference is the glint pattern's centre from the found glints and each LED's offset in the
-calibration frames (:func:`~.gaze.glint_offsets`), not the mean of the found glints, which
-moves toward them. Rendering the frames over a gaze grid is :mod:`eyelume.optimize.tracking`'s.
+calibration of its own beyond a one-point kappa: with calibration frames, the offset between the
+central calibration target (0°, 0°) and the model's optical axis there is added to every
+estimate (:func:`kappa_offset`; the angle kappa of the person, ``eye.kappa_deg``, and the
+model's own bias at the centre). The frames' gazes are fixation targets of the visual axis
+(:func:`eyelume.optimize.tracking.render_frame` turns the eye so its visual axis meets them), so
+every error is against the visual axis. Both use the glints matched to LEDs only: a frame
+with some LEDs' glints missing (off the cornea, under a lid) but ≥ 3 matched is answered
+(:func:`~.detect.detect`); its PCCR reference is the glint pattern's centre from the found
+glints and each LED's offset in the calibration frames (:func:`~.gaze.glint_offsets`), not
+the mean of the found glints, which moves toward them. Rendering the frames over a gaze grid is
+:mod:`eyelume.optimize.tracking`'s.
 
 With optical elements (spectacles, a hot mirror), a detected glint matched to an LED may be a
 spectacle ghost (:mod:`eyelume.analysis.ghosts`) taken for the corneal glint:
@@ -264,6 +270,23 @@ def _geometric(model: GeometricGaze, frame: Frame, n_leds: int) -> tuple[float, 
     return (est.h_deg, est.v_deg) if est.ok else None
 
 
+def kappa_offset(
+    model: GeometricGaze, calibration: list[Frame], n_leds: int, left: bool
+) -> tuple[float, float] | None:
+    """The geometric model's one-point kappa calibration (Guestrin & Eizenman's, as an additive
+    angle offset): target − estimate (h, v degrees) at the central calibration frame (gaze
+    (0°, 0°)); None without that frame or when the model gives no estimate there. ``left``:
+    the model's angles mirrored as :func:`analyse_frames` does."""
+    centre = [f for f in calibration if f.gaze == (0.0, 0.0)]
+    if not centre:
+        return None
+    est = _geometric(model, centre[0], n_leds)
+    if est is None:
+        return None
+    h, v = (-est[0], est[1]) if left else est
+    return (0.0 - h, 0.0 - v)
+
+
 def analyse_frames(
     scene: Scene, leds_mm: np.ndarray, frames: list[Frame], calibration: list[Frame]
 ) -> TrackingReport:
@@ -287,17 +310,22 @@ def analyse_frames(
         )
     camera = pinhole_camera(scene)
     geometric = GeometricGaze(camera, leds_mm)
+    left = scene.eye_pose.which == "left"
+    kappa = kappa_offset(geometric, calibration, len(leds_mm), left)
     for f in frames:
         if pccr is not None and f.pg_vector is not None:
             f.pccr = tuple(float(x) for x in pccr.predict(np.array([f.pg_vector]))[0])
         f.geometric = _geometric(geometric, f, len(leds_mm))
-        if f.geometric is not None and scene.eye_pose.which == "left":
+        if f.geometric is not None and left:
             # the model's angles are the world's (h toward +x); a left eye's scene gaze is
             # anatomical (h toward the nose, world −x): mirror to compare
             f.geometric = (-f.geometric[0], f.geometric[1])
+        if f.geometric is not None and kappa is not None:
+            f.geometric = (f.geometric[0] + kappa[0], f.geometric[1] + kappa[1])
     mm_per_px = camera.scale_mm  # mm per pixel on the plane in focus
     report = TrackingReport(frames, calibration, mm_per_px)
     report.summary = summarise(report, pccr_calibrated=pccr is not None)
+    report.summary["geometric_kappa_deg"] = None if kappa is None else list(kappa)
     report.summary["safety"] = eye_safety(scene)
     return report
 
