@@ -222,7 +222,7 @@ def _error(est, gaze) -> float | None:
 
 def evaluate_people(
     people: Sequence,
-    samples_per_pixel: int = 2,
+    samples_per_pixel: int = 8,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
 ) -> list[PersonResult]:
