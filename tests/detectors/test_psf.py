@@ -158,9 +158,11 @@ def test_psf_none_reproduces_the_render_before_the_psf():
     """``camera.psf = "none"`` is the render as it was before the PSF existed: the arrays of
     ``tests/reference/vr_offaxis_small_seed3.npz``, rendered by commit 88e872f (vr-offaxis at 80
     × 80 pixels of 15 µm, fast 4 samples/pixel and forward 300 000 rays, seed 3), to 1e-9
-    relative as tests/test_bit_identity.py."""
+    relative as tests/test_bit_identity.py. The glint's reflectance is the fixed 2.1 % the
+    preset had then (074eede made the tear film's Fresnel value its default)."""
     ref = np.load(REF)
-    sc = apply_overrides(load_scene("vr-offaxis"), {**SMALL, "camera.psf": "none"})
+    then = {"eye.cornea_reflection": "fixed", "eye.cornea_reflectance": 0.021}
+    sc = apply_overrides(load_scene("vr-offaxis"), {**SMALL, **then, "camera.psf": "none"})
     f = eyelume.render(sc, eyelume.RenderOptions(estimator="fast", samples_per_pixel=4, seed=3))
     w = eyelume.render(sc, eyelume.RenderOptions(estimator="forward", rays=300_000, seed=3))
     assert f.psf is None and w.psf is None
