@@ -842,6 +842,8 @@ def reproduce(
         "deltas": values,
         "wall_time_s": round(time.perf_counter() - t0, 2),
         "paper_placement": paper,
+        "eye_plane_mm": [sc.eye_plane.width_mm, sc.eye_plane.height_mm],
+        "picture_mm": list(sc.sensor.field_mm),
     }
     if partial:
         meta["partial"] = partial

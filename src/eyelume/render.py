@@ -947,26 +947,53 @@ def _groups_forward(groups: _Groups, opt: RenderOptions, progress) -> RenderResu
     )
 
 
+#: Kinds of the traced rays of :class:`RenderExtras`: reached the sensor, born near the view's
+#: section plane; reached the sensor, born off it (drawn projected); did not reach the sensor.
+RAY_KINDS = ("sensor", "sensor, off the section", "other")
+
+
 @dataclass
 class RenderExtras:
     """What ``eyelume render`` draws and records beside its images, computed here (where rays
     may be traced) so that :mod:`eyelume.report` only writes it.
 
     ``sections``: the system in two orthogonal views, ``"yz"`` and ``"xz"``, world frame
-    (:func:`eyelume.layout.system_sections`); ``ray_paths``: a few dozen traced rays, ((k, 3)
-    world vertices in mm, reached the sensor) (:func:`eyelume.estimators.forward.trace_paths`);
-    ``truth``: the true gaze, pupil and glint positions on the picture
+    (:func:`eyelume.layout.system_sections`); ``ray_paths``: per view, a few dozen traced rays
+    ((k, 3) world vertices in mm, kind of :data:`RAY_KINDS`)
+    (:func:`eyelume.estimators.forward.trace_paths`): rays reaching the sensor born within
+    1 mm of the view's section plane (the plane through the eye's nominal vertex the view
+    cuts), topped up to 6 with rays reaching the sensor born off it (few rays reach the
+    sensor of an off-axis camera, and perhaps none from the LEDs in one section: drawn
+    projected onto it, so the camera's view shows in both sections), and rays that miss it
+    born near the plane; ``truth``: the true gaze, pupil and glint positions on the picture
     (:func:`eyelume.analysis.truth.eye_truth`).
     """
 
     sections: dict[str, list[Section]]
-    ray_paths: list[tuple[np.ndarray, bool]]
+    ray_paths: dict[str, list[tuple[np.ndarray, str]]]
     truth: dict
 
 
 def render_extras(cs: CompiledScene, seed: int) -> RenderExtras:
-    """The layout views, ray paths (drawn from the seed's stream) and truth of a compiled
-    scene (:class:`RenderExtras`)."""
+    """The layout views, ray paths (drawn from the seed's stream, for each view those born
+    near its section plane first) and truth of a compiled scene (:class:`RenderExtras`)."""
+    from eyelume.compile import eye_plane_origin
+
     views = {view: system_sections(cs, view=view) for view in VIEWS}
-    paths = [(cs.frame.world_point(p), hit) for p, hit in trace_paths(cs, seed)]
+    origin = eye_plane_origin(cs.scene)
+    tol, want, least = 1.0, 24, 6
+    # one search for rays reaching the sensor, born anywhere (rare for an off-axis camera)
+    hits = [p for p, _ in trace_paths(cs, seed, detected=8 * want, other=0, section_tol=np.inf)]
+    paths = {}
+    for view, (cut, _) in VIEWS.items():
+        # the world plane w_cut = origin[cut] in the camera frame: world = R^T p_c + o
+        normal = cs.frame.rotation[:, cut]
+        offset = float(origin[cut] - cs.frame.origin[cut])
+        near = [abs(float(p[0] @ normal) - offset) <= tol for p in hits]
+        chosen = [(p, "sensor") for p, n in zip(hits, near, strict=True) if n][:want]
+        off = [p for p, n in zip(hits, near, strict=True) if not n]
+        chosen += [(p, RAY_KINDS[1]) for p in off[: max(0, least - len(chosen))]]
+        others = trace_paths(cs, seed, detected=0, other=want, plane=(normal, offset))
+        chosen += [(p, "other") for p, hit in others if not hit]
+        paths[view] = [(cs.frame.world_point(p), kind) for p, kind in chosen]
     return RenderExtras(views, paths, eye_truth(cs))

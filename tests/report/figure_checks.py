@@ -10,6 +10,14 @@
 - :func:`axes_without_unit_label`: every axis (x or y, colour bars apart: see above) that
   draws tick labels — a numeric scale shown — whose label does not end with a unit in
   parentheses, e.g. "(mm)", "(°)", "(px)" or "(dimensionless)".
+- :func:`exponent_texts`: every axis (colour bars included) that draws an offset or exponent
+  text ("1e−6" over a colour bar) or a tick label in e-notation ("1.6e-08"): such numbers are
+  misread; a figure scales its data to an SI-prefixed unit instead (a log scale's 10^k labels
+  are allowed).
+- :func:`colormaps_off_rule`: every image whose colour map breaks eyelume's rule
+  (:mod:`eyelume.report.plots`): a picture on the sensor (colour bar labelled "image-plane
+  irradiance" or in DN) grey, an eye-plane irradiance inferno, anything else a perceptually
+  uniform viridis or the diverging map.
 - :func:`caption_missing`: the figure draws no caption (its suptitle, a ``fig.text`` or, for a
   one-panel figure, the panel's title: where eyelume's writers put it) naming the scene and the
   seed (``seed N``, or ``no random seed`` for a closed-form, deterministic result).
@@ -128,6 +136,64 @@ def images_without_unit_colorbar(fig: Figure) -> list[str]:
             label = cax.get_ylabel() or cax.get_xlabel()
             if not UNIT.search(label):
                 bad.append(f"{where!r}: colour bar label {label!r} names no unit in parentheses")
+    return bad
+
+
+#: A tick label in e-notation: "1.6e-08", "2e+03", "1e−6" (matplotlib's minus sign).
+_E_NOTATION = re.compile(r"\d[eE][+\-−]?\d")
+
+
+def exponent_texts(fig: Figure) -> list[str]:
+    """Descriptions of the axes (colour bars' included) that draw an offset text or a tick
+    label in e-notation."""
+    _drawn_texts(fig)
+    _, drawn = _tick_labels(fig)
+    bad = []
+    for ax in _all_axes(fig):
+        if not (ax.get_visible() and ax.axison):
+            continue
+        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            where = ax.get_title() or axis.get_label_text() or ax.get_ylabel() or "untitled panel"
+            offset = axis.get_offset_text()
+            if axis.get_visible() and offset.get_visible() and offset.get_text().strip():
+                bad.append(f"{where!r}: {name} axis draws offset text {offset.get_text()!r}")
+            for t in axis.get_major_ticks() + axis.get_minor_ticks():
+                for lab in (t.label1, t.label2):
+                    if id(lab) in drawn and _E_NOTATION.search(lab.get_text()):
+                        bad.append(f"{where!r}: {name} tick label {lab.get_text()!r}")
+    return bad
+
+
+#: The colour maps of eyelume's rule (eyelume.report.plots's docstring).
+_SENSOR, _IRRADIANCE = {"gray"}, {"inferno"}
+_OTHER = {"viridis", "viridis_r", "RdBu_r", "RdBu"}
+
+
+def colormaps_off_rule(fig: Figure) -> list[str]:
+    """Descriptions of the images whose colour map is not the rule's for what their colour bar
+    says they show."""
+    bad = []
+    images = []
+    for ax in _all_axes(fig):
+        images += [*ax.images, *(c for c in ax.collections if isinstance(c, QuadMesh))]
+    bars = [im for im in images if getattr(im, "colorbar", None) is not None]
+    bar_axes = {im.colorbar.ax for im in bars}
+    images = [im for im in images if im.axes not in bar_axes]  # a bar's own colour strip
+    for im in images:
+        owner = im if im.colorbar is not None else next(
+            (c for c in bars if _same_scale(c, im)), None
+        )  # fmt: skip
+        if owner is None:
+            continue  # images_without_unit_colorbar's
+        label = (owner.colorbar.ax.get_ylabel() or owner.colorbar.ax.get_xlabel()).lower()
+        if "image-plane" in label or "(dn)" in label:
+            allowed, what = _SENSOR, "a picture on the sensor"
+        elif "irradiance" in label:
+            allowed, what = _IRRADIANCE, "an irradiance map"
+        else:
+            allowed, what = _OTHER, "another quantity"
+        if im.cmap.name not in allowed:
+            bad.append(f"{label!r}: {what} drawn with {im.cmap.name!r}, not {sorted(allowed)}")
     return bad
 
 

@@ -16,6 +16,8 @@ import pytest
 from figure_checks import (
     axes_without_unit_label,
     caption_missing,
+    colormaps_off_rule,
+    exponent_texts,
     images_without_unit_colorbar,
     text_overlaps,
 )
@@ -46,6 +48,8 @@ class Caught:
         found = [f"texts overlap: {a!r} / {b!r}" for a, b in text_overlaps(fig)]
         found += images_without_unit_colorbar(fig)
         found += axes_without_unit_label(fig)
+        found += exponent_texts(fig)
+        found += colormaps_off_rule(fig)
         if self.caption is not None:
             found += [m for m in [caption_missing(fig, *self.caption)] if m]
         if found:
@@ -63,7 +67,7 @@ def _check(write, caption: tuple[str, int | None] | None) -> Caught:
     return caught
 
 
-def _rows(gazes, *, pccr=True, fail=()):
+def _rows(gazes, *, pccr=True, fail=(), cal=()):
     rows = []
     for k, (h, v) in enumerate(gazes):
         ok = k not in fail
@@ -75,8 +79,11 @@ def _rows(gazes, *, pccr=True, fail=()):
                 "false_glints": 0,
                 "pccr_error_deg": (0.456 * (k + 1) if ok else None) if pccr else None,
                 "geometric_error_deg": 1.234 * (k + 1) if ok else None,
+                "calibration": (h, v) in cal,
             }
         )
+        if (h, v) in cal and pccr:
+            rows[-1]["pccr_error_deg"] = 1.2e-14  # the fit's residual on its own picture
     return rows
 
 
@@ -91,9 +98,40 @@ def _rows(gazes, *, pccr=True, fail=()):
 )
 def test_error_maps(tmp_path, gazes, pccr, fail):
     meta = {"scene": "paper2005", "seed": 3, "samples_per_pixel": 4, "sensor": [87, 65]}
-    rows = _rows(gazes, pccr=pccr, fail=fail)
+    rows = _rows(gazes, pccr=pccr, fail=fail, cal={(-20.0, 0.0), (0.0, 0.0), (20.0, 0.0)})
     _check(lambda: save_error_maps(rows, tmp_path / "e.png", tracking_caption(meta)),
            ("paper2005", 3))  # fmt: skip
+
+
+def test_error_maps_mark_calibration_gazes_and_leave_them_out_of_the_mean(tmp_path):
+    """A test gaze that is a calibration gaze (the PCCR polynomial fitted on that very picture:
+    its value is an in-sample residual, here a near-zero one) is drawn hatched and marked "cal"
+    in the PCCR panel, with a legend entry, and is neither a number in its cell nor part of the
+    panel's colour scale or mean; the geometric panel (no calibration) keeps its value."""
+    gazes = [(h, v) for v in (-10.0, 0.0, 10.0) for h in (-20.0, 0.0, 20.0)]
+    cal = {(-20.0, 0.0), (0.0, 0.0), (20.0, 0.0)}
+    rows = _rows(gazes, cal=cal)
+    seen = {}
+
+    def keep(fig, name):
+        fig.canvas.draw()
+        for ax in fig.axes:
+            texts = [t.get_text() for t in ax.texts]
+            norm = ax.images[0].norm if ax.images else None
+            seen[ax.get_title().split("\n")[0]] = (ax.get_title(), texts, norm, len(ax.patches))
+        seen["legend"] = [t.get_text() for lg in fig.legends for t in lg.get_texts()]
+
+    with observe_figures(keep):
+        save_error_maps(rows, tmp_path / "e.png", "scene paper2005, seed 0")
+    title, texts, norm, patches = seen["PCCR gaze error (°)"]
+    assert texts.count("cal") == 3 and patches == 3
+    assert not any("e-14" in t or t == "1.2e-14" for t in texts)
+    measured = [r["pccr_error_deg"] for r in rows if not r["calibration"]]
+    assert norm.vmin == pytest.approx(min(measured))  # the residual is not on the scale
+    assert f"mean {np.mean(measured):.2f}° over 6 gazes, 3 calibration gazes left out" in title
+    g_title, g_texts, _, g_patches = seen["geometric gaze error (°)"]
+    assert "cal" not in g_texts and g_patches == 0 and "over 9 gazes" in g_title
+    assert any(t.startswith("cal: a calibration gaze") for t in seen["legend"])
 
 
 def test_sweep_landscape_and_best_pattern(tmp_path):
@@ -132,10 +170,38 @@ def test_delta_study_figures(tmp_path):
         )  # fmt: skip
         save_delta_gallery(
             deltas, patterns, images, ["Y20 Z50 θ0", "Y40 Z70 θ15"], tmp_path / "deltas.png",
-            caption=caption,
+            caption=caption, plane_mm=(40.0, 30.0), picture_mm=(46.0, 34.3),
         )  # fmt: skip
 
     assert len(_check(write, ("paper2005", 2)).names) == 2
+
+
+def test_delta_gallery_draws_the_eye_plane_in_mm_and_the_eye_image_on_the_sensor(tmp_path):
+    """deltas.png: the eye-plane row spans the receiver's ±20 × ±15 mm (not its 21 × 15 bins),
+    the eye-image row the picture's ±23 × ±17.15 mm on the sensor with the pixel size said; the
+    eye plane in inferno, the eye image grey as the camera shows it."""
+    rng = np.random.default_rng(1)
+    patterns = [rng.uniform(0, 1e-4, (15, 21)) for _ in range(2)]
+    images = [rng.uniform(0, 1e-8, (65, 87)) for _ in range(2)]
+    seen = {}
+
+    def keep(fig, name):
+        for ax in fig.axes:
+            if ax.images:
+                seen.setdefault(ax.get_xlabel(), []).append(
+                    (tuple(ax.images[0].get_extent()), ax.images[0].cmap.name)
+                )
+
+    with observe_figures(keep):
+        save_delta_gallery([0.1, 0.5], patterns, images, ["a", "b"], tmp_path / "d.png",
+                           plane_mm=(40.0, 30.0), picture_mm=(46.0, 34.3))  # fmt: skip
+    plane = seen.pop("eye plane x (mm)")
+    assert [e for e, _ in plane] == [(-20.0, 20.0, -15.0, 15.0)] * 2
+    assert {c for _, c in plane} == {"inferno"}
+    ((label, picture),) = seen.items()
+    assert label == "image x on the sensor (mm; 1 px = 0.529 mm)"
+    assert [e for e, _ in picture] == [pytest.approx((-23.0, 23.0, -17.15, 17.15))] * 2
+    assert {c for _, c in picture} == {"gray"}
 
 
 def test_error_time_plot(tmp_path):
@@ -168,7 +234,8 @@ def test_render_figures_of_a_40_by_30_render(tmp_path):
         ("paper2005", 1),
     )
     assert sorted(caught.names) == [
-        "eye_image_plot.png", "eye_plane_plot.png", "layout.png", "layout_xz.png",
+        "eye_image_digital_plot.png", "eye_image_plot.png", "eye_plane_plot.png", "layout.png",
+        "layout_xz.png",
     ]  # fmt: skip
 
 
@@ -197,6 +264,31 @@ def test_the_checks_find_overlapping_texts_and_a_missing_colour_bar():
     assert caption_missing(fig, "paper2005", 1) is not None  # seed 12 is not seed 1
     assert caption_missing(fig, "paper2005", None) is not None  # nor says there is none
     assert caption_missing(fig, "paper2005", 12) is None
+
+
+def test_the_checks_find_offset_texts_exponents_and_colour_maps_off_the_rule():
+    """An irradiance map in W/mm² drawn as is (values ~1e-6): its colour bar shows an offset
+    or e-notation; a sensor picture in inferno and an eye-plane map in grey break the rule;
+    scaled to µW/mm² in the rule's maps, the same figure passes."""
+    from eyelume.report.plots import agg_figure, si_scale
+
+    data = 1e-6 * (1.0 + np.arange(12.0).reshape(3, 4) / 1000.0)
+    fig = agg_figure(8, 3)
+    a, b = fig.subplots(1, 2)
+    fig.colorbar(a.imshow(data, cmap="inferno"), ax=a, label="image-plane irradiance (W/mm²)")
+    fig.colorbar(b.imshow(data * 2, cmap="gray"), ax=b, label="eye-plane irradiance (W/mm²)")
+    assert exponent_texts(fig), "an offset or exponent went unnoticed"
+    bad = colormaps_off_rule(fig)
+    assert len(bad) == 2 and "picture on the sensor" in bad[0] + bad[1]
+
+    factor, label = si_scale("image-plane irradiance (W/mm²)", float(data.max()))
+    assert label == "image-plane irradiance (µW/mm²)"
+    fig = agg_figure(8, 3)
+    a, b = fig.subplots(1, 2)
+    fig.colorbar(a.imshow(data / factor, cmap="gray"), ax=a, label=label)
+    fig.colorbar(b.imshow(2 * data / factor, cmap="inferno"), ax=b,
+                 label=label.replace("image-plane", "eye-plane"))  # fmt: skip
+    assert exponent_texts(fig) == [] and colormaps_off_rule(fig) == []
 
 
 def test_sweep_outputs_of_a_real_two_point_sweep(tmp_path):

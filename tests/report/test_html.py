@@ -72,8 +72,18 @@ def test_report_renders_in_headless_chromium_with_its_figures(tmp_path):
     assert text.count("<figcaption>") == n_img
     captions = [html.unescape(c) for c in re.findall(r"<figcaption>(.*?)</figcaption>", text)]
     landscapes, best = captions[:-1], captions[-1]
-    for c in landscapes:  # the study's scene and seed, as run_study recorded them
-        assert "Study report: scene paper2005, seed 1, 16 camera samples per pixel." in c, c
+    for c in landscapes:  # the study's scene, as run_study recorded it, and the budget used
+        assert "Study report: scene paper2005." in c, c
+        # eye_plane_merit and the safety margins are closed form: the study's 16 camera samples
+        # per pixel and seed 1 were not used for them, and the caption must not say they were
+        assert "no camera samples, no random seed" in c and "16 camera samples" not in c, c
+    # the runs table's headers carry units; the best runs read as settings, not Python dicts
+    assert (
+        "<th>leds.height_mm (mm)</th>" in text and "<th>corneal_margin (limit / exposure)" in text
+    )
+    best_runs = re.search(r"<h2>Best runs.*?</ol>", text, re.S).group(0)
+    assert "{" not in best_runs and "leds.height_mm = " in best_runs and " mm" in best_runs
+    assert "eye_plane_merit = " in best_runs and "(dimensionless)" in best_runs
     # the best run is rendered anew, with its own seed: said so
     assert "scene paper2005 with the run's overrides, seed 0, 16 camera samples" in best, best
     shots = tmp_path / "screenshots"  # the test's artefacts, kept in pytest's tmp folder
@@ -89,6 +99,10 @@ def test_report_renders_in_headless_chromium_with_its_figures(tmp_path):
         assert decoded and int(decoded.group(1)) == n_img  # every figure decoded, has a size
         overflow = re.search(r'data-overflow-px="(\d+)"', dom)
         assert overflow and int(overflow.group(1)) == 0, f"{width} px: page wider than window"
+        # figures grow with the window (at 1920 px they are not left at their PNG's size)
+        narrowest = int(re.search(r'data-figure-min-px="(\d+)"', dom).group(1))
+        widest = int(re.search(r'data-figure-max-px="(\d+)"', dom).group(1))
+        assert 0.4 * width <= narrowest <= widest <= width, (width, narrowest, widest)
         # 3 of the 6 runs have 1 W/sr LEDs: over the corneal limit, drawn in red
         assert dom.count('class="unsafe"') == 3
         shot = shots / f"report_{width}.png"

@@ -337,4 +337,4 @@ def test_irradiance_plot_pixel_axes_count_the_array(tmp_path):
             np.ones((30, 40)), tmp_path / "p.png", extent_mm=(-2, 2, -1.5, 1.5), title="t",
             pixel_axes=True,
         )  # fmt: skip
-    assert seen == [{"column (px of 40)", "row (px of 30)"}]
+    assert seen == [{"column (sensor px of 40)", "row (sensor px of 30)"}]

@@ -294,10 +294,13 @@ def trace_forward(
 
 class PathSearch(NamedTuple):
     """Which recorded rays :func:`_trace_paths` keeps: born within ``section_tol`` mm of the
-    y–z section, up to ``want_detected`` that reach the sensor and ``want_other`` that do not;
-    into ``out`` (k, max_len, 3) with ``lengths`` and ``kinds`` (1: detected)."""
+    section plane n · p = ``plane_offset`` (``plane_normal`` n (3,), unit, camera frame), up to
+    ``want_detected`` that reach the sensor and ``want_other`` that do not; into ``out``
+    (k, max_len, 3) with ``lengths`` and ``kinds`` (1: detected)."""
 
     section_tol: float
+    plane_normal: np.ndarray
+    plane_offset: float
     want_detected: int
     want_other: int
     out: np.ndarray
@@ -319,8 +322,10 @@ def _trace_paths(start, n, seed, scene, n_tallies, want):
     k = 0
     for i in range(start, start + n):
         entry, _, npath = trace_ray(i, seed, scene, counts, path, True)
-        if abs(path[0, 0]) > want.section_tol:
-            continue  # born off the y–z section: its projection would mislead
+        n = want.plane_normal
+        off = path[0, 0] * n[0] + path[0, 1] * n[1] + path[0, 2] * n[2] - want.plane_offset
+        if abs(off) > want.section_tol:
+            continue  # born off the section: its projection would mislead
         detected = entry == TALLY_SENSOR
         if (detected and got_d < want.want_detected) or (not detected and got_o < want.want_other):
             want.out[k, :npath] = path[:npath]
@@ -343,17 +348,29 @@ def trace_paths(
     other: int = 24,
     search: int = 4_000_000,
     section_tol: float = 1.0,
+    plane: tuple[np.ndarray, float] | None = None,
 ) -> list[tuple[np.ndarray, bool]]:
     """Record the vertices of a few rays for drawing: up to ``detected`` rays that reach the
     sensor and ``other`` that do not, among the first ``search`` rays of the seed's stream,
-    keeping only rays born within ``section_tol`` mm of the y–z section (x = 0).
+    keeping only rays born within ``section_tol`` mm of the section plane ``plane`` = (unit
+    normal n (3,), offset d) in the camera frame, n · p = d (default: the y–z section x_c = 0).
 
-    Returns a list of ((k, 3) world vertices in mm, reached_sensor).
+    Returns a list of ((k, 3) camera-frame vertices in mm, reached_sensor).
     """
+    normal, offset = (np.array([1.0, 0.0, 0.0]), 0.0) if plane is None else plane
     max_len = cs.scene.run.max_events + cs.lf.shape[0] + 4
     out = np.zeros((detected + other, max_len, 3))
     lengths = np.zeros(detected + other, dtype=np.int64)
     kinds = np.zeros(detected + other, dtype=np.int64)
-    want = PathSearch(float(section_tol), int(detected), int(other), out, lengths, kinds)
+    want = PathSearch(
+        float(section_tol),
+        np.ascontiguousarray(normal, dtype=np.float64),
+        float(offset),
+        int(detected),
+        int(other),
+        out,
+        lengths,
+        kinds,
+    )
     k = _trace_paths(0, search, seed, cs.tables, len(cs.tallies), want)
     return [(out[j, : lengths[j]].copy(), bool(kinds[j])) for j in range(k)]

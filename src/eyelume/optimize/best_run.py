@@ -10,7 +10,8 @@ the tracking errors over the gaze grid — is computed here and stored in the st
 - ``best_run.json``: the run's index, overrides, the merit it is best by and its value, the
   scene, ``seed`` and ``samples_per_pixel`` of the eye image and the tracking frames, and
   ``tracking_rows`` (:func:`eyelume.analysis.tracking.evaluate.error_map_rows` over the 3 × 3
-  gaze grid of :mod:`.tracking`) or null.
+  gaze grid of :mod:`.tracking`) or null, ``eye_plane_mm`` and ``picture_mm`` (width, height
+  mm of the eye-plane receiver and of the picture on the sensor: the figures' mm axes).
 
 The best run is the one with the lowest value of the first merit in :data:`MERITS` the study
 measured.
@@ -95,6 +96,8 @@ def save_best_run(folder: str | Path, scene: str) -> Path | None:
         "samples_per_pixel": _SPP,
         "tracking_samples_per_pixel": _TRACKING_SPP if tracking is not None else None,
         "tracking_rows": tracking,
+        "eye_plane_mm": [sc.eye_plane.width_mm, sc.eye_plane.height_mm],
+        "picture_mm": list(sc.sensor.field_mm),
     }
     path = folder / BEST_RUN_FILES[1]
     write_json(path, meta)

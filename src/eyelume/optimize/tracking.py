@@ -138,8 +138,12 @@ def evaluate_tracking(
             calib.append(run_unit(render_frame, cal, h, v, samples_per_pixel, seed))
             if progress:
                 progress(f"calibration gaze ({h:+.0f}°, {v:+.0f}°)")
+        # a test gaze of the calibration grid, rendered in the calibration's scene with the
+        # same seed and budget, is the same picture: its PCCR error is the fit's in-sample residual
+        same = calibration_scene is None or calibration_scene == scene
         for h, v in tests:
             frames.append(run_unit(render_frame, scene, h, v, samples_per_pixel, seed))
+            frames[-1].calibration = same and (h, v) in grid
             if progress:
                 f = frames[-1]
                 progress(

@@ -25,7 +25,14 @@ from matplotlib.figure import Figure
 
 from eyelume.errors import StoreError
 from eyelume.optimize.best_run import BEST_RUN_FILES, best_runs
-from eyelume.report.plots import agg_figure, save_figure
+from eyelume.report.plots import (
+    CMAP_IRRADIANCE,
+    CMAP_SENSOR,
+    agg_figure,
+    draw_maps,
+    pixel_pitch_label,
+    save_figure,
+)
 from eyelume.report.tracking_outputs import save_error_maps
 
 __all__ = ["write_report"]
@@ -33,9 +40,24 @@ __all__ = ["write_report"]
 
 def _png(fig: Figure) -> str:
     buf = io.BytesIO()
-    save_figure(fig, buf, dpi=90)
+    save_figure(fig, buf, dpi=120)  # sharp when a wide window draws it larger
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
+
+#: Units of the study's metrics by their full name (counts, shares, a yes/no).
+_METRIC_UNITS = {
+    "eye_image_merit_se": "dimensionless",
+    "skin_cv": "dimensionless",
+    "detection_rate": "share of frames",
+    "glints_visible_min": "count",
+    "glints_visible_mean": "count",
+    "gaze_share_all_glints": "share of gazes",
+    "false_glints_mean": "count",
+    "false_glints_max": "count",
+    "false_glint_to_glint_px_min": "px",
+    "false_glint_to_pupil_px_min": "px",
+    "within_exempt_group": "yes/no",
+}
 
 #: Units read from a parameter's or metric's name ending (the scene's and metrics' own naming:
 #: ``leds.height_mm``, ``pitch_deg``, ``corneal_margin`` = exposure limit / exposure).
@@ -45,6 +67,7 @@ _NAME_UNITS = (
     ("_mm", "mm"),
     ("_deg", "°"),
     ("_nm", "nm"),
+    ("_um", "µm"),
     ("_px", "px"),
     ("_ms", "ms"),
     ("_margin", "limit / exposure"),
@@ -52,37 +75,85 @@ _NAME_UNITS = (
 )
 
 
+def unit_of(name: str) -> str | None:
+    """The unit a parameter's or metric's name says (:data:`_METRIC_UNITS`, else its ending,
+    ``_NAME_UNITS``), or None: none is invented."""
+    if name in _METRIC_UNITS:
+        return _METRIC_UNITS[name]
+    return next((unit for end, unit in _NAME_UNITS if name.endswith(end)), None)
+
+
 def axis_label(name: str) -> str:
-    """``name`` with its unit in parentheses when its ending says it (``_NAME_UNITS``)."""
-    for end, unit in _NAME_UNITS:
-        if name.endswith(end):
-            return f"{name} ({unit})"
-    return name
+    """``name`` with its unit in parentheses when its name says it (:func:`unit_of`)."""
+    unit = unit_of(name)
+    return name if unit is None else f"{name} ({unit})"
 
 
-def study_caption(folder: Path) -> str:
-    """The study's scene, seed and budget, as its runner recorded them in ``study.json``
-    (:data:`eyelume.optimize.runner.STUDY_FILE`), for the captions; says so when the folder has
-    none (a study run before eyelume wrote it) or it cannot be read."""
+def _value_with_unit(name: str, value) -> str:
+    """``value`` as a reader writes it: a number with its unit (``30 mm``, ``10°``)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return str(value)
+    unit = unit_of(name)
+    text = f"{value:.5g}"
+    if unit in (None, "dimensionless", "yes/no"):
+        return text
+    return f"{text}{unit}" if unit == "°" else f"{text} {unit}"
+
+
+def _study_info(folder: Path) -> dict | None:
     from eyelume.optimize.runner import STUDY_FILE
 
     try:
         info = json.loads((folder / STUDY_FILE).read_text(encoding="utf-8"))
+        return info if all(k in info for k in ("study", "scene", "seed")) else None
+    except (OSError, ValueError, TypeError):
+        return None
+
+
+def metric_budget(metric: str, info: dict | None) -> str:
+    """How a study's ``metric`` was computed, with the budget that computation actually used:
+    the camera samples per pixel and the seed only for the metrics rendered with them
+    (:func:`eyelume.optimize.study.run_metrics`); closed-form metrics say they used none."""
+    seed = f"seed {info['seed']}" if info else "seed not recorded"
+    spp = info.get("samples_per_pixel") if info else None
+    rendered = f"{spp} camera samples per pixel" if spp is not None else "camera samples unknown"
+    if metric.startswith(("eye_image_merit", "skin_")):
+        return f"rendered with the fast estimator, glints removed: {rendered}, {seed}"
+    if metric in ("tracking_score_deg", "detection_rate"):
         return (
-            f"Study {info['study']}: scene {info['scene']}, seed {info['seed']}, "
-            f"{info['samples_per_pixel']} camera samples per pixel."
+            f"rendered with the fast estimator over a 3 × 3 gaze grid (±20° × ±10°), geometric "
+            f"gaze model: {rendered} per frame, {seed}"
         )
-    except (OSError, ValueError, KeyError, TypeError):
+    if metric == "eye_plane_merit":
+        return "closed-form eye-plane irradiance: no camera samples, no random seed"
+    if metric.startswith(("glints_", "gaze_share", "false_glint")):
+        return "from the renderer's truth over a gaze grid: no camera samples, no random seed"
+    if metric.endswith("_margin") or metric == "within_exempt_group":
+        return "closed-form IEC 62471 exposure: no camera samples, no random seed"
+    return f"budget of the study: {rendered}, {seed}"
+
+
+def study_caption(folder: Path) -> str:
+    """The study's name and scene, as its runner recorded them in ``study.json``
+    (:data:`eyelume.optimize.runner.STUDY_FILE`), for the captions; says so when the folder has
+    none (a study run before eyelume wrote it) or it cannot be read. The budget a figure used
+    is :func:`metric_budget`'s."""
+    from eyelume.optimize.runner import STUDY_FILE
+
+    info = _study_info(folder)
+    if info is None:
         return f"The folder records no study scene or seed ({STUDY_FILE} missing or unreadable)."
+    return f"Study {info['study']}: scene {info['scene']}."
 
 
 def _landscapes(
-    rows: list[dict], params: list[str], metrics: list[str], study: str
+    rows: list[dict], params: list[str], metrics: list[str], folder: Path
 ) -> list[tuple[str, str]]:
     out = []
     n = max(1, len(params))
+    info = _study_info(folder)
     for m in metrics:
-        fig = agg_figure(3.4 * n, 3.0)
+        fig = agg_figure(max(3.4 * n, 6.4), 3.2)
         axes = fig.subplots(1, n, squeeze=False, sharey=True)[0]
         for ax, p in zip(axes, params, strict=False):
             xs = [r["overrides"].get(p) for r in rows]
@@ -98,10 +169,18 @@ def _landscapes(
         caption = (
             f"{m} of each committed run (one dot per run) against each varied parameter "
             f"({', '.join(params) or 'none'}), the other parameters at the run's own values; "
-            f"read from the study's store, not recomputed. {study}"
+            f"read from the study's store, not recomputed. {study_caption(folder)} "
+            f"{m}: {metric_budget(m, info)}."
         )
         out.append((caption, _png(fig)))
     return out
+
+
+def _extent(size_mm) -> tuple[float, float, float, float] | None:
+    if not size_mm:
+        return None
+    w, h = size_mm
+    return (-w / 2, w / 2, -h / 2, h / 2)
 
 
 def _best_images(folder: Path) -> list[tuple[str, str]]:
@@ -112,42 +191,79 @@ def _best_images(folder: Path) -> list[tuple[str, str]]:
     with np.load(arrays) as data:
         pattern, image = data["eye_plane"], data["eye_image"]
     info = json.loads(meta.read_text(encoding="utf-8"))
+    scene = info.get("scene_name", info.get("scene"))
+    seeded = "seed" in info
     how = (
-        f"scene {info.get('scene_name', info.get('scene'))} with the run's overrides, "
-        f"seed {info['seed']}, {info['samples_per_pixel']} camera samples per pixel"
-        if "seed" in info
+        f"scene {scene} with the run's overrides, seed {info['seed']}, "
+        f"{info['samples_per_pixel']} camera samples per pixel (fast estimator)"
+        if seeded
         else "seed not recorded (best_run.json written before eyelume recorded it)"
     )
-    fig = agg_figure(9, 3.4)
+    fig = agg_figure(10, 3.8)
     a, b = fig.subplots(1, 2)
-    im = a.imshow(pattern, cmap="inferno", vmin=0)
-    a.set_title("eye-plane irradiance", fontsize=10)
-    fig.colorbar(im, ax=a, label="irradiance (W/mm²)")
-    im = b.imshow(image, cmap="gray", vmin=0, vmax=float(np.percentile(image, 99.5)) or 1.0)
-    b.set_title("eye image (glints clipped at 99.5 %)", fontsize=10)
-    fig.colorbar(im, ax=b, label="irradiance (W/mm²)", extend="max")
-    for ax in (a, b):
-        ax.set_xlabel("column (px)", fontsize=8)
-        ax.set_ylabel("row (px)", fontsize=8)
-        ax.tick_params(labelsize=7)
+    plane = _extent(info.get("eye_plane_mm"))
+    draw_maps(fig, [a], [pattern], extent=plane, cmap=CMAP_IRRADIANCE,
+              label="eye-plane irradiance (W/mm²)", vmax=float(np.max(pattern)),
+              xlabel="eye plane x (mm)" if plane else "eye plane column (px)",
+              ylabel="eye plane y (mm)" if plane else "eye plane row (px)")  # fmt: skip
+    a.set_title("eye-plane irradiance (closed form)", fontsize=10)
+    picture = _extent(info.get("picture_mm"))
+    top = float(np.percentile(image, 99.5))
+    if picture:
+        labels = pixel_pitch_label("x", picture, image.shape[1]), "image y on the sensor (mm)"
+    else:
+        labels = "image column (sensor px)", "image row (sensor px)"
+    draw_maps(fig, [b], [image], extent=picture, cmap=CMAP_SENSOR, vmax=top,
+              clipped=bool(np.max(image) > top), label="image-plane irradiance (W/mm²)",
+              xlabel=labels[0], ylabel=labels[1])  # fmt: skip
+    b.set_title("eye image on the sensor (glints clipped at 99.5 %)", fontsize=10)
     out = [
         (
-            f"Best run (#{info['index']}): its eye-plane irradiance toward the eye and the "
-            "simulated eye image, rendered anew with the fast estimator after the study "
-            f"(eyelume report --scene) and stored beside its results: {how}.",
+            f"Best run (#{info['index']}): its eye-plane irradiance toward the eye (closed form: "
+            "no rays) and the simulated eye image as the camera sees it, rendered anew after "
+            f"the study (eyelume report --scene) and stored beside its results: {how}.",
             _png(fig),
         )
     ]
     if info.get("tracking_rows"):
-        buf = io.BytesIO()
-        save_error_maps(info["tracking_rows"], buf)
         spp = info.get("tracking_samples_per_pixel")
-        track = how.replace(f"{info.get('samples_per_pixel')} camera", f"{spp} camera")
+        track = (
+            f"scene {scene} with the run's overrides, seed {info['seed']}, {spp} camera samples "
+            "per pixel per frame (fast estimator), geometric gaze model (no calibration)"
+            if seeded
+            else how
+        )
+        buf = io.BytesIO()
+        save_error_maps(info["tracking_rows"], buf, caption=_wrap_caption(track))
         out.append(("Best run: pupil-centre, glint and gaze errors of the tracking evaluation "
                     "over the gaze grid (one cell per gaze; a red × where the frame failed): "
                     f"{track}.",
                     base64.b64encode(buf.getvalue()).decode("ascii")))  # fmt: skip
     return out
+
+
+def _wrap_caption(text: str) -> str:
+    import textwrap
+
+    return textwrap.fill(text, 110)
+
+
+def _best_list(best: list[dict], merit: str | None) -> str:
+    """The best runs as readable lines: ``run 3: leds.height_mm = 30 mm, leds.pitch_deg = 10°
+    — eye_plane_merit = 0.0123 (dimensionless)``."""
+    items = []
+    for r in best:
+        setting = ", ".join(
+            f"{html.escape(str(k))} = {html.escape(_value_with_unit(k, v))}"
+            for k, v in sorted(r["overrides"].items())
+        )
+        value = r["metrics"][merit]
+        unit = unit_of(merit)
+        items.append(
+            f"<li>run {html.escape(str(r['index']))}: {setting or 'the base scene'} — "
+            f"{html.escape(merit)} = {value:.5g}{f' ({html.escape(unit)})' if unit else ''}</li>"
+        )
+    return "".join(items)
 
 
 def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
@@ -167,7 +283,7 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
     params = sorted({k for r in rows for k in r["overrides"]})
     metrics = sorted({k for r in rows for k, v in r["metrics"].items()
                       if isinstance(v, int | float) and not isinstance(v, bool)})  # fmt: skip
-    figures = _landscapes(rows, params, metrics, study_caption(folder))
+    figures = _landscapes(rows, params, metrics, folder)
     merit, best = best_runs(rows)
     if best:
         figures += _best_images(folder)
@@ -179,7 +295,7 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
             return f"{v:.5g}" if math.isfinite(v) else "—"
         return html.escape(str(v))
 
-    head = "".join(f"<th>{html.escape(c)}</th>" for c in ["#", *params, *metrics])
+    head = "".join(f"<th>{html.escape(axis_label(c))}</th>" for c in ["#", *params, *metrics])
     body = []
     for r in rows:
         unsafe = r["metrics"].get("within_exempt_group") is False
@@ -187,12 +303,7 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
                *(cell(r["metrics"].get(m)) for m in metrics)]  # fmt: skip
         cls = ' class="unsafe"' if unsafe else ""
         body.append(f"<tr{cls}>" + "".join(f"<td>{t}</td>" for t in tds) + "</tr>")
-    best_html = "".join(
-        f"<li>run {html.escape(str(r['index']))}: {html.escape(str(r['overrides']))} — "
-        f"{html.escape(str(merit))} "
-        f"{r['metrics'][merit]:.5g}</li>"
-        for r in best
-    )
+    best_html = _best_list(best, merit)
     figs = "".join(
         f'<figure><img alt="{html.escape(t)}" src="data:image/png;base64,{d}">'
         f"<figcaption>{html.escape(t)}</figcaption></figure>"
@@ -210,15 +321,17 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
         html.escape(", ".join(studies))
     }
 </title><style>
-body {{ font-family: sans-serif; margin: 1em auto; padding: 0 1em; max-width: 1600px; }}
+body {{ font-family: sans-serif; margin: 1em auto; padding: 0 1em; max-width: 2400px; }}
 .scroll {{ overflow-x: auto; max-width: 100%; }}
 table {{ border-collapse: collapse; font-size: 0.9em; }}
 td, th {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; white-space: nowrap; }}
 th {{ background: #f4f4f4; position: sticky; top: 0; }}
 tr.unsafe td {{ color: #b00; font-weight: bold; }}
-figure {{ display: inline-block; vertical-align: top; max-width: 100%; margin: 0.5em; }}
-figure img {{ max-width: 100%; height: auto; }}
-figcaption {{ font-size: 0.9em; color: #333; max-width: 60em; }}
+.figures {{ display: grid; gap: 1em;
+  grid-template-columns: repeat(auto-fill, minmax(min(100%, 720px), 1fr)); }}
+figure {{ margin: 0; min-width: 0; }}
+figure img {{ width: 100%; max-width: 100%; height: auto; }}
+figcaption {{ font-size: 0.9em; color: #333; overflow-wrap: anywhere; }}
 </style></head>
 <body data-figures="0">
 <h1>Study {html.escape(", ".join(studies))}</h1>
@@ -229,13 +342,17 @@ figcaption {{ font-size: 0.9em; color: #333; max-width: 60em; }}
         if n_nonfinite
         else ""
     }
-<h2>Merit landscapes</h2>{figs}
+<h2>Merit landscapes</h2><div class="figures">{figs}</div>
 <h2>Best runs{f" by {html.escape(str(merit))}" if merit else ""}</h2><ol>{best_html}</ol>
 <h2>All runs</h2><div class="scroll"><table><tr>{head}</tr>{"".join(body)}</table></div>
 <script>
 window.addEventListener("load", () => {{
   const ok = [...document.images].filter(i => i.complete && i.naturalWidth > 0).length;
   document.body.dataset.figures = String(ok);
+  // the narrowest and widest figure as drawn (CSS px): figures grow with the window
+  const widths = [...document.images].map(i => i.getBoundingClientRect().width);
+  document.body.dataset.figureMinPx = String(Math.round(widths.length ? Math.min(...widths) : 0));
+  document.body.dataset.figureMaxPx = String(Math.round(widths.length ? Math.max(...widths) : 0));
   // for a headless check of the layout: how far the page overflows the window sideways
   document.body.dataset.overflowPx = String(
     Math.max(0, document.documentElement.scrollWidth - window.innerWidth));

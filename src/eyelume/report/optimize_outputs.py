@@ -169,6 +169,8 @@ def write_delta_study_outputs(
         [f"Y{r.height_mm:g} Z{r.distance_mm:g} θ{r.pitch_deg:g}" for r in rows],
         path("deltas.png"),
         caption=_caption(meta),
+        plane_mm=meta.get("eye_plane_mm"),
+        picture_mm=meta.get("picture_mm"),
     )
     for r in rows:
         save_grey_png(r.image, path(f"eye_image_delta_{r.delta:.1f}.png"))

@@ -10,7 +10,15 @@ import numpy as np
 from matplotlib.colors import LogNorm
 from matplotlib.ticker import LogFormatterSciNotation, LogLocator, NullFormatter
 
-from eyelume.report.plots import agg_figure, save_figure
+from eyelume.report.plots import (
+    CMAP_IRRADIANCE,
+    CMAP_MAGNITUDE,
+    CMAP_SENSOR,
+    agg_figure,
+    draw_maps,
+    pixel_pitch_label,
+    save_figure,
+)
 
 __all__ = [
     "save_sweep_heatmaps",
@@ -57,7 +65,7 @@ def save_sweep_heatmaps(
             origin="lower",
             aspect="auto",
             norm=norm,
-            cmap="viridis_r",
+            cmap=CMAP_MAGNITUDE + "_r",
             extent=(*edges(distances), *edges(pitches)),
         )
         ax.set_title(f"LED height Y = {y:g} mm", fontsize=10)
@@ -99,15 +107,15 @@ def save_pattern_vs_target(
     caption: str = "",
 ) -> None:
     """The eye-plane pattern and the target side by side, each scaled to unit mean, on one
-    colour scale (inferno) with one colour bar. ``caption`` (scene, seed, budget) goes under the
-    title."""
+    colour scale (:data:`~eyelume.report.plots.CMAP_IRRADIANCE`) with one colour bar.
+    ``caption`` (scene, seed, budget) goes under the title."""
     a, b = pattern / pattern.mean(), target / target.mean()
     vmax = float(max(a.max(), b.max()))
     fig = agg_figure(9, 3.8)
     axes = fig.subplots(1, 2, sharey=True)
     im = None
     for ax, data, name in ((axes[0], a, "best pattern"), (axes[1], b, "target")):
-        im = ax.imshow(data, extent=extent_mm, cmap="inferno", vmin=0, vmax=vmax)
+        im = ax.imshow(data, extent=extent_mm, cmap=CMAP_IRRADIANCE, vmin=0, vmax=vmax)
         ax.set_title(name, fontsize=10)
         ax.set_xlabel("eye plane x (mm)")
     axes[0].set_ylabel("eye plane y (mm)")
@@ -160,29 +168,39 @@ def save_delta_gallery(
     labels: Sequence[str],
     path: str | Path,
     caption: str = "",
+    plane_mm: tuple[float, float] | None = None,
+    picture_mm: tuple[float, float] | None = None,
 ) -> None:
-    """For each δ, its best eye-plane pattern (top, inferno) and the simulated eye image
-    (bottom, grey, glints clipped at the 99.5th percentile), each row on one colour scale with a
-    colour bar in W/mm²; axes in pixels (columns and rows of the arrays)."""
+    """For each δ, its best eye-plane pattern (top, :data:`~eyelume.report.plots.CMAP_IRRADIANCE`)
+    and the simulated eye image (bottom, grey as the camera shows it, glints clipped at the
+    99.5th percentile), each row on one colour scale with a colour bar in SI-prefixed W/mm².
+    The eye plane is drawn in mm of the receiver (``plane_mm`` = its width, height), the eye
+    image in mm on the sensor (``picture_mm`` = the picture's width, height) with the pixel size
+    in the axis label; without them, in array columns and rows (px)."""
     n = len(deltas)
-    fig = agg_figure(2.6 * n + 1.4, 5.2)
+    fig = agg_figure(2.6 * n + 1.6, 5.6)
     axes = fig.subplots(2, n, squeeze=False, sharex="row", sharey="row")
     p_max = max(float(np.max(p)) for p in patterns)
     i_max = max(float(np.percentile(i, 99.5)) for i in images)
-    rows = (
-        (0, patterns, "inferno", p_max, "eye-plane irradiance (W/mm²)"),
-        (1, images, "gray", i_max, "eye-image irradiance (W/mm²)"),
-    )
-    for row, arrays, cmap, vmax, label in rows:
-        im = None
-        for j in range(n):
-            ax = axes[row][j]
-            im = ax.imshow(arrays[j], cmap=cmap, vmin=0, vmax=vmax if vmax > 0 else 1.0)
-            ax.set_xlabel("column (px)", fontsize=8)
-            ax.tick_params(labelsize=7)
-        axes[row][0].set_ylabel(("eye plane" if row == 0 else "eye image") + "\nrow (px)",
-                                fontsize=8)  # fmt: skip
-        fig.colorbar(im, ax=axes[row].tolist(), label=label, shrink=0.9)
+    clipped = any(float(np.max(i)) > i_max for i in images)
+    if plane_mm is not None:
+        w, h = plane_mm
+        extent = (-w / 2, w / 2, -h / 2, h / 2)
+        xlab, ylab = "eye plane x (mm)", "eye plane\ny (mm)"
+    else:
+        extent, xlab, ylab = None, "eye plane column (px)", "eye plane\nrow (px)"
+    draw_maps(fig, axes[0], patterns, extent=extent, cmap=CMAP_IRRADIANCE, vmax=p_max,
+              label="eye-plane irradiance (W/mm²)", xlabel=xlab, ylabel=ylab)  # fmt: skip
+    if picture_mm is not None:
+        w, h = picture_mm
+        extent = (-w / 2, w / 2, -h / 2, h / 2)
+        cols = images[0].shape[1]
+        xlab = pixel_pitch_label("x", extent, cols)
+        ylab = "eye image\ny on the sensor (mm)"  # square pixels: the x label gives their size
+    else:
+        extent, xlab, ylab = None, "image column (sensor px)", "eye image\nrow (sensor px)"
+    draw_maps(fig, axes[1], images, extent=extent, cmap=CMAP_SENSOR, vmax=i_max, clipped=clipped,
+              label="image-plane irradiance (W/mm²)", xlabel=xlab, ylabel=ylab)  # fmt: skip
     for j in range(n):
         axes[0][j].set_title(f"δ = {deltas[j]:.1f}\n{labels[j]}", fontsize=8)
     fig.suptitle("Best pattern and eye image per δ" + (f"\n{caption}" if caption else ""),

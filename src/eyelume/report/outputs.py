@@ -9,12 +9,34 @@ import numpy as np
 
 from eyelume.detectors.sensor import camera_summary, digitize
 from eyelume.json_files import write_json
-from eyelume.report.plots import SectionCurve, save_grey_png, save_irradiance_plot, save_layout
+from eyelume.report.plots import (
+    CMAP_SENSOR,
+    SectionCurve,
+    save_grey_png,
+    save_irradiance_plot,
+    save_layout,
+)
 
 if TYPE_CHECKING:  # annotations only: report/ never imports what traces rays
     from eyelume.render import RenderExtras, RenderResult
 
 __all__ = ["write_render_outputs"]
+
+#: Colours of the traced rays in the layout by kind (:data:`eyelume.render.RAY_KINDS`),
+#: distinct from the LEDs' red (:data:`eyelume.report.plots.CATEGORY_COLORS`), and their
+#: legend entries.
+RAY_COLORS = {"sensor": "tab:pink", "sensor, off the section": "tab:olive", "other": "tab:orange"}
+RAY_LABELS = {
+    "sensor": "ray reaching the sensor, born ≤ 1 mm from the section",
+    "sensor, off the section": "ray reaching the sensor, born off the section (projected)",
+    "other": "other ray, born ≤ 1 mm from the section",
+}
+
+
+def _led_id(name: str) -> str:
+    """An LED axis's id, as ``truth.json`` numbers the LEDs ("LED 2 axis" → "2"), else ""."""
+    parts = name.split()
+    return parts[1] if len(parts) == 3 and parts[0] == "LED" and parts[2] == "axis" else ""
 
 
 def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | Path) -> list[Path]:
@@ -28,9 +50,13 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
     99.5th percentile), ``eye_image_digital.npy`` (the camera's reading in DN, uint16, from
     :func:`eyelume.detectors.sensor.digitize` with the render's seed) and
     ``eye_image_digital.png`` (0 DN
-    black … full scale white, no autoscaling), colour-bar figures ``*_plot.png`` in physical
-    units, ``layout.png`` (a y–z section with a few dozen traced rays) and ``summary.json`` (run
-    facts, power ledger and, under ``"camera"``, the sensor settings and saturated pixels) and
+    black … full scale white, no autoscaling; the camera's picture, each pixel drawn as a block
+    of 8 × 8 or so, the factor in its PNG comment) and its labelled enlargement
+    ``eye_image_digital_plot.png`` (DN colour bar, mm and sensor-px axes), colour-bar figures
+    ``*_plot.png`` in physical units (grey for the pictures on the sensor, inferno for the eye
+    plane: :mod:`eyelume.report.plots`), ``layout.png`` and ``layout_xz.png`` (the y–z and
+    x–z sections, each with a few dozen rays traced from near its plane) and ``summary.json``
+    (run facts, power ledger and, under ``"camera"``, the sensor settings and saturated pixels) and
     ``truth.json`` (the true gaze, apparent pupil and glint positions on the picture:
     :func:`eyelume.analysis.truth.eye_truth`). With ``ambient.sun``: ``ambient_image.npy``,
     ``ambient_image_std.npy`` and ``ambient_image.png`` (the sunlight's picture, W/mm² at the
@@ -70,35 +96,67 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
     np.save(path("eye_image_digital.npy"), digital.counts)
     save_grey_png(digital.counts, path("eye_image_digital.png"), white=digital.full_scale_dn)
     name = sc.name
+    budget = (
+        f"fast estimator, {result.samples_per_pixel} samples per pixel"
+        if result.estimator == "fast" and result.samples_per_pixel
+        else f"{result.estimator} estimator, {result.rays:,} rays"
+    )
     save_irradiance_plot(
         shown,
         path("eye_image_plot.png"),
         extent_mm=result.picture_extent_mm,
-        title=f"{name}: eye image, {result.rays:,} rays, seed {result.seed} "
-        "(glints clipped at 99.5 %)",
-        xlabel="image x (mm, picture upright)",
-        ylabel="image y (mm)",
+        title=f"{name}: eye image on the sensor (glints clipped at 99.5 %)\n"
+        f"{budget}, seed {result.seed}",
+        label="image-plane irradiance (W/mm²)",
+        xlabel="image x on the sensor (mm, picture upright)",
+        ylabel="image y on the sensor (mm)",
         clip_percentile=99.5,
         pixel_axes=True,
+        cmap=CMAP_SENSOR,
+    )
+    # the camera's picture at its own size is eye_image_digital.png; this is its labelled
+    # enlargement: the same numbers on the camera's own scale (0 DN black, full scale white)
+    save_irradiance_plot(
+        digital.counts,
+        path("eye_image_digital_plot.png"),
+        extent_mm=result.picture_extent_mm,
+        title=f"{name}: the camera's digital picture (eye_image_digital.png enlarged), "
+        f"{sc.sensor.exposure_ms:g} ms exposure, 0 DN black, full scale "
+        f"{digital.full_scale_dn:g} DN white\n{budget}, seed {result.seed}",
+        label="camera signal (DN)",
+        xlabel="image x on the sensor (mm, picture upright)",
+        ylabel="image y on the sensor (mm)",
+        pixel_axes=True,
+        cmap=CMAP_SENSOR,
+        vmax=float(digital.full_scale_dn),
     )
     save_irradiance_plot(
         result.eye_plane,
         path("eye_plane_plot.png"),
         extent_mm=result.plane_extent_mm,
-        title=f"{name}: eye-plane irradiance toward the eye, {result.rays:,} rays, "
-        f"seed {result.seed}",
+        title=f"{name}: eye-plane irradiance toward the eye\n{budget}, seed {result.seed}",
+        label="eye-plane irradiance (W/mm²)",
+        xlabel="eye plane x (mm)",
+        ylabel="eye plane y (mm)",
     )
-    rays = extras.ray_paths
     for view, file, vertical in (("yz", "layout.png", "y"), ("xz", "layout_xz.png", "x")):
-        curves = [SectionCurve(s.name, s.category, s.z, s.y) for s in extras.sections[view]]
+        curves = [
+            SectionCurve(s.name, s.category, s.z, s.y, tag=_led_id(s.name))
+            for s in extras.sections[view]
+        ]
+        rays = extras.ray_paths[view]
+        count = {k: sum(kind == k for _, kind in rays) for k in RAY_COLORS}
         save_layout(
             curves,
             [p for p, _ in rays],
             path(file),
-            title=f"{name}: {vertical}–z section (world; camera projected)\n"
-            f"traced rays (seed {result.seed}): reaching the sensor red, others orange",
-            ray_colors=["tab:red" if hit else "tab:orange" for _, hit in rays],
+            title=f"{name}: {vertical}–z section, world frame (camera projected onto it), "
+            f"traced rays of seed {result.seed}",
+            ray_colors=[RAY_COLORS[kind] for _, kind in rays],
             vertical=vertical,
+            ray_legend=[
+                (RAY_COLORS[k], f"{RAY_LABELS[k]} ({count[k]})") for k in RAY_COLORS if count[k]
+            ],  # fmt: skip
         )
     summary = result.summary()
     summary["camera"] = camera_summary(sc.sensor, sc.wavelength_nm, digital)

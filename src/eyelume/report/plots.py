@@ -14,6 +14,22 @@ Three outputs, all in the package's units (lengths in mm, irradiance in W/mm²):
 Figures are :class:`matplotlib.figure.Figure` objects drawn by the Agg canvas; pyplot is never
 imported, so nothing leaks between calls or processes. Parent directories of ``path`` are created
 when missing.
+
+**Colour maps, one rule for every figure eyelume writes** (the constants below; the figure
+tests check it, ``tests/report/figure_checks.py``):
+
+- a picture on the sensor, as the camera shows it (the eye image's irradiance on the image plane,
+  the camera's digital numbers): grey, :data:`CMAP_SENSOR` (black = 0);
+- a physical irradiance map that is not a camera picture (the eye-plane receiver's pattern, a
+  target): the perceptually uniform :data:`CMAP_IRRADIANCE` (``inferno``);
+- any other non-negative quantity (errors as magnitudes, counts, merits): the perceptually
+  uniform :data:`CMAP_MAGNITUDE` (``viridis``; reversed where lower is better);
+- a signed quantity (a difference, a signed error): the diverging :data:`CMAP_SIGNED`, centred
+  on zero.
+
+**Numbers without exponents**: a colour bar or axis in watts is scaled to an SI-prefixed unit
+(:func:`si_scale`: µW/mm², nW, …) so that its tick labels are plain numbers and no offset text
+("1e−6" over the bar) is drawn.
 """
 
 from __future__ import annotations
@@ -21,6 +37,7 @@ from __future__ import annotations
 import io
 import math
 import os
+import re
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -37,10 +54,19 @@ from PIL.PngImagePlugin import PngInfo
 
 __all__ = [
     "CATEGORY_COLORS",
+    "CMAP_IRRADIANCE",
+    "CMAP_MAGNITUDE",
+    "CMAP_SENSOR",
+    "CMAP_SIGNED",
+    "si_scale",
     "agg_figure",
     "observe_figures",
     "save_figure",
     "SectionCurve",
+    "add_pixel_axes",
+    "draw_maps",
+    "pixel_pitch_label",
+    "plain_number",
     "save_error_time_plot",
     "save_grey_png",
     "save_irradiance_plot",
@@ -61,6 +87,16 @@ CATEGORY_COLORS: dict[str, str] = {
 }
 
 _CATEGORY_STYLES: dict[str, str] = {"receiver": "--", "field": ":"}
+
+#: The colour maps of the rule in the module docstring.
+CMAP_SENSOR = "gray"
+CMAP_IRRADIANCE = "inferno"
+CMAP_MAGNITUDE = "viridis"
+CMAP_SIGNED = "RdBu_r"
+
+#: SI prefixes from 1 down to 1e-15, for :func:`si_scale`.
+_PREFIXES = (("", 1.0), ("m", 1e-3), ("µ", 1e-6), ("n", 1e-9), ("p", 1e-12), ("f", 1e-15))
+_UNIT_AT_END = re.compile(r"\(([^()]+)\)\s*$")
 _DEFAULT_RAY_COLOR = "tab:orange"
 _DPI = 150
 
@@ -105,6 +141,26 @@ def _prepare_path(path: PathLike) -> Path:
     out = Path(os.fspath(path))
     out.parent.mkdir(parents=True, exist_ok=True)
     return out
+
+
+def si_scale(label: str, largest: float) -> tuple[float, str]:
+    """(factor, label) to draw values up to ``largest`` in an SI-prefixed unit: a ``label``
+    ending with a unit in watts in parentheses, e.g. ``"irradiance (W/mm²)"`` with ``largest``
+    = 3.2e-8, gives ``(1e-9, "irradiance (nW/mm²)")``; divide the values by ``factor``. The
+    prefix is the largest of m, µ, n, p, f (down to 1e-15) that keeps ``largest`` ≥ 1 in it, so
+    tick labels are plain numbers below 1000. A label whose unit is not in W (or a ``largest``
+    ≤ 0, NaN or ≥ 1) is returned unchanged with factor 1.
+
+    >>> si_scale("irradiance (W/mm²)", 3.2e-8)
+    (1e-09, 'irradiance (nW/mm²)')
+    >>> si_scale("signal (DN)", 700.0)
+    (1.0, 'signal (DN)')
+    """
+    m = _UNIT_AT_END.search(label)
+    if m is None or not m.group(1).startswith("W") or not (0.0 < largest < 1.0):
+        return 1.0, label
+    prefix, factor = next(((p, f) for p, f in _PREFIXES if largest >= f), _PREFIXES[-1])
+    return factor, label[: m.start(1)] + prefix + label[m.start(1) :]
 
 
 def agg_figure(width_in: float, height_in: float, layout: str | None = "constrained") -> Figure:
@@ -258,28 +314,108 @@ def save_grey_png(
 # --------------------------------------------------------------------------------------------------
 
 
+def plain_number(value: float, _pos: int | None = None) -> str:
+    """A tick label without exponent or offset (``1000``, ``0.25``; 6 significant digits)."""
+    return f"{value:.6g}"
+
+
+def _wrap(text: str, width_in: float, points: float = 12.0) -> str:
+    """``text`` with each of its lines wrapped to about ``width_in`` inches of a ``points`` font
+    (a long scene name must not widen the figure)."""
+    import textwrap
+
+    chars = max(20, int(width_in * 144 / points))
+    return "\n".join(textwrap.fill(line, chars) for line in text.split("\n"))
+
+
+def add_pixel_axes(ax, shape: tuple[int, int], extent: tuple[float, float, float, float],
+                   *, what: str = "px") -> None:  # fmt: skip
+    """A second scale on ``ax`` counting the array's columns (top edge) and rows (left edge,
+    outside the first scale: the right edge is the colour bar's) for an image of ``shape``
+    (rows, cols) drawn at ``extent`` (left, right, bottom, top) mm; 0 at the left and top edges.
+    ``what`` names the unit, e.g. ``"sensor px"``."""
+    rows, cols = shape
+    left, right, bottom, top = extent
+    sx, sy = cols / (right - left), rows / (top - bottom)
+    top_ax = ax.secondary_xaxis(
+        "top", functions=(lambda x: (x - left) * sx, lambda c: left + c / sx)
+    )
+    top_ax.set_xlabel(f"column ({what} of {cols})")
+    left_ax = ax.secondary_yaxis(-0.2, functions=(lambda y: (top - y) * sy, lambda r: top - r / sy))
+    left_ax.set_ylabel(f"row ({what} of {rows})")
+
+
+def draw_maps(  # noqa: PLR0913 - each option is one labelled aspect
+    fig: Figure,
+    axes: Sequence,
+    arrays: Sequence[np.ndarray],
+    *,
+    extent: tuple[float, float, float, float] | None,
+    cmap: str,
+    label: str,
+    vmax: float,
+    clipped: bool = False,
+    xlabel: str,
+    ylabel: str,
+    fontsize: float = 8,
+) -> None:
+    """Draw ``arrays`` into ``axes`` (one each) on one colour scale 0 … ``vmax`` with one colour
+    bar labelled ``label`` (SI-prefixed when in watts, :func:`si_scale`; an arrow at its top
+    when ``clipped``), at ``extent`` (left, right, bottom, top) mm, or in array columns and
+    rows when None; ``xlabel`` on each panel, ``ylabel`` on the first."""
+    vmax = float(vmax) if vmax > 0 else 1.0
+    factor, label = si_scale(label, vmax)
+    image = None
+    for ax, arr in zip(axes, arrays, strict=True):
+        image = ax.imshow(np.asarray(arr) / factor, cmap=cmap, vmin=0, vmax=vmax / factor,
+                          extent=extent, interpolation="nearest")  # fmt: skip
+        ax.set_xlabel(xlabel, fontsize=fontsize)
+        ax.tick_params(labelsize=fontsize - 1)
+    axes[0].set_ylabel(ylabel, fontsize=fontsize)
+    bar = fig.colorbar(image, ax=list(axes), extend="max" if clipped else "neither", shrink=0.9)
+    bar.set_label(label, fontsize=fontsize)
+    bar.formatter = FuncFormatter(plain_number)
+    bar.update_ticks()
+    bar.ax.tick_params(labelsize=fontsize - 1)
+
+
+def pixel_pitch_label(axis: str, extent, cols: int) -> str:
+    """An eye image's axis label in mm on the sensor with the pixel size said, e.g.
+    ``"image x on the sensor (mm; 1 px = 0.529 mm)"``, for panels too small for a second
+    (pixel) scale (:func:`add_pixel_axes`)."""
+    pitch = abs(extent[1] - extent[0]) / cols
+    return f"image {axis} on the sensor (mm; 1 px = {pitch:.3g} mm)"
+
+
 def save_irradiance_plot(  # noqa: PLR0913 - each option is one labelled aspect
     irradiance: np.ndarray,
     path: PathLike,
     *,
     extent_mm: tuple[float, float, float, float],
     title: str,
-    label: str = "Irradiance (W/mm²)",
+    label: str = "irradiance (W/mm²)",
     xlabel: str = "x (mm)",
     ylabel: str = "y (mm)",
     clip_percentile: float | None = None,
     pixel_axes: bool = False,
+    cmap: str = CMAP_IRRADIANCE,
+    vmax: float | None = None,
 ) -> None:
-    """Write an irradiance map as a figure with millimetre axes and a colour bar.
+    """Write an irradiance map (or a camera picture) as a figure with millimetre axes and a
+    colour bar.
 
-    With ``pixel_axes``, a second scale on the top and right edges counts the array's columns
+    With ``pixel_axes``, a second scale on the top and left edges counts the array's columns
     and rows (the sensor's pixels of an eye image: 0 at the left and top edges), so the picture's
     enlargement is labelled in pixels as well as in mm.
 
-    The map is drawn with the perceptual colormap ``inferno`` at its physical aspect ratio, the
-    colour scale running from ``min(0, E_min)`` to ``E_max`` or, with ``clip_percentile``, to that
-    percentile of the positive values; brighter entries (corneal glints) then saturate and the
-    colour bar shows an arrow at its top. Saved at 150 dpi with a tight bounding box.
+    The map is drawn with ``cmap`` (the module's colour-map rule: :data:`CMAP_IRRADIANCE` for an
+    eye-plane pattern, :data:`CMAP_SENSOR` for a picture on the sensor) at its physical aspect
+    ratio, the colour scale running from ``min(0, E_min)`` to ``vmax`` when given (a camera's
+    full scale), else ``E_max`` or, with ``clip_percentile``, that percentile of the positive
+    values; brighter entries (corneal glints) then saturate and the colour bar shows an arrow at
+    its top. A unit in watts is drawn SI-prefixed (:func:`si_scale`: nW/mm², …) so the colour
+    bar's numbers need no exponent. Saved at 150 dpi with a tight bounding box; a long title is
+    wrapped to the figure's width.
 
     Parameters
     ----------
@@ -294,12 +430,17 @@ def save_irradiance_plot(  # noqa: PLR0913 - each option is one labelled aspect
     title : str
         Figure title.
     label : str, optional
-        Colour bar label, with its unit. Default ``"Irradiance (W/mm²)"``.
+        Colour bar label, with its unit in parentheses. Default ``"irradiance (W/mm²)"``.
     xlabel, ylabel : str, optional
         Axis labels. Defaults ``"x (mm)"`` and ``"y (mm)"``.
     clip_percentile : float or None, optional
         Percentile in (0, 100] of the positive values at the top of the colour scale. ``None``
         (default) scales to the maximum.
+    cmap : str, optional
+        Colour map (module docstring's rule). Default :data:`CMAP_IRRADIANCE`.
+    vmax : float, optional
+        A fixed top of the colour scale (same unit as the array); ``clip_percentile`` is then
+        ignored.
 
     Raises
     ------
@@ -330,7 +471,10 @@ def save_irradiance_plot(  # noqa: PLR0913 - each option is one labelled aspect
         raise ValueError(f"extent_mm has zero width or height: {ext}")
 
     vmin = min(0.0, float(arr.min()))
-    if clip_percentile is None:
+    if vmax is not None:
+        vmax = float(vmax)
+        clipped = bool(np.any(arr > vmax))
+    elif clip_percentile is None:
         vmax = float(arr.max())
         clipped = False
     else:
@@ -338,14 +482,15 @@ def save_irradiance_plot(  # noqa: PLR0913 - each option is one labelled aspect
         clipped = bool(np.any(arr > vmax))
     if vmax <= vmin:
         vmax = vmin + 1.0  # constant image: any non-degenerate scale shows it as one colour
+    factor, label = si_scale(label, max(abs(vmin), abs(vmax)))
 
     fig = Figure(figsize=(7.0, 5.0), layout="constrained")
     ax = fig.add_subplot()
     image = ax.imshow(
-        arr,
-        cmap="inferno",
-        vmin=vmin,
-        vmax=vmax,
+        arr / factor,
+        cmap=cmap,
+        vmin=vmin / factor,
+        vmax=vmax / factor,
         origin="upper",
         extent=(left, right, bottom, top),
         interpolation="nearest",
@@ -356,26 +501,16 @@ def save_irradiance_plot(  # noqa: PLR0913 - each option is one labelled aspect
     cax = ax.inset_axes((1.0 + 0.04 * widen, 0.0, 0.045 * widen, 1.0))
     colorbar = fig.colorbar(image, cax=cax, extend="max" if clipped else "neither")
     colorbar.set_label(label)
-    # numbers written out (1.2e-07): an offset text on top of the bar collides with the axes
-    colorbar.formatter = FuncFormatter(lambda v, _: f"{v:.3g}")
+    # plain numbers (the unit is SI-prefixed): no offset text on top of the bar
+    colorbar.formatter = FuncFormatter(plain_number)
     colorbar.update_ticks()
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     if pixel_axes:
-        rows, cols = arr.shape
-        sx, sy = cols / (right - left), rows / (top - bottom)
-        top_ax = ax.secondary_xaxis(
-            "top", functions=(lambda x: (x - left) * sx, lambda c: left + c / sx)
-        )
-        top_ax.set_xlabel(f"column (px of {cols})")
-        # the right edge is taken by the colour bar: the row scale goes on the left, outside
-        left_ax = ax.secondary_yaxis(
-            -0.2, functions=(lambda y: (top - y) * sy, lambda r: top - r / sy)
-        )
-        left_ax.set_ylabel(f"row (px of {rows})")
-        fig.suptitle(title)  # above the pixel scale, not on it
+        add_pixel_axes(ax, arr.shape, (left, right, bottom, top), what="sensor px")
+        fig.suptitle(_wrap(title, 7.0))  # above the pixel scale, not on it
     else:
-        ax.set_title(title)
+        ax.set_title(_wrap(title, 6.0))
     _save_figure(fig, path)
 
 
@@ -401,6 +536,9 @@ class SectionCurve:
         World z (mm) of the polyline's vertices, 1-D.
     y : numpy.ndarray
         World y (mm) of the same vertices, 1-D, same length as ``z``.
+    tag : str, optional
+        A short label written beside the curve's first vertex, e.g. an LED's id ``"2"`` on its
+        axis (curves whose first vertices coincide share one label, ``"1, 3"``). Default none.
 
     Raises
     ------
@@ -418,6 +556,7 @@ class SectionCurve:
     category: str
     z: np.ndarray
     y: np.ndarray
+    tag: str = ""
 
     def __post_init__(self) -> None:
         if self.category not in CATEGORY_COLORS:
@@ -466,6 +605,14 @@ def _ray_segments(rays: Sequence[np.ndarray], vertical: int = 1) -> list[np.ndar
     return segments
 
 
+def _ray_colours(ray_colors: Sequence[str] | None, n: int) -> list[str]:
+    if ray_colors is None:
+        return [_DEFAULT_RAY_COLOR] * n
+    if len(ray_colors) != n:
+        raise ValueError(f"ray_colors has {len(ray_colors)} entries but there are {n} rays")
+    return list(ray_colors)
+
+
 def _layout_width_in(curves: Sequence[SectionCurve], segments: list[np.ndarray]) -> float:
     """The layout's width (in) for a 5 in height: the system's aspect at equal scale, 6 to 16."""
     zs = [c.z for c in curves] + [s[:, 0] for s in segments]
@@ -485,6 +632,7 @@ def save_layout(
     title: str,
     ray_colors: Sequence[str] | None = None,
     vertical: str = "y",
+    ray_legend: Sequence[tuple[str, str]] = (),
 ) -> None:
     """Write a y–z (or x–z) cross-section of the optical system, surfaces and rays, as a
     layout plot (``vertical``: ``"y"`` or ``"x"``, the world axis drawn upward; the rays are
@@ -509,6 +657,13 @@ def save_layout(
         Figure title.
     ray_colors : sequence of str or None, optional
         One matplotlib colour per ray (e.g. by LED); default all ``"tab:orange"``.
+    ray_legend : sequence of (colour, label), optional
+        Legend entries for the rays' colours, e.g. ``[("tab:pink", "rays reaching the
+        sensor")]``.
+
+    LEDs (category ``"led"``) appear in the legend as drawn: a circle (a body cut by the plane,
+    or an emitter point) and a line (its axis); their ``tag`` (the LED's id) is written beside
+    each axis's start.
 
     Raises
     ------
@@ -535,14 +690,7 @@ def save_layout(
     if vertical not in ("x", "y"):
         raise ValueError(f"vertical must be 'x' or 'y', got {vertical!r}")
     segments = _ray_segments(rays, 1 if vertical == "y" else 0)
-    if ray_colors is None:
-        colors: list[str] = [_DEFAULT_RAY_COLOR] * len(segments)
-    else:
-        colors = list(ray_colors)
-        if len(colors) != len(segments):
-            raise ValueError(
-                f"ray_colors has {len(colors)} entries but there are {len(segments)} rays"
-            )
+    colors = _ray_colours(ray_colors, len(segments))
 
     fig = Figure(figsize=(_layout_width_in(curves, segments), 5.0), layout="constrained")
     ax = fig.add_subplot()
@@ -552,6 +700,7 @@ def save_layout(
             autolim=True,
         )
     present: list[str] = []
+    tags: list[tuple[float, float, str]] = []
     for curve in curves:
         ax.plot(
             curve.z,
@@ -565,28 +714,66 @@ def save_layout(
         )
         if curve.category not in present:
             present.append(curve.category)
+        if curve.tag:
+            tags.append((float(curve.z[0]), float(curve.y[0]), curve.tag))
     ax.autoscale_view()
     ax.set_aspect("equal", adjustable="datalim")
+    _write_tags(ax, tags)
 
-    if present:
-        order = [c for c in CATEGORY_COLORS if c in present]
-        handles = [
+    handles = _layout_handles(present, ray_legend)
+    if handles:
+        ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                  borderaxespad=0.0, fontsize="small", framealpha=0.85)  # fmt: skip
+    ax.set_xlabel("world z (mm)")
+    ax.set_ylabel(f"world {vertical} (mm)")
+    ax.set_title(_wrap(title, fig.get_figwidth() * 0.75))
+    ax.grid(True, linewidth=0.3, alpha=0.5)
+    _save_figure(fig, path)
+
+
+def _layout_handles(present: list[str], ray_legend: Sequence[tuple[str, str]]) -> list[Line2D]:
+    """Legend entries of a layout: each category present, drawn as on the plot (an LED as a
+    circle on its axis line), then the rays' colours."""
+    handles = []
+    for c in (c for c in CATEGORY_COLORS if c in present):
+        led = c == "led"
+        handles.append(
             Line2D(
                 [],
                 [],
                 color=CATEGORY_COLORS[c],
                 linestyle=_CATEGORY_STYLES.get(c, "-"),
                 linewidth=1.3,
-                label=c,
+                marker="o" if led else None,
+                markersize=5,
+                markerfacecolor="none",
+                label="LED: body ○, axis —, its id" if led else c,
             )
-            for c in order
-        ]
-        ax.legend(handles=handles, loc="upper right", fontsize="small", framealpha=0.85)
-    ax.set_xlabel("world z (mm)")
-    ax.set_ylabel(f"world {vertical} (mm)")
-    ax.set_title(title)
-    ax.grid(True, linewidth=0.3, alpha=0.5)
-    _save_figure(fig, path)
+        )
+    for color, label in ray_legend:
+        handles.append(Line2D([], [], color=color, linewidth=1.3, label=label))
+    return handles
+
+
+def _write_tags(ax, tags: list[tuple[float, float, str]]) -> None:
+    """Each tag beside its point, tags of points closer than 2 % of the view joined."""
+    if not tags:
+        return
+    (z0, z1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    near = 0.02 * max(abs(z1 - z0), abs(y1 - y0))
+    groups: list[list] = []
+    for z, y, tag in tags:
+        for g in groups:
+            if abs(g[0] - z) <= near and abs(g[1] - y) <= near:
+                g[2].append(tag)
+                break
+        else:
+            groups.append([z, y, [tag]])
+    for z, y, names in groups:
+        ax.annotate(
+            ", ".join(names), (z, y), textcoords="offset points", xytext=(-4, 3),
+            ha="right", va="bottom", fontsize=7, color=CATEGORY_COLORS["led"],
+        )  # fmt: skip
 
 
 # --------------------------------------------------------------------------------------------------

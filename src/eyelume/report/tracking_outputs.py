@@ -11,7 +11,7 @@ import numpy as np
 
 from eyelume.analysis.tracking.evaluate import error_map_rows
 from eyelume.json_files import write_json
-from eyelume.report.plots import agg_figure, save_figure
+from eyelume.report.plots import CMAP_MAGNITUDE, agg_figure, save_figure
 
 __all__ = [
     "save_error_maps",
@@ -50,8 +50,9 @@ def _half_step(values: np.ndarray) -> float:
 
 
 def _draw_map(fig, ax, z: np.ndarray, extent, label: str, discrete: bool) -> None:
-    """``z`` (viridis) with its colour bar labelled ``label``; ``discrete`` (a count): one
-    colour per whole number and ticks on whole numbers only (BoundaryNorm)."""
+    """``z`` (:data:`~eyelume.report.plots.CMAP_MAGNITUDE`) with its colour bar labelled
+    ``label``; ``discrete`` (a count): one colour per whole number and ticks on whole numbers
+    only (BoundaryNorm)."""
     from matplotlib.colors import BoundaryNorm
     from matplotlib.ticker import MaxNLocator
 
@@ -59,7 +60,7 @@ def _draw_map(fig, ax, z: np.ndarray, extent, label: str, discrete: bool) -> Non
     if discrete:
         lo, hi = int(np.nanmin(z)), int(np.nanmax(z))
         norm = BoundaryNorm(np.arange(lo - 0.5, hi + 1.0), ncolors=256)
-    im = ax.imshow(z, origin="lower", cmap="viridis", extent=extent, aspect="auto", norm=norm)
+    im = ax.imshow(z, origin="lower", cmap=CMAP_MAGNITUDE, extent=extent, aspect="auto", norm=norm)
     cb = fig.colorbar(im, ax=ax, label=label)
     if norm is not None:  # every count up to 10 of them, else whole numbers MaxNLocator picks
         ticks = MaxNLocator(nbins=min(hi - lo + 1, 10), integer=True).tick_values(lo, hi)
@@ -70,12 +71,18 @@ def _draw_map(fig, ax, z: np.ndarray, extent, label: str, discrete: bool) -> Non
 def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
     """Four maps over the gaze grid (2 × 2 panels): pupil-centre error (px), glints found (a
     count: one colour per whole number, integer ticks), PCCR and geometric gaze errors (°), each
-    with its colour bar (viridis) and each cell's value
-    written in it; a red × marks a frame that failed (legend below), and a panel with no value
-    at all says so instead of drawing an empty scale. ``rows`` are
+    with its colour bar (:data:`~eyelume.report.plots.CMAP_MAGNITUDE`), each cell's value
+    written in it and the panel's mean in its title; a red × marks a frame that failed (legend
+    below), and a panel with no value at all says so instead of drawing an empty scale.
+
+    A row with ``"calibration": true`` is a calibration frame (the PCCR polynomial was fitted on
+    that very picture): its PCCR cell is hatched and marked "cal" instead of showing the fit's
+    in-sample residual as if it were a held-out measurement, and is left out of the PCCR
+    panel's colour scale and mean (the title says how many were left out). ``rows`` are
     :func:`eyelume.analysis.tracking.evaluate.error_map_rows` (one per frame); ``caption``
-    (scene, seed, budget) is written under the panels. ``path``: a file or a binary buffer."""
+    (scene, seed, budget) is written above the panels. ``path``: a file or a binary buffer."""
     from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
     maps = [
         ("pupil-centre error", "pupil_error_px", "px"),
@@ -83,14 +90,21 @@ def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
         ("PCCR gaze error", "pccr_error_deg", "°"),
         ("geometric gaze error", "geometric_error_deg", "°"),
     ]
-    fig = agg_figure(10, 7.6)
+    # a calibration frame's PCCR value is the fit's residual on its own picture: not shown
+    fitted = [bool(r.get("calibration")) and r.get("pccr_error_deg") is not None for r in rows]
+    cal_rows = [dict(r, pccr_error_deg=None) if f else r for r, f in zip(rows, fitted, strict=True)]
+    _, _, cal = _grid([{**r, "cal": 1.0 if f else None} for r, f in zip(rows, fitted, strict=True)],
+                      "cal")  # fmt: skip
+    fig = agg_figure(10, 7.8)
     axes = fig.subplots(2, 2).ravel()
-    failed = False
+    failed = marked = False
     for ax, (title, key, unit) in zip(axes, maps, strict=True):
-        hs, vs, z = _grid(rows, key)
+        pccr = key == "pccr_error_deg"
+        hs, vs, z = _grid(cal_rows if pccr else rows, key)
+        is_cal = np.isfinite(cal) if pccr else np.zeros(z.shape, dtype=bool)
         dh, dv = _half_step(hs), _half_step(vs)
         extent = (hs[0] - dh, hs[-1] + dh, vs[0] - dv, vs[-1] + dv)
-        ax.set_title(f"{title} ({unit})", fontsize=10)
+        ax.set_title(_panel_title(title, unit, z, int(is_cal.sum())), fontsize=9)
         ax.set_xlabel("horizontal gaze (°)")
         ax.set_ylabel("vertical gaze (°)")
         ax.set_xlim(extent[0], extent[1])
@@ -101,30 +115,67 @@ def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
         size = float(np.clip(cell_in * 72 / 3.2, 4.0, 8.0))
         if finite.any():
             _draw_map(fig, ax, z, extent, f"{title} ({unit})", discrete=unit == "count")
-            mid = 0.5 * (np.nanmin(z) + np.nanmax(z))
         else:
             ax.text(
                 0.5, 0.5, "no frame gave a value", transform=ax.transAxes, ha="center",
                 va="center", fontsize=9, bbox={"facecolor": "white", "edgecolor": "0.6"},
             )  # fmt: skip
-        for i, v in enumerate(vs):
-            for j, h in enumerate(hs):
-                if finite[i, j]:
-                    dark = z[i, j] < mid or np.nanmin(z) == np.nanmax(z)
-                    ax.text(h, v, f"{z[i, j]:.2g}", ha="center", va="center", fontsize=size,
-                            color="white" if dark else "black")  # fmt: skip
-                elif finite.any():
-                    ax.plot(h, v, "x", color="red", ms=7, mew=1.5)
-                    failed = True
+        cells = _write_cells(ax, hs, vs, z, is_cal, (dh, dv), size)
+        failed, marked = failed or cells[0], marked or cells[1]
     handles = []
     if failed:
         handles.append(Line2D([], [], marker="x", color="red", linestyle="none", mew=1.5,
                               label="no value: detection failed or no estimate"))  # fmt: skip
+    if marked:
+        handles.append(Patch(facecolor="0.85", edgecolor="0.45", hatch="///",
+                             label="cal: a calibration gaze (PCCR fitted on this very "
+                             "picture: an in-sample residual, not a test; left out of the "
+                             "mean)"))  # fmt: skip
     if handles:
         fig.legend(handles=handles, loc="outside lower left", fontsize="small", frameon=False)
     if caption:
         fig.suptitle(caption, fontsize=9)
     save_figure(fig, path, dpi=110)
+
+
+def _write_cells(ax, hs, vs, z, is_cal, half, size) -> tuple[bool, bool]:
+    """Each cell's number, a red × where a frame gave none, a hatched "cal" on a calibration
+    frame's cell; (any ×, any "cal")."""
+    from matplotlib.patches import Rectangle
+
+    finite = np.isfinite(z)
+    failed = marked = False
+    dh, dv = half
+    mid = 0.5 * (np.nanmin(z) + np.nanmax(z)) if finite.any() else 0.0
+    for i, v in enumerate(vs):
+        for j, h in enumerate(hs):
+            if is_cal[i, j]:
+                ax.add_patch(Rectangle((h - dh, v - dv), 2 * dh, 2 * dv, facecolor="0.85",
+                                       edgecolor="0.45", hatch="///", linewidth=0.5))  # fmt: skip
+                ax.text(h, v, "cal", ha="center", va="center", fontsize=size,
+                        bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5})  # fmt: skip
+                marked = True
+            elif finite[i, j]:
+                dark = z[i, j] < mid or np.nanmin(z) == np.nanmax(z)
+                ax.text(h, v, f"{z[i, j]:.2g}", ha="center", va="center", fontsize=size,
+                        color="white" if dark else "black")  # fmt: skip
+            elif finite.any():
+                ax.plot(h, v, "x", color="red", ms=7, mew=1.5)
+                failed = True
+    return failed, marked
+
+
+def _panel_title(title: str, unit: str, z: np.ndarray, n_cal: int) -> str:
+    """A panel's title: the quantity and unit, then its mean over the cells with a value (and
+    how many calibration gazes were left out of it)."""
+    head = f"{title} ({unit})"
+    n = int(np.isfinite(z).sum())
+    if n == 0:
+        return head
+    mean = float(np.nanmean(z))
+    shown = f"{mean:.2f}" if unit != "°" else f"{mean:.2f}°"
+    left = f", {n_cal} calibration gaze{'s' if n_cal != 1 else ''} left out" if n_cal else ""
+    return f"{head}\nmean {shown}{'' if unit == '°' else ' ' + unit} over {n} gazes{left}"
 
 
 def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
@@ -138,7 +189,7 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
             [
                 "gaze_h_deg", "gaze_v_deg", "detected", "failures", "pupil_error_px",
                 "glints_found", "glints_true", "pccr_h_deg", "pccr_v_deg", "geometric_h_deg",
-                "geometric_v_deg", "render_s", "detect_ms", "false_glints",
+                "geometric_v_deg", "render_s", "detect_ms", "false_glints", "calibration_frame",
             ]
         )  # fmt: skip
         for fr in report.frames:
@@ -150,7 +201,7 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
                     "; ".join(fr.detection.failures), f"{fr.pupil_error_px:.4f}",
                     fr.glints_found, fr.glints_true, f"{p[0]:.4f}", f"{p[1]:.4f}",
                     f"{g[0]:.4f}", f"{g[1]:.4f}", f"{fr.render_s:.3f}", f"{fr.detect_ms:.3f}",
-                    fr.false_glints,
+                    fr.false_glints, int(fr.calibration),
                 ]
             )  # fmt: skip
     summary = {"meta": meta, **report.summary}

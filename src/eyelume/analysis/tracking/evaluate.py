@@ -90,6 +90,10 @@ class Frame:
     glints_px: list | None = None
     false_glints: int = 0  # matched glints that are element ghosts (false_glints)
     ambient: dict | None = None  # ambient.sun: the frame's signal to ambient (ambient_ratios)
+    #: the test frame is the calibration frame of its gaze (same scene, seed and budget: the
+    #: same picture), so its PCCR error is the fit's in-sample residual, not a measurement:
+    #: left out of the PCCR statistics (:func:`summarise`) and marked "cal" on the error maps
+    calibration: bool = False
 
 
 @dataclass
@@ -333,6 +337,8 @@ def analyse_frames(
 def _errors(frames: list[Frame], attr: str) -> np.ndarray:
     out = []
     for f in frames:
+        if attr == "pccr" and f.calibration:
+            continue  # the PCCR polynomial was fitted on this very picture
         est = getattr(f, attr)
         if est is not None:
             out.append(math.hypot(est[0] - f.gaze[0], est[1] - f.gaze[1]))
@@ -341,7 +347,10 @@ def _errors(frames: list[Frame], attr: str) -> np.ndarray:
 
 def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
     """Detection rate, pupil-centre error (px, mm), glints per frame, false glints (total,
-    frames with any, mean per frame: :func:`false_glints`), gaze errors (°)."""
+    frames with any, mean per frame: :func:`false_glints`), gaze errors (°). The PCCR error's
+    statistics leave out the test frames that are calibration frames (``Frame.calibration``:
+    their error is the fit's in-sample residual) and say how many
+    (``calibration_frames_excluded``)."""
     frames = report.frames
     ok = [f for f in frames if f.detection.ok]
     pe = np.array([f.pupil_error_px for f in ok if math.isfinite(f.pupil_error_px)])
@@ -376,7 +385,14 @@ def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
             "frames_with": int(sum(f.false_glints > 0 for f in frames)),
             "per_frame_mean": float(np.mean([f.false_glints for f in frames])) if frames else 0.0,
         },
-        "gaze_pccr": stats(_errors(frames, "pccr")) if pccr_calibrated else {"frames": 0},
+        "gaze_pccr": (
+            {
+                **stats(_errors(frames, "pccr")),
+                "calibration_frames_excluded": sum(f.calibration for f in frames),
+            }
+            if pccr_calibrated
+            else {"frames": 0}
+        ),
         "gaze_geometric": stats(_errors(frames, "geometric")),
         "render_s_per_frame": float(np.mean([f.render_s for f in frames])),
         "detect_ms_per_frame": float(np.nanmean([f.detect_ms for f in frames])),
@@ -503,7 +519,9 @@ def error_map_rows(frames: Sequence[Frame]) -> list[dict]:
     """One plain row per frame for the error maps over the gaze grid: ``gaze`` (h, v °),
     ``pupil_error_px`` (None where detection failed), ``glints_found``, ``false_glints``
     (:func:`false_glints`), ``pccr_error_deg`` and
-    ``geometric_error_deg`` (None without an estimate). JSON-ready: a study stores them."""
+    ``geometric_error_deg`` (None without an estimate), ``calibration`` (the frame is a
+    calibration frame: its PCCR error is the fit's in-sample residual, ``Frame.calibration``).
+    JSON-ready: a study stores them."""
     return [
         {
             "gaze": [float(f.gaze[0]), float(f.gaze[1])],
@@ -512,6 +530,7 @@ def error_map_rows(frames: Sequence[Frame]) -> list[dict]:
             "false_glints": int(f.false_glints),
             "pccr_error_deg": _finite(_err(f.pccr, f.gaze)),
             "geometric_error_deg": _finite(_err(f.geometric, f.gaze)),
+            "calibration": bool(f.calibration),
         }
         for f in frames
     ]
