@@ -338,3 +338,17 @@ def test_irradiance_plot_pixel_axes_count_the_array(tmp_path):
             pixel_axes=True,
         )  # fmt: skip
     assert seen == [{"column (sensor px of 40)", "row (sensor px of 30)"}]
+
+
+def test_a_long_scene_name_wraps_instead_of_widening_the_eye_image_plot(tmp_path):
+    """The title (scene name, budget, seed) wraps to the figure's width: a 90-character scene
+    name leaves the PNG as wide as a short one's."""
+    widths = []
+    for name in ("s", "a-very-long-scene-file-name-that-someone-gave-their-headset-" * 2):
+        path = tmp_path / f"{len(name)}.png"
+        save_irradiance_plot(
+            np.ones((30, 40)), path, extent_mm=(-2, 2, -1.5, 1.5), pixel_axes=True,
+            title=f"{name}: eye image on the sensor (glints clipped at 99.5 %)\nseed 1",
+        )  # fmt: skip
+        widths.append(_read(path).shape[1])
+    assert widths[1] <= widths[0] + 5, widths

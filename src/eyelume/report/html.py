@@ -234,18 +234,12 @@ def _best_images(folder: Path) -> list[tuple[str, str]]:
             else how
         )
         buf = io.BytesIO()
-        save_error_maps(info["tracking_rows"], buf, caption=_wrap_caption(track))
+        save_error_maps(info["tracking_rows"], buf, caption=track)
         out.append(("Best run: pupil-centre, glint and gaze errors of the tracking evaluation "
                     "over the gaze grid (one cell per gaze; a red × where the frame failed): "
                     f"{track}.",
                     base64.b64encode(buf.getvalue()).decode("ascii")))  # fmt: skip
     return out
-
-
-def _wrap_caption(text: str) -> str:
-    import textwrap
-
-    return textwrap.fill(text, 110)
 
 
 def _best_list(best: list[dict], merit: str | None) -> str:

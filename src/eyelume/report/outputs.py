@@ -27,9 +27,9 @@ __all__ = ["write_render_outputs"]
 #: legend entries.
 RAY_COLORS = {"sensor": "tab:pink", "sensor, off the section": "tab:olive", "other": "tab:orange"}
 RAY_LABELS = {
-    "sensor": "ray reaching the sensor, born ≤ 1 mm from the section",
-    "sensor, off the section": "ray reaching the sensor, born off the section (projected)",
-    "other": "other ray, born ≤ 1 mm from the section",
+    "sensor": "ray to the sensor",
+    "sensor, off the section": "ray to the sensor, born off\nthe section (projected)",
+    "other": "other ray",
 }
 
 
@@ -150,8 +150,8 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
             curves,
             [p for p, _ in rays],
             path(file),
-            title=f"{name}: {vertical}–z section, world frame (camera projected onto it), "
-            f"traced rays of seed {result.seed}",
+            title=f"{name}: {vertical}–z section, world frame (camera projected onto it); "
+            f"traced rays of seed {result.seed}, born within 1 mm of the section unless marked",
             ray_colors=[RAY_COLORS[kind] for _, kind in rays],
             vertical=vertical,
             ray_legend=[

@@ -46,6 +46,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
+from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import FuncFormatter
@@ -64,6 +65,7 @@ __all__ = [
     "save_figure",
     "SectionCurve",
     "add_pixel_axes",
+    "wrap_title",
     "draw_maps",
     "pixel_pitch_label",
     "plain_number",
@@ -319,12 +321,12 @@ def plain_number(value: float, _pos: int | None = None) -> str:
     return f"{value:.6g}"
 
 
-def _wrap(text: str, width_in: float, points: float = 12.0) -> str:
+def wrap_title(text: str, width_in: float, points: float = 12.0) -> str:
     """``text`` with each of its lines wrapped to about ``width_in`` inches of a ``points`` font
     (a long scene name must not widen the figure)."""
     import textwrap
 
-    chars = max(20, int(width_in * 144 / points))
+    chars = max(20, int(width_in * 120 / points))
     return "\n".join(textwrap.fill(line, chars) for line in text.split("\n"))
 
 
@@ -508,9 +510,9 @@ def save_irradiance_plot(  # noqa: PLR0913 - each option is one labelled aspect
     ax.set_ylabel(ylabel)
     if pixel_axes:
         add_pixel_axes(ax, arr.shape, (left, right, bottom, top), what="sensor px")
-        fig.suptitle(_wrap(title, 7.0))  # above the pixel scale, not on it
+        fig.suptitle(wrap_title(title, 7.0))  # above the pixel scale, not on it
     else:
-        ax.set_title(_wrap(title, 6.0))
+        ax.set_title(wrap_title(title, 6.0))
     _save_figure(fig, path)
 
 
@@ -659,7 +661,8 @@ def save_layout(
         One matplotlib colour per ray (e.g. by LED); default all ``"tab:orange"``.
     ray_legend : sequence of (colour, label), optional
         Legend entries for the rays' colours, e.g. ``[("tab:pink", "rays reaching the
-        sensor")]``.
+        sensor"), ("tab:orange", "other rays")]``; rays of every colour but the last entry's are
+        drawn stronger and on top (the few that reach the sensor among many that do not).
 
     LEDs (category ``"led"``) appear in the legend as drawn: a circle (a body cut by the plane,
     or an emitter point) and a line (its axis); their ``tag`` (the LED's id) is written beside
@@ -692,13 +695,20 @@ def save_layout(
     segments = _ray_segments(rays, 1 if vertical == "y" else 0)
     colors = _ray_colours(ray_colors, len(segments))
 
-    fig = Figure(figsize=(_layout_width_in(curves, segments), 5.0), layout="constrained")
+    # the system's width at equal scale, plus the legend's column beside the axes
+    fig = Figure(figsize=(_layout_width_in(curves, segments) + 3.0, 5.0), layout="constrained")
     ax = fig.add_subplot()
     if segments:
+        # rays in a legend colour other than the last (the common "other" rays) stand out
+        strong = {c for c, _ in ray_legend[:-1]}
+        rgba = [to_rgba(c, 0.9 if c in strong else 0.35) for c in colors]
+        widths = [1.0 if c in strong else 0.5 for c in colors]
+        order = sorted(range(len(segments)), key=lambda i: colors[i] in strong)  # strong on top
         ax.add_collection(
-            LineCollection(segments, colors=colors, linewidths=0.5, alpha=0.35, zorder=1),
+            LineCollection([segments[i] for i in order], colors=[rgba[i] for i in order],
+                           linewidths=[widths[i] for i in order], zorder=1),
             autolim=True,
-        )
+        )  # fmt: skip
     present: list[str] = []
     tags: list[tuple[float, float, str]] = []
     for curve in curves:
@@ -726,7 +736,7 @@ def save_layout(
                   borderaxespad=0.0, fontsize="small", framealpha=0.85)  # fmt: skip
     ax.set_xlabel("world z (mm)")
     ax.set_ylabel(f"world {vertical} (mm)")
-    ax.set_title(_wrap(title, fig.get_figwidth() * 0.75))
+    ax.set_title(wrap_title(title, fig.get_figwidth() - 3.0))
     ax.grid(True, linewidth=0.3, alpha=0.5)
     _save_figure(fig, path)
 

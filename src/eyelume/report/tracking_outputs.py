@@ -11,7 +11,7 @@ import numpy as np
 
 from eyelume.analysis.tracking.evaluate import error_map_rows
 from eyelume.json_files import write_json
-from eyelume.report.plots import CMAP_MAGNITUDE, agg_figure, save_figure
+from eyelume.report.plots import CMAP_MAGNITUDE, agg_figure, save_figure, wrap_title
 
 __all__ = [
     "save_error_maps",
@@ -134,7 +134,7 @@ def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
     if handles:
         fig.legend(handles=handles, loc="outside lower left", fontsize="small", frameon=False)
     if caption:
-        fig.suptitle(caption, fontsize=9)
+        fig.suptitle(wrap_title(caption, 10.0, 9.0), fontsize=9)  # a long scene name wraps
     save_figure(fig, path, dpi=110)
 
 
