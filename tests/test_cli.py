@@ -27,6 +27,7 @@ def test_render_writes_every_output(tmp_path):
         "eye_image.png",
         "eye_plane.png",
         "eye_image_plot.png",
+        "eye_image_digital_plot.png",
         "eye_plane_plot.png",
         "layout.png",
         "layout_xz.png",

@@ -41,9 +41,14 @@ def test_a_pupil_hidden_by_the_eyelid_is_a_failure_not_a_gaze():
 @pytest.mark.slow
 def test_evaluate_tracking_small_grid():
     scene = eyelume.load_scene("paper2005")
-    rep = evaluate_tracking(scene, test_h=(-10.0, 10.0), test_v=(0.0,), samples_per_pixel=8)
+    rep = evaluate_tracking(scene, test_h=(-20.0, 10.0), test_v=(0.0,), samples_per_pixel=8)
     assert len(rep.frames) == 2 and len(rep.calibration) == 9
     s = rep.summary
+    # (−20°, 0°) is a calibration gaze, rendered alike: the same picture the PCCR polynomial
+    # was fitted on, flagged and left out of the PCCR statistics (its error is in-sample)
+    assert [f.calibration for f in rep.frames] == [True, False]
+    assert s["gaze_pccr"]["calibration_frames_excluded"] == 1
+    assert s["gaze_pccr"]["frames"] == (rep.frames[1].pccr is not None)
     assert 0 <= s["detection_rate"] <= 1
     for f in rep.frames:
         if f.detection.ok:

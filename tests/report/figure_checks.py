@@ -153,7 +153,8 @@ def exponent_texts(fig: Figure) -> list[str]:
         if not (ax.get_visible() and ax.axison):
             continue
         for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
-            where = ax.get_title() or axis.get_label_text() or ax.get_ylabel() or "untitled panel"
+            title = ax.get_title() if hasattr(ax, "get_title") else ""  # not a SecondaryAxis's
+            where = title or axis.get_label_text() or "untitled panel"
             offset = axis.get_offset_text()
             if axis.get_visible() and offset.get_visible() and offset.get_text().strip():
                 bad.append(f"{where!r}: {name} axis draws offset text {offset.get_text()!r}")

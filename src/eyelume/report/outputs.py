@@ -150,8 +150,8 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
             curves,
             [p for p, _ in rays],
             path(file),
-            title=f"{name}: {vertical}–z section, world frame (camera projected onto it); "
-            f"traced rays of seed {result.seed}, born within 1 mm of the section unless marked",
+            title=f"{name}: {vertical}–z section (world; camera projected); rays of seed "
+            f"{result.seed} born ≤ 1 mm from the section unless marked",
             ray_colors=[RAY_COLORS[kind] for _, kind in rays],
             vertical=vertical,
             ray_legend=[

@@ -616,14 +616,14 @@ def _ray_colours(ray_colors: Sequence[str] | None, n: int) -> list[str]:
 
 
 def _layout_width_in(curves: Sequence[SectionCurve], segments: list[np.ndarray]) -> float:
-    """The layout's width (in) for a 5 in height: the system's aspect at equal scale, 6 to 16."""
+    """The layout's width (in) for a 5 in height: the system's aspect at equal scale, 4 to 16."""
     zs = [c.z for c in curves] + [s[:, 0] for s in segments]
     vs = [c.y for c in curves] + [s[:, 1] for s in segments]
     if not zs:
         return 6.0
     span_z = float(np.ptp(np.concatenate(zs))) or 1.0
     span_v = float(np.ptp(np.concatenate(vs))) or 1.0
-    return float(np.clip(4.2 * span_z / span_v + 2.2, 6.0, 16.0))
+    return float(np.clip(4.2 * span_z / span_v + 2.2, 4.0, 16.0))
 
 
 def save_layout(
