@@ -185,7 +185,10 @@ def test_delta_gallery_draws_the_eye_plane_in_mm_and_the_eye_image_on_the_sensor
     images = [rng.uniform(0, 1e-8, (65, 87)) for _ in range(2)]
     seen = {}
 
+    ylabels = []
+
     def keep(fig, name):
+        ylabels.extend(ax.get_ylabel() for ax in fig.axes)
         for ax in fig.axes:
             if ax.images:
                 seen.setdefault(ax.get_xlabel(), []).append(
@@ -199,7 +202,10 @@ def test_delta_gallery_draws_the_eye_plane_in_mm_and_the_eye_image_on_the_sensor
     assert [e for e, _ in plane] == [(-20.0, 20.0, -15.0, 15.0)] * 2
     assert {c for _, c in plane} == {"inferno"}
     ((label, picture),) = seen.items()
-    assert label == "image x on the sensor (mm; 1 px = 0.529 mm)"
+    assert label == "image x on the sensor (mm)"
+    assert [y for y in ylabels if y.startswith("eye image")] == [
+        "eye image, 1 px = 0.529 mm\ny on the sensor (mm)"
+    ]
     assert [e for e, _ in picture] == [pytest.approx((-23.0, 23.0, -17.15, 17.15))] * 2
     assert {c for _, c in picture} == {"gray"}
 

@@ -16,7 +16,6 @@ from eyelume.report.plots import (
     CMAP_SENSOR,
     agg_figure,
     draw_maps,
-    pixel_pitch_label,
     save_figure,
 )
 
@@ -176,7 +175,7 @@ def save_delta_gallery(
     99.5th percentile), each row on one colour scale with a colour bar in SI-prefixed W/mm².
     The eye plane is drawn in mm of the receiver (``plane_mm`` = its width, height), the eye
     image in mm on the sensor (``picture_mm`` = the picture's width, height) with the pixel size
-    in the axis label; without them, in array columns and rows (px)."""
+    in the row's label; without them, in array columns and rows (px)."""
     n = len(deltas)
     fig = agg_figure(2.6 * n + 1.6, 5.6)
     axes = fig.subplots(2, n, squeeze=False, sharex="row", sharey="row")
@@ -194,9 +193,9 @@ def save_delta_gallery(
     if picture_mm is not None:
         w, h = picture_mm
         extent = (-w / 2, w / 2, -h / 2, h / 2)
-        cols = images[0].shape[1]
-        xlab = pixel_pitch_label("x", extent, cols)
-        ylab = "eye image\ny on the sensor (mm)"  # square pixels: the x label gives their size
+        pitch = w / images[0].shape[1]  # square pixels: one size said once, beside the row
+        xlab = "image x on the sensor (mm)"
+        ylab = f"eye image, 1 px = {pitch:.3g} mm\ny on the sensor (mm)"
     else:
         extent, xlab, ylab = None, "image column (sensor px)", "eye image\nrow (sensor px)"
     draw_maps(fig, axes[1], images, extent=extent, cmap=CMAP_SENSOR, vmax=i_max, clipped=clipped,
