@@ -6,8 +6,11 @@ runs it, and written small under ``docs/figures/`` (each at most ``--width`` pix
 Writes ``eye_image_plot.png`` and ``layout.png`` (``eyelume render --scene paper2005``),
 ``layout_vr-offaxis_xz.png`` (``eyelume render --scene vr-offaxis``, its x–z view),
 ``landscape.png`` (``eyelume sweep-leds``) and ``error_maps.png``
-(``eyelume evaluate-tracking --samples N``), and prints each command and its wall time. The
-figures are eyelume's own files, only downscaled (Pillow, Lanczos); nothing is drawn here.
+(``eyelume evaluate-tracking --samples N``), and the presets' pictures the README shows under
+``docs/presets/`` (``vr-offaxis_eye_image.png``, ``vr-offaxis_layout_xz.png``,
+``eyetrackvr_eye_image.png``, ``glasses-frame_eye_image.png``: each ``eye_image_plot.png`` of
+``eyelume render --scene NAME``), and prints each command and its wall time. The figures are
+eyelume's own files, only downscaled (Pillow, Lanczos); nothing is drawn here.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "figures"
+PRESETS = ROOT / "docs" / "presets"
 
 
 def run(args: list[str]) -> None:
@@ -32,14 +36,14 @@ def run(args: list[str]) -> None:
     print(f"  {time.perf_counter() - t0:.0f} s", flush=True)
 
 
-def small(src: Path, name: str, width: int) -> None:
+def small(src: Path, name: str, width: int, out: Path = OUT) -> None:
     with Image.open(src) as im:
         im = im.convert("RGB")
         if im.width > width:
             im = im.resize((width, round(im.height * width / im.width)), Image.LANCZOS)
-        OUT.mkdir(parents=True, exist_ok=True)
-        im.save(OUT / name, optimize=True)
-    print(f"  wrote docs/figures/{name} ({(OUT / name).stat().st_size // 1024} kB)")
+        out.mkdir(parents=True, exist_ok=True)
+        im.save(out / name, optimize=True)
+    print(f"  wrote {(out / name).relative_to(ROOT)} ({(out / name).stat().st_size // 1024} kB)")
 
 
 def main() -> None:
@@ -55,6 +59,11 @@ def main() -> None:
         small(t / "r" / "layout.png", "layout.png", a.width)
         run(["render", "--scene", "vr-offaxis", "--samples", str(a.samples), "--out", str(t / "v")])
         small(t / "v" / "layout_xz.png", "layout_vr-offaxis_xz.png", a.width)
+        small(t / "v" / "eye_image_plot.png", "vr-offaxis_eye_image.png", a.width, PRESETS)
+        small(t / "v" / "layout_xz.png", "vr-offaxis_layout_xz.png", a.width, PRESETS)
+        for scene, spp in (("eyetrackvr", 4), ("glasses-frame", 2)):  # as the README says
+            run(["render", "--scene", scene, "--samples", str(spp), "--out", str(t / scene)])
+            small(t / scene / "eye_image_plot.png", f"{scene}_eye_image.png", a.width, PRESETS)
         run(["sweep-leds", "--out", str(t / "s")])
         small(t / "s" / "landscape.png", "landscape.png", a.width)
         run(["evaluate-tracking", "--samples", str(a.tracking_samples), "--out", str(t / "e")])
