@@ -305,9 +305,13 @@ class SurfaceSpec:
     tally_a: str = ""
     tally_b: str = ""
     r_table: tuple[np.ndarray, np.ndarray] | None = None  # R(θ): angles (rad), R
+    lashes: tuple[int, float, float] | None = None  # a fringe's count, pitch (rad), half-width
 
     def float_row(self) -> np.ndarray:
         f = np.zeros(G.N_FLOAT if self.r_table is None else I.N_FLOAT_WITH_TABLE)
+        if self.lashes is not None:
+            f = np.zeros(G.N_FLOAT_WITH_LASHES)
+            f[G.LASH_COUNT], f[G.LASH_PITCH], f[G.LASH_HALF_WIDTH] = self.lashes
         if self.r_table is not None:
             angles, values = self.r_table
             f[I.R_TABLE_COUNT] = len(angles)
@@ -1148,6 +1152,79 @@ def _add_face(t: _Table, scene: Scene) -> None:
         )
 
 
+#: The ledger's and the regions' name of an eyelash fringe (:func:`_add_lashes`).
+LASHES_NAME = "eyelashes"
+
+
+def lash_fringe(scene: Scene) -> dict | None:
+    """The eyelash fringe of ``scene.face.lashes`` in the world frame, or None when it has none:
+    ``apex`` (3,) mm and unit ``axis`` (3,) of its cone (the lid's axis, turned with the lid's
+    share of the gaze), unit ``forward`` (3,) (local +x, the span's centre), ``slope`` m (the
+    cone x² + y² = m² z², m = cot tilt), local ``z_range`` (mm, the lashes' roots and tips),
+    ``count``, ``pitch`` (rad), ``half_width`` (mm), ``root_radius`` ρ_m (mm) and the margin's
+    centre ``margin_centre`` (3,) mm. The lid's margin, at local z_m, is the circle of radius
+    ρ_m = √(R² − z_m²); a lash from it at tilt θ meets the axis at z_m − ρ_m tan θ, the apex."""
+    face = scene.face
+    lashes = face.lashes
+    if not (face.enabled and lashes.enabled):
+        return None
+    lid = next(tis for tis in face.tissues if tis.name == lashes.lid)  # the model's validator
+    turn, _ = gaze_rotation(scene.eye, share_vertical=lid.follows_gaze, share_horizontal=0.0)
+    axis = as_world(scene, turn @ np.asarray(lid.axis, dtype=float))
+    axis = axis / np.linalg.norm(axis)
+    fwd = as_world(scene, turn @ np.array([0.0, 0.0, 1.0]))
+    fwd = fwd - axis * float(fwd @ axis)
+    if np.linalg.norm(fwd) < 1e-6:
+        raise SceneError(
+            f"face.lashes.lid = {lashes.lid!r}: its axis points along the line of sight; "
+            "the lashes need a lid axis across it"
+        )
+    fwd = fwd / np.linalg.norm(fwd)
+    centre = eye_point(scene, lid.center_mm, share_vertical=lid.follows_gaze, share_horizontal=0.0)
+    z_m = lid.clip_z_mm[0]
+    rho = math.sqrt(lid.radius_mm**2 - z_m**2)
+    tilt = math.radians(lashes.tilt_deg)
+    z_apex = z_m - rho * math.tan(tilt)
+    z0 = z_m - z_apex
+    return {
+        "apex": centre + axis * z_apex,
+        "axis": axis,
+        "forward": fwd,
+        "slope": 1.0 / math.tan(tilt),
+        "z_range": (z0, z0 + lashes.length_mm * math.sin(tilt)),
+        "count": lashes.count,
+        "pitch": math.radians(lashes.span_deg) / lashes.count,
+        "half_width": lashes.width_mm / 2.0,
+        "root_radius": rho,
+        "margin_centre": centre + axis * z_m,
+    }
+
+
+def _add_lashes(t: _Table, scene: Scene) -> None:
+    """The eyelash fringe (:func:`lash_fringe`): one opaque ``SHAPE_LASHES`` row, Lambertian
+    with the lashes' reflectance on both faces, the ledger's "eyelashes"."""
+    fr = lash_fringe(scene)
+    if fr is None:
+        return
+    axis, fwd = fr["axis"], fr["forward"]
+    rot = np.stack([fwd, np.cross(axis, fwd), axis])
+    rho = scene.face.lashes.reflectance
+    # every lash point lies within ρ_m + length of the margin's centre
+    bound = (fr["margin_centre"], (fr["root_radius"] + scene.face.lashes.length_mm) * 1.000001)
+    t.add(
+        LASHES_NAME,
+        G.SHAPE_LASHES,
+        fr["apex"],
+        rot,
+        bound,
+        curv=fr["slope"],
+        clip_z=fr["z_range"],
+        rho_a=rho,
+        rho_b=rho,
+        lashes=(fr["count"], fr["pitch"], fr["half_width"]),
+    )
+
+
 def _add_led_bodies(t: _Table, scene: Scene, centres: np.ndarray, axes: np.ndarray) -> None:
     """Each LED's body: an absorbing sphere of its own radius (the ledger's "LED bodies")."""
     for i, (c, rb) in enumerate(zip(centres, scene.leds.body_radii_mm(), strict=True)):
@@ -1812,6 +1889,7 @@ def compile_scene(
     first = _first_order(scene, lens, idx, stop, fixed_stop)
     _add_eye(t, scene)
     _add_face(t, scene)
+    _add_lashes(t, scene)
     centres, axes = led_world_poses(scene)
     _check_leds(scene, centres, lens.lf, frame)
     _check_leds_in_head(scene, centres)

@@ -80,6 +80,25 @@ def _clip_mask(sf: np.ndarray, s: int, world: np.ndarray) -> np.ndarray:
     )
 
 
+def _lash_points(sf: np.ndarray, s: int, rot: np.ndarray, o: np.ndarray, cut: int) -> np.ndarray:
+    """An eyelash fringe's lashes in the plane p[cut] = 0: its cone's meridians there (the
+    plane through its axis), within the lashes' span, NaN rows between them."""
+    psi = math.atan2(-rot[0, cut], rot[1, cut])
+    z = np.linspace(sf[s, G.ZLO], sf[s, G.ZHI], 51)
+    half_span = 0.5 * sf[s, G.LASH_COUNT] * sf[s, G.LASH_PITCH]
+    lines = []
+    for a in (psi, psi + math.pi):
+        a = math.remainder(a, 2 * math.pi)
+        if abs(a) <= half_span:
+            r = sf[s, G.CURV] * z
+            local = np.stack([r * math.cos(a), r * math.sin(a), z], 1)
+            lines.append(local @ rot + o)
+    if not lines:
+        return np.zeros((0, 3))
+    gap = np.full((1, 3), np.nan)
+    return np.concatenate([x for line in lines for x in (line, gap)][:-1])
+
+
 def _surface_points(sf: np.ndarray, si: np.ndarray, s: int, extent: float, cut: int) -> np.ndarray:
     """World points of surface ``s`` along its intersection with the plane p[cut] = 0."""
     rot = sf[s, G.R00 : G.R22 + 1].reshape(3, 3)
@@ -97,6 +116,8 @@ def _surface_points(sf: np.ndarray, si: np.ndarray, s: int, extent: float, cut: 
         z = sag(c, k, np.abs(r))
         local = np.stack([r * math.cos(psi), r * math.sin(psi), z], 1)
         return local @ rot + o
+    if shape == G.SHAPE_LASHES:
+        return _lash_points(sf, s, rot, o, cut)
     if shape == G.SHAPE_SPHERE:
         rad = sf[s, G.RADIUS]
         if abs(o[cut]) >= rad:

@@ -197,7 +197,14 @@ def test_each_sample_reaches_its_scene(scene):
             up.clip_z_mm[0] / lo.clip_z_mm[0]
         )
         assert e.kappa_deg == (v["kappa_horizontal_deg"], scene.eye.kappa_deg[1])
+        lashes = p.scene.face.lashes
+        assert lashes.enabled and lashes.count == round(v["lash_count"])
+        assert lashes.length_mm == v["lash_length_mm"]
         assert p.not_applied == ()
+    # a scene without the lashes' lid: they are not applied
+    bare = scene.model_copy(update={"face": scene.face.model_copy(update={"enabled": False})})
+    p = sample_people(bare, 1, 11, build_scenes=False)[0]
+    assert {"lash_count", "lash_length_mm"} <= set(p.not_applied)
 
 
 def test_impossible_corneas_are_redrawn(scene):

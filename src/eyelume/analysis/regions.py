@@ -20,7 +20,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from eyelume.compile import CompiledScene
+from eyelume.compile import LASHES_NAME, CompiledScene
 from eyelume.errors import EyelumeWarning
 from eyelume.estimators.fast_run import primary_surface_map
 from eyelume.estimators.statistics import median_pixel_rel_error
@@ -68,7 +68,7 @@ def region_masks(
         "pupil": of(lambda n, b: n in pupil_names or (n == "sclera" and not b)),
         "iris": of(lambda n, b: n in ("iris", "iris root")),
         "sclera": of(lambda n, b: n == "sclera" and b),
-        "skin": of(lambda n, b: n in tissues),
+        "skin": of(lambda n, b: n in tissues or n == LASHES_NAME),  # the lashes: the lid's
     }
     if cs.scene.elements and reflections:
         from eyelume.analysis.ghosts import ghost_truth

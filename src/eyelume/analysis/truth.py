@@ -320,7 +320,7 @@ def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
         if entry["visible"]
         else "the LED sends no light this way (beyond its angular profile)"
         if dark and not (blocked_in or blocked_out)
-        else "blocked (an eyelid, the face or an opaque element)"
+        else "blocked (an eyelid or its lashes, the face or an opaque element)"
     )
     return entry
 

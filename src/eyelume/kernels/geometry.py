@@ -9,7 +9,14 @@ rows of R the local axes in world coordinates. Shapes, in their local frame:
   (1+k) c z² − 2 z = 0, apical curvatures c along x and c_y along y, vertex at the origin (the
   conicoid when c_y = c; kept a shape of its own so that the conicoid's arithmetic, and the
   rotationally symmetric renders, stay bit for bit what they were);
-* sphere: |p| = radius;  cylinder: x² + y² = radius² about local z.
+* sphere: |p| = radius;  cylinder: x² + y² = radius² about local z;
+* eyelash fringe: the cone x² + y² = m² z² (m = ``CURV``, apex at the origin, the nappe z > 0)
+  that exists only on its lashes: ``LASH_COUNT`` strands spaced by ``LASH_PITCH`` (rad) in
+  azimuth ψ = atan2(y, x), centred on local +x (ψ = 0), each a ribbon of half-width
+  ``LASH_HALF_WIDTH`` (mm) measured across it in the cone (|ψ − ψ_i| · r ≤ half-width at the
+  distance r from the axis). A ray crossing the cone between the lashes goes on; one crossing a
+  lash meets an opaque surface (:func:`on_lash`). The lash columns follow the geometry's
+  (``N_FLOAT``; only a fringe's row has them, the table is padded with zeros).
 
 Each exists where the local radial distance r ∈ [rmin, rmax] and local z ∈ [zlo, zhi]. Normals
 point toward *side B*: +z for a conicoid (the side light reaches after it, lens-design
@@ -35,12 +42,15 @@ N_A, N_B = 23, 24  # refractive index on sides A and B
 REFL, ABSORB = 25, 26  # fixed reflectance and absorptance of a refracting interface
 RHO_A, RHO_B = 27, 28  # Lambertian reflectance of the faces of an opaque surface
 N_FLOAT = 29
+# an eyelash fringe's strands (SHAPE_LASHES), in columns after the geometry's
+LASH_COUNT, LASH_PITCH, LASH_HALF_WIDTH = N_FLOAT, N_FLOAT + 1, N_FLOAT + 2
+N_FLOAT_WITH_LASHES = N_FLOAT + 3
 
 # --- int columns -------------------------------------------------------------------------------
 SHAPE, ACTION, FRESNEL, TALLY_A, TALLY_B = 0, 1, 2, 3, 4
 N_INT = 5
 
-SHAPE_CONIC, SHAPE_SPHERE, SHAPE_CYLINDER, SHAPE_QUADRIC = 0, 1, 2, 3
+SHAPE_CONIC, SHAPE_SPHERE, SHAPE_CYLINDER, SHAPE_QUADRIC, SHAPE_LASHES = 0, 1, 2, 3, 4
 ACT_REFRACT, ACT_OPAQUE, ACT_LENS = 0, 1, 2
 
 T_MIN = 1e-7  # mm: a hit closer than this to a ray's origin is the surface it just left
@@ -138,12 +148,29 @@ def conic_normal(c, k, x, y, z):
 
 
 @njit(cache=True, inline="always")
+def on_lash(count, pitch, half_width, x, y):
+    """Whether the local point (x, y, ·) of an eyelash fringe lies on one of its ``count``
+    lashes: the strand i nearest its azimuth ψ = atan2(y, x) sits at ψ_i = (i + ½ − count/2)
+    · pitch (i = 0 … count − 1) and covers |ψ − ψ_i| · r ≤ ``half_width`` (mm), r = √(x² + y²).
+    The fringe covers the fraction 2 · half_width / (r · pitch) of its span at r."""
+    psi = math.atan2(y, x)
+    u = psi / pitch + 0.5 * count
+    i = math.floor(u)
+    if i < 0 or i >= count:
+        return False
+    off = (u - i - 0.5) * pitch  # rad from the strand's centre
+    return abs(off) * math.sqrt(x * x + y * y) <= half_width
+
+
+@njit(cache=True, inline="always")
 def _valid(sf, s, shape, x, y, z):
     r2 = x * x + y * y
     if r2 < sf[s, RMIN2] or r2 > sf[s, RMAX2] or z < sf[s, ZLO] or z > sf[s, ZHI]:
         return False
     if shape == SHAPE_CONIC or shape == SHAPE_QUADRIC:
         return on_vertex_branch(sf[s, CURV], sf[s, CONIC], z)
+    if shape == SHAPE_LASHES:
+        return on_lash(sf[s, LASH_COUNT], sf[s, LASH_PITCH], sf[s, LASH_HALF_WIDTH], x, y)
     return True
 
 
@@ -166,6 +193,11 @@ def intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max):
         a, b, c = quadric_coefficients(
             sf[s, CURV], sf[s, CURV_Y], sf[s, CONIC], px, py, pz, ux, uy, uz
         )
+    elif shape == SHAPE_LASHES:
+        m2 = sf[s, CURV] * sf[s, CURV]
+        a = ux * ux + uy * uy - m2 * uz * uz
+        b = 2.0 * (px * ux + py * uy - m2 * pz * uz)
+        c = px * px + py * py - m2 * pz * pz
     else:
         a = ux * ux + uy * uy
         b = 2.0 * (px * ux + py * uy)
@@ -192,6 +224,11 @@ def surface_normal(sf, si, s, x, y, z):
         nx, ny, nz = px * inv, py * inv, pz * inv
     elif shape == SHAPE_QUADRIC:
         nx, ny, nz = quadric_normal(sf[s, CURV], sf[s, CURV_Y], sf[s, CONIC], px, py, pz)
+    elif shape == SHAPE_LASHES:  # away from the cone's axis
+        m2 = sf[s, CURV] * sf[s, CURV]
+        nx, ny, nz = px, py, -m2 * pz
+        inv = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
+        nx, ny, nz = nx * inv, ny * inv, nz * inv
     else:
         inv = 1.0 / math.sqrt(px * px + py * py)
         nx, ny, nz = px * inv, py * inv, 0.0

@@ -7,7 +7,8 @@ people from measured (or, where marked, assumed) distributions and makes each on
 astigmatism (the power vector J0, J45: :func:`corneal_split`), pupil
 diameter by ambient level (its mean from Watson & Yellott's 2012 unified formula), angle kappa,
 centre of rotation, iris, sclera and skin NIR reflectance (skin by wavelength, Cooksey, Allen &
-Tsai 2017), lid aperture and headset slip (x, y, z).
+Tsai 2017), lid aperture, eyelashes (count and length on the upper lid: they switch
+``face.lashes`` on) and headset slip (x, y, z).
 
 Sampling: person ``i`` of seed ``s`` draws one uniform number per parameter (in the file's
 order, whichever parameters are used) from ``numpy.random.SeedSequence(s).spawn(i + 1)[i]``,
@@ -430,6 +431,34 @@ def _lid_indices(scene: Scene) -> tuple[int, int] | None:
     return None
 
 
+def _lid_overrides(scene: Scene, v: float, over: dict[str, Any]) -> bool:
+    """Open the lids to the aperture ``v`` (mm) in ``over``: both margins (their
+    ``clip_z_mm[0]``) scaled in proportion; False (nothing set) for a scene without the two."""
+    lids = _lid_indices(scene)
+    if lids is None:
+        return False
+    up, lo = (scene.face.tissues[k] for k in lids)
+    scale = v / (up.clip_z_mm[0] + lo.clip_z_mm[0])
+    for k, t in zip(lids, (up, lo), strict=True):
+        over[f"face.tissues.{k}.clip_z_mm"] = [t.clip_z_mm[0] * scale, t.clip_z_mm[1]]
+    return True
+
+
+def _lash_overrides(scene: Scene, target: str, v: float, over: dict[str, Any]) -> bool:
+    """Switch the lashes on with a sampled ``lashes.<field>`` (a count rounded) in ``over``;
+    False (nothing set) when the scene has not the lid they grow on (``face.lashes.lid``, a
+    sphere, on an enabled face)."""
+    face = scene.face
+    if not face.enabled or not any(
+        t.name == face.lashes.lid and t.shape == "sphere" for t in face.tissues
+    ):
+        return False
+    key = target.removeprefix("lashes.")
+    over["face.lashes.enabled"] = True
+    over[f"face.lashes.{key}"] = round(v) if key == "count" else v
+    return True
+
+
 def _overrides(
     scene: Scene, values: dict[str, float], used: tuple[str, ...], dists: dict[str, Distribution]
 ) -> tuple[dict[str, Any], tuple[str, ...]]:
@@ -450,15 +479,14 @@ def _overrides(
             over["eye.cornea.axis_deg"] = axis
         elif target == "kappa.horizontal":
             over["eye.kappa_deg"] = [v, scene.eye.kappa_deg[1]]
-        elif target == "lid_aperture":
-            lids = _lid_indices(scene)
-            if lids is None:
+        elif target == "lid_aperture" or target.startswith("lashes."):
+            applied = (
+                _lid_overrides(scene, v, over)
+                if target == "lid_aperture"
+                else _lash_overrides(scene, target, v, over)
+            )
+            if not applied:
                 skipped.append(name)
-                continue
-            up, lo = (scene.face.tissues[k] for k in lids)
-            scale = v / (up.clip_z_mm[0] + lo.clip_z_mm[0])
-            for k, t in zip(lids, (up, lo), strict=True):
-                over[f"face.tissues.{k}.clip_z_mm"] = [t.clip_z_mm[0] * scale, t.clip_z_mm[1]]
         else:
             over[target] = v
     if "eye.surfaces.0.radius_mm" in over or "eye.surfaces.0.conic" in over:
