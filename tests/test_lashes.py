@@ -196,3 +196,20 @@ def test_lashes_seen_are_labelled_skin():
     assert lash.sum() > 20  # the lashes are in view
     masks = region_masks(cs)
     assert masks["skin"][lash].all()
+
+
+def test_cli_refuses_overlapping_lashes_in_one_line(tmp_path):
+    from typer.testing import CliRunner
+
+    from eyelume.cli import app
+
+    res = CliRunner().invoke(
+        app,
+        ["render", "--scene", "vr-offaxis", "--out", str(tmp_path / "out")]
+        + ["--set", "face.lashes.enabled=true", "--set", "face.lashes.count=400"],
+        prog_name="eyelume",
+    )
+    assert res.exit_code == 2, res.output
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and "lashes.count = 400" in lines[0] and "overlap" in lines[0]
+    assert not (tmp_path / "out" / "eye_image.npy").exists()
