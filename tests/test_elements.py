@@ -332,7 +332,8 @@ def test_two_elements_that_intersect_are_refused(tmp_path):
     path = _scene_file(tmp_path, [PLATE, tilted])
     res = runner.invoke(app, ["info", "--scene", str(path), "--json"])
     assert res.exit_code == 2
-    assert "elements.1 (mirror) intersects elements.0 (window)" in res.stderr
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "elements.1 (mirror) intersects elements.0 (window)" in lines[0]
     # moved clear of the plate, the same mirror is fine
     ok = tilted | {"position_mm": [0.0, 20.0, 40.0]}  # beside the camera's line of sight
     res = runner.invoke(app, ["info", "--scene", str(_scene_file(tmp_path, [PLATE, ok]))])
@@ -351,6 +352,28 @@ def _scene_file(tmp_path, elements) -> str:
     path = tmp_path / "scene.toml"
     path.write_text(text, encoding="utf-8")
     return str(path)
+
+
+@pytest.mark.parametrize(
+    ("rows", "says"),
+    [
+        ("0,0.01\n95,0.2\n", "angle of incidence 95 deg out of range"),
+        ("-5,0.01\n90,0.2\n", "angle of incidence -5 deg out of range"),
+        ("0,0.01\n60,0.2\n", "must increase from 0 to 90 deg"),
+    ],
+)
+def test_a_table_with_angles_out_of_range_is_one_line_exit_2(tmp_path, rows, says):
+    """Issue 14's bad input: a coating's R(θ) table whose angles leave 0 … 90° (or do not span
+    them), through the command line: one line naming the table's field, exit code 2."""
+    table = tmp_path / "r.csv"
+    table.write_text("angle_deg,R\n" + rows, encoding="utf-8")
+    coat = {"model": "table", "table_csv": str(table), "source": "test data"}
+    path = _scene_file(tmp_path, [PLATE | {"front": {"coating": coat}}])
+    res = runner.invoke(app, ["info", "--scene", path, "--json"])
+    assert res.exit_code == 2, res.output
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and says in lines[0], res.stderr
+    assert "elements.0.front.coating.table_csv" in lines[0], lines[0]
 
 
 def test_reflectance_table_is_checked_and_interpolated_in_the_angle_of_incidence(tmp_path):
@@ -693,16 +716,42 @@ def test_a_hot_mirror_reflects_above_its_cutoff_and_each_wavelength_group_sees_i
         _scene([mirror | {"front": {"coating": coat | {"reflectance_below": None}}}])
 
 
-def test_regions_warn_that_a_mirror_is_looked_through():
-    """The regions' map refracts only: through a window it is right (no warning), a mirror it
-    would look through, so a scene with one is warned about (one line naming it)."""
+def test_regions_follow_a_mirror_fold():
+    """The regions' map takes an element's stronger branch (a window's refraction, a mirror's
+    fold), as the truth does: behind the 45° fold mirror the pupil mask is the pupil the truth
+    finds through it (its centroid within a pixel of the truth's pupil centre, its area that
+    of the truth's pupil ellipse within 15 %), and no warning; a hot mirror that turns the
+    view at one LED wavelength and not at another is warned about in one line."""
     import warnings
 
     from eyelume.analysis.regions import RegionWarning, region_masks
+    from eyelume.analysis.truth import eye_truth
 
+    cs = compile_scene(eyelume.load_scene("vr-offaxis", FOLDED | {"elements": [FOLD]}))
     with warnings.catch_warnings():
         warnings.simplefilter("error", RegionWarning)
         region_masks(compile_scene(_scene([PLATE])))
-    cs = compile_scene(eyelume.load_scene("vr-offaxis", FOLDED | {"elements": [FOLD]}))
-    with pytest.warns(RegionWarning, match=r"elements.0 is a mirror"):
-        region_masks(cs)
+        masks = region_masks(cs, reflections=False)
+    truth = eye_truth(cs)["pupil"]
+    rows, cols = np.nonzero(masks["pupil"])
+    assert masks["skin"].sum() > 0 and masks["iris"].sum() > 0
+    assert math.hypot(cols.mean() - truth["centre_px"][0], rows.mean() - truth["centre_px"][1]) < 1
+    x, y = np.array(truth["edge_px"]).T  # the pupil's outline, in order: the shoelace area
+    area = 0.5 * abs(np.dot(x, np.roll(y, 1)) - np.dot(y, np.roll(x, 1)))
+    assert rows.size == pytest.approx(area, rel=0.15)
+    hot = FOLD | {
+        "front": {
+            "coating": {
+                "model": "fixed",
+                "reflectance": 0.92,
+                "transmittance": 0.08,
+                "cutoff_nm": 720.0,
+                "reflectance_below": 0.10,
+                "transmittance_below": 0.88,
+            }
+        }
+    }
+    two = {"elements": [hot], "leds.wavelength_nm": [850.0, 650.0] * 4}
+    cs = compile_scene(eyelume.load_scene("vr-offaxis", FOLDED | two))
+    with pytest.warns(RegionWarning, match=r"elements.0 is a mirror .*R = 0.92.*R = 0.1"):
+        region_masks(cs, reflections=False)

@@ -243,17 +243,18 @@ def _check_counts(samples: int, seed: int) -> None:
 
 
 def _refuse_elements(sc, command: str) -> None:
-    """The commands that render many frames use the fast estimator, which does not trace
-    optical elements yet: a scene with some is refused before any work, naming them."""
+    """The commands built on the paper's generator (``sweep-leds``: LEDs and the eye plane in
+    free space, by definition) would ignore the scene's optical elements: a scene with some is
+    refused before any work, naming them."""
     if sc.elements:
         names = ", ".join(
             f"elements.{k}" + (f" ({el.name})" if el.name else "")
             for k, el in enumerate(sc.elements)
         )
         _fail(
-            f"{command} renders with the fast estimator, which does not trace optical elements "
-            f"yet, and the scene has {names}: take them out (--set elements=[]), or render the "
-            "scene with `eyelume render --estimator forward`"
+            f"{command} places LEDs by the paper's generator, whose eye plane is lit in free "
+            f"space, and the scene has {names}, which it would ignore: take them out "
+            "(--set elements=[]), or judge the scene with `eyelume evaluate-tracking`"
         )
 
 
@@ -470,13 +471,13 @@ def render(
     sc = _load(scene, set_)
     estimator = estimator or ("forward" if rays is not None else sc.run.estimator)
     _check_render_options(estimator, rays, samples, rel_error, max_samples, seed)
-    check_estimator(sc, estimator)
+    cs = compile_scene(sc)
+    check_estimator(sc, estimator, cs)
     _check_out(out)
     if max_samples is None:
         from eyelume.estimators.fast_run import MAX_SAMPLES_REL_ERROR
 
         max_samples = MAX_SAMPLES_REL_ERROR
-    cs = compile_scene(sc)
     if estimator == "fast":
         result = _render_fast(cs, samples, rel_error, max_samples, seed)
     else:
@@ -1111,6 +1112,7 @@ def evaluate_tracking_cmd(
     their own 3 × 3 calibration, and the distribution over them."""
     from eyelume.analysis.tracking.evaluate import failure_reason
     from eyelume.compile import compile_scene
+    from eyelume.render import check_estimator
     from eyelume.report.tracking_outputs import write_tracking_outputs
 
     _refuse_gaze(set_, "evaluate-tracking")
@@ -1118,9 +1120,8 @@ def evaluate_tracking_cmd(
     _check_counts(samples=samples, seed=seed)
     sampled = _people_options(population, population_seed, population_file, tracked_deg,
                               named_population)  # fmt: skip
-    _refuse_elements(sc, "evaluate-tracking")
+    check_estimator(sc, "fast", compile_scene(sc))  # its frames are the fast estimator's
     _check_out(out)
-    compile_scene(sc)
     if sampled is not None:
         _people_run(sc, *sampled, samples, seed, tracked_deg, out)
         return

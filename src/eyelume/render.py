@@ -42,11 +42,13 @@ from eyelume.analysis.regions import region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import (
+    CONVERGING_SHARE_LIMIT,
     CompiledScene,
     SunSource,
     compile_scene,
     connected_by_newton,
     element_index,
+    element_light_shares,
     single_wavelength,
     wavelength_groups,
 )
@@ -493,20 +495,38 @@ class RenderOptions:
     max_samples_per_pixel: int | None = None
 
 
-def check_estimator(scene: Scene, estimator: str) -> None:
-    """Refuse (SceneError) an estimator that cannot render ``scene``: the fast one for a scene
-    with an optical element whose LED light it does not connect by Newton's method (a curved
-    mirror or a converging lens: :func:`eyelume.compile.connected_by_newton`) — its light would
-    be left to the light paths alone, which no test checks yet."""
+def check_estimator(scene: Scene, estimator: str, compiled: CompiledScene | None = None) -> None:
+    """Refuse (SceneError) an estimator that cannot render ``scene`` well: the fast one for a
+    scene where a converging lens or a curved mirror (an element whose LED light is not
+    connected by Newton's method, :func:`eyelume.compile.connected_by_newton`: several roots)
+    takes more than :data:`eyelume.compile.CONVERGING_SHARE_LIMIT` of some LED's flux first
+    (:func:`eyelume.compile.element_light_shares`, computed on ``compiled`` or on the scene
+    compiled here). Below it, that light (an LED beside an eyepiece grazing its front) is the
+    light paths' alone — unbiased, as the forward agreement on paper2005-integrated checks
+    (tests/estimators/test_integrated_agreement.py) — while every camera path through and off
+    the element is traced from the camera, whatever its power."""
     if estimator != "fast" or not scene.elements:
         return
-    for k, el in enumerate(scene.elements):
-        if not connected_by_newton(el, element_index(scene, k, el)):
+    curved = [
+        k
+        for k, el in enumerate(scene.elements)
+        if not connected_by_newton(el, element_index(scene, k, el))
+    ]
+    if not curved:
+        return
+    cs = compiled if compiled is not None else compile_scene(scene)
+    shares = element_light_shares(cs)
+    for k in curved:
+        led = int(np.argmax(shares[:, k]))
+        share = float(shares[led, k])
+        if share > CONVERGING_SHARE_LIMIT:
+            el = scene.elements[k]
             what = "a curved mirror" if el.kind == "mirror" else "a converging lens"
             raise SceneError(
-                f"estimator = 'fast': elements.{k} ({el.name or el.kind}) is {what}, which the "
-                "fast estimator does not handle yet (--estimator forward, or run.estimator = "
-                "'forward')"
+                f"estimator = 'fast': elements.{k} ({el.name or el.kind}) is {what} that takes "
+                f"{share:.2%} of LED {cs.led_indices[led]}'s light first (more than "
+                f"{CONVERGING_SHARE_LIMIT:.1%}), which the fast estimator leaves to its light "
+                "paths: render it with `eyelume render --estimator forward`"
             )
 
 
@@ -623,7 +643,7 @@ def _render_leds(
     sc = cs.scene
     seed = sc.run.seed if seed is None else int(seed)
     estimator = opt.estimator or ("forward" if rays is not None else sc.run.estimator)
-    check_estimator(sc, estimator)
+    check_estimator(sc, estimator, cs)
     if cs.sun is None:  # a sun compile's wavelength is its own trace wavelength, not counted
         check_sensor_spectra(sc)  # a bad QE table fails now, not after the tracing
     if cs.led_ids is None and not single_wavelength(sc):

@@ -82,9 +82,10 @@ class RegionWarning(EyelumeWarning):
     """The regions cannot be mapped faithfully for this scene (they are still returned)."""
 
 
-def _mirror_rt(cs: CompiledScene, k: int) -> tuple[float, float]:
-    """(R, T) of mirror ``elements[k]`` where it reflects the most over the LEDs' wavelengths
-    (a ``fixed`` coating, its cut-off) and, for an R(angle) table, its angles (T = 1 − R)."""
+def _mirror_rt(cs: CompiledScene, k: int, least: bool = False) -> tuple[float, float]:
+    """(R, T) of mirror ``elements[k]`` where it reflects the most (``least``: the least) over
+    the LEDs' wavelengths (a ``fixed`` coating, its cut-off) and, for an R(angle) table, its
+    angles (T = 1 − R)."""
     from eyelume.scene.elements import read_reflectance_table
     from eyelume.scene.model import MIRROR_COATING
 
@@ -92,34 +93,32 @@ def _mirror_rt(cs: CompiledScene, k: int) -> tuple[float, float]:
     lams = set(cs.scene.leds.wavelengths_nm(cs.scene.wavelength_nm)) | {cs.scene.wavelength_nm}
     if coat.model == "table":
         field = f"elements.{k}.front.coating.table_csv"
-        r = max(
-            float(read_reflectance_table(coat.table_csv, field, lam)[1].max())  # type: ignore[arg-type]
-            for lam in lams
-        )
+        rs = [read_reflectance_table(coat.table_csv, field, lam)[1] for lam in lams]  # type: ignore[arg-type]
+        r = min(float(x.min()) for x in rs) if least else max(float(x.max()) for x in rs)
         return r, 1.0 - r
-    return max((coat.fixed_at(lam) for lam in lams), key=lambda rt: rt[0] - rt[1])
+    pick = min if least else max
+    return pick((coat.fixed_at(lam) for lam in lams), key=lambda rt: rt[0] - rt[1])
 
 
 def _warn_mirrors(cs: CompiledScene) -> None:
-    """Warn once per scene when a mirror element may fold the camera's view: the map follows
-    every chief ray by refraction only (:func:`eyelume.estimators.fast_run.primary_surface_map`),
-    through a mirror as if it were not there — the view it transmits. That is the view the
-    camera mostly sees through a partial mirror that transmits at least as much as it reflects
-    (T ≥ R; its reflection adds a second, fainter view the map leaves out), and is wrong where a
-    mirror reflecting more than it transmits (R > T at some LED wavelength or angle) folds the
-    view — the rule by which the compile follows the camera's line of sight
-    (:func:`eyelume.compile.compile_scene`: the stronger branch). Only that is warned about,
-    naming R and T."""
+    """Warn once per scene when a mirror element's stronger branch depends on the wavelength:
+    the map follows every chief ray through an element by its stronger branch at the scene's
+    wavelength (:func:`eyelume.estimators.fast_run.primary_surface_map`: reflected where
+    R > T, a mirror's fold, as the compile follows the camera's line of sight), so it is
+    wrong for LEDs of a wavelength at which the mirror turns the other way (R > T at one
+    wavelength and R ≤ T at another, e.g. a hot mirror's cut-off between them). Only that is
+    warned about, naming R and T."""
     for k, el in enumerate(cs.scene.elements):
         if el.kind != "mirror":
             continue
         r, t = _mirror_rt(cs, k)
-        if r > t:
+        lo_r, lo_t = _mirror_rt(cs, k, least=True)
+        if r > t and lo_r <= lo_t:
             warnings.warn(
-                f"elements.{k} is a mirror (R = {r:g}, T = {t:g}): the eye image's regions "
-                "(pupil, iris, sclera, skin) and their statistics are mapped by refraction "
-                "only, through it as if it were not there; wrong where it folds the camera's "
-                "view",
+                f"elements.{k} is a mirror that reflects more than it transmits at one LED "
+                f"wavelength (R = {r:g}, T = {t:g}) and not at another (R = {lo_r:g}, "
+                f"T = {lo_t:g}): the eye image's regions (pupil, iris, sclera, skin) follow "
+                "its stronger branch at the scene's wavelength only",
                 RegionWarning,
                 stacklevel=3,
             )

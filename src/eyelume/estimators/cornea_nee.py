@@ -7,9 +7,10 @@ A straight shadow ray from the receiver to an LED crosses the cornea (or the ele
 light bends, so the light that actually arrives comes along a different path. For a point x on
 a Lambertian face and an LED at P, we find that path by Newton's method: the emission direction
 is parametrised by the point a where it crosses a plane (:class:`Plane`: for the cornea the
-camera frame's z = 0, else the plane through the straight guess at the distance of x, normal to
-it), the ray is refracted or reflected by each surface of the chain (:class:`Chain`) and meets
-the tangent plane of the face at x at h(a); we solve h(a) = x. The irradiance at x is then
+plane through its vertex normal to its axis, else the plane through the straight guess at the
+distance of x, normal to it), the ray is refracted or reflected by each surface of the chain
+(:class:`Chain`) and meets the tangent plane of the face at x at h(a); we solve h(a) = x. The
+irradiance at x is then
 
     E = I(α) · Π T_j or R_j · (cos γ / |a − P|²) / |det ∂h/∂a|,
 
@@ -247,11 +248,25 @@ def led_through_chain(surfaces, chain, plane, target, leds, k, rc):
 
 
 @njit(cache=True, inline="always")
-def _eye_plane(rc):
-    """The cornea's parametrisation plane: the camera frame's z = 0, Newton starting on the
-    segment from the LED to the receiver point."""
-    o, ex, ey, ez = (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
-    return Plane(o, ex, ey, ez, (rc.x, rc.y, rc.z))
+def _eye_plane(surfaces, cornea, rc):
+    """The cornea's parametrisation plane: through the anterior cornea's vertex (surface
+    ``cornea``'s origin), normal to its axis w, e1 the camera frame's x made normal to w,
+    e2 = e1 × w; Newton starting on the segment from the LED to the receiver point. Every LED
+    lit ray toward the iris crosses it steeply near the cornea, wherever the camera is — the
+    camera frame's z = 0 (used before) lies 97 mm beyond the eye for a camera whose view a
+    mirror folds (paper2005-integrated), behind some LEDs, so their connection failed. For the
+    paper's rig (vertex at the origin, w = −z) it is that plane: e1 = x, e2 = y exactly."""
+    sf = surfaces.sf
+    o = (sf[cornea, G.OX], sf[cornea, G.OY], sf[cornea, G.OZ])
+    wx, wy, wz = sf[cornea, G.R20], sf[cornea, G.R21], sf[cornea, G.R22]
+    ax, ay, az = 1.0 - wx * wx, -wx * wy, -wx * wz  # x − (x·w) w
+    norm = math.sqrt(ax * ax + ay * ay + az * az)
+    if norm < 1e-6:  # the axis along x: start from y instead
+        ax, ay, az = -wy * wx, 1.0 - wy * wy, -wy * wz
+        norm = math.sqrt(ax * ax + ay * ay + az * az)
+    ax, ay, az = ax / norm, ay / norm, az / norm
+    e2 = (ay * wz - az * wy, az * wx - ax * wz, ax * wy - ay * wx)
+    return Plane(o, (ax, ay, az), e2, (wx, wy, wz), (rc.x, rc.y, rc.z))
 
 
 @per_ray
@@ -280,10 +295,10 @@ def led_through_cornea(surfaces, cornea, target, leds, k, rc):
     """Irradiance (W/mm²) at receiver point ``rc`` (a :class:`Receiver`) on surface ``target``
     from LED ``k`` of ``leds`` (:class:`~eyelume.kernels.tables.LedTable`) along the path
     refracted by the anterior (surface ``cornea``) and posterior (``cornea + 1``) cornea, its
-    direction parametrised on the camera frame's z = 0; 0 when there is none. See the module
-    docstring."""
+    direction parametrised on the plane through the corneal vertex normal to its axis
+    (:func:`_eye_plane`); 0 when there is none. See the module docstring."""
     chain = Chain(2, (cornea, cornea + 1, 0, 0), (TRANSMIT_A, TRANSMIT_A, 0, 0))
-    return led_through_chain(surfaces, chain, _eye_plane(rc), target, leds, k, rc)
+    return led_through_chain(surfaces, chain, _eye_plane(surfaces, cornea, rc), target, leds, k, rc)
 
 
 @per_ray

@@ -1047,11 +1047,13 @@ def _light_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
 
 @njit(cache=True)
 def primary_surfaces(scene, cam, row0, labels, sides):
-    """The surface each pixel sees in the ideal (refraction-only) image: the chief ray from the
-    pixel centre through the stop's centre, always refracting (never reflecting), to the first
-    opaque surface (``labels``; −1: nothing, or no chief ray) and the side it meets (``sides``:
-    1 = side B, the side the surface's normal points to). ``labels`` and ``sides`` hold the band
-    of picture rows from ``row0`` (so a large sensor is mapped band by band)."""
+    """The surface each pixel sees in the ideal image: the chief ray from the pixel centre
+    through the stop's centre, refracting at the eye's surfaces (never reflecting) and taking
+    an optical element's stronger branch (reflected where R > T, a mirror's fold; as
+    :func:`eyelume.analysis.truth._through_elements`), to the first opaque surface (``labels``;
+    −1: nothing, or no chief ray) and the side it meets (``sides``: 1 = side B, the side the
+    surface's normal points to). ``labels`` and ``sides`` hold the band of picture rows from
+    ``row0`` (so a large sensor is mapped band by band)."""
     _primary_surfaces(scene.surfaces, scene.picture, cam, row0, labels, sides)
 
 
@@ -1085,9 +1087,16 @@ def _primary_surfaces(surfaces, picture, camera, row0, labels, sides):
             z += t * dz
             nx, ny, nz = G.surface_normal(sf, si, s, x, y, z)
             f = interface_at(sf, si, s, dx * nx + dy * ny + dz * nz)
-            ok, dx, dy, dz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
+            ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
+            if _is_element(camera, s) and (
+                not ok or f.reflectance > 1.0 - f.reflectance - f.absorptance
+            ):
+                # an element's stronger branch (a mirror's fold), as the truth takes it
+                dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz)
+                continue
             if not ok:
                 break
+            dx, dy, dz = tx, ty, tz
 
 
 @njit(cache=True)
