@@ -114,8 +114,9 @@ def ideal_mask(
 ) -> IdealMask:
     """The paper's ideal eye image (Fig. 9(a)) for ``scene``, on its sensor grid.
 
-    The regions come from the chief ray of each pixel (refraction only), so they do not depend on
-    reflectances: the mask of a scene and of :func:`glints_off` of it are the same.
+    The regions come from the chief ray of each pixel (refracted by the eye, an optical element's
+    stronger branch: :func:`eyelume.analysis.regions.region_masks`), so they do not depend on
+    the eye's reflectances: the mask of a scene and of :func:`glints_off` of it are the same.
     """
     cs = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
     return mask_from_regions(region_masks(cs), levels, weights)
