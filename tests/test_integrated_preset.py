@@ -94,3 +94,22 @@ def test_truth_glints_pupil_and_ghosts(integrated):
     # the glints lie about the pupil centre, the four LEDs' layout (a ring about the axis)
     radii = [math.dist(g["centre_px"], (cx, cy)) for g in t["glints"]]
     assert max(radii) - min(radii) < 0.01 * max(radii)
+
+
+def test_glint_layout_for_matching_follows_the_fold(integrated):
+    """The layout the detector matches glints against (``led_picture_azimuths``): through the
+    45° fold mirror the picture is mirrored left to right, so LED k at ring azimuth a_k (0° =
+    +x, toward the nose) has its glint at picture azimuth 180° − a_k (the pinhole model of
+    the camera without the elements put it at a_k, 0.32 × too close: every frame of
+    evaluate-tracking then lost or mismatched glints)."""
+    from eyelume.analysis.tracking.evaluate import led_picture_azimuths, led_picture_pattern
+
+    scene, cs = integrated
+    got = led_picture_azimuths(cs)
+    for a, g in zip(scene.leds.azimuths(), got, strict=True):
+        assert (g - (180.0 - a)) % 360.0 == pytest.approx(0.0, abs=0.5) or (
+            g - (180.0 - a)
+        ) % 360.0 == pytest.approx(360.0, abs=0.5)
+    t = eye_truth(cs)
+    seen = np.array([g["centre_px"] for g in t["glints"]], float)
+    assert np.allclose(led_picture_pattern(cs), seen - seen.mean(axis=0), atol=1e-9)

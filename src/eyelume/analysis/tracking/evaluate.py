@@ -150,10 +150,22 @@ def led_picture_pattern(cs) -> np.ndarray:
     cornea here is the sphere of the flat meridian's radius on the optical axis: an astigmatic
     cornea (``eye.cornea``) squeezes the real pattern across its steep meridian by about
     R_steep/R_flat (4 % for 2 D) and a decentred one shifts it; whether the detector's
-    pattern tolerance takes that has not been checked."""
-    from eyelume.compile import eye_point
+    pattern tolerance takes that has not been checked. With optical elements between the eye
+    and the camera (an eyepiece magnifies the pattern, a fold mirror mirrors it) the pinhole
+    does not see the glints where they are: the truth's glints (:func:`eyelume.analysis.truth.
+    eye_truth`, followed through the elements) in primary gaze give the layout instead, when
+    every LED has one."""
+    from eyelume.compile import compile_scene, eye_point
 
     scene = cs.scene
+    if scene.elements:
+        from eyelume.analysis.truth import eye_truth
+
+        eye = scene.eye.model_copy(update={"gaze_horizontal_deg": 0.0, "gaze_vertical_deg": 0.0})
+        glints = eye_truth(compile_scene(scene.model_copy(update={"eye": eye})))["glints"]
+        if glints and all(g["centre_px"] is not None for g in glints):
+            at = np.array([g["centre_px"] for g in glints], float)
+            return at - at.mean(axis=0)
     cam = pinhole_camera(scene)
     radius = scene.eye.surfaces[0].radius_mm
     c = cs.frame.point(eye_point(scene, [0.0, 0.0, -radius], 0.0, 0.0))
