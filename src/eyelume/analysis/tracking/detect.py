@@ -509,9 +509,17 @@ def _pupil_result(fit, params) -> tuple[Pupil | None, list[str]]:
 
 def _split_specks(blobs: list[dict], params) -> tuple[list[Glint], list[Glint]]:
     """Step 5a: the glints, and the specks — blobs with less than ``glint_min_flux_frac`` of the
-    brightest glint's light (above its background), which no LED's corneal reflection is."""
+    brightest glint's light (above its background), which no LED's corneal reflection is.
+
+    The brightest glint is the one with most light among the blobs whose peak reaches the
+    brightest pixel of any blob (to 2 %): a corneal glint, the image of a point source, is the
+    brightest thing per pixel, and when it saturates its light is clipped — a broad diffuse
+    highlight (a lit lid margin: vr-offaxis at gaze (0, 0), 54 px at 742 DN against eight
+    saturated glints) may hold more light without being a glint, and must not make the real
+    ones specks."""
     every = [Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"]) for b in blobs]
-    top = max((g.flux for g in every), default=0.0)
+    peak_top = max((g.peak for g in every), default=0.0)
+    top = max((g.flux for g in every if g.peak >= 0.98 * peak_top), default=0.0)
     glints = [g for g in every if g.flux >= params.glint_min_flux_frac * top]
     specks = [g for g in every if g.flux < params.glint_min_flux_frac * top]
     return glints, specks
