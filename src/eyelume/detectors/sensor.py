@@ -111,6 +111,50 @@ def photon_energy_j(wavelength_nm: float) -> float:
     return h * c / (wavelength_nm * 1e-9)
 
 
+def _spectral_table(
+    where: Path, field: str, column: str, words: tuple[str, str, str]
+) -> tuple[np.ndarray, np.ndarray]:
+    """A two-column CSV table ``wavelength_nm, <column>`` (a QE curve or a filter's T(λ)):
+    (wavelengths nm (n,), values (n,)), each value a fraction in [0, 1]. ``words``: what the
+    table is, what its values are, their symbol — for the messages.
+
+    Raises
+    ------
+    InputFileError
+        One line naming ``where`` and ``field``: unreadable, fewer than two rows, a wavelength
+        not finite and > 0 or not strictly increasing (not a function of λ), a value outside
+        [0, 1].
+    """
+    name, quantity, symbol = words
+    table = read_csv_table(where, field, ("wavelength_nm", column))
+    lam, v = table[:, 0], table[:, 1]
+    if len(lam) < 2:
+        raise InputFileError(
+            f"{len(lam)} row(s): a {name} needs at least two wavelengths", file=where, field=field
+        )
+    for n, (x, y) in enumerate(table, 1):
+        if not (math.isfinite(x) and x > 0):
+            raise InputFileError(
+                f"row {n}: wavelength {x!r} nm must be finite and > 0", file=where, field=field
+            )
+        if not (math.isfinite(y) and 0 <= y <= 1):
+            raise InputFileError(
+                f"row {n} ({x:g} nm): {quantity} {y!r} lies outside [0, 1]",
+                file=where,
+                field=field,
+            )
+    steps = np.diff(lam)
+    if np.any(steps <= 0):
+        n = int(np.argmax(steps <= 0)) + 2
+        raise InputFileError(
+            f"row {n}: wavelength {lam[n - 1]:g} nm after {lam[n - 2]:g} nm: the wavelengths "
+            f"must increase strictly ({symbol} must be a function of wavelength)",
+            file=where,
+            field=field,
+        )
+    return lam, v
+
+
 def quantum_efficiency_curve(sensor: Sensor) -> tuple[np.ndarray, np.ndarray] | None:
     """The sensor's QE(λ) table, (wavelengths nm (n,), QE (n,)), or None for one number.
 
@@ -133,35 +177,9 @@ def quantum_efficiency_curve(sensor: Sensor) -> tuple[np.ndarray, np.ndarray] | 
         where = Path(str(resources.files("eyelume.scene.presets") / "sensors" / QE_CURVES[qe]))
     else:
         where = Path(qe)
-    table = read_csv_table(where, _QE_FIELD, ("wavelength_nm", "quantum_efficiency"))
-    lam, q = table[:, 0], table[:, 1]
-    if len(lam) < 2:
-        raise InputFileError(
-            f"{len(lam)} row(s): a QE curve needs at least two wavelengths",
-            file=where,
-            field=_QE_FIELD,
-        )
-    for n, (x, y) in enumerate(table, 1):
-        if not (math.isfinite(x) and x > 0):
-            raise InputFileError(
-                f"row {n}: wavelength {x!r} nm must be finite and > 0", file=where, field=_QE_FIELD
-            )
-        if not (math.isfinite(y) and 0 <= y <= 1):
-            raise InputFileError(
-                f"row {n} ({x:g} nm): quantum efficiency {y!r} lies outside [0, 1]",
-                file=where,
-                field=_QE_FIELD,
-            )
-    steps = np.diff(lam)
-    if np.any(steps <= 0):
-        n = int(np.argmax(steps <= 0)) + 2
-        raise InputFileError(
-            f"row {n}: wavelength {lam[n - 1]:g} nm after {lam[n - 2]:g} nm: the wavelengths "
-            "must increase strictly (QE must be a function of wavelength)",
-            file=where,
-            field=_QE_FIELD,
-        )
-    return lam, q
+    return _spectral_table(
+        where, _QE_FIELD, "quantum_efficiency", ("QE curve", "quantum efficiency", "QE")
+    )
 
 
 def _outside(sensor: Sensor, lam: np.ndarray, what: str) -> SceneError:
@@ -206,37 +224,9 @@ def filter_table(sensor: Sensor) -> tuple[np.ndarray, np.ndarray] | None:
     if f is None or f.kind != "table":
         return None
     where = Path(f.table_csv)  # type: ignore[arg-type]
-    table = read_csv_table(where, _FILTER_FIELD, ("wavelength_nm", "transmittance"))
-    lam, t = table[:, 0], table[:, 1]
-    if len(lam) < 2:
-        raise InputFileError(
-            f"{len(lam)} row(s): a filter table needs at least two wavelengths",
-            file=where,
-            field=_FILTER_FIELD,
-        )
-    for n, (x, y) in enumerate(table, 1):
-        if not (math.isfinite(x) and x > 0):
-            raise InputFileError(
-                f"row {n}: wavelength {x!r} nm must be finite and > 0",
-                file=where,
-                field=_FILTER_FIELD,
-            )
-        if not (math.isfinite(y) and 0 <= y <= 1):
-            raise InputFileError(
-                f"row {n} ({x:g} nm): transmittance {y!r} lies outside [0, 1]",
-                file=where,
-                field=_FILTER_FIELD,
-            )
-    steps = np.diff(lam)
-    if np.any(steps <= 0):
-        n = int(np.argmax(steps <= 0)) + 2
-        raise InputFileError(
-            f"row {n}: wavelength {lam[n - 1]:g} nm after {lam[n - 2]:g} nm: the wavelengths "
-            "must increase strictly (T must be a function of wavelength)",
-            file=where,
-            field=_FILTER_FIELD,
-        )
-    return lam, t
+    return _spectral_table(
+        where, _FILTER_FIELD, "transmittance", ("filter table", "transmittance", "T")
+    )
 
 
 def filter_transmittance(sensor: Sensor, wavelength_nm) -> np.ndarray:
