@@ -21,6 +21,7 @@ from figure_checks import (
     images_without_unit_colorbar,
     text_overlaps,
 )
+from matplotlib.text import Text
 
 from eyelume.report.optimize_outputs import _caption as delta_caption
 from eyelume.report.optimize_outputs import sweep_caption
@@ -344,3 +345,55 @@ def test_glint_count_colour_bar_has_integer_ticks_only(tmp_path):
     norm, ticks, labels = bars["glints found and matched (count)"]
     assert isinstance(norm, BoundaryNorm)
     assert ticks == [1, 2, 3, 4] and labels == ["1", "2", "3", "4"]
+
+
+def _tiny_render(name: str):
+    from eyelume.compile import compile_scene
+    from eyelume.render import RenderOptions, render, render_extras
+    from eyelume.scene.io import load_scene
+
+    scene = load_scene(
+        "paper2005",
+        {"run.estimator": "forward", "sensor.cols": "24", "sensor.rows": "18", "name": name},
+    )
+    result = render(scene, RenderOptions(rays=5_000, seed=1))
+    return result, render_extras(compile_scene(scene), result.seed)
+
+
+def test_a_scene_name_with_dollars_and_backslashes_is_shown_literally(tmp_path):
+    """User text is not matplotlib mathtext: a name with ``$…$`` pairs and a backslash command
+    (``$\\badcmd$`` made matplotlib raise ParseFatalException after the render, so nothing was
+    written) reaches every render figure's title as typed, and every file is written."""
+    from eyelume.report.outputs import write_render_outputs
+
+    name = "Rig A: $1.5k vs $2k budget, rig $\\badcmd$"
+    result, extras = _tiny_render(name)
+    titles = []
+
+    def keep(fig, _name):
+        fig.canvas.draw()  # mathtext would raise (or garble) here
+        titles.extend(t.get_text() for t in fig.findobj(Text) if name in t.get_text())
+        rendered = [t for t in fig.findobj(Text) if name in t.get_text()]
+        assert rendered and all(not t.get_parse_math() for t in rendered)
+
+    with observe_figures(keep):
+        written = write_render_outputs(result, extras, tmp_path)
+    assert len(titles) >= 5
+    for f in ("summary.json", "truth.json", "layout.png", "eye_image_plot.png"):
+        assert (tmp_path / f).is_file() and tmp_path / f in written
+
+
+def test_a_failing_figure_loses_no_json_result(tmp_path, monkeypatch):
+    """summary.json and truth.json are written before any figure: a figure that fails cannot
+    lose the run's numbers."""
+    import eyelume.report.outputs as outputs
+
+    result, extras = _tiny_render("paper2005")
+
+    def broken(*_a, **_k):
+        raise RuntimeError("figure failed")
+
+    monkeypatch.setattr(outputs, "save_irradiance_plot", broken)
+    with pytest.raises(RuntimeError, match="figure failed"):
+        outputs.write_render_outputs(result, extras, tmp_path)
+    assert (tmp_path / "summary.json").is_file() and (tmp_path / "truth.json").is_file()

@@ -93,6 +93,14 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
         save_grey_png(result.ambient.eye_image, path("ambient_image.png"))
     digital = digitize(counted, sc.sensor, sc.wavelength_nm, result.seed)
     digital.counts[missing] = 0
+    # the run's numbers first: a figure that fails below cannot lose them
+    summary = result.summary()
+    summary["camera"] = camera_summary(sc.sensor, sc.wavelength_nm, digital)
+    write_json(path("summary.json"), summary)
+    truth = extras.truth
+    if "ambient" in summary:  # where the sun's brightest pixel is, and the ratios
+        truth = {**truth, "ambient": summary["ambient"]}
+    write_json(path("truth.json"), truth)
     np.save(path("eye_image_digital.npy"), digital.counts)
     save_grey_png(digital.counts, path("eye_image_digital.png"), white=digital.full_scale_dn)
     name = sc.name
@@ -158,11 +166,4 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
                 (RAY_COLORS[k], f"{RAY_LABELS[k]} ({count[k]})") for k in RAY_COLORS if count[k]
             ],  # fmt: skip
         )
-    summary = result.summary()
-    summary["camera"] = camera_summary(sc.sensor, sc.wavelength_nm, digital)
-    write_json(path("summary.json"), summary)
-    truth = extras.truth
-    if "ambient" in summary:  # where the sun's brightest pixel is, and the ratios
-        truth = {**truth, "ambient": summary["ambient"]}
-    write_json(path("truth.json"), truth)
     return written

@@ -190,10 +190,33 @@ def observe_figures(callback: Callable[[Figure, str], None]) -> Iterator[None]:
         _OBSERVERS.remove(callback)
 
 
+def literal_texts(fig: Figure) -> None:
+    """Draw every text of ``fig`` that eyelume or the user wrote (titles, captions, axis labels,
+    legends, cell numbers: scene, study and note names among them) as typed, not as matplotlib
+    mathtext: a name such as ``Rig A: $1.5k vs $2k`` would otherwise be garbled and one such
+    as ``rig $\\badcmd$`` makes drawing raise ``ParseFatalException``. Tick labels and axis
+    offset texts (matplotlib's own, which may use mathtext for exponents) are left alone; eyelume
+    writes no mathtext of its own."""
+    from matplotlib.text import Text
+
+    automatic: set[int] = set()
+    for ax in fig.axes:
+        for axis in (getattr(ax, n, None) for n in ("xaxis", "yaxis", "zaxis")):
+            if axis is None:
+                continue
+            automatic.add(id(axis.offsetText))
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                automatic.update((id(tick.label1), id(tick.label2)))
+    for text in fig.findobj(Text):
+        if id(text) not in automatic:
+            text.set_parse_math(False)
+
+
 def save_figure(fig: Figure, path: PathLike | io.BytesIO, *, dpi: float = _DPI) -> None:
     """Render ``fig`` with the Agg canvas as a PNG to ``path`` (a file, parent folders created,
     or a binary buffer), tell the observers (:func:`observe_figures`) and release it."""
     FigureCanvasAgg(fig)
+    literal_texts(fig)
     try:
         if isinstance(path, io.IOBase):
             fig.savefig(path, dpi=dpi, bbox_inches="tight", format="png")
