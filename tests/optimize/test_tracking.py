@@ -59,6 +59,28 @@ def test_evaluate_tracking_small_grid():
             assert np.hypot(f.geometric[0] - f.gaze[0], f.geometric[1] - f.gaze[1]) < 8
 
 
+@pytest.mark.slow
+def test_the_geometric_kappa_frame_is_left_out_of_the_geometric_statistics():
+    """The test frame at (0°, 0°) is the geometric model's one-point kappa calibration frame
+    (the same picture): its geometric error is 0 by construction, so it is flagged
+    ``geometric_calibration`` for the error maps and left out of ``gaze_geometric``, which
+    says so; (10°, 0°) is a measurement."""
+    from eyelume.analysis.tracking.evaluate import error_map_rows
+
+    scene = eyelume.load_scene("paper2005")
+    rep = evaluate_tracking(scene, test_h=(0.0, 10.0), test_v=(0.0,), samples_per_pixel=8)
+    centre, other = rep.frames
+    assert centre.geometric is not None
+    assert np.hypot(*centre.geometric) < 1e-9  # target − estimate added back: exactly on target
+    g = rep.summary["gaze_geometric"]
+    assert g["calibration_frames_excluded"] == 1
+    assert g["frames"] == (other.geometric is not None)
+    if other.geometric is not None:
+        err = np.hypot(other.geometric[0] - 10.0, other.geometric[1])
+        assert g["mean_deg"] == pytest.approx(err)
+    assert [r["geometric_calibration"] for r in error_map_rows(rep.frames)] == [True, False]
+
+
 def test_track_command_on_a_rendered_image(tmp_path):
     scene = eyelume.load_scene("paper2005")
     from eyelume.detectors.sensor import digitize

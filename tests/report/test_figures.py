@@ -81,10 +81,13 @@ def _rows(gazes, *, pccr=True, fail=(), cal=()):
                 "pccr_error_deg": (0.456 * (k + 1) if ok else None) if pccr else None,
                 "geometric_error_deg": 1.234 * (k + 1) if ok else None,
                 "calibration": (h, v) in cal,
+                "geometric_calibration": (h, v) in cal and (h, v) == (0.0, 0.0),
             }
         )
         if (h, v) in cal and pccr:
             rows[-1]["pccr_error_deg"] = 1.2e-14  # the fit's residual on its own picture
+        if rows[-1]["geometric_calibration"]:
+            rows[-1]["geometric_error_deg"] = 0.0  # the kappa offset was taken on this picture
     return rows
 
 
@@ -108,7 +111,8 @@ def test_error_maps_mark_calibration_gazes_and_leave_them_out_of_the_mean(tmp_pa
     """A test gaze that is a calibration gaze (the PCCR polynomial fitted on that very picture:
     its value is an in-sample residual, here a near-zero one) is drawn hatched and marked "cal"
     in the PCCR panel, with a legend entry, and is neither a number in its cell nor part of the
-    panel's colour scale or mean; the geometric panel (no calibration) keeps its value."""
+    panel's colour scale or mean; in the geometric panel only the model's one-point kappa frame
+    (0°, 0°), error exactly 0, is hatched and left out."""
     gazes = [(h, v) for v in (-10.0, 0.0, 10.0) for h in (-20.0, 0.0, 20.0)]
     cal = {(-20.0, 0.0), (0.0, 0.0), (20.0, 0.0)}
     rows = _rows(gazes, cal=cal)
@@ -130,8 +134,11 @@ def test_error_maps_mark_calibration_gazes_and_leave_them_out_of_the_mean(tmp_pa
     measured = [r["pccr_error_deg"] for r in rows if not r["calibration"]]
     assert norm.vmin == pytest.approx(min(measured))  # the residual is not on the scale
     assert f"mean {np.mean(measured):.2f}° over 6 gazes, 3 calibration gazes left out" in title
-    g_title, g_texts, _, g_patches = seen["geometric gaze error (°)"]
-    assert "cal" not in g_texts and g_patches == 0 and "over 9 gazes" in g_title
+    g_title, g_texts, g_norm, g_patches = seen["geometric gaze error (°)"]
+    assert g_texts.count("cal") == 1 and g_patches == 1 and "0" not in g_texts
+    g_measured = [r["geometric_error_deg"] for r in rows if not r["geometric_calibration"]]
+    assert g_norm.vmin == pytest.approx(min(g_measured)) and min(g_measured) > 0  # 0 not on it
+    assert f"mean {np.mean(g_measured):.2f}° over 8 gazes, 1 calibration gaze left out" in g_title
     assert any(t.startswith("cal: a calibration gaze") for t in seen["legend"])
 
 

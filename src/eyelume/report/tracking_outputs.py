@@ -78,7 +78,9 @@ def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
     A row with ``"calibration": true`` is a calibration frame (the PCCR polynomial was fitted on
     that very picture): its PCCR cell is hatched and marked "cal" instead of showing the fit's
     in-sample residual as if it were a held-out measurement, and is left out of the PCCR
-    panel's colour scale and mean (the title says how many were left out). ``rows`` are
+    panel's colour scale and mean (the title says how many were left out); likewise the
+    geometric cell of a row with ``"geometric_calibration": true`` (the model's one-point kappa
+    frame, error 0 by construction). ``rows`` are
     :func:`eyelume.analysis.tracking.evaluate.error_map_rows` (one per frame); ``caption``
     (scene, seed, budget) is written above the panels. ``path``: a file or a binary buffer."""
     from matplotlib.lines import Line2D
@@ -90,18 +92,11 @@ def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
         ("PCCR gaze error", "pccr_error_deg", "°"),
         ("geometric gaze error", "geometric_error_deg", "°"),
     ]
-    # a calibration frame's PCCR value is the fit's residual on its own picture: not shown
-    fitted = [bool(r.get("calibration")) and r.get("pccr_error_deg") is not None for r in rows]
-    cal_rows = [dict(r, pccr_error_deg=None) if f else r for r, f in zip(rows, fitted, strict=True)]
-    _, _, cal = _grid([{**r, "cal": 1.0 if f else None} for r, f in zip(rows, fitted, strict=True)],
-                      "cal")  # fmt: skip
     fig = agg_figure(10, 7.8)
     axes = fig.subplots(2, 2).ravel()
     failed = marked = False
     for ax, (title, key, unit) in zip(axes, maps, strict=True):
-        pccr = key == "pccr_error_deg"
-        hs, vs, z = _grid(cal_rows if pccr else rows, key)
-        is_cal = np.isfinite(cal) if pccr else np.zeros(z.shape, dtype=bool)
+        hs, vs, z, is_cal = _calibrated_grid(rows, key, _CALIBRATION_FLAG.get(key))
         dh, dv = _half_step(hs), _half_step(vs)
         extent = (hs[0] - dh, hs[-1] + dh, vs[0] - dv, vs[-1] + dv)
         ax.set_title(_panel_title(title, unit, z, int(is_cal.sum())), fontsize=9)
@@ -128,14 +123,38 @@ def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
                               label="no value: detection failed or no estimate"))  # fmt: skip
     if marked:
         handles.append(Patch(facecolor="0.85", edgecolor="0.45", hatch="///",
-                             label="cal: a calibration gaze (PCCR fitted on this very "
-                             "picture: an in-sample residual, not a test; left out of the "
-                             "mean)"))  # fmt: skip
+                             label="cal: a calibration gaze (PCCR polynomial or geometric "
+                             "kappa fitted on this very picture: an in-sample residual, not a "
+                             "test; left out of the mean)"))  # fmt: skip
     if handles:
         fig.legend(handles=handles, loc="outside lower left", fontsize="small", frameon=False)
     if caption:
         fig.suptitle(wrap_title(caption, 10.0, 9.0), fontsize=9)  # a long scene name wraps
     save_figure(fig, path, dpi=110)
+
+
+#: Each gaze-error column's row flag of the frames its estimator was calibrated on (the same
+#: picture: the value is an in-sample residual, not a measurement): the PCCR polynomial's 3 × 3
+#: calibration gazes, the geometric model's one-point kappa frame
+#: (:func:`eyelume.analysis.tracking.evaluate.is_kappa_frame`).
+_CALIBRATION_FLAG = {
+    "pccr_error_deg": "calibration",
+    "geometric_error_deg": "geometric_calibration",
+}
+
+
+def _calibrated_grid(
+    rows: list[dict], key: str, flag: str | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_grid` of ``key`` with the cells of rows flagged ``flag`` (a calibration frame
+    with a value) emptied, and the boolean grid of those cells (hatched "cal", not on the
+    colour scale nor in the mean)."""
+    fitted = [bool(flag and r.get(flag)) and r.get(key) is not None for r in rows]
+    kept = [dict(r, **{key: None}) if f else r for r, f in zip(rows, fitted, strict=True)]
+    hs, vs, z = _grid(kept, key)
+    _, _, cal = _grid([{**r, "cal": 1.0 if f else None} for r, f in zip(rows, fitted, strict=True)],
+                      "cal")  # fmt: skip
+    return hs, vs, z, np.isfinite(cal)
 
 
 def _write_cells(ax, hs, vs, z, is_cal, half, size) -> tuple[bool, bool]:

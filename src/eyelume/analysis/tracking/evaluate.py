@@ -286,6 +286,17 @@ def _geometric(model: GeometricGaze, frame: Frame, n_leds: int) -> tuple[float, 
     return (est.h_deg, est.v_deg) if est.ok else None
 
 
+#: The gaze of the geometric model's one-point kappa calibration frame (:func:`kappa_offset`).
+KAPPA_GAZE = (0.0, 0.0)
+
+
+def is_kappa_frame(frame: Frame) -> bool:
+    """The test ``frame`` is the geometric model's own kappa calibration frame (the calibration
+    frame at :data:`KAPPA_GAZE`, the same picture): its geometric error is 0 by construction,
+    not a measurement, so it is left out of the geometric statistics and marked "cal"."""
+    return bool(frame.calibration) and tuple(frame.gaze) == KAPPA_GAZE
+
+
 def kappa_offset(
     model: GeometricGaze, calibration: list[Frame], n_leds: int, left: bool
 ) -> tuple[float, float] | None:
@@ -293,7 +304,7 @@ def kappa_offset(
     angle offset): target − estimate (h, v degrees) at the central calibration frame (gaze
     (0°, 0°)); None without that frame or when the model gives no estimate there. ``left``:
     the model's angles mirrored as :func:`analyse_frames` does."""
-    centre = [f for f in calibration if f.gaze == (0.0, 0.0)]
+    centre = [f for f in calibration if tuple(f.gaze) == KAPPA_GAZE]
     if not centre:
         return None
     est = _geometric(model, centre[0], n_leds)
@@ -351,6 +362,8 @@ def _errors(frames: list[Frame], attr: str) -> np.ndarray:
     for f in frames:
         if attr == "pccr" and f.calibration:
             continue  # the PCCR polynomial was fitted on this very picture
+        if attr == "geometric" and is_kappa_frame(f):
+            continue  # the kappa offset was taken on this very picture: error 0 by construction
         est = getattr(f, attr)
         if est is not None:
             out.append(math.hypot(est[0] - f.gaze[0], est[1] - f.gaze[1]))
@@ -361,7 +374,8 @@ def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
     """Detection rate, pupil-centre error (px, mm), glints per frame, false glints (total,
     frames with any, mean per frame: :func:`false_glints`), gaze errors (°). The PCCR error's
     statistics leave out the test frames that are calibration frames (``Frame.calibration``:
-    their error is the fit's in-sample residual) and say how many
+    their error is the fit's in-sample residual), the geometric error's leave out the kappa
+    calibration frame (:func:`is_kappa_frame`: error 0 by construction), each saying how many
     (``calibration_frames_excluded``)."""
     frames = report.frames
     ok = [f for f in frames if f.detection.ok]
@@ -405,7 +419,10 @@ def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
             if pccr_calibrated
             else {"frames": 0}
         ),
-        "gaze_geometric": stats(_errors(frames, "geometric")),
+        "gaze_geometric": {
+            **stats(_errors(frames, "geometric")),
+            "calibration_frames_excluded": sum(is_kappa_frame(f) for f in frames),
+        },
         "render_s_per_frame": float(np.mean([f.render_s for f in frames])),
         "detect_ms_per_frame": float(np.nanmean([f.detect_ms for f in frames])),
         "saturated_share": float(np.mean([f.saturated_share for f in frames])) if frames else 0.0,
@@ -532,7 +549,9 @@ def error_map_rows(frames: Sequence[Frame]) -> list[dict]:
     ``pupil_error_px`` (None where detection failed), ``glints_found``, ``false_glints``
     (:func:`false_glints`), ``pccr_error_deg`` and
     ``geometric_error_deg`` (None without an estimate), ``calibration`` (the frame is a
-    calibration frame: its PCCR error is the fit's in-sample residual, ``Frame.calibration``).
+    calibration frame: its PCCR error is the fit's in-sample residual, ``Frame.calibration``),
+    ``geometric_calibration`` (the frame is the geometric model's kappa calibration frame:
+    :func:`is_kappa_frame`, its geometric error 0 by construction).
     JSON-ready: a study stores them."""
     return [
         {
@@ -543,6 +562,7 @@ def error_map_rows(frames: Sequence[Frame]) -> list[dict]:
             "pccr_error_deg": _finite(_err(f.pccr, f.gaze)),
             "geometric_error_deg": _finite(_err(f.geometric, f.gaze)),
             "calibration": bool(f.calibration),
+            "geometric_calibration": is_kappa_frame(f),
         }
         for f in frames
     ]
