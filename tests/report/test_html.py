@@ -165,3 +165,33 @@ def test_axis_labels_take_the_unit_their_name_ends_with():
     assert axis_label("corneal_margin") == "corneal_margin (limit / exposure)"
     assert axis_label("eye_plane_merit") == "eye_plane_merit (dimensionless)"
     assert axis_label("glints") == "glints"  # no unit in the name: none invented
+
+
+def _row(index, merit, safe):
+    return {
+        "index": index,
+        "study": "s",
+        "overrides": {"leds.height_mm": 20.0 + index},
+        "metrics": {"eye_plane_merit": merit, "within_exempt_group": safe},
+    }
+
+
+def test_a_run_over_the_eye_safety_limit_is_never_best_when_a_compliant_one_exists():
+    """Runs that tie on merit (and one over the limit with a better merit): the compliant runs
+    rank first; the over-limit ones follow, marked in the Best runs list; with no compliant run
+    the best one is over the limit and the page says so loudly."""
+    from eyelume.optimize.best_run import best_runs
+    from eyelume.report.html import _best_list, _best_warning
+
+    rows = [_row(0, 0.5, False), _row(1, 0.5, True), _row(2, 0.1, False), _row(3, 0.7, True)]
+    merit, best = best_runs(rows)
+    assert merit == "eye_plane_merit" and [r["index"] for r in best] == [1, 3, 2, 0]
+    items = re.findall(r"<li>.*?</li>", _best_list(best, merit))
+    assert ["OVER the IEC 62471" in i for i in items] == [False, False, True, True]
+    assert _best_warning(rows, best) == ""
+    unsafe = [_row(0, 0.5, False), _row(1, 0.2, False)]
+    _, best = best_runs(unsafe)
+    assert best[0]["index"] == 1
+    assert "No run of this study is within the IEC 62471 exempt-group limit" in _best_warning(
+        unsafe, best
+    )

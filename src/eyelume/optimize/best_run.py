@@ -14,7 +14,9 @@ the tracking errors over the gaze grid — is computed here and stored in the st
   mm of the eye-plane receiver and of the picture on the sensor: the figures' mm axes).
 
 The best run is the one with the lowest value of the first merit in :data:`MERITS` the study
-measured.
+measured among the runs within the IEC 62471 exempt group (:func:`over_limit`); a run over the
+limit is ranked after every compliant one, so it is "best" only when no run is compliant
+(``best_run.json`` then says ``"over_limit": true`` and the report says so).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ import numpy as np
 
 from eyelume.json_files import write_json
 
-__all__ = ["BEST_RUN_FILES", "MERITS", "best_runs", "save_best_run"]
+__all__ = ["BEST_RUN_FILES", "MERITS", "best_runs", "over_limit", "save_best_run"]
 
 #: The merits a study's runs are ranked by, in order of preference (lower is better).
 MERITS = ("eye_image_merit", "eye_plane_merit")
@@ -36,15 +38,23 @@ BEST_RUN_FILES = ("best_run.npz", "best_run.json")
 _SEED, _SPP, _TRACKING_SPP = 0, 16, 8
 
 
+def over_limit(row: dict) -> bool:
+    """The stored run is over an IEC 62471 exempt-group limit (its ``within_exempt_group``
+    metric is false; a run that did not measure it is not counted as over)."""
+    return row["metrics"].get("within_exempt_group") is False
+
+
 def best_runs(rows: list[dict], count: int = 5) -> tuple[str | None, list[dict]]:
     """(merit, the ``count`` best rows by it) of a study's stored rows; (None, []) when the study
-    measured no merit of :data:`MERITS`."""
+    measured no merit of :data:`MERITS`. Runs within the eye-safety limit come first (by merit),
+    then the runs over it (:func:`over_limit`, by merit): an over-limit run is never ranked
+    above a compliant one, whatever its merit or a tie."""
     measured = {k for r in rows for k, v in r["metrics"].items() if _is_number(v)}
     merit = next((m for m in MERITS if m in measured), None)
     if merit is None:
         return None, []
     scored = [r for r in rows if _is_number(r["metrics"].get(merit))]
-    return merit, sorted(scored, key=lambda r: r["metrics"][merit])[:count]
+    return merit, sorted(scored, key=lambda r: (over_limit(r), r["metrics"][merit]))[:count]
 
 
 def _is_number(v) -> bool:
@@ -90,6 +100,7 @@ def save_best_run(folder: str | Path, scene: str) -> Path | None:
         "overrides": run["overrides"],
         "merit": merit,
         "value": value if math.isfinite(value) else None,
+        "over_limit": over_limit(run),  # true only when no run of the study is within the limit
         "scene": str(scene),
         "scene_name": sc.name,
         "seed": _SEED,

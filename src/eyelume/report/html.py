@@ -24,7 +24,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from eyelume.errors import StoreError
-from eyelume.optimize.best_run import BEST_RUN_FILES, best_runs
+from eyelume.optimize.best_run import BEST_RUN_FILES, best_runs, over_limit
 from eyelume.report.plots import (
     CMAP_IRRADIANCE,
     CMAP_SENSOR,
@@ -158,16 +158,24 @@ def _landscapes(
         for ax, p in zip(axes, params, strict=False):
             xs = [r["overrides"].get(p) for r in rows]
             ys = [r["metrics"].get(m) for r in rows]
-            pts = [(x, y) for x, y in zip(xs, ys, strict=True)
+            pts = [(x, y, over_limit(r)) for x, y, r in zip(xs, ys, rows, strict=True)
                    if isinstance(y, int | float) and isinstance(x, int | float)]  # fmt: skip
-            if pts:
-                ax.plot(*zip(*pts, strict=True), "o", ms=4)
+            styles = ((False, {"marker": "o", "ms": 4}),
+                      (True, {"marker": "x", "ms": 5, "color": "#b00", "mew": 1.2}))  # fmt: skip
+            for unsafe, style in styles:
+                kept = [(x, y) for x, y, u in pts if u is unsafe]
+                if kept:
+                    label = "over the IEC 62471 exempt-group limit" if unsafe else "run"
+                    ax.plot(*zip(*kept, strict=True), linestyle="none", label=label, **style)
+            if any(u for _, _, u in pts):
+                ax.legend(fontsize=7)
             ax.set_xlabel(axis_label(p), fontsize=8)
             ax.tick_params(labelsize=7)
             ax.grid(True, linewidth=0.3, alpha=0.5)
         axes[0].set_ylabel(axis_label(m), fontsize=8)
         caption = (
-            f"{m} of each committed run (one dot per run) against each varied parameter "
+            f"{m} of each committed run (one dot per run; a red × over the IEC 62471 "
+            f"exempt-group limit) against each varied parameter "
             f"({', '.join(params) or 'none'}), the other parameters at the run's own values; "
             f"read from the study's store, not recomputed. {study_caption(folder)} "
             f"{m}: {metric_budget(m, info)}."
@@ -221,7 +229,12 @@ def _best_images(folder: Path) -> list[tuple[str, str]]:
         (
             f"Best run (#{info['index']}): its eye-plane irradiance toward the eye (closed form: "
             "no rays) and the simulated eye image as the camera sees it, rendered anew after "
-            f"the study (eyelume report --scene) and stored beside its results: {how}.",
+            f"the study (eyelume report --scene) and stored beside its results: {how}."
+            + (
+                " OVER the IEC 62471 exempt-group limit: no run of the study is within it."
+                if info.get("over_limit")
+                else ""
+            ),  # fmt: skip
             _png(fig),
         )
     ]
@@ -253,11 +266,28 @@ def _best_list(best: list[dict], merit: str | None) -> str:
         )
         value = r["metrics"][merit]
         unit = unit_of(merit)
+        flag = (
+            ' <strong class="over-limit">OVER the IEC 62471 exempt-group limit</strong>'
+            if over_limit(r)
+            else ""
+        )
         items.append(
             f"<li>run {html.escape(str(r['index']))}: {setting or 'the base scene'} — "
-            f"{html.escape(merit)} = {value:.5g}{f' ({html.escape(unit)})' if unit else ''}</li>"
+            f"{html.escape(merit)} = {value:.5g}{f' ({html.escape(unit)})' if unit else ''}"
+            f"{flag}</li>"
         )
     return "".join(items)
+
+
+def _best_warning(rows: list[dict], best: list[dict]) -> str:
+    """A loud line when the best run is over the eye-safety limit (no run is within it)."""
+    if not best or not over_limit(best[0]):
+        return ""
+    return (
+        '<p class="over-limit"><strong>No run of this study is within the IEC 62471 exempt-group '
+        f"limit ({len(rows)} runs): the best run below is over it and is not a safe design."
+        "</strong></p>"
+    )
 
 
 def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
@@ -320,7 +350,7 @@ body {{ font-family: sans-serif; margin: 1em auto; padding: 0 1em; max-width: 24
 table {{ border-collapse: collapse; font-size: 0.9em; }}
 td, th {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; white-space: nowrap; }}
 th {{ background: #f4f4f4; position: sticky; top: 0; }}
-tr.unsafe td {{ color: #b00; font-weight: bold; }}
+tr.unsafe td, .over-limit {{ color: #b00; font-weight: bold; }}
 .figures {{ display: grid; gap: 1em;
   grid-template-columns: repeat(auto-fill, minmax(min(100%, 720px), 1fr)); }}
 figure {{ margin: 0; min-width: 0; }}
@@ -337,7 +367,8 @@ figcaption {{ font-size: 0.9em; color: #333; overflow-wrap: anywhere; }}
         else ""
     }
 <h2>Merit landscapes</h2><div class="figures">{figs}</div>
-<h2>Best runs{f" by {html.escape(str(merit))}" if merit else ""}</h2><ol>{best_html}</ol>
+<h2>Best runs{f" by {html.escape(str(merit))}" if merit else ""}</h2>
+{_best_warning(rows, best)}<p>Runs within the eye-safety limit rank first.</p><ol>{best_html}</ol>
 <h2>All runs</h2><div class="scroll"><table><tr>{head}</tr>{"".join(body)}</table></div>
 <script>
 window.addEventListener("load", () => {{
