@@ -404,3 +404,21 @@ def test_a_failing_figure_loses_no_json_result(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError, match="figure failed"):
         outputs.write_render_outputs(result, extras, tmp_path)
     assert (tmp_path / "summary.json").is_file() and (tmp_path / "truth.json").is_file()
+
+
+def test_error_map_cells_write_degrees_with_one_decimal(tmp_path):
+    """A gaze error of 1.96° is written "2.0" (two significant figures wrote "2", read as a
+    count), glint counts whole, pupil errors in px to two figures."""
+    rows = _rows([(-10.0, 0.0), (10.0, 0.0)], pccr=False)
+    rows[0]["geometric_error_deg"], rows[1]["geometric_error_deg"] = 1.96, 12.34
+    seen = {}
+
+    def keep(fig, name):
+        for ax in fig.axes:
+            seen[ax.get_title().split("\n")[0]] = [t.get_text() for t in ax.texts]
+
+    with observe_figures(keep):
+        save_error_maps(rows, tmp_path / "e.png", "scene paper2005, seed 0")
+    assert seen["geometric gaze error (°)"] == ["2.0", "12.3"]
+    assert seen["glints found and matched (count)"] == ["4", "4"]
+    assert seen["pupil-centre error (px)"] == ["0.12", "0.25"]

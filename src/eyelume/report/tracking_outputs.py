@@ -115,7 +115,7 @@ def save_error_maps(rows: list[dict], path, caption: str = "") -> None:
                 0.5, 0.5, "no frame gave a value", transform=ax.transAxes, ha="center",
                 va="center", fontsize=9, bbox={"facecolor": "white", "edgecolor": "0.6"},
             )  # fmt: skip
-        cells = _write_cells(ax, hs, vs, z, is_cal, (dh, dv), size)
+        cells = _write_cells(ax, hs, vs, z, is_cal, (dh, dv), size, _CELL_FORMAT[unit])
         failed, marked = failed or cells[0], marked or cells[1]
     handles = []
     if failed:
@@ -157,9 +157,14 @@ def _calibrated_grid(
     return hs, vs, z, np.isfinite(cal)
 
 
-def _write_cells(ax, hs, vs, z, is_cal, half, size) -> tuple[bool, bool]:
-    """Each cell's number, a red × where a frame gave none, a hatched "cal" on a calibration
-    frame's cell; (any ×, any "cal")."""
+#: How a cell's value is written, by the panel's unit: degrees with one decimal (two
+#: significant figures wrote 1.96° as "2", read as a count), counts whole, pixels to 2 figures.
+_CELL_FORMAT = {"°": ".1f", "count": ".0f", "px": ".2g"}
+
+
+def _write_cells(ax, hs, vs, z, is_cal, half, size, fmt: str = ".2g") -> tuple[bool, bool]:
+    """Each cell's number (format ``fmt``), a red × where a frame gave none, a hatched "cal" on
+    a calibration frame's cell; (any ×, any "cal")."""
     from matplotlib.patches import Rectangle
 
     finite = np.isfinite(z)
@@ -176,7 +181,7 @@ def _write_cells(ax, hs, vs, z, is_cal, half, size) -> tuple[bool, bool]:
                 marked = True
             elif finite[i, j]:
                 dark = z[i, j] < mid or np.nanmin(z) == np.nanmax(z)
-                ax.text(h, v, f"{z[i, j]:.2g}", ha="center", va="center", fontsize=size,
+                ax.text(h, v, f"{z[i, j]:{fmt}}", ha="center", va="center", fontsize=size,
                         color="white" if dark else "black")  # fmt: skip
             elif finite.any():
                 ax.plot(h, v, "x", color="red", ms=7, mew=1.5)
