@@ -471,9 +471,9 @@ def render(
     sc = _load(scene, set_)
     estimator = estimator or ("forward" if rays is not None else sc.run.estimator)
     _check_render_options(estimator, rays, samples, rel_error, max_samples, seed)
+    _check_out(out)
     cs = compile_scene(sc)
     check_estimator(sc, estimator, cs)
-    _check_out(out)
     if max_samples is None:
         from eyelume.estimators.fast_run import MAX_SAMPLES_REL_ERROR
 

@@ -83,7 +83,10 @@ def interrupt_between_batches():
 def sigterm_as_interrupt() -> None:
     """Make SIGTERM act as Ctrl-C in this process (KeyboardInterrupt, recorded by
     :func:`last_signal`), so a terminated command cleans up as an interrupted one does: it
-    keeps what is finished, ends its workers and exits 143 instead of dying mid-write."""
+    keeps what is finished, ends its workers and exits 143 instead of dying mid-write.
+    Called as a command starts, it forgets the signal an earlier command in the same process
+    took (a test runner's, or an API user's loop): a later Ctrl-C exits 130, not 143."""
+    _last[0] = None
     if threading.current_thread() is not threading.main_thread():
         return
 
