@@ -156,13 +156,14 @@ REF = Path(__file__).parents[1] / "reference" / "vr_offaxis_small_seed3.npz"
 
 def test_psf_none_reproduces_the_render_before_the_psf():
     """``camera.psf = "none"`` is the render as it was before the PSF existed: the arrays of
-    ``tests/reference/vr_offaxis_small_seed3.npz``, rendered by commit 88e872f (vr-offaxis at 80
-    × 80 pixels of 15 µm, fast 4 samples/pixel and forward 300 000 rays, seed 3), to 1e-9
-    relative as tests/test_bit_identity.py. The glint's reflectance is the fixed 2.1 % the
-    preset had then (074eede made the tear film's Fresnel value its default)."""
+    ``tests/reference/vr_offaxis_small_seed3.npz`` (vr-offaxis at 80 × 80 pixels of 15 µm,
+    fast 4 samples/pixel and forward 300 000 rays, seed 3), to 1e-9 relative as
+    tests/test_bit_identity.py. Rendered by commit 88e872f, before the PSF existed; rendered
+    again with ``camera.psf = "none"`` after two deliberate changes of the picture: the tear
+    film's glint (074eede, vr-offaxis's default) and the cornea's Newton plane through its
+    vertex (96dbce2: iris connections that failed from the camera frame's z = 0 now found)."""
     ref = np.load(REF)
-    then = {"eye.cornea_reflection": "fixed", "eye.cornea_reflectance": 0.021}
-    sc = apply_overrides(load_scene("vr-offaxis"), {**SMALL, **then, "camera.psf": "none"})
+    sc = apply_overrides(load_scene("vr-offaxis"), {**SMALL, "camera.psf": "none"})
     f = eyelume.render(sc, eyelume.RenderOptions(estimator="fast", samples_per_pixel=4, seed=3))
     w = eyelume.render(sc, eyelume.RenderOptions(estimator="forward", rays=300_000, seed=3))
     assert f.psf is None and w.psf is None
