@@ -352,3 +352,24 @@ def test_a_long_scene_name_wraps_instead_of_widening_the_eye_image_plot(tmp_path
         )  # fmt: skip
         widths.append(_read(path).shape[1])
     assert widths[1] <= widths[0] + 5, widths
+
+
+def test_a_narrow_layout_is_drawn_on_limits_near_its_content(tmp_path):
+    """A system taller than long (vr-offaxis: z −25 … 55 mm across ±60 mm) is drawn at equal
+    scale on axis limits near its content, not on a z range widened to fill the axes (it was
+    drawn on z −90 … 125 mm, in a third of each axis)."""
+    from eyelume.report.plots import observe_figures
+
+    skin = SectionCurve("skin", "tissue", np.array([-5.0, -5.0]), np.array([-60.0, 60.0]))
+    lens = SectionCurve("lens", "lens", np.array([20.0, 25.0]), np.array([20.0, 25.0]))
+    ray = np.array([[0.0, 0.0, -25.0], [0.0, 10.0, 55.0]])
+    seen = {}
+
+    def keep(fig, _name):
+        ax = fig.axes[0]
+        seen["x"], seen["y"] = ax.get_xlim(), ax.get_ylim()
+
+    with observe_figures(keep):
+        save_layout([skin, lens], [ray], tmp_path / "l.png", title="narrow")
+    assert seen["x"][1] - seen["x"][0] < 1.2 * 80  # content spans 80 mm in z
+    assert seen["y"][1] - seen["y"][0] < 1.2 * 120

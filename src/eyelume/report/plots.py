@@ -750,7 +750,11 @@ def save_layout(
         if curve.tag:
             tags.append((float(curve.z[0]), float(curve.y[0]), curve.tag))
     ax.autoscale_view()
-    ax.set_aspect("equal", adjustable="datalim")
+    # equal scale: a wide system (longer in z than across) widens its across range to fill the
+    # axes; a narrow one shapes the axes box to the drawn content instead (widening its z range
+    # drew vr-offaxis, z −25 … 57 mm, on z −90 … 125 mm, in a third of each axis)
+    (z0, z1), (v0, v1) = ax.get_xlim(), ax.get_ylim()
+    ax.set_aspect("equal", adjustable="datalim" if z1 - z0 >= v1 - v0 else "box")
     _write_tags(ax, tags)
 
     handles = _layout_handles(present, ray_legend)
