@@ -48,7 +48,9 @@ def _category(name: str, action: int) -> str:
         return "element"
     if name.startswith("LED"):
         return "led"
-    if action == G.ACT_LENS or name.startswith("camera body"):
+    if name.startswith("camera body"):
+        return "camera"
+    if action == G.ACT_LENS:
         return "lens"
     if action == G.ACT_REFRACT or name in ("iris", "iris root", "retina", "sclera"):
         return "eye"
@@ -221,6 +223,23 @@ def _camera_sections(cs: CompiledScene, cut: int, vertical: int) -> list[Section
     return out
 
 
+def _body_outline(pieces: list[np.ndarray]) -> list[Section]:
+    """The camera body's section as one closed outline: the convex hull of its faces' cut
+    pieces (the body is a cylinder, convex, so its section is too; the front ring alone cuts
+    to two parallel strokes). Pieces that span no area are drawn as they are."""
+    if not pieces:
+        return []
+    from scipy.spatial import ConvexHull, QhullError
+
+    pts = np.concatenate(pieces)
+    try:
+        hull = pts[ConvexHull(pts).vertices]
+    except (QhullError, ValueError):
+        return [Section("camera body", "camera", p[:, 0], p[:, 1]) for p in pieces]
+    ring = np.vstack([hull, hull[:1]])
+    return [Section("camera body", "camera", ring[:, 0], ring[:, 1])]
+
+
 #: Tissues drawn only in front of the periorbital skin: behind it they are inside the head.
 _BEHIND_SKIN_HIDDEN = ("upper eyelid", "lower eyelid", "brow", "cheek", "nose")
 
@@ -251,6 +270,7 @@ def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -
         sf[:, G.OX + cut] -= plane_o[cut]
         sf[:, G.BX + cut] -= plane_o[cut]
     out: list[Section] = []
+    body: list[np.ndarray] = []  # the camera body's cut pieces (z, vertical): one outline
     emit = cs.frame.world_point(cs.led.points)
     front = _skin_front(cs, sf, emit)
     for s, name in enumerate(cs.surface_names):
@@ -266,7 +286,11 @@ def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -
             keep &= side * (pts[:, 2] - z0) >= -1e-9
         for run in _runs(pts, keep):
             category = _category(name, int(cs.si[s, G.ACTION]))
+            if category == "camera":
+                body.append(run[:, [2, vertical]])
+                continue
             out.append(Section(name, category, run[:, 2], run[:, vertical]))
+    out.extend(_body_outline(body))
     axes = cs.frame.world_vector(cs.led.axes)
     for k, (p, a) in enumerate(zip(emit, axes, strict=True)):
         line = np.stack([p, p + 10.0 * a])

@@ -69,3 +69,19 @@ def test_an_off_axis_camera_is_drawn_where_it_is_in_both_views():
         world = cs.frame.world_point(np.array([0.0, 0.0, cs.first_order.entrance_pupil_z]))
         assert np.allclose(pupil[0], [world[2], world[axis]], atol=1e-6)
     assert abs(world[0]) > 5 or abs(world[1]) > 5  # off-axis indeed
+
+
+@pytest.mark.parametrize("view", ["yz", "xz"])
+def test_the_camera_body_is_one_closed_outline_labelled_camera(view):
+    """vr-offaxis's camera body (a cylinder) is drawn as one closed outline of category
+    "camera" spanning an area (its front ring alone cut to two parallel strokes labelled
+    "lens"); no "camera body" piece is a lens."""
+    cs = compile_scene(load_scene("vr-offaxis"))
+    secs = system_sections(cs, view=view)
+    assert not [s for s in secs if s.name.startswith("camera body") and s.category != "camera"]
+    body = [s for s in secs if s.category == "camera"]
+    assert len(body) == 1
+    z, y = body[0].z, body[0].y
+    assert (z[0], y[0]) == (z[-1], y[-1]) and len(z) >= 4  # closed, spans an area
+    area = 0.5 * abs(np.dot(z[:-1], y[1:]) - np.dot(z[1:], y[:-1]))
+    assert area > 1.0  # mm²: a body, not two strokes

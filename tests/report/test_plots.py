@@ -286,8 +286,8 @@ def test_section_curve_nan_raises_naming_curve():
 
 
 def test_section_curve_unknown_category_raises():
-    with pytest.raises(ValueError, match="camera"):
-        SectionCurve("housing", "camera", np.zeros(2), np.zeros(2))
+    with pytest.raises(ValueError, match="housing"):  # "camera" is a category now
+        SectionCurve("strap", "housing", np.zeros(2), np.zeros(2))
 
 
 def test_section_curve_arrays_are_read_only_copies():

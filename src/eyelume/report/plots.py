@@ -81,6 +81,7 @@ CATEGORY_COLORS: dict[str, str] = {
     "eye": "tab:blue",
     "tissue": "tab:brown",
     "lens": "tab:green",
+    "camera": "dimgray",
     "element": "tab:cyan",
     "stop": "black",
     "sensor": "tab:purple",
