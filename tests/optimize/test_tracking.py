@@ -60,7 +60,7 @@ def test_evaluate_tracking_small_grid():
 
 
 @pytest.mark.slow
-def test_the_geometric_kappa_frame_is_left_out_of_the_geometric_statistics():
+def test_the_geometric_kappa_frame_is_left_out_of_the_geometric_statistics(tmp_path):
     """The test frame at (0°, 0°) is the geometric model's one-point kappa calibration frame
     (the same picture): its geometric error is 0 by construction, so it is flagged
     ``geometric_calibration`` for the error maps and left out of ``gaze_geometric``, which
@@ -78,6 +78,15 @@ def test_the_geometric_kappa_frame_is_left_out_of_the_geometric_statistics():
     if other.geometric is not None:
         err = np.hypot(other.geometric[0] - 10.0, other.geometric[1])
         assert g["mean_deg"] == pytest.approx(err)
+    # frames.csv flags it, so its rows reproduce the summary (a fresh user could not)
+    import csv
+
+    from eyelume.report.tracking_outputs import write_tracking_outputs
+
+    write_tracking_outputs(rep, {}, tmp_path)
+    with open(tmp_path / "frames.csv", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["geometric_calibration_frame"] for r in rows] == ["1", "0"]
     assert [r["geometric_calibration"] for r in error_map_rows(rep.frames)] == [True, False]
 
 

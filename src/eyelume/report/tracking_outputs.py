@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from eyelume.analysis.tracking.evaluate import error_map_rows
+from eyelume.analysis.tracking.evaluate import error_map_rows, is_kappa_frame
 from eyelume.json_files import write_json
 from eyelume.report.plots import CMAP_MAGNITUDE, agg_figure, save_figure, wrap_title
 
@@ -203,7 +203,11 @@ def _panel_title(title: str, unit: str, z: np.ndarray, n_cal: int) -> str:
 
 
 def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
-    """``frames.csv``, ``summary.json`` and ``error_maps.png`` in folder ``out``."""
+    """``frames.csv``, ``summary.json`` and ``error_maps.png`` in folder ``out``.
+
+    ``frames.csv``'s ``calibration_frame`` (1: a PCCR calibration gaze, left out of
+    ``gaze_pccr``) and ``geometric_calibration_frame`` (1: the geometric model's own one-point
+    kappa frame, left out of ``gaze_geometric``) let its rows reproduce the summary's means."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = [out / "frames.csv", out / "summary.json", out / "error_maps.png"]
@@ -214,6 +218,7 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
                 "gaze_h_deg", "gaze_v_deg", "detected", "failures", "pupil_error_px",
                 "glints_found", "glints_true", "pccr_h_deg", "pccr_v_deg", "geometric_h_deg",
                 "geometric_v_deg", "render_s", "detect_ms", "false_glints", "calibration_frame",
+                "geometric_calibration_frame",
             ]
         )  # fmt: skip
         for fr in report.frames:
@@ -225,7 +230,7 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
                     "; ".join(fr.detection.failures), f"{fr.pupil_error_px:.4f}",
                     fr.glints_found, fr.glints_true, f"{p[0]:.4f}", f"{p[1]:.4f}",
                     f"{g[0]:.4f}", f"{g[1]:.4f}", f"{fr.render_s:.3f}", f"{fr.detect_ms:.3f}",
-                    fr.false_glints, int(fr.calibration),
+                    fr.false_glints, int(fr.calibration), int(is_kappa_frame(fr)),
                 ]
             )  # fmt: skip
     summary = {"meta": meta, **report.summary}
