@@ -55,6 +55,8 @@ from eyelume.scene.elements import (
     vertex_z_mm,
 )
 from eyelume.scene.eye import (
+    _rot_x,
+    _rot_y,
     anterior_cornea_pose,
     anterior_quadric,
     check_eye_geometry,
@@ -110,16 +112,6 @@ FIXED_TALLIES = (
 
 EYE_AXIS_ROT = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]])
 """World → eye-frame rotation in primary gaze: z' = −z (into the eye), y' = y, x' = −x."""
-
-
-def _rot_x(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _rot_y(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def gaze_rotation(eye, share_vertical: float = 1.0, share_horizontal: float = 1.0):
