@@ -241,6 +241,7 @@ def test_no_ghosts_without_elements_and_the_truth_unchanged():
         truth = json.loads(json.dumps(eye_truth(cs)))
         assert "ghosts" not in truth
         assert ghost_truth(_view(cs, cs.camera)) == []
+        truth.pop("iris")  # the limbus, added after the reference was written (issue 17)
         _same(truth, ref[name])
 
 

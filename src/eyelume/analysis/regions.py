@@ -32,6 +32,7 @@ __all__ = [
     "reflection_mask",
     "region_masks",
     "region_stats",
+    "surface_masks",
     "with_glints",
     "with_reflections",
 ]
@@ -51,7 +52,21 @@ def region_masks(
     a scene with optical elements, ``reflection`` (:func:`reflection_mask` of the ghosts'
     truth; ``reflections=False`` skips their search, ~1 s)."""
     _warn_mirrors(cs)
-    labels, sides = primary_surface_map(cs)
+    masks = surface_masks(cs, *primary_surface_map(cs))
+    if cs.scene.elements and reflections:
+        from eyelume.analysis.ghosts import ghost_truth
+        from eyelume.analysis.truth import _view
+
+        masks = with_reflections(masks, reflection_mask(cs, ghost_truth(_view(cs, cs.camera))))
+    return masks if glint_images is None else with_glints(masks, glint_images)
+
+
+def surface_masks(
+    cs: CompiledScene, labels: np.ndarray, sides: np.ndarray
+) -> dict[str, np.ndarray]:
+    """Boolean (rows, cols) masks ``pupil``, ``iris``, ``sclera``, ``skin`` of the primary
+    surface map (``labels``, ``sides``: :func:`eyelume.estimators.fast_run.primary_surface_map`),
+    before any glint or reflection is taken out (what :func:`region_masks` starts from)."""
     names = cs.surface_names
     eye = cs.scene.eye
     tissues = {t.name for t in cs.scene.face.tissues} if cs.scene.face.enabled else set()
@@ -64,18 +79,12 @@ def region_masks(
         )
         return table[labels, sides]  # label −1 (nothing) indexes the last, all-False row
 
-    masks = {
+    return {
         "pupil": of(lambda n, b: n in pupil_names or (n == "sclera" and not b)),
         "iris": of(lambda n, b: n in ("iris", "iris root")),
         "sclera": of(lambda n, b: n == "sclera" and b),
         "skin": of(lambda n, b: n in tissues or n == LASHES_NAME),  # the lashes: the lid's
     }
-    if cs.scene.elements and reflections:
-        from eyelume.analysis.ghosts import ghost_truth
-        from eyelume.analysis.truth import _view
-
-        masks = with_reflections(masks, reflection_mask(cs, ghost_truth(_view(cs, cs.camera))))
-    return masks if glint_images is None else with_glints(masks, glint_images)
 
 
 class RegionWarning(EyelumeWarning):

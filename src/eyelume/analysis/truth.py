@@ -50,7 +50,7 @@ from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.sampling import orthonormal_basis, radiant_intensity
 from eyelume.kernels.tables import CameraTables
 
-__all__ = ["eye_truth", "glint_counts", "sensor_to_pixel"]
+__all__ = ["eye_truth", "glint_counts", "sclera_reflection", "sensor_to_pixel"]
 
 _H = 1e-4  # mm on the sensor: forward-difference step
 _EDGE_POINTS = 72
@@ -272,6 +272,106 @@ def _pupil_truth(v: _View, pupil_c: np.ndarray) -> dict:
     }
 
 
+def _direct_image(v: _View, point: np.ndarray):
+    """The sensor point (mm) whose chief ray (through the optical elements before ``point``)
+    passes through ``point`` (camera frame) itself, with no refraction by the eye: a point on
+    the eye's outer surface, e.g. the limbus. None when it is not found."""
+    cs, cam = v.cs, v.cam
+    ep = np.array([0.0, 0.0, cam.entrance_pupil_z])
+    if point[2] >= ep[2]:
+        return None
+    n = (ep - point) / np.linalg.norm(ep - point)
+    g1, g2 = _basis(n)
+
+    def residual(s):
+        return _miss(_chief_ray(cs, cam, s[0], s[1], point), point, n, g1, g2)
+
+    m = -(cs.image_z - ep[2]) / (ep[2] - point[2])  # pinhole through the entrance pupil
+    found = _solve(residual, m * point[:2])
+    if found is None and cs.scene.elements:
+        found = _solve(residual, np.zeros(2))
+    return found
+
+
+def _seen_on_eye(v: _View, s: np.ndarray, point: np.ndarray, tol_mm: float = 0.05) -> bool:
+    """Whether the chief ray of sensor point ``s`` (mm) first meets the eye within ``tol_mm``
+    of ``point`` or beyond it on an eye surface (nothing of the face, a lash or an opaque
+    element before it): the point is not under a lid."""
+    ray = _chief_ray(v.cs, v.cam, *s, share=True)
+    if ray is None or ray[2] <= 0.0:
+        return False
+    p, d, _ = ray
+    hit, t = G.nearest_hit(v.cs.sf, v.cs.si, *p, *d)
+    if hit < 0:
+        return False
+    eye_names = {x.name for x in v.cs.scene.eye.surfaces} | {"iris", "iris root", "sclera"}
+    return v.cs.surface_names[hit] in eye_names and t >= (point - p) @ d - tol_mm
+
+
+def _iris_truth(v: _View) -> dict:
+    """The apparent iris's outline: the limbus (the corneoscleral junction, the anterior
+    cornea's clear-aperture edge of radius r_l at depth z_l behind the corneal vertex,
+    :func:`eyelume.scene.eye.limbus_geometry`), 72 points turned with the eye and imaged by the
+    chief ray through each (:func:`_direct_image`: they lie on the eye's outer surface, so no
+    refraction), and the share of them not under a lid or its lashes (:func:`_seen_on_eye`).
+    The picture's iris region ends there: the iris's own outer edge
+    (``iris_outer_diameter_mm``), seen through the cornea magnified about 1.13 times, lies
+    behind the sclera at the limbus (5.5 mm × 1.13 > 6.0 mm for the presets' eyes), so what
+    a camera sees of the iris, root included, is bounded by the limbus."""
+    from eyelume.scene.eye import limbus_geometry
+
+    cs = v.cs
+    r_l, z_l, _ = limbus_geometry(cs.scene.eye)
+    limbus, seen = [], 0
+    for k in range(_EDGE_POINTS):
+        a = 2 * math.pi * k / _EDGE_POINTS
+        point = v.turned(np.array([r_l * math.cos(a), r_l * math.sin(a), -z_l]))
+        s = _direct_image(v, point)
+        if s is not None:
+            limbus.append(sensor_to_pixel(cs, *s))
+            seen += _seen_on_eye(v, s, point)
+    return {
+        "centre_mm": cs.frame.world_point(v.turned(np.array([0.0, 0.0, -z_l]))).tolist(),
+        "diameter_mm": 2 * r_l,
+        "edge_px": [list(p) for p in limbus],
+        "visible_fraction": seen / _EDGE_POINTS,
+    }
+
+
+def sclera_reflection(cs: CompiledScene, k: int) -> list[float] | None:
+    """The pixel (c, r) where LED ``k``'s mirror image in the eyeball's sclera sphere lies: the
+    sensor point whose chief ray, reflected by the sclera (the eyeball sphere behind the limbus,
+    :func:`eyelume.scene.eye.limbus_geometry`), passes through the LED's emission point, the
+    sclera being the first thing that ray meets. A real eye's moist sclera shows a weak glint
+    there when the corneal glint has slid off the cornea; eyelume renders the sclera as
+    Lambertian, so the picture has no spot there. None when there is no such point."""
+    from eyelume.scene.eye import limbus_geometry
+
+    v = _view(cs, cs.camera)
+    sclera = cs.surface_names.index("sclera")
+    led = cs.led.points[cs.led_indices.index(k)]
+    eyeball = v.turned(np.array([0.0, 0.0, -limbus_geometry(cs.scene.eye)[2]]))
+    n = (led - eyeball) / np.linalg.norm(led - eyeball)
+    g1, g2 = _basis(n)
+
+    def residual(s):
+        ray = _chief_ray(cs, v.cam, s[0], s[1])
+        ray = None if ray is None else _off_cornea(cs, sclera, *ray)
+        ray = None if ray is None else _through_elements(cs, *ray, led)
+        return _miss(ray, led, n, g1, g2)
+
+    ep = np.array([0.0, 0.0, v.cam.entrance_pupil_z])
+    bis = n + (ep - eyeball) / np.linalg.norm(ep - eyeball)
+    q = eyeball + cs.scene.eye.sclera_radius_mm * bis / np.linalg.norm(bis)
+    s = _solve(residual, -(cs.image_z - ep[2]) / (ep[2] - q[2]) * q[:2])
+    if s is None:
+        return None
+    ray = _chief_ray(cs, v.cam, *s)
+    if ray is None or G.nearest_hit(cs.sf, cs.si, *ray[0], *ray[1])[0] != sclera:
+        return None
+    return list(sensor_to_pixel(cs, *s))
+
+
 def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
     """LED ``k``'s glint (row ``row`` of the compiled LED table): the pixel whose chief ray the
     cornea reflects to the LED, and whether the way in and out is clear and the LED sends light
@@ -420,8 +520,10 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
 
     Returns a JSON-ready dict (``truth.json``): gaze angles; the pupil's 3D centre (world mm),
     its apparent centre in pixels, the pixel positions of 72 points of its edge, the share of
-    them visible (not under a lid); per LED its glint's pixel position, whether its reflection
-    lies on the cornea's cap (``on_cornea``) and is seen (``visible``), or why there is none;
+    them visible (not under a lid); ``iris``: its outline, the limbus (:func:`_iris_truth`:
+    its centre (world mm), diameter, 72 edge points' pixels and the share not under a lid);
+    per LED its glint's pixel position, whether its reflection lies on the cornea's cap
+    (``on_cornea``) and is seen (``visible``), or why there is none;
     the counts ``glints_on_cornea`` and ``glints_visible``; ``leds_in_view``: each LED the
     camera sees directly (a wide lens beside the ring), its pixel, whether it is seen and
     its radiant intensity toward the lens — a bright spot that is not a glint; with optical
@@ -462,6 +564,7 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
         "pixel_convention": "OpenCV: pixel (column c, row r) centred at (x, y) = (c, r); row 0 "
         "at the top of the upright picture",
         "pupil": _pupil_truth(v, v.turned(np.array([0.0, 0.0, -depth]))),
+        "iris": _iris_truth(v),
         "glints": glints,
         "glints_on_cornea": sum(g["on_cornea"] for g in glints),
         "glints_visible": sum(g["visible"] for g in glints),
@@ -497,6 +600,7 @@ def _truth_by_wavelength(cs: CompiledScene, with_ghosts: bool = True) -> dict:
     eye = cs.scene.eye
     depth = sum(s.thickness_mm for s in eye.surfaces[: eye.iris_surface])
     out["pupil"] = _pupil_truth(base, base.turned(np.array([0.0, 0.0, -depth])))
+    out["iris"] = _iris_truth(base)
     out["optical_axis"] = cs.frame.world_vector(base.axis).tolist()
     glints: dict[int, dict] = {}
     in_view: list[dict] = []

@@ -1,0 +1,273 @@
+"""A dataset picture's labels (issue 17) against computations written out here: the ellipse
+convention on synthetic points, the segmentation's pupil against the pupil ellipse, the camera
+model projecting the truth's limbus points (OpenCV's ``projectPoints``), the ideal lens's K from
+its EFL, focus distance and pitch, the eye's axes in the paper's rig, the glint flags, the
+OpenEDS view, and a label validated against the shipped JSON schema."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import cv2
+import jsonschema
+import numpy as np
+import pytest
+
+from eyelume.analysis import labels as L
+from eyelume.analysis.regions import region_masks
+from eyelume.analysis.truth import eye_truth
+from eyelume.compile import compile_scene, eye_point
+from eyelume.scene.eye import limbus_geometry
+from eyelume.scene.io import apply_overrides, load_scene
+
+#: vr-offaxis at 100 × 100 pixels over the OV6211's 1.2 mm chip (12 µm bins): a small picture
+#: of the same field, for speed.
+SMALL = {"sensor.cols": 100, "sensor.rows": 100, "sensor.pixel_pitch_um": 12.0}
+#: Eye turned so that the pupil is wholly visible and off-centre in both pictures.
+GAZE = {"eye.gaze_horizontal_deg": 8.0, "eye.gaze_vertical_deg": -5.0}
+
+
+def _picture(name: str, overrides: dict):
+    scene = apply_overrides(load_scene(name), overrides)
+    cs = compile_scene(scene)
+    truth = eye_truth(cs)
+    masks = region_masks(cs)
+    label, seg = L.picture_labels(cs, None, None, None, masks, truth)
+    return cs, truth, label, seg
+
+
+@pytest.fixture(scope="module")
+def vr():
+    return _picture("vr-offaxis", {**SMALL, **GAZE})
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return _picture("paper2005", GAZE)
+
+
+# ----------------------------------------------------------------------------- ellipses
+
+
+@pytest.mark.parametrize("angle", [30.0, -50.0, 90.0, 0.0])
+def test_ellipse_fit_recovers_a_synthetic_ellipse_in_the_stated_convention(angle):
+    """Points x = c + a cos t (cos θ, sin θ) + b sin t (−sin θ, cos θ) (image y down) give back
+    c, a ≥ b and θ in (−90°, 90°]; and a pixel along +θ from the centre lies inside."""
+    c, a, b = np.array([40.3, 22.7]), 15.0, 6.0
+    th = math.radians(angle)
+    t = np.linspace(0, 2 * math.pi, 50, endpoint=False)
+    u, v = np.array([math.cos(th), math.sin(th)]), np.array([-math.sin(th), math.cos(th)])
+    pts = c + np.outer(a * np.cos(t), u) + np.outer(b * np.sin(t), v)
+    e = L.fit_ellipse(pts)
+    assert e["center_px"] == pytest.approx(c.tolist(), abs=1e-9)
+    assert e["semi_axes_px"] == pytest.approx([a, b], abs=1e-9)
+    assert e["angle_deg"] == pytest.approx(angle if angle != -90.0 else 90.0, abs=1e-7)
+    # a point 12 px along the major axis (toward +x, +y = down for θ > 0) is inside, the same
+    # point mirrored about the x axis (the other sign convention) is not
+    p = c + 12.0 * u
+    q = c + 12.0 * np.array([u[0], -u[1]])
+    mask = L.ellipse_mask(e, (60, 80))
+    r, col = int(round(p[1])), int(round(p[0]))
+    assert mask[r, col]
+    if abs(angle) not in (0.0, 90.0):
+        assert not mask[int(round(q[1])), int(round(q[0]))]
+
+
+def test_ellipse_fit_agrees_with_opencv_on_the_swapped_axes():
+    """The same ellipse from cv2.fitEllipse (an independent implementation, its own
+    convention: full axes (w, h), angle of w) rasterised by its own points."""
+    rng = np.random.default_rng(3)
+    c, a, b, th = np.array([30.0, 25.0]), 12.0, 7.0, math.radians(-35.0)
+    t = rng.uniform(0, 2 * math.pi, 40)
+    u, v = np.array([math.cos(th), math.sin(th)]), np.array([-math.sin(th), math.cos(th)])
+    pts = c + np.outer(a * np.cos(t), u) + np.outer(b * np.sin(t), v)
+    ours = L.fit_ellipse(pts)
+    (cx, cy), (w, h), ang = cv2.fitEllipse(pts.astype(np.float32))
+    theirs = {"center_px": [cx, cy], "semi_axes_px": [w / 2, h / 2], "angle_deg": ang}
+    if h > w:
+        theirs = {"center_px": [cx, cy], "semi_axes_px": [h / 2, w / 2], "angle_deg": ang + 90.0}
+    inside = L.ellipse_mask(ours, (50, 60))
+    assert (inside == L.ellipse_mask(theirs, (50, 60))).mean() > 0.995
+
+
+# --------------------------------------------------------------------------- segmentation
+
+
+@pytest.mark.parametrize("which", ["vr", "paper"])
+def test_segmentation_pupil_matches_the_pupil_ellipse(which, request):
+    """Both are pixel-centre samplings of the apparent pupil's outline: the segmentation by the
+    chief ray through each pixel centre, the ellipse by its inside test. They can differ only
+    at pixels whose centres lie between the fitted ellipse and the true outline. The outline
+    deviates from the fit by fit_rms_px (refraction by the cornea; checked < 0.05 px) and at
+    most a few times that; a band of width w along a curve of length P holds about P w pixel
+    centres: the bound is P × 10 fit_rms_px + 1. A sign-flipped angle, or the centre off by
+    half a pixel (the other pixel-centre convention), exceeds it many times (vr-offaxis: 37
+    and 22 pixels against a bound of 4.8)."""
+    cs, truth, label, seg = request.getfixturevalue(which)
+    assert label["pupil"]["visible_share"] == 1.0
+    e = label["pupil"]["ellipse"]
+    assert e["fit_rms_px"] < 0.05
+    pupil = L.openeds_map(seg, L.primary_classes(cs)) == 3
+    ell = L.ellipse_mask(e, seg.shape)
+    a, b = e["semi_axes_px"]
+    perimeter = math.pi * (3 * (a + b) - math.sqrt((3 * a + b) * (a + 3 * b)))  # Ramanujan
+    bound = perimeter * 10 * e["fit_rms_px"] + 1
+    mismatch = int((pupil ^ ell).sum())
+    assert mismatch <= bound, (mismatch, bound)
+    assert (pupil & ell).sum() / (pupil | ell).sum() >= 1 - bound / ell.sum()
+    # the pupil's label: its centre's image lies inside the ellipse, near its centre
+    assert np.hypot(*np.subtract(label["pupil"]["center_px"], e["center_px"])) < 0.1 * b
+
+
+def test_segmentation_classes_and_the_openeds_view(vr):
+    cs, truth, label, seg = vr
+    assert seg.dtype == np.uint8 and seg.shape == (100, 100)
+    present = set(np.unique(seg).tolist())
+    assert {1, 2, 3, 4, 5} <= present  # sclera, iris, pupil, skin, the lids all in view
+    # eyelid pixels are those whose surface is a lid: above and below the iris, not beside it
+    cx, cy = label["iris"]["ellipse"]["center_px"]
+    rows = np.nonzero((seg == 5).any(axis=1))[0]
+    assert rows.min() < cy < rows.max()
+    o = L.openeds_map(seg)
+    assert set(np.unique(o).tolist()) <= {0, 1, 2, 3}
+    assert np.array_equal(o[seg <= 3], seg[seg <= 3])
+
+
+def test_openeds_map_puts_the_class_under_a_glint():
+    seg = np.full((9, 9), 2, dtype=np.uint8)  # iris
+    seg[:, 6:] = 4  # skin on the right
+    seg[3:6, 3:6] = 3  # pupil
+    seg[4, 4] = 6  # a glint on the pupil
+    seg[0, 0] = 7  # a reflection on the iris
+    under = seg.copy()
+    under[4, 4], under[0, 0] = 3, 2
+    o = L.openeds_map(seg)
+    assert o[4, 4] == 3 and o[0, 0] == 2 and (o[:, 6:] == 0).all()
+    assert np.array_equal(o, L.openeds_map(seg, under))
+
+
+# ------------------------------------------------------------------------------- camera
+
+
+def _limbus_world(cs) -> np.ndarray:
+    """The 72 limbus points (world mm) as truth places them, written out here."""
+    r_l, z_l, _ = limbus_geometry(cs.scene.eye)
+    a = 2 * np.pi * np.arange(72) / 72
+    return np.array([eye_point(cs.scene, [r_l * math.cos(t), r_l * math.sin(t), -z_l]) for t in a])
+
+
+@pytest.mark.parametrize("which", ["vr", "paper"])
+def test_the_camera_model_projects_the_limbus_onto_the_truths_pixels(which, request):
+    """The limbus lies on the eye's outer surface: truth images each point by the chief ray
+    through it (Newton on the real camera: the ideal lens, or the paper's Double Gauss). The
+    label's K, dist, R, t with cv2.projectPoints must put it there: to 1e-3 px for the ideal
+    lens (exact model), to 5 × the fit's RMS for the Double Gauss."""
+    cs, truth, label, _ = request.getfixturevalue(which)
+    cam = label["camera"]
+    world = _limbus_world(cs)
+    rvec = cv2.Rodrigues(np.array(cam["R"]))[0]
+    px = cv2.projectPoints(
+        world, rvec, np.array(cam["t_mm"]), np.array(cam["K"]), np.array(cam["dist"])
+    )[0].reshape(-1, 2)
+    assert len(truth["iris"]["edge_px"]) == 72
+    err = np.hypot(*(px - np.array(truth["iris"]["edge_px"])).T)
+    tol = 1e-3 if cs.scene.camera.optics == "ideal" else max(5 * cam["intrinsics_fit_rms_px"], 1e-3)
+    assert err.max() < tol, (err.max(), cam["intrinsics_fit_rms_px"])
+    # the same through the camera frame: x_cam = R x + t in front of the camera (z > 0)
+    xc = world @ np.array(cam["R"]).T + np.array(cam["t_mm"])
+    assert (xc[:, 2] > 0).all()
+    px2 = cv2.projectPoints(
+        xc, np.zeros(3), np.zeros(3), np.array(cam["K"]), np.array(cam["dist"])
+    )[0].reshape(-1, 2)
+    assert np.allclose(px2, px, atol=1e-9)
+
+
+def test_the_ideal_lens_intrinsics_from_efl_focus_distance_and_pitch():
+    """fx = fy = v / p with v = 1 / (1/f − 1/s) the image distance and p the pixel pitch;
+    (cx, cy) the picture's centre; dist = (k1, k2, 0, 0, 0) as the scene gives them."""
+    scene = apply_overrides(
+        load_scene("vr-offaxis"),
+        {**SMALL, "camera.ideal.k1": -0.05, "camera.ideal.k2": 0.01},
+    )
+    cs = compile_scene(scene)
+    cam = L.camera_intrinsics(cs)
+    ideal = scene.camera.ideal
+    v = 1.0 / (1.0 / ideal.efl_mm - 1.0 / ideal.focus_distance_mm)
+    f_px = v / 0.012
+    assert np.allclose(cam["K"], [[f_px, 0, 49.5], [0, f_px, 49.5], [0, 0, 1]], rtol=1e-12)
+    assert cam["dist"] == [-0.05, 0.01, 0.0, 0.0, 0.0]
+    # exact model: the chief rays of the distorting lens land where OpenCV puts them
+    assert cam["intrinsics_fit_rms_px"] < 1e-6
+
+
+def test_the_paper_rigs_eye_in_the_opencv_camera_frame(paper):
+    """The paper's camera looks along −z at the eye: OpenCV's R is diag(1, −1, −1) (up to the
+    fit's rounding) and the eye turned by GAZE (up/right in the world) has its optical axis
+    (out of the eye, toward the camera: −z) with x ∝ sin h, y ∝ −sin v·… (down in OpenCV is
+    −y of the world); the eyeball centre lies 13.5 − 7.8 = 5.7 mm behind the corneal centre
+    along the axis."""
+    cs, truth, label, _ = paper
+    cam, frame = label["camera"], label["camera_frame"]
+    assert np.allclose(cam["R"], np.diag([1.0, -1.0, -1.0]), atol=1e-6)
+    h, v = math.radians(8.0), math.radians(-5.0)
+    # world optical axis: R_y(h) R_x(−v) (0, 0, 1) = (sin h cos v, sin v, cos h cos v)
+    world_axis = np.array([math.sin(h) * math.cos(v), math.sin(v), math.cos(h) * math.cos(v)])
+    assert frame["optical_axis"] == pytest.approx(world_axis * [1, -1, -1], abs=1e-9)
+    d = np.array(frame["eyeball_center_mm"]) - np.array(frame["cornea_center_mm"])
+    assert np.linalg.norm(d) == pytest.approx(13.5 - 7.8, abs=1e-9)
+    assert d / np.linalg.norm(d) == pytest.approx(-np.array(frame["optical_axis"]), abs=1e-9)
+
+
+# ------------------------------------------------------------------------------- glints
+
+
+def test_glint_flags_from_the_sensors_saturated_pixels(vr):
+    cs, truth, _, _ = vr
+    sat = np.zeros((100, 100), dtype=bool)
+    g = next(e for e in truth["glints"] if e["visible"])
+    c, r = (int(round(x)) for x in g["centre_px"])
+    sat[r + 1, c] = True  # within the 3 × 3 neighbourhood
+    glints = L._glints(cs, truth, sat)
+    flagged = {e["led"] for e in glints if e["saturated"]}
+    assert g["led"] in flagged
+    sat[:] = False
+    sat[r + 3, c] = True  # two pixels beyond it
+    assert not any(e["saturated"] for e in L._glints(cs, truth, sat) if e["led"] == g["led"])
+
+
+# ------------------------------------------------------------------------------- schema
+
+
+def test_a_label_line_validates_against_the_schema(vr, paper):
+    schema = json.loads(L.SCHEMA_PATH.read_text(encoding="utf-8"))
+    jsonschema.Draft202012Validator.check_schema(schema)
+    validator = jsonschema.Draft202012Validator(schema)
+    book = {
+        "index": 0,
+        "seed": 123,
+        "image": "images/000000.png",
+        "irradiance": "irradiance/000000.npy",
+        "segmentation": "segmentation/000000.png",
+        "image_bits": 8,
+        "varied": {"eye.pupil_diameter_mm": 4.0},
+        "person": None,
+        "glasses": False,
+        "render": {
+            "estimator": "fast",
+            "samples_per_pixel": 8,
+            "median_skin_rel_error": 0.01,
+            "skin_shot_noise": 0.02,
+            "seconds": 1.0,
+        },
+    }
+    for _, _, label, _ in (vr, paper):
+        line = json.loads(json.dumps({**book, **label}))  # what labels.jsonl holds
+        validator.validate(line)
+    # the schema is strict: a misspelt key or a missing one is refused
+    bad = json.loads(json.dumps({**book, **vr[2]}))
+    bad["pupil"]["ellipse"]["angle"] = bad["pupil"]["ellipse"].pop("angle_deg")
+    assert not validator.is_valid(bad)
+    bad = json.loads(json.dumps({**book, **vr[2]}))
+    del bad["camera"]
+    assert not validator.is_valid(bad)
