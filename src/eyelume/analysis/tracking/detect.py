@@ -395,7 +395,11 @@ def _black_border(img: np.ndarray, min_frac: float = 0.005) -> np.ndarray | None
     edge = (img[0], img[-1], img[:, 0], img[:, -1])
     if not any((e == lo).any() for e in edge):
         return None
-    flat = (img == lo).astype(np.uint8)
+    flat = cv2.compare(img, float(lo), cv2.CMP_EQ) if img.dtype != np.float64 else None
+    if flat is None:
+        flat = (img == lo).astype(np.uint8)
+    if cv2.countNonZero(flat) < min_frac * img.size:
+        return None  # too few pixels at the minimum for any region to be a border
     _, lab, stats, _ = cv2.connectedComponentsWithStats(flat, connectivity=4)
     on_edge = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
     on_edge = on_edge[(on_edge > 0) & (stats[on_edge, cv2.CC_STAT_AREA] >= min_frac * img.size)]
@@ -419,8 +423,10 @@ def _mend_hot_pixels(img: np.ndarray, noise: float) -> int:
     t = float(math.floor(thr)) if img.dtype.kind in "iu" else float(thr)
     above = cv2.compare(img, t, cv2.CMP_GT)
     # The pixels above, in row order, looked for only in the rows holding any (a few hundred
-    # pixels of a frame: cv2.findNonZero over the whole mask cost 5× the comparison).
-    hit = np.flatnonzero(cv2.reduce(above, 1, cv2.REDUCE_MAX).ravel())
+    # pixels of a frame: cv2.findNonZero over the whole mask cost 5× the comparison). The
+    # rows' sums (32-bit) find them: OpenCV's REDUCE_MAX along rows is ~100× slower (0.8 ms
+    # at 640 × 400).
+    hit = np.flatnonzero(cv2.reduce(above, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel())
     if not len(hit):
         return 0
     r, xs = np.nonzero(above[hit])
