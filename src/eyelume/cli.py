@@ -1434,7 +1434,10 @@ def study(
 
 @app.command()
 def report(
-    folder: Annotated[Path, typer.Argument(help="A study's folder (its results.sqlite).")],
+    folder: Annotated[
+        Path,
+        typer.Argument(help="A study's folder (its results.sqlite) or a dataset's (labels.jsonl)."),
+    ],
     scene: Annotated[
         str | None,
         typer.Option(
@@ -1447,7 +1450,9 @@ def report(
         typer.Option("--out", help="The page to write (default: FOLDER/report.html)."),
     ] = None,
 ) -> None:
-    """Write FOLDER/report.html (or --out): the study's table (unsafe runs in red), merit
+    """Write FOLDER/report.html (or --out). A dataset's folder (eyelume dataset): its label
+    summary, a contact sheet of labelled pictures and the varied parameters' distributions. A
+    study's: the study's table (unsafe runs in red), merit
     landscapes, the best runs and the best run's stored eye-plane pattern and eye image (--scene
     stores them). Reads the store read-only: a study still running is reported as far as it has
     committed; a read-only FOLDER needs --out (and no --scene)."""
@@ -1470,6 +1475,60 @@ def report(
     except (OSError, ValueError) as exc:
         _fail(str(exc))
     err.print(f"wrote {path}")
+
+
+@app.command("dataset-export")
+def dataset_export(
+    folder: Annotated[Path, typer.Argument(help="A dataset folder (eyelume dataset's --out).")],
+    out: Annotated[Path, typer.Option("--out", help="The folder to write the copy into.")],
+    to: Annotated[
+        str, typer.Option("--to", help="The layout: openeds (the only one).")
+    ] = "openeds",
+    split: Annotated[
+        str, typer.Option(help="The split folder written (OpenEDS: train, validation, test).")
+    ] = "train",  # fmt: skip
+    size: Annotated[
+        str,
+        typer.Option(
+            help="COLSxROWS canvas the pictures are fitted onto (aspect kept, black "
+            "padding), or 'native' to keep each picture's size."
+        ),  # fmt: skip
+    ] = "640x400",
+) -> None:
+    """Copy a labelled dataset into the layout an OpenEDS-trained segmentation model reads:
+    OUT/SPLIT/images/NNNNNN.png (8-bit grey, 640 × 400 by default) and OUT/SPLIT/labels/
+    NNNNNN.npy (uint8 ids 0 background, 1 sclera, 2 iris, 3 pupil), with OUT/eyelume_export.json
+    mapping each picture's pixels to the label file's (eyelume.report.dataset_outputs)."""
+    from eyelume.report.dataset_outputs import export_openeds
+
+    if to != "openeds":
+        _fail(f"--to {to!r}: the only layout is 'openeds'")
+    if size == "native":
+        canvas = None
+    else:
+        try:
+            canvas = tuple(int(v) for v in size.lower().split("x"))
+        except ValueError:
+            canvas = ()
+        if len(canvas) != 2 or min(canvas) < 1:
+            _fail(f"--size {size!r}: give COLSxROWS (e.g. 640x400) or 'native'")
+    if not folder.is_dir():
+        _fail(f"{folder}: is not a folder (a dataset folder written by eyelume dataset)")
+    _check_out(out)
+    with _progress_bar("[bold]export[/] {task.description}", "{task.completed}/{task.total} "
+                       "pictures") as bar:  # fmt: skip
+        task = bar.add_task("", total=None)
+        summary = export_openeds(
+            folder, out, split=split, size=canvas,
+            progress=lambda done, total: bar.update(task, completed=done, total=total),
+        )  # fmt: skip
+    shares = ", ".join(f"{k} {v}" for k, v in summary.class_pixels.items())
+    err.print(
+        f"wrote {summary.pictures} pictures to {out / split} (OpenEDS layout; label pixels by "
+        f"class id: {shares}); pixel mapping in {out / 'eyelume_export.json'}",
+        highlight=False,
+        soft_wrap=True,
+    )
 
 
 @app.command()

@@ -35,7 +35,41 @@ from eyelume.report.plots import (
 )
 from eyelume.report.tracking_outputs import save_error_maps
 
-__all__ = ["write_report"]
+__all__ = ["write_dataset_report", "write_report"]
+
+
+#: Run when a page has loaded: counts the figures that decoded and measures the layout, for a
+#: headless browser's check (module doc).
+_LOAD_SCRIPT = """<script>
+window.addEventListener("load", () => {
+  const ok = [...document.images].filter(i => i.complete && i.naturalWidth > 0).length;
+  document.body.dataset.figures = String(ok);
+  // the narrowest and widest figure as drawn (CSS px): figures grow with the window
+  const widths = [...document.images].map(i => i.getBoundingClientRect().width);
+  document.body.dataset.figureMinPx = String(Math.round(widths.length ? Math.min(...widths) : 0));
+  document.body.dataset.figureMaxPx = String(Math.round(widths.length ? Math.max(...widths) : 0));
+  // for a headless check of the layout: how far the page overflows the window sideways
+  document.body.dataset.overflowPx = String(
+    Math.max(0, document.documentElement.scrollWidth - window.innerWidth));
+});
+</script>"""
+
+
+#: The pages' style sheet: figures in a grid that grows with the window, wide tables in their
+#: own scrolling box.
+_STYLE = """<style>
+body { font-family: sans-serif; margin: 1em auto; padding: 0 1em; max-width: 2400px; }
+.scroll { overflow-x: auto; max-width: 100%; }
+table { border-collapse: collapse; font-size: 0.9em; }
+td, th { border: 1px solid #ccc; padding: 2px 6px; text-align: right; white-space: nowrap; }
+th { background: #f4f4f4; position: sticky; top: 0; }
+tr.unsafe td, .over-limit { color: #b00; font-weight: bold; }
+.figures { display: grid; gap: 1em;
+  grid-template-columns: repeat(auto-fill, minmax(min(100%, 720px), 1fr)); }
+figure { margin: 0; min-width: 0; }
+figure img { width: 100%; max-width: 100%; height: auto; }
+figcaption { font-size: 0.9em; color: #333; overflow-wrap: anywhere; }
+</style>"""
 
 
 def _png(fig: Figure) -> str:
@@ -299,6 +333,8 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
     from eyelume.optimize.store import read_rows
 
     folder = Path(folder)
+    if (folder / "labels.jsonl").exists() or (folder / "dataset.json").exists():
+        return write_dataset_report(folder, out)
     rows, note = read_rows(folder)
     if not rows:
         raise StoreError("the study has no finished run yet", file=folder)
@@ -344,19 +380,7 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
 <meta name="viewport" content="width=device-width, initial-scale=1"><title>eyelume study {
         html.escape(", ".join(studies))
     }
-</title><style>
-body {{ font-family: sans-serif; margin: 1em auto; padding: 0 1em; max-width: 2400px; }}
-.scroll {{ overflow-x: auto; max-width: 100%; }}
-table {{ border-collapse: collapse; font-size: 0.9em; }}
-td, th {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; white-space: nowrap; }}
-th {{ background: #f4f4f4; position: sticky; top: 0; }}
-tr.unsafe td, .over-limit {{ color: #b00; font-weight: bold; }}
-.figures {{ display: grid; gap: 1em;
-  grid-template-columns: repeat(auto-fill, minmax(min(100%, 720px), 1fr)); }}
-figure {{ margin: 0; min-width: 0; }}
-figure img {{ width: 100%; max-width: 100%; height: auto; }}
-figcaption {{ font-size: 0.9em; color: #333; overflow-wrap: anywhere; }}
-</style></head>
+</title>{_STYLE}</head>
 <body data-figures="0">
 <h1>Study {html.escape(", ".join(studies))}</h1>
 <p>{len(rows)} runs committed; {n_unsafe} over an IEC 62471 exempt-group limit (red).</p>
@@ -370,19 +394,117 @@ figcaption {{ font-size: 0.9em; color: #333; overflow-wrap: anywhere; }}
 <h2>Best runs{f" by {html.escape(str(merit))}" if merit else ""}</h2>
 {_best_warning(rows, best)}<p>Runs within the eye-safety limit rank first.</p><ol>{best_html}</ol>
 <h2>All runs</h2><div class="scroll"><table><tr>{head}</tr>{"".join(body)}</table></div>
-<script>
-window.addEventListener("load", () => {{
-  const ok = [...document.images].filter(i => i.complete && i.naturalWidth > 0).length;
-  document.body.dataset.figures = String(ok);
-  // the narrowest and widest figure as drawn (CSS px): figures grow with the window
-  const widths = [...document.images].map(i => i.getBoundingClientRect().width);
-  document.body.dataset.figureMinPx = String(Math.round(widths.length ? Math.min(...widths) : 0));
-  document.body.dataset.figureMaxPx = String(Math.round(widths.length ? Math.max(...widths) : 0));
-  // for a headless check of the layout: how far the page overflows the window sideways
-  document.body.dataset.overflowPx = String(
-    Math.max(0, document.documentElement.scrollWidth - window.innerWidth));
-}});
-</script></body></html>
+{_LOAD_SCRIPT}</body></html>
+"""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(page, encoding="utf-8")
+    except OSError as exc:
+        hint = "; give --out FILE elsewhere" if out is None else ""
+        raise StoreError(
+            f"cannot write the report ({exc.strerror or exc}){hint}", file=path
+        ) from None
+    return path
+
+
+def _dataset_summary(ds) -> list[tuple[str, str]]:
+    """(quantity, value) rows of the dataset page's table, read from the label lines."""
+    labels = ds.labels
+    n = len(labels)
+    sizes = sorted(
+        {tuple(lab["size_px"]) for lab in labels if isinstance(lab.get("size_px"), list)}
+    )
+    bits = sorted({lab.get("image_bits") for lab in labels if lab.get("image_bits")})
+
+    def mean_of(values) -> str:
+        v = [x for x in values if isinstance(x, int | float) and not isinstance(x, bool)]
+        return f"{np.mean(v):.3g} (over {len(v)} pictures)" if v else "—"
+
+    glints = [lab.get("glints") for lab in labels if isinstance(lab.get("glints"), list)]
+    rows = [
+        ("pictures", str(n)),
+        ("indices", f"{labels[0]['index']} … {labels[-1]['index']}"),
+        ("scene", ds.scene),
+        ("seed", str(ds.seed) if ds.seed is not None else "not recorded"),
+        ("picture size (columns × rows, px)", ", ".join(f"{c} × {r}" for c, r in sizes) or "—"),
+        ("PNG bit depth", ", ".join(str(b) for b in bits) or "—"),
+        ("share with glasses", f"{np.mean([bool(lab.get('glasses')) for lab in labels]):.3f}"),
+        (
+            "pupil visible share, mean",
+            mean_of((lab.get("pupil") or {}).get("visible_share") for lab in labels),
+        ),  # fmt: skip
+        ("eye openness, mean", mean_of(lab.get("eye_openness") for lab in labels)),
+        (
+            "glints visible per picture, mean",
+            mean_of(sum(bool(g.get("visible")) for g in gs) for gs in glints),
+        ),  # fmt: skip
+        (
+            "glints saturated per picture, mean",
+            mean_of(sum(bool(g.get("saturated")) for g in gs) for gs in glints),
+        ),  # fmt: skip
+    ]
+    return rows
+
+
+def write_dataset_report(folder: str | Path, out: str | Path | None = None) -> Path:
+    """Write a dataset folder's page (``eyelume dataset``'s output, read by
+    :func:`eyelume.report.dataset_outputs.read_dataset`) to ``out`` (default
+    ``folder/report.html``): a table of what the labels say, a contact sheet of sample pictures
+    with their labels drawn on them and the distributions of the varied parameters
+    (:mod:`eyelume.report.dataset_outputs`), embedded as PNG; returns the page's path.
+    InputFileError for a folder without a readable ``labels.jsonl``; StoreError when the page
+    cannot be written."""
+    from eyelume.report.dataset_outputs import (
+        dataset_caption,
+        figure_png,
+        read_dataset,
+        save_contact_sheet,
+        save_distributions,
+    )
+
+    folder = Path(folder)
+    ds = read_dataset(folder)
+    path = folder / "report.html" if out is None else Path(out)
+    figures = [
+        (
+            f"Sample pictures as the camera recorded them (images/*.png, DN on one grey scale) "
+            "with their labels drawn from labels.jsonl: pupil and iris ellipses, each glint's "
+            "true position with its LED id (a white × when saturated, grey when hidden), "
+            f"spurious reflections; read, not recomputed. {dataset_caption(ds)}.",
+            figure_png(save_contact_sheet, ds),
+        ),
+        (
+            "Distributions of what varied from picture to picture (gaze target, pupil diameter, "
+            "each [[vary]] path, the people's sampled parameters) and the share with glasses, "
+            f"read from labels.jsonl. {dataset_caption(ds)}.",
+            figure_png(save_distributions, ds),
+        ),
+    ]
+    figs = "".join(
+        f'<figure><img alt="{html.escape(t)}" src="data:image/png;base64,'
+        f'{base64.b64encode(d).decode("ascii")}"><figcaption>{html.escape(t)}</figcaption>'
+        "</figure>"
+        for t, d in figures
+    )
+    table = "".join(
+        f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>"
+        for k, v in _dataset_summary(ds)
+    )
+    name = html.escape(ds.name)
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1"><title>eyelume dataset {
+        name
+    }</title>{_STYLE}</head>
+<body data-figures="0">
+<h1>Dataset {name}</h1>
+<p>Folder {html.escape(str(folder))}: labels in labels.jsonl (one JSON object per picture; the
+schema in schema.json), pictures in images/, segmentations in segmentation/. An OpenEDS-layout
+copy for segmentation models: <code>eyelume dataset-export {html.escape(str(folder))} --out
+DIR</code>.</p>
+<div class="scroll"><table>{table}</table></div>
+<h2>Pictures and labels</h2><div class="figures">{figs}</div>
+{_LOAD_SCRIPT}</body></html>
 """
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
