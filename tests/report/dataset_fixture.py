@@ -45,7 +45,7 @@ def write_fake_dataset(
                     angle, 0, 360, 3, -1, shift=4)  # fmt: skip
         seg[: rows // 8] = 5  # an upper eyelid band
         glints = []
-        for led, (dx, dy) in enumerate([(-9, -3), (9, -3), (-9, 5), (9, 5)]):
+        for led, (dx, dy) in enumerate([(-14, -4), (14, -4), (-14, 6), (14, 6)]):
             gx, gy = cx + dx + rng.uniform(-0.5, 0.5), cy + dy + rng.uniform(-0.5, 0.5)
             cv2.circle(seg, (round(gx * s), round(gy * s)), round(1.5 * s), 6, -1, shift=4)
             glints.append({"led": led, "position_px": [gx, gy], "on_cornea": True,

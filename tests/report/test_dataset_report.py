@@ -14,6 +14,7 @@ import os
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,6 +28,7 @@ from eyelume.report.dataset_outputs import (
     export_openeds,
     openeds_view,
     read_dataset,
+    read_picture,
     save_contact_sheet,
     save_distributions,
 )
@@ -184,3 +186,29 @@ def test_cli_dataset_export(tmp_path):
         assert len(res.output.strip().splitlines()) == 1
     res = runner.invoke(app, ["dataset-export", str(tmp_path), "--out", str(tmp_path / "y")])
     assert res.exit_code == 2 and "labels.jsonl" in res.output, res.output
+
+
+def test_detector_benchmark_scores_against_the_labels(tmp_path):
+    """benchmarks/dataset_detect.py's scoring: on the drawn pictures (their labels exact by
+    construction) the detector's pupil centre is within half a pixel and every glint is paired;
+    a label moved by 3 px reads as a 3 px error, a glint moved out of reach as one missed and
+    one false."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+    import dataset_detect as bench
+
+    write_fake_dataset(tmp_path / "set", n=3)
+    ds = read_dataset(tmp_path / "set")
+    pics = [read_picture(ds, lab) for lab in ds.labels]
+    rows = [bench.score_picture(p, lab, None, None) for p, lab in zip(pics, ds.labels, strict=True)]
+    s = bench.summarise(rows)
+    assert s["ok_share"] == 1.0 and s["pupil_share_within_1px"] == 1.0
+    assert s["pupil_error_px_p95"] < 0.5
+    assert s["glints_true"] == s["glints_matched"] == 12 and s["glints_false"] == 0
+    lab = json.loads(json.dumps(ds.labels[0]))
+    cx, cy = lab["pupil"]["ellipse"]["center_px"]
+    lab["pupil"]["ellipse"]["center_px"] = [cx + 3.0, cy]
+    lab["glints"][1]["position_px"][0] += 10.0  # out of the 3 px reach
+    r = bench.score_picture(pics[0], lab, None, None)
+    assert r["pupil_error_px"] == pytest.approx(3.0, abs=0.5)
+    one = bench.summarise([r])
+    assert (one["glints_matched"], one["glints_missed"], one["glints_false"]) == (3, 1, 1)
