@@ -13,11 +13,13 @@ import cv2
 import jsonschema
 import numpy as np
 import pytest
+from scipy import optimize
 
 from eyelume.analysis import labels as L
 from eyelume.analysis.regions import region_masks
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import compile_scene, eye_point
+from eyelume.estimators.fast_run import trace_fast
 from eyelume.scene.eye import limbus_geometry
 from eyelume.scene.io import apply_overrides, load_scene
 
@@ -201,6 +203,23 @@ def test_the_ideal_lens_intrinsics_from_efl_focus_distance_and_pitch():
     assert cam["intrinsics_fit_rms_px"] < 1e-6
 
 
+def test_calibrate_camera_on_an_ideal_lens_recovers_its_exact_model():
+    """The fitting path (cv2.calibrateCamera on the chief rays), run on an ideal lens with
+    distortion, against the lens's own K and (k1, k2): the chief rays follow OpenCV's model
+    exactly, so only the fit's convergence separates them (1e-6 relative)."""
+    scene = apply_overrides(
+        load_scene("vr-offaxis"),
+        {**SMALL, "camera.ideal.k1": -0.05, "camera.ideal.k2": 0.01},
+    )
+    cs = compile_scene(scene)
+    exact, fitted = L.camera_intrinsics(cs), L.camera_intrinsics(cs, fit=True)
+    assert np.allclose(fitted["K"], exact["K"], rtol=1e-6)
+    assert fitted["dist"] == pytest.approx([-0.05, 0.01, 0.0, 0.0, 0.0], abs=1e-4)
+    assert np.allclose(fitted["R"], exact["R"], atol=1e-7)
+    assert np.allclose(fitted["t_mm"], exact["t_mm"], atol=1e-5)
+    assert fitted["intrinsics_fit_rms_px"] < 1e-4
+
+
 def test_the_paper_rigs_eye_in_the_opencv_camera_frame(paper):
     """The paper's camera looks along −z at the eye: OpenCV's R is diag(1, −1, −1) (up to the
     fit's rounding) and the eye turned by GAZE (up/right in the world) has its optical axis
@@ -220,6 +239,92 @@ def test_the_paper_rigs_eye_in_the_opencv_camera_frame(paper):
 
 
 # ------------------------------------------------------------------------------- glints
+
+
+def _centroids(images: np.ndarray) -> np.ndarray:
+    """Each glint image's intensity centroid (x, y) in pixels (OpenCV convention)."""
+    r, c = np.mgrid[0 : images.shape[1], 0 : images.shape[2]]
+    w = images.sum(axis=(1, 2))
+    return np.stack([(images * c).sum(axis=(1, 2)) / w, (images * r).sum(axis=(1, 2)) / w], 1)
+
+
+def test_glint_positions_against_the_rendered_spots_centroids(paper):
+    """The paper's camera blurs each glint over ~14 pixels (FocusWarning: the sensor sits
+    1.9 mm behind best focus), so its intensity centroid in the fast estimator's per-LED glint
+    image is a sub-pixel measurement. Two independent renders (seeds 1, 2; 200 000 light paths
+    aimed at the cornea each) give the centroids' noise: σ of one render from the pooled
+    differences, σ/√2 for their mean. The label's position must lie within 4 σ/√2 + 0.05 px
+    of the mean (0.05 px: the aberrated spot's centroid need not sit on the chief ray; 0.03 px
+    measured at 1.45 M paths), and within a quarter pixel in any case."""
+    cs, truth, label, _ = paper
+    runs = [_centroids(trace_fast(cs, 2, 80_000, seed).glint_images) for seed in (1, 2)]
+    sigma = math.sqrt(np.mean((runs[0] - runs[1]) ** 2) / 2)
+    mean = (runs[0] + runs[1]) / 2
+    got = np.array([g["position_px"] for g in label["glints"]])
+    assert all(g["visible"] for g in label["glints"]) and len(got) == 4
+    err = np.abs(got - mean)
+    assert err.max() <= 4 * sigma / math.sqrt(2) + 0.05, (err, sigma)
+    assert err.max() < 0.25
+
+
+def test_eye_openness_against_the_lid_margins_projected():
+    """Paper rig, primary gaze: the lid margins are the circles y = +4.5 mm and y = −5.5 mm of
+    the lid spheres (radius 13 mm about the eyeball centre 13.04 mm behind the vertex); their
+    front points, projected by the label's camera, bound the eyeball's run in the limbus's
+    column. Openness = that run (px) over the limbus's vertical chord, to ±1.5 px of the run
+    (pixel centres) over the chord."""
+    cs, truth, label, _ = _picture("paper2005", {})
+    cam = label["camera"]
+    z = lambda y: -13.04 + math.sqrt(13.0**2 - y**2)  # noqa: E731
+    pts = np.array([[0.0, 4.5, z(4.5)], [0.0, -5.5, z(5.5)]])
+    rvec = cv2.Rodrigues(np.array(cam["R"]))[0]
+    px = cv2.projectPoints(
+        pts, rvec, np.array(cam["t_mm"]), np.array(cam["K"]), np.array(cam["dist"])
+    )[0].reshape(-1, 2)
+    e = label["iris"]["ellipse"]
+    a, b = e["semi_axes_px"]
+    th = math.radians(e["angle_deg"])
+    chord = 2 / math.sqrt(math.cos(th) ** 2 / a**2 + math.sin(th) ** 2 / b**2)
+    expected = (px[1, 1] - px[0, 1]) / chord
+    assert label["eye_openness"] == pytest.approx(expected, abs=1.5 / chord)
+    assert 0.7 < label["eye_openness"] < 0.95  # the lids cover the limbus's top and bottom
+
+
+def test_a_glint_off_the_cornea_is_placed_on_the_sclera_by_fermats_principle():
+    """vr-offaxis, the eye turned 25° away from the nose: LED 0's reflection leaves the cornea's
+    cap. Its sclera mirror image is where |LED − P| + |P − O| is stationary for P on the
+    eyeball sphere (12 mm about the eyeball centre; O the ideal lens's centre, the pinhole
+    −Rᵀt), found here by SciPy and projected by the label's camera."""
+    cs, truth, label, _ = _picture("vr-offaxis", {**SMALL, "eye.gaze_horizontal_deg": -25.0})
+    g = label["glints"][0]
+    assert not g["on_cornea"] and g["on_sclera"] and not g["visible"]
+    cam = label["camera"]
+    r, t = np.array(cam["R"]), np.array(cam["t_mm"])
+    o = -r.T @ t
+    led = np.array(label["leds"][0]["position_mm"])
+    centre = eye_point(cs.scene, [0.0, 0.0, -limbus_geometry(cs.scene.eye)[2]])
+    rad = cs.scene.eye.sclera_radius_mm
+
+    def on_sphere(a):
+        return centre + rad * np.array(
+            [math.cos(a[1]) * math.sin(a[0]), math.sin(a[1]), math.cos(a[1]) * math.cos(a[0])]
+        )
+
+    def path(a):
+        p = on_sphere(a)
+        return np.linalg.norm(led - p) + np.linalg.norm(p - o)
+
+    bis = (led - centre) / np.linalg.norm(led - centre) + (o - centre) / np.linalg.norm(o - centre)
+    a0 = [math.atan2(bis[0], bis[2]), math.asin(bis[1] / np.linalg.norm(bis))]
+    p = on_sphere(
+        optimize.minimize(
+            path, a0, method="Nelder-Mead", options={"xatol": 1e-12, "fatol": 1e-14}
+        ).x
+    )
+    px = cv2.projectPoints(
+        p[None], cv2.Rodrigues(r)[0], t, np.array(cam["K"]), np.array(cam["dist"])
+    )[0].reshape(2)
+    assert np.hypot(*(px - g["position_px"])) < 1e-3
 
 
 def test_glint_flags_from_the_sensors_saturated_pixels(vr):

@@ -369,7 +369,7 @@ def _chief_samples(cs) -> tuple[np.ndarray, np.ndarray]:
     return np.array(pts), np.array(pix)
 
 
-def camera_intrinsics(cs) -> dict:
+def camera_intrinsics(cs, *, fit: bool | None = None) -> dict:
     """The camera's OpenCV model: ``K`` (3 × 3, px), ``dist`` (k1, k2, p1, p2, k3), ``R``
     (3 × 3), ``t_mm`` (3,) with x_cam = R x_world + t (world: the headset frame; camera:
     OpenCV's, x right, y down, z forward, mm), ``image_size`` [cols, rows],
@@ -395,15 +395,22 @@ def camera_intrinsics(cs) -> dict:
       fixed by the pixel pitch); the view's fitted pose (a shift of the pinhole along the axis
       to where the chief rays best converge) is folded into R and t.
 
+    ``fit``: None (default) as above; True fits with :func:`cv2.calibrateCamera` whatever the
+    optics (an ideal lens's fit recovers its exact model: a check of the fitting path).
+
     Cached per camera (:func:`_camera_key`): pictures that vary the eye, LEDs or exposure
     share one fit."""
-    key = _camera_key(cs.scene)
+    ideal = cs.scene.camera.optics == "ideal"
+    if fit is False and not ideal:
+        raise ValueError("camera_intrinsics(fit=False): only an ideal lens has an exact model")
+    fit = not ideal if fit is None else bool(fit)
+    key = f"{_camera_key(cs.scene)}-{fit}"
     if key not in _CAMERA_CACHE:
-        _CAMERA_CACHE[key] = _fit_camera(cs)
+        _CAMERA_CACHE[key] = _fit_camera(cs, fit)
     return json.loads(json.dumps(_CAMERA_CACHE[key]))  # a copy the caller may change
 
 
-def _fit_camera(cs) -> dict:
+def _fit_camera(cs, fit: bool) -> dict:
     import cv2
 
     from eyelume.scene.pose import opencv_extrinsics
@@ -415,7 +422,7 @@ def _fit_camera(cs) -> dict:
     r_w, t_w = opencv_extrinsics(cs.frame, fo.entrance_pupil_z)
     pts_c, pix = _chief_samples(cs)
     obj = cs.frame.world_point(pts_c) @ r_w.T + t_w  # OpenCV camera coordinates
-    if scene.camera.optics == "ideal":
+    if not fit:
         ideal = scene.camera.ideal
         v = ideal.image_distance_mm
         k = np.array([[v / px, 0.0, (cols - 1) / 2], [0.0, v / py, (rows - 1) / 2], [0, 0, 1.0]])
