@@ -122,6 +122,34 @@ def test_segmentation_pupil_matches_the_pupil_ellipse(which, request):
     assert np.hypot(*np.subtract(label["pupil"]["center_px"], e["center_px"])) < 0.1 * b
 
 
+@pytest.fixture(scope="module")
+def folded():
+    """paper2005-integrated: the camera sees the eye through an eyepiece, folded by a hot
+    mirror."""
+    return _picture("paper2005-integrated", GAZE)
+
+
+@pytest.mark.parametrize("which", ["vr", "paper", "folded"])
+def test_the_limbus_ellipse_bounds_the_segmentations_iris(which, request):
+    """The picture's iris region ends at the limbus (the chief ray meets the cornea inside its
+    clear aperture, so it reaches the iris or its root, or the sclera outside it); the limbus
+    ellipse comes from 72 limbus points imaged one by one. Outside the ellipse no pixel is iris
+    or pupil; inside it every pixel is iris, pupil or an eyelid (or skin) covering them — to
+    the same band as the pupil's test (P × 10 fit_rms_px + 1 pixel). Through the folded view
+    a Newton root on a ray that misses the mirror would put the outline elsewhere."""
+    cs, truth, label, _ = request.getfixturevalue(which)
+    assert len(truth["iris"]["edge_px"]) == 72
+    e = label["iris"]["ellipse"]
+    u = L.primary_classes(cs)
+    ell = L.ellipse_mask(e, u.shape)
+    eye = np.isin(u, [2, 3])
+    a, b = e["semi_axes_px"]
+    bound = math.pi * (a + b) * 10 * e["fit_rms_px"] + 1
+    assert (eye & ~ell).sum() <= bound
+    assert (ell & ~eye & ~np.isin(u, [4, 5])).sum() <= bound
+    assert 0.2 < label["iris"]["visible_share"] < 1.0  # the lids cover its top and bottom
+
+
 def test_segmentation_classes_and_the_openeds_view(vr):
     cs, truth, label, seg = vr
     assert seg.dtype == np.uint8 and seg.shape == (100, 100)

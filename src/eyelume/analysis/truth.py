@@ -272,24 +272,46 @@ def _pupil_truth(v: _View, pupil_c: np.ndarray) -> dict:
     }
 
 
-def _direct_image(v: _View, point: np.ndarray):
-    """The sensor point (mm) whose chief ray (through the optical elements before ``point``)
-    passes through ``point`` (camera frame) itself, with no refraction by the eye: a point on
-    the eye's outer surface, e.g. the limbus. None when it is not found."""
+def _line_of_sight(v: _View) -> np.ndarray | None:
+    """The direction (camera frame, unit) from the scene back toward the camera along the chief
+    ray of the sensor's centre, past the optical elements (a folded view's last leg)."""
+    ray = _chief_ray(v.cs, v.cam, 0.0, 0.0)
+    return None if ray is None else -ray[1] / np.linalg.norm(ray[1])
+
+
+def _direct_image(
+    v: _View, point: np.ndarray, toward: np.ndarray | None = None, guess: np.ndarray | None = None
+):
+    """The sensor point (mm) whose chief ray (past the optical elements, which lie between the
+    eye and the camera) passes through ``point`` (camera frame) itself, with no refraction by
+    the eye: a point on the eye's outer surface, e.g. the limbus. The miss is measured across
+    ``toward`` (the direction the ray arrives from, reversed: :func:`_line_of_sight`; default
+    the straight line to the entrance pupil); ``guess``: a sensor point (mm) to start from
+    first. None when it is not found."""
     cs, cam = v.cs, v.cam
     ep = np.array([0.0, 0.0, cam.entrance_pupil_z])
-    if point[2] >= ep[2]:
+    if point[2] >= ep[2] and not cs.scene.elements:
         return None
-    n = (ep - point) / np.linalg.norm(ep - point)
+    n = (ep - point) / np.linalg.norm(ep - point) if toward is None else toward
     g1, g2 = _basis(n)
 
-    def residual(s):
-        return _miss(_chief_ray(cs, cam, s[0], s[1], point), point, n, g1, g2)
+    def residual(s):  # past every element: they all lie between the eye and the camera
+        return _miss(_chief_ray(cs, cam, s[0], s[1]), point, n, g1, g2)
 
-    m = -(cs.image_z - ep[2]) / (ep[2] - point[2])  # pinhole through the entrance pupil
-    found = _solve(residual, m * point[:2])
-    if found is None and cs.scene.elements:
-        found = _solve(residual, np.zeros(2))
+    # guesses: the pinhole image through the entrance pupil, then (a view through elements
+    # may be folded: a straight guess can find a ray that misses a mirror and runs straight
+    # to the point, imaged far outside the picture) the picture's centre
+    guesses = [-(cs.image_z - ep[2]) / (ep[2] - point[2]) * point[:2]]
+    if guess is not None:
+        guesses.insert(0, guess)
+    if cs.scene.elements:
+        guesses.append(np.zeros(2))
+    half = np.array([cs.picture.width_mm, cs.picture.height_mm])  # twice the half-size
+    found = None
+    for guess in guesses:
+        found = _solve(residual, guess)
+        if found is not None and np.all(np.abs(found) <= half):
+            return found
     return found
 
 
@@ -322,11 +344,23 @@ def _iris_truth(v: _View) -> dict:
 
     cs = v.cs
     r_l, z_l, _ = limbus_geometry(cs.scene.eye)
+    toward = _line_of_sight(v) if cs.scene.elements else None
+    points = [
+        v.turned(np.array([r_l * math.cos(a), r_l * math.sin(a), -z_l]))
+        for a in 2 * np.pi * np.arange(_EDGE_POINTS) / _EDGE_POINTS
+    ]
+    found = [_direct_image(v, p, toward) for p in points]
+    # Newton may not converge from the straight guesses through a folded view: start those
+    # from a neighbour's solution, going round the circle both ways
+    for order in (range(_EDGE_POINTS), range(_EDGE_POINTS - 1, -1, -1)):
+        for k in order:
+            prev = (
+                found[(k - 1) % _EDGE_POINTS] if order.step > 0 else found[(k + 1) % _EDGE_POINTS]
+            )
+            if found[k] is None and prev is not None:
+                found[k] = _direct_image(v, points[k], toward, prev)
     limbus, seen = [], 0
-    for k in range(_EDGE_POINTS):
-        a = 2 * math.pi * k / _EDGE_POINTS
-        point = v.turned(np.array([r_l * math.cos(a), r_l * math.sin(a), -z_l]))
-        s = _direct_image(v, point)
+    for s, point in zip(found, points, strict=True):
         if s is not None:
             limbus.append(sensor_to_pixel(cs, *s))
             seen += _seen_on_eye(v, s, point)
