@@ -115,7 +115,7 @@ def score_picture(pic: np.ndarray, label: dict, azimuths, pattern, *, radius: fl
     det = detect(pic, led_azimuths_deg=azimuths, led_pattern_px=pattern)
     ms = 1e3 * (time.perf_counter() - t0)
     pupil = label.get("pupil") or {}
-    ellipse = pupil.get("ellipse") or {}
+    ellipse = pupil.get("ellipse") or {"center_px": pupil.get("center_px")}
     out = {"index": label["index"], "ok": det.ok, "detect_ms": ms, "pupil_error_px": None,
            "pupil_candidate_error_px": None, "pupil_scored": False,
            "failures": [f for f in det.failures if not f.startswith("warning")]}  # fmt: skip
@@ -211,7 +211,7 @@ def main() -> None:
     else:
         folder = args.folder
     ds = read_dataset(folder)
-    azimuths, pattern, layout = led_layout(ds.info, ds.folder)
+    azimuths, pattern, layout = led_layout(ds.spec, ds.folder)
     C.print_header("eyelume detector against a dataset's labels", C.machine())
     print(f"dataset {ds.name}: scene {ds.scene}, seed {ds.seed}, {len(ds.labels)} pictures; "
           f"LED layout from {layout}")  # fmt: skip

@@ -105,7 +105,8 @@ _GLINT, _REFLECTION = 6, 7
 
 @dataclass
 class DatasetFolder:
-    """A dataset folder as read: ``folder``, ``info`` (``dataset.json``, or {} when absent),
+    """A dataset folder as read: ``folder``, ``info`` (``dataset.json``, or {} when absent:
+    the resolved dataset file under ``dataset``, with the eyelume version and scene hashes),
     ``labels`` (the label lines, sorted by ``index``)."""
 
     folder: Path
@@ -113,17 +114,24 @@ class DatasetFolder:
     labels: list[dict]
 
     @property
+    def spec(self) -> dict:
+        """The dataset file as resolved: ``dataset.json``'s ``dataset`` object (or its top
+        level when it has none)."""
+        inner = self.info.get("dataset")
+        return inner if isinstance(inner, dict) else self.info
+
+    @property
     def name(self) -> str:
-        return str(self.info.get("name") or self.folder.name)
+        return str(self.spec.get("name") or self.folder.name)
 
     @property
     def scene(self) -> str:
-        return str(self.info.get("scene", "scene not recorded"))
+        return str(self.spec.get("scene", "scene not recorded"))
 
     @property
     def seed(self) -> int | None:
-        seed = self.info.get("seed")
-        return seed if isinstance(seed, int) else None
+        seed = self.spec.get("seed")
+        return seed if isinstance(seed, int) and not isinstance(seed, bool) else None
 
 
 def _label_line(path: Path, n: int, line: str, seen: set[int]) -> dict:
@@ -305,7 +313,7 @@ def export_openeds(
     images, labels_dir = out / split / "images", out / split / "labels"
     images.mkdir(parents=True, exist_ok=True)
     labels_dir.mkdir(parents=True, exist_ok=True)
-    bits = _adc_bits(ds.info)
+    bits = _adc_bits(ds.spec)
     counts = np.zeros(4, np.int64)
     records = []
     for k, label in enumerate(ds.labels):

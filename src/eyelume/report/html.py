@@ -443,6 +443,14 @@ def _dataset_summary(ds) -> list[tuple[str, str]]:
             mean_of(sum(bool(g.get("saturated")) for g in gs) for gs in glints),
         ),  # fmt: skip
     ]
+    render = [lab.get("render") or {} for lab in labels]
+    for key, what in (
+        ("samples_per_pixel", "render: camera samples per pixel, mean"),
+        ("median_skin_rel_error", "render: median skin pixel's relative standard error, mean"),
+        ("skin_shot_noise", "render: the sensor's relative shot noise there, mean"),
+        ("seconds", "render: seconds per picture, mean"),
+    ):
+        rows.append((what, mean_of(r.get(key) for r in render)))
     return rows
 
 
