@@ -1462,6 +1462,8 @@ def report(
         if out.is_dir():
             _fail(f"--out {out}: is a folder; give the page's file name, e.g. {out}/report.html")
         _check_out(out.parent)
+    if scene is not None and (folder / "labels.jsonl").exists():
+        _fail(f"--scene {scene}: {folder} is a dataset's folder (labels.jsonl), not a study's")
     if scene is not None and folder.is_dir():
         # --scene stores the best run in FOLDER: a read-only folder is refused before the work
         _check_out(folder, option="--scene stores the best run in")

@@ -212,3 +212,13 @@ def test_detector_benchmark_scores_against_the_labels(tmp_path):
     assert r["pupil_error_px"] == pytest.approx(3.0, abs=0.5)
     one = bench.summarise([r])
     assert (one["glints_matched"], one["glints_missed"], one["glints_false"]) == (3, 1, 1)
+
+
+def test_cli_report_on_a_dataset_folder(tmp_path):
+    write_fake_dataset(tmp_path / "set", n=2)
+    runner = CliRunner()
+    res = runner.invoke(app, ["report", str(tmp_path / "set"), "--out", str(tmp_path / "p.html")])
+    assert res.exit_code == 0, res.output
+    assert "<h1>Dataset fake-set</h1>" in (tmp_path / "p.html").read_text(encoding="utf-8")
+    res = runner.invoke(app, ["report", str(tmp_path / "set"), "--scene", "vr-offaxis"])
+    assert res.exit_code == 2 and "is a dataset's folder" in res.output, res.output
