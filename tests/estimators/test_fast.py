@@ -322,7 +322,9 @@ def test_one_led_through_the_cornea_is_the_sum_on_average():
                 1.0,
                 True,
                 True,
-                np.empty(8),
+                F.Scratch(
+                    np.empty(8), np.empty((F.ELEMENT_BRANCHES, 7)), np.zeros(1, dtype=np.int64)
+                ),
             )
             v = out.vertex
             if v.s != iris:
