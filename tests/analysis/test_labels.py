@@ -213,6 +213,24 @@ def test_the_camera_model_projects_the_limbus_onto_the_truths_pixels(which, requ
     assert np.allclose(px2, px, atol=1e-9)
 
 
+@pytest.mark.parametrize(
+    "overrides",
+    [{"eye_pose.which": "left"}, {"head_offset_mm": [1.0, -0.5, 0.7], "camera.roll_deg": 12.0}],
+    ids=["left eye", "slip and roll"],
+)
+def test_the_camera_model_for_a_left_eye_and_a_rolled_camera(overrides):
+    """A left eye (the whole headset mirrored, x → −x) and a camera rolled 12° with the headset
+    slipped: R stays a proper rotation and the limbus projects onto the truth's pixels."""
+    cs, truth, label, _ = _picture("vr-offaxis", {**SMALL, **GAZE, **overrides})
+    cam = label["camera"]
+    assert np.linalg.det(np.array(cam["R"])) == pytest.approx(1.0, abs=1e-12)
+    rvec = cv2.Rodrigues(np.array(cam["R"]))[0]
+    px = cv2.projectPoints(
+        _limbus_world(cs), rvec, np.array(cam["t_mm"]), np.array(cam["K"]), np.array(cam["dist"])
+    )[0].reshape(-1, 2)
+    assert np.abs(px - np.array(truth["iris"]["edge_px"])).max() < 1e-3
+
+
 def test_the_ideal_lens_intrinsics_from_efl_focus_distance_and_pitch():
     """fx = fy = v / p with v = 1 / (1/f − 1/s) the image distance and p the pixel pitch;
     (cx, cy) the picture's centre; dist = (k1, k2, 0, 0, 0) as the scene gives them."""
@@ -367,6 +385,27 @@ def test_glint_flags_from_the_sensors_saturated_pixels(vr):
     sat[:] = False
     sat[r + 3, c] = True  # two pixels beyond it
     assert not any(e["saturated"] for e in L._glints(cs, truth, sat) if e["led"] == g["led"])
+
+
+def test_leds_seen_directly_are_reflections():
+    """eyetrackvr's wide lens sees its LED ring: each LED in view is a 'led in view'
+    reflection and its pixel is class 7 in the segmentation (background in the OpenEDS view)."""
+    cs, truth, label, seg = _picture("eyetrackvr", {})
+    seen = [e for e in label["reflections"] if e["kind"] == "led in view" and e["visible"]]
+    assert seen
+    for e in seen:
+        c, r = (int(round(x)) for x in e["position_px"])
+        assert seg[r, c] == 7
+        assert L.openeds_map(seg)[r, c] != 7
+
+
+def test_picture_labels_refuses_arrays_of_another_size(vr):
+    cs, truth, _, _ = vr
+    masks = region_masks(cs)
+    with pytest.raises(ValueError, match="saturated"):
+        L.picture_labels(cs, None, np.zeros((10, 10), bool), None, masks, truth)
+    with pytest.raises(ValueError, match="pupil"):
+        L.picture_labels(cs, None, None, None, {**masks, "pupil": masks["pupil"][1:]}, truth)
 
 
 # ------------------------------------------------------------------------------- schema
