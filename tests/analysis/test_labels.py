@@ -373,6 +373,36 @@ def test_a_glint_off_the_cornea_is_placed_on_the_sclera_by_fermats_principle():
     assert np.hypot(*(px - g["position_px"])) < 1e-3
 
 
+def test_lashes_are_eyelid_and_glints_under_them_hidden():
+    """vr-offaxis with lashes, the eye looking 25° down (the upper lid and its lashes follow):
+    every pixel whose chief ray meets a lash (the primary surface map, read here) is class 5;
+    a glint on the cornea whose pixel shows a lid or lash is hidden, never visible; a visible
+    glint has iris or pupil under it (the cornea's cap lies within the limbus)."""
+    from eyelume.compile import LASHES_NAME
+    from eyelume.estimators.fast_run import primary_surface_map
+
+    cs, truth, label, seg = _picture(
+        "vr-offaxis", {**SMALL, "face.lashes.enabled": True, "eye.gaze_vertical_deg": -25.0}
+    )
+    under = L.primary_classes(cs)
+    surf, _ = primary_surface_map(cs)
+    lash = surf == cs.surface_names.index(LASHES_NAME)
+    assert lash.sum() > 50 and (under[lash] == 5).all()
+    hidden = [g for g in label["glints"] if g["hidden"]]
+    assert hidden and all(not g["visible"] for g in hidden)
+    under_lid = 0
+    for g in label["glints"]:
+        if g["position_px"] is None or not g["on_cornea"]:
+            continue
+        c, r = (int(round(x)) for x in g["position_px"])
+        if under[r, c] == 5:
+            assert g["hidden"]
+            under_lid += 1
+        if g["visible"]:
+            assert under[r, c] in (2, 3)
+    assert under_lid  # one glint lies behind the lid or its lashes as the camera sees it
+
+
 def test_glint_flags_from_the_sensors_saturated_pixels(vr):
     cs, truth, _, _ = vr
     sat = np.zeros((100, 100), dtype=bool)
