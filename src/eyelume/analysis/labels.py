@@ -122,11 +122,19 @@ def primary_classes(cs) -> np.ndarray:
 def _leds_seen_mask(cs, truth: dict | None) -> np.ndarray:
     """(rows, cols) bool: a disc about each LED the camera sees directly (truth's
     ``leds_in_view``, visible ones), of the radius :func:`eyelume.analysis.regions.reflection_mask`
-    gives a ghost in focus (the Airy radius, at least 1 px)."""
+    gives a ghost: half its geometric defocus blur (:func:`eyelume.analysis.ghosts._blur_px`
+    at the LED's distance from the entrance pupil: an LED beside the lens is far from the
+    plane in focus) plus the Airy radius, at least 1 px."""
+    from eyelume.analysis.ghosts import _blur_px
     from eyelume.analysis.regions import reflection_mask
 
+    ep_z = cs.first_order.entrance_pupil_z
     seen = [
-        {"visible": True, "centre_px": e["centre_px"], "blur_px": 0.0}
+        {
+            "visible": True,
+            "centre_px": e["centre_px"],
+            "blur_px": _blur_px(cs, ep_z - cs.led.points[cs.led_indices.index(e["led"])][2]),
+        }
         for e in (truth or {}).get("leds_in_view", [])
         if e["visible"]
     ]
