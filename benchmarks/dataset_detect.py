@@ -27,7 +27,9 @@ with the LED azimuths and glint pattern the base scene predicts
   detector returns (matched to an LED or not) is a detection. They are paired one to one by
   least total distance (Hungarian, ``scipy.optimize.linear_sum_assignment``) within
   ``--glint-radius`` px (3 px: glints on a 400 × 400 eye picture are a few pixels across and
-  several apart): *matched*, *false* (detections left over), *missed* (truths left over); the
+  several apart): *matched*, *false* (detections left over), *missed* (truths left over; those
+  whose label says they are not on the cornea — a reflection off the sclera — counted apart
+  too, ``glints_missed_off_cornea``: the detector looks for glints near the pupil only); the
   matched glints' position error (median, p95) and, of those the detector gave an LED, the
   share whose LED id is the label's.
 
@@ -135,6 +137,10 @@ def score_picture(pic: np.ndarray, label: dict, azimuths, pattern, *, radius: fl
         len(pairs),
     )
     out["glint_errors_px"] = [d for _, _, d in pairs]
+    paired = {t for t, _, _ in pairs}
+    out["glints_missed_off_cornea"] = sum(
+        1 for t, g in enumerate(truth) if t not in paired and not g.get("on_cornea", True)
+    )
     with_led = [(truth[t]["led"], found[f].led) for t, f, _ in pairs if found[f].led is not None]
     out["led_pairs"] = len(with_led)
     out["led_agree"] = sum(a == b for a, b in with_led)
@@ -171,6 +177,7 @@ def summarise(rows: list[dict]) -> dict:
         "glints_matched": matched,
         "glints_false": found - matched,
         "glints_missed": true - matched,
+        "glints_missed_off_cornea": sum(r["glints_missed_off_cornea"] for r in rows),
         "glint_error_px_median": _pct(g_err, 50),
         "glint_error_px_p95": _pct(g_err, 95),
         "led_id_agreement": sum(r["led_agree"] for r in rows) / leds if leds else None,
