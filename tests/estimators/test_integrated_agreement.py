@@ -1,7 +1,8 @@
 """The fast estimator against the plain forward one on ``paper2005-integrated`` (issue 14: the
 paper's Fig. 1, the eye imaged back through a converging eyepiece and a 45° hot mirror).
 
-The camera paths go through the eyepiece and off the hot mirror by analog choices; the LEDs sit
+The camera paths go through the eyepiece and off the hot mirror split at each surface into
+their reflected and transmitted parts (tests/estimators/test_element_split.py); the LEDs sit
 on the eye side, so their light reaches the face straight (next-event estimation) and through
 the cornea onto the iris (Newton's method through the cornea, on the plane through the corneal
 vertex normal to its axis — the camera frame's z = 0, used before, lay 97 mm beyond the eye
