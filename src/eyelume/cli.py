@@ -1378,15 +1378,7 @@ def study(
     from eyelume.report.optimize_outputs import write_study_table
 
     st = load_study(study_file)
-    if workers is not None and workers < 1:
-        _fail(f"--workers {workers}: must be ≥ 1")
-    if workers is not None and dask not in (None, "local"):
-        _fail(
-            f"--workers {workers} with --dask {dask}: a scheduler's cluster has its own workers "
-            "(--workers sizes --dask local or the process pool)"
-        )
-    if not 0 <= lock_timeout <= 86400:
-        _fail(f"--lock-timeout {lock_timeout}: must be 0 to 86400 s")
+    _check_executor(workers, dask, lock_timeout)
     _check_out(out)
     if (Path(out) / "results.sqlite").exists():
         from eyelume.optimize.store import read_rows
@@ -1430,6 +1422,89 @@ def study(
             highlight=False,
         )
     err.print(f"{len(rows)}/{total} runs in {out / 'results.sqlite'}; table in {table}")
+
+
+def _check_executor(workers: int | None, dask: str | None, lock_timeout: float) -> None:
+    """The executor options of ``study`` and ``dataset``."""
+    if workers is not None and workers < 1:
+        _fail(f"--workers {workers}: must be ≥ 1")
+    if workers is not None and dask not in (None, "local"):
+        _fail(
+            f"--workers {workers} with --dask {dask}: a scheduler's cluster has its own workers "
+            "(--workers sizes --dask local or the process pool)"
+        )
+    if not 0 <= lock_timeout <= 86400:
+        _fail(f"--lock-timeout {lock_timeout}: must be 0 to 86400 s")
+
+
+@app.command()
+def dataset(
+    dataset_file: Annotated[Path, typer.Argument(help="The dataset file (TOML).")],
+    out: Annotated[Path, typer.Option("--out", help="The dataset's folder (created).")],
+    resume: Annotated[
+        bool,
+        typer.Option(help="Continue the dataset in OUT (after Ctrl-C, SIGTERM or a crash)."),
+    ] = False,
+    workers: Annotated[
+        int | None, typer.Option(help="Worker processes (default: every core).")
+    ] = None,
+    dask: Annotated[
+        str | None,
+        typer.Option(help="Run on Dask: 'local' starts a LocalCluster, else a scheduler address."),
+    ] = None,
+    lock_timeout: Annotated[
+        float,
+        typer.Option(
+            "--lock-timeout",
+            help="Seconds a commit waits (after SQLite's 5 s) while another program holds the "
+            "store's write lock, before the run stops (exit 2; --resume continues).",
+        ),
+    ] = 60.0,
+) -> None:
+    """Make a labelled dataset of eye pictures: the sensor's picture (PNG), the irradiance
+    (.npy) and one label line each (labels.jsonl), every picture committed at once to
+    OUT/results.sqlite (resumable: --resume makes the missing ones, the same bytes)."""
+    from eyelume.optimize.dataset import load_dataset, refuse_not_empty, run_dataset
+
+    _check_executor(workers, dask, lock_timeout)
+    ds = load_dataset(dataset_file)
+    _check_out(out)
+    refuse_not_empty(out, resume)
+    if (Path(out) / "results.sqlite").exists():
+        from eyelume.optimize.store import read_rows
+
+        read_rows(out)  # a damaged store is one line before the banner, not after it
+    err.print(
+        f"dataset {ds.name}: {ds.pictures} pictures into {out} "
+        "(Ctrl-C, then --resume, loses nothing)"
+    )
+    with _progress_bar("[bold]pictures", "{task.completed}/{task.total}") as bar:
+        task = bar.add_task("dataset", total=ds.pictures)
+        first = [True]
+
+        def progress(done: int, total: int) -> None:
+            if first[0]:  # pictures already done: the ETA counts from here, not from 0
+                first[0] = False
+                bar.reset(task, total=total, completed=done)
+            else:
+                bar.update(task, completed=done)
+
+        try:
+            done = run_dataset(
+                ds,
+                out,
+                workers,
+                resume,
+                progress,
+                dask,
+                lock_timeout_s=lock_timeout,
+                note=lambda msg: err.print(f"[yellow]{msg}[/]", highlight=False),
+            )
+        except KeyboardInterrupt:
+            bar.stop()
+            err.print(f"interrupted: the finished pictures are in {out}; --resume continues")
+            _exit_interrupted()
+    err.print(f"{done}/{ds.pictures} pictures in {out}; labels in {out / 'labels.jsonl'}")
 
 
 @app.command()

@@ -1,17 +1,21 @@
-"""Running a study on a local process pool or a Dask cluster, committing each finished run to
-the store at once.
+"""Running independent tasks — a study's runs, a dataset's pictures — on a local process pool or
+a Dask cluster, committing each finished task at once; and running a study with them.
 
-Runs are independent and each is a pure function of its inputs (fixed seeds), so results do not
-depend on the number of workers or the order runs finish; the table is read back in plan order.
-Workers are fresh processes (``spawn``) with one Numba thread each, so N workers use N cores.
-``dask="local"`` starts a ``distributed.LocalCluster`` of ``workers`` single-threaded worker
-processes; any other value is a scheduler address. The same runs, the same results.
+Tasks are independent and each is a pure function of its inputs (fixed seeds), so results do not
+depend on the number of workers or the order tasks finish; a study's table is read back in plan
+order. Workers are fresh processes (``spawn``) with one Numba thread each, so N workers use N
+cores. ``dask="local"`` starts a ``distributed.LocalCluster`` of ``workers`` single-threaded
+worker processes; any other value is a scheduler address. The same tasks, the same results.
+
+At most a few tasks per worker are in flight (:func:`run_tasks`: ``window``): the next task is
+taken from the caller's iterator only as one finishes, so the parent holds no per-task state for
+the tasks still to come (a dataset of a million pictures costs the parent what ten cost).
 
 Workers end with their parent: each asks the kernel for SIGKILL when its parent dies
 (``prctl(PR_SET_PDEATHSIG)``, Linux) and watches its parent's pid once a second (elsewhere), so a
-study killed with ``kill -9`` leaves no worker behind. When the study stops — Ctrl-C, SIGTERM (the
+study killed with ``kill -9`` leaves no worker behind. When the run stops — Ctrl-C, SIGTERM (the
 command line turns it into the same interrupt), a commit that cannot be made — the queue is
-dropped and the workers are terminated at once: no run is computed only to be thrown away.
+dropped and the workers are terminated at once: no task is computed only to be thrown away.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ import os
 import signal
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
@@ -34,7 +38,7 @@ from eyelume.optimize.study import Study, plan_runs, run_key, run_metrics
 from eyelume.scene.io import load_scene
 from eyelume.scene.model import Scene
 
-__all__ = ["run_study"]
+__all__ = ["run_study", "run_tasks"]
 
 
 def _init_worker(parent: int | None = None) -> None:
@@ -75,6 +79,16 @@ def _end_pool(pool: ProcessPoolExecutor) -> None:
         proc.join(timeout=5)
         if proc.is_alive():
             proc.kill()
+
+
+def _in_worker(fn: Callable, args: tuple):
+    """``fn(*args)`` with one Numba thread in the calling thread (a Dask worker runs its tasks
+    in a thread of its own, which the pool's initializer never saw)."""
+    import numba
+
+    if numba.get_num_threads() != 1:
+        numba.set_num_threads(1)
+    return fn(*args)
 
 
 def _one(scene_json: dict, overrides: dict, study_json: dict) -> tuple[dict, float]:
@@ -132,39 +146,84 @@ def run_study(
         finished = len(runs) - len(todo)
         if progress:
             progress(finished, len(runs))
-        workers = workers or os.cpu_count() or 1
         scene_json = base.model_dump(mode="json")
         study_json = study.model_dump(mode="json")
 
-        def commit(i: int, r: dict, k: str, result: tuple[dict, float]) -> None:
+        def commit(tag: tuple[int, dict, str], result: tuple[dict, float]) -> None:
             nonlocal finished
+            i, r, k = tag
             store.put(k, i, study.name, r, result[0], result[1])
             finished += 1
             if progress:
                 progress(finished, len(runs))
 
-        if dask is not None:
-            _run_on_dask(dask, workers, todo, scene_json, study_json, commit)
-        else:
-            _run_on_pool(workers, todo, scene_json, study_json, commit)
+        tasks = (((i, r, k), (scene_json, r, study_json)) for i, r, k in todo)
+        run_tasks(_one, tasks, commit, workers, dask)
         return store.rows()
     finally:
         store.close()
 
 
-def _run_on_pool(workers, todo, scene_json, study_json, commit) -> None:
-    """The runs on a local pool of ``spawn`` worker processes that end with this one; each
+#: Tasks in flight per worker (:func:`run_tasks`): enough that a worker never waits for the
+#: parent's commit, few enough that the parent holds almost nothing per task.
+TASKS_PER_WORKER = 2
+
+
+def run_tasks(
+    fn: Callable,
+    tasks: Iterable[tuple[object, tuple]],
+    commit: Callable[[object, object], None],
+    workers: int | None = None,
+    dask: str | None = None,
+    window: int | None = None,
+) -> None:
+    """Run ``fn(*args)`` for each ``(tag, args)`` of ``tasks`` on worker processes and call
+    ``commit(tag, result)`` in this process as each finishes (in the order they finish).
+
+    ``fn`` must be a module-level function (it is pickled by name) and each task a pure
+    function of its arguments. ``workers``: processes of the local pool, or of a Dask
+    LocalCluster with ``dask="local"`` (default: every core); ``dask``: None for the local pool,
+    ``"local"``, or a scheduler's address (its own workers). ``window``: most tasks in flight
+    (default :data:`TASKS_PER_WORKER` per worker); ``tasks`` is read lazily, one task as another
+    finishes. KeyboardInterrupt (Ctrl-C, SIGTERM via the command line), a worker dying, or an
+    error in ``fn`` or ``commit`` stops every worker at once and is raised; what was committed
+    stays."""
+    workers = workers or os.cpu_count() or 1
+    if dask is not None:
+        _run_on_dask(dask, workers, fn, iter(tasks), commit, window)
+    else:
+        _run_on_pool(workers, fn, iter(tasks), commit, window or TASKS_PER_WORKER * workers)
+
+
+def _submit_some(submit: Callable, tasks: Iterator, pending: dict, window: int) -> None:
+    """Submit tasks from ``tasks`` until ``window`` are pending (or none is left)."""
+    while len(pending) < window:
+        try:
+            tag, args = next(tasks)
+        except StopIteration:
+            return
+        pending[submit(tag, args)] = tag
+
+
+def _run_on_pool(workers, fn, tasks, commit, window) -> None:
+    """The tasks on a local pool of ``spawn`` worker processes that end with this one; each
     result is committed as it arrives; an interrupt or error ends the workers at once."""
     ctx = mp.get_context("spawn")
     pool = ProcessPoolExecutor(
         workers, mp_context=ctx, initializer=_init_worker, initargs=(os.getpid(),)
     )
     try:
-        pending = {pool.submit(_one, scene_json, r, study_json): (i, r, k) for i, r, k in todo}
+        pending: dict = {}
+
+        def submit(tag, args):
+            return pool.submit(_in_worker, fn, args)
+
+        _submit_some(submit, tasks, pending, window)
         while pending:
             ready, _ = wait(pending, return_when=FIRST_COMPLETED)
             for fut in ready:
-                commit(*pending.pop(fut), fut.result())
+                commit(pending.pop(fut), fut.result())
+            _submit_some(submit, tasks, pending, window)
     except (KeyboardInterrupt, BrokenProcessPool):
         # Ctrl-C / SIGTERM (a worker hit by Ctrl-C breaks the pool): what is committed stays;
         # drop the queue and end the workers instead of waiting for them
@@ -176,8 +235,8 @@ def _run_on_pool(workers, todo, scene_json, study_json, commit) -> None:
     pool.shutdown()
 
 
-def _run_on_dask(address, workers, todo, scene_json, study_json, commit) -> None:
-    """The same runs on a Dask cluster: a new LocalCluster for "local", else the scheduler at
+def _run_on_dask(address, workers, fn, tasks, commit, window) -> None:
+    """The same tasks on a Dask cluster: a new LocalCluster for "local", else the scheduler at
     ``address``; each result is committed by this process as it arrives."""
     from dask.distributed import Client, LocalCluster, as_completed
 
@@ -191,12 +250,21 @@ def _run_on_dask(address, workers, todo, scene_json, study_json, commit) -> None
         client = Client(address)
     try:
         client.run(_init_worker)
-        futures = {
-            client.submit(_one, scene_json, r, study_json, key=f"run-{k}", pure=False): (i, r, k)
-            for i, r, k in todo
-        }
-        for fut in as_completed(list(futures)):
-            commit(*futures[fut], fut.result())
+        if window is None:
+            window = TASKS_PER_WORKER * max(1, sum(client.nthreads().values()))
+        pending: dict = {}
+
+        def submit(tag, args):
+            return client.submit(_in_worker, fn, args, pure=False)  # a random key each
+
+        _submit_some(submit, tasks, pending, window)
+        done = as_completed(list(pending))
+        for fut in done:
+            commit(pending.pop(fut), fut.result())
+            before = set(pending)
+            _submit_some(submit, tasks, pending, window)
+            for new in set(pending) - before:
+                done.add(new)
     finally:
         client.close()
         if cluster is not None:

@@ -169,6 +169,18 @@ class ResultStore:
         """Keys of the finished runs."""
         return {k for (k,) in self.db.execute("SELECT key FROM runs")}
 
+    def has(self, key: str) -> bool:
+        """Whether the run ``key`` is finished (one indexed look-up: a dataset of a million
+        pictures asks picture by picture instead of holding every key)."""
+        return self.db.execute("SELECT 1 FROM runs WHERE key = ?", (key,)).fetchone() is not None
+
+    def count(self, below: int | None = None) -> int:
+        """How many runs are finished (those of plan index < ``below`` when given)."""
+        if below is None:
+            return int(self.db.execute("SELECT COUNT(*) FROM runs").fetchone()[0])
+        sql = "SELECT COUNT(*) FROM runs WHERE idx < ?"
+        return int(self.db.execute(sql, (int(below),)).fetchone()[0])
+
     def studies(self) -> set[str]:
         """Names of the studies that wrote here."""
         return {s for (s,) in self.db.execute("SELECT DISTINCT study FROM runs")}
@@ -202,6 +214,13 @@ class ResultStore:
     def rows(self) -> list[dict]:
         """Every finished run, in plan order."""
         return _as_rows(self.db.execute(f"SELECT {_COLUMNS} FROM runs ORDER BY idx"))
+
+    def each_row(self):
+        """Every finished run in plan order, one at a time (a generator over the database's
+        cursor: the rows are never all in memory)."""
+        cursor = self.db.execute(f"SELECT {_COLUMNS} FROM runs ORDER BY idx")
+        for row in cursor:
+            yield from _as_rows([row])
 
     def _unlock(self) -> None:
         fcntl.flock(self._lock, fcntl.LOCK_UN)

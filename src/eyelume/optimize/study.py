@@ -119,32 +119,45 @@ class Study(_Table):
     population: Population | None = None
 
 
-def load_study(path: str | Path) -> Study:
-    """Read and validate a study file; SceneError naming the field and value on bad input."""
+def read_input_file(path: Path, kind: str, model: type[_Table]):
+    """A TOML input file (a study, a dataset) read and validated as ``model``: SceneError in
+    one line naming ``kind`` and the file, and the field and value, on bad input. The text as
+    scene files take it: UTF-8 (BOM or not), or what an editor saved (UTF-16, Windows-1252)."""
     p = Path(path)
     try:
         raw = p.read_bytes()
     except OSError as exc:
-        raise SceneError(f"study {p}: {exc.strerror or exc}") from None
-    # as scene files: UTF-8 (BOM or not), or what an editor saved (UTF-16, Windows-1252)
+        raise SceneError(f"{kind} {p}: {exc.strerror or exc}") from None
     text = decode_text(raw, p, SceneError).lstrip("\ufeff")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"study {p}: not valid TOML: {exc}") from None
+        raise SceneError(f"{kind} {p}: not valid TOML: {exc}") from None
     try:
-        study = Study.model_validate(data)
+        return model.model_validate(data)
     except ValueError as exc:
         first = exc.errors()[0] if hasattr(exc, "errors") else {"loc": (), "msg": str(exc)}
         loc = ".".join(str(x) for x in first.get("loc", ())) or "(top level)"
         value = first.get("input")
+        msg = str(first.get("msg")).removeprefix("Value error, ")
         if first.get("type") in ("missing", "extra_forbidden") or isinstance(value, dict):
-            raise SceneError(f"study {p}: field '{loc}': {first.get('msg')}") from None
-        raise SceneError(str(first.get("msg")), file=f"study {p}", field=loc, value=value) from None
-    if study.scene not in preset_names() and not Path(study.scene).is_absolute():
-        # a scene file named by a relative path is the study file's neighbour, not the
-        # current directory's
-        study = study.model_copy(update={"scene": str((p.parent / study.scene).absolute())})
+            raise SceneError(f"{kind} {p}: field '{loc}': {msg}") from None
+        raise SceneError(msg, file=f"{kind} {p}", field=loc, value=value) from None
+
+
+def beside(path: Path, scene: str) -> str:
+    """A scene named in an input file at ``path``: a preset as it is, a relative file path
+    made absolute against that file's folder (its neighbour, not the current directory's)."""
+    if scene in preset_names() or Path(scene).is_absolute():
+        return scene
+    return str((Path(path).parent / scene).absolute())
+
+
+def load_study(path: str | Path) -> Study:
+    """Read and validate a study file; SceneError naming the field and value on bad input."""
+    p = Path(path)
+    study = read_input_file(p, "study", Study)
+    study = study.model_copy(update={"scene": beside(p, study.scene)})
     try:
         base = load_scene(study.scene)
     except EyelumeError as exc:

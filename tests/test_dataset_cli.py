@@ -1,0 +1,116 @@
+"""`eyelume dataset` (issue 17): bad input in one line with exit code 2 before anything is
+written, a non-empty --out refused without --resume, SIGTERM stopping cleanly (finished pictures
+and their labels kept, no worker left, exit 143) and --resume finishing the rest."""
+
+from __future__ import annotations
+
+import json
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+
+import psutil
+import pytest
+from typer.testing import CliRunner
+
+from eyelume.cli import app
+from eyelume.scene.io import load_scene, save_scene
+
+runner = CliRunner()
+
+TEXT = """
+name = "tiny"
+scene = "tiny.toml"
+seed = 3
+pictures = {pictures}
+samples_per_pixel = 1
+[[vary]]
+path = "eye.pupil_diameter_mm"
+range = [2.0, 7.0]
+"""
+
+
+def write(tmp_path, text=TEXT, pictures=3):
+    sc = load_scene("vr-offaxis", {"sensor.cols": 40, "sensor.rows": 40, "sensor.width_mm": 1.2,
+                                   "sensor.height_mm": 1.2})  # fmt: skip
+    save_scene(sc, tmp_path / "tiny.toml")
+    p = tmp_path / "ds.toml"
+    p.write_text(text.format(pictures=pictures), encoding="utf-8")
+    return p
+
+
+@pytest.mark.parametrize(
+    ("edit", "args", "words"),
+    [
+        (lambda t: t.replace("[2.0, 7.0]", "[2.0, 70.0]"), [], ["vary[0]", "70"]),
+        (lambda t: t.replace("pictures = 3", "pictures = 'many'"), [], ["pictures"]),
+        (lambda t: t, ["--workers", "0"], ["--workers 0"]),
+        (lambda t: t, ["--workers", "2", "--dask", "tcp://x:1"], ["--dask"]),
+    ],
+)
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, edit, args, words):
+    p = write(tmp_path)
+    p.write_text(edit(p.read_text(encoding="utf-8")), encoding="utf-8")
+    out = tmp_path / "out"
+    res = runner.invoke(app, ["dataset", str(p), "--out", str(out), *args])
+    assert res.exit_code == 2, res.output
+    lines = [x for x in res.output.splitlines() if x.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error:"), res.output
+    for w in words:
+        assert w in lines[0]
+    assert not out.exists()
+
+
+def test_a_non_empty_out_is_refused_without_resume(tmp_path):
+    p = write(tmp_path)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine", encoding="utf-8")
+    res = runner.invoke(app, ["dataset", str(p), "--out", str(out)])
+    assert res.exit_code == 2 and "not empty" in res.output and "--resume" in res.output
+    assert sorted(x.name for x in out.iterdir()) == ["notes.txt"]
+
+
+@pytest.mark.slow
+def test_sigterm_keeps_the_finished_pictures_and_resume_finishes(tmp_path):
+    p = write(tmp_path, pictures=8)
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-c", "from eyelume.cli import app; app()", "dataset", str(p),
+           "--out", str(out), "--workers", "2"]  # fmt: skip
+    proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+    db, n, workers = out / "results.sqlite", 0, []
+    try:
+        deadline = time.time() + 300
+        while time.time() < deadline and proc.poll() is None and n < 2:
+            try:
+                with sqlite3.connect(f"{db.absolute().as_uri()}?mode=ro", uri=True) as con:
+                    n = con.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
+            except sqlite3.OperationalError:
+                n = 0
+            time.sleep(0.05)
+        workers = [c.pid for c in psutil.Process(proc.pid).children(recursive=True)]
+        proc.send_signal(signal.SIGTERM)  # the command only, as a service manager does
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(timeout=30)
+    assert proc.returncode == 143, err
+    assert "--resume" in err and "Traceback" not in err
+    deadline = time.time() + 15
+    while time.time() < deadline and any(psutil.pid_exists(w) and psutil.Process(w).status()
+                                         != psutil.STATUS_ZOMBIE for w in workers):  # fmt: skip
+        time.sleep(0.2)
+    assert not any(psutil.pid_exists(w) and psutil.Process(w).status() != psutil.STATUS_ZOMBIE
+                   for w in workers), "workers outlived the command"  # fmt: skip
+    labels = (out / "labels.jsonl").read_text(encoding="utf-8").splitlines()
+    done = [json.loads(x)["index"] for x in labels]
+    assert 2 <= len(done) < 8 and done == sorted(done)
+    for i in done:
+        assert (out / "images" / f"{i:06d}.png").is_file()
+    res = runner.invoke(app, ["dataset", str(p), "--out", str(out), "--resume", "--workers", "1"])
+    assert res.exit_code == 0, res.output
+    labels = (out / "labels.jsonl").read_text(encoding="utf-8").splitlines()
+    assert [json.loads(x)["index"] for x in labels] == list(range(8))
