@@ -200,7 +200,15 @@ def test_a_picture_label_holds_its_draws_and_truth(tmp_path):
     # 8 bits: DN × 255 / (2^10 − 1), rounded
     assert np.array_equal(pic.image, np.rint(pic.counts * (255 / 1023)).astype(np.uint8))
     assert len(lab["glints"]) == 8
+    assert lab["segmentation"] == "segmentation/000001.png"
+    assert pic.segmentation.shape == (40, 40) and pic.segmentation.dtype == np.uint8
     json.dumps(lab, allow_nan=False)
+    jsonschema = pytest.importorskip("jsonschema")
+    from importlib import resources
+
+    schema = json.loads((resources.files("eyelume.analysis") / "dataset_label.schema.json")
+                        .read_text(encoding="utf-8"))  # fmt: skip
+    jsonschema.validate(json.loads(D.dumps(lab, indent=None)), schema)
 
 
 @pytest.mark.slow
@@ -238,9 +246,12 @@ def test_killed_then_resumed_equals_an_uninterrupted_run_and_one_picture_alone(t
         assert a[name] == b[name], name
     lines = (clean / "labels.jsonl").read_text(encoding="utf-8").splitlines()
     assert [json.loads(x)["index"] for x in lines] == list(range(6))
+    assert sum(name.startswith("segmentation/") for name in a) == 6
+    assert "schema.json" in a and "dataset.json" in a
     # one picture alone, in this process
     pic = D.make_picture(ds, 4)
     assert D._png(pic.image) == a["images/000004.png"]
+    assert D._png(pic.segmentation) == a["segmentation/000004.png"]
     assert np.array_equal(pic.irradiance, np.load(clean / "irradiance/000004.npy"))
     assert json.loads(D.dumps(pic.label, indent=None)) == json.loads(lines[4])
 

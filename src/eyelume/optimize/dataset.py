@@ -1,6 +1,7 @@
 """Labelled synthetic eye datasets (issue 17): a dataset file, each picture's draws and seed, the
-picture made by one pure function of (dataset, index), and the dataset run on the study's
-executors and result store.
+picture made by one pure function of (dataset, index) — its labels by
+:func:`eyelume.analysis.labels.picture_labels` — and the dataset run on the study's executors
+and result store.
 
 A dataset file (TOML)::
 
@@ -61,10 +62,11 @@ that picture's own median skin pixel. A number is a fixed rel_error target;
 **The folder** (``/work/dataset_spec.md``, README): ``dataset.json``, ``results.sqlite`` (the
 study's :class:`~eyelume.optimize.store.ResultStore`: one row per picture, the label as its
 metrics), ``labels.jsonl`` (rewritten from the store, sorted by index, when a run ends or is
-interrupted), ``images/``, ``irradiance/``. A worker writes a picture's files (each to a
-temporary name, then renamed) and returns its label; the parent commits it: a picture is done
-when its label is in the store, and ``resume`` renders the others again, overwriting their
-files with the same bytes.
+interrupted), ``schema.json`` (the label lines' JSON schema), ``images/``, ``irradiance/``,
+``segmentation/`` (the class ids of :mod:`eyelume.analysis.labels`). A worker writes a
+picture's files (each to a temporary name, then renamed) and returns its label; the parent
+commits it: a picture is done when its label is in the store, and ``resume`` renders the
+others again, overwriting their files with the same bytes.
 """
 
 from __future__ import annotations
@@ -78,6 +80,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
+from importlib import resources
 from pathlib import Path
 from typing import Literal
 
@@ -95,7 +98,6 @@ from eyelume.scene.population import Person, Population, sample_people
 __all__ = [
     "DATASET_FILE",
     "LABELS_FILE",
-    "PIXEL_CONVENTION",
     "Dataset",
     "Picture",
     "PicturePlan",
@@ -113,10 +115,8 @@ __all__ = [
 DATASET_FILE = "dataset.json"
 #: One label per line, sorted by index (rewritten from the store when a run ends).
 LABELS_FILE = "labels.jsonl"
-PIXEL_CONVENTION = (
-    "OpenCV: pixel (c, r) centred at (x, y) = (c, r), x right, y down, origin at the centre of "
-    "the top-left pixel"
-)
+#: The label lines' JSON schema (a copy of eyelume/analysis/dataset_label.schema.json).
+SCHEMA_FILE = "schema.json"
 #: Most pictures a dataset may plan (a typo guard: 10⁷ pictures are months of this machine).
 MAX_PICTURES = 10_000_000
 #: Digits of a picture's file name (more when the dataset has more pictures).
@@ -536,14 +536,17 @@ def sensor_noise_target(scene: Scene, seed: int) -> tuple[float, float]:
 class Picture:
     """One picture of a dataset (:func:`make_picture`): its ``plan``, ``scene``, the digital
     picture ``counts`` ((rows, cols) uint16 DN), the ``image`` written to the PNG (uint8 or
-    uint16), the ``irradiance`` ((rows, cols) float32 W/mm² at the scene's wavelength) and the
-    ``label`` (one line of labels.jsonl)."""
+    uint16), the ``irradiance`` ((rows, cols) float32 W/mm² at the scene's wavelength), the
+    ``segmentation`` ((rows, cols) uint8 class ids, :data:`eyelume.analysis.labels.
+    SEGMENTATION_CLASSES`) and the ``label`` (one line of labels.jsonl: the bookkeeping keys
+    and :func:`eyelume.analysis.labels.picture_labels`' labels)."""
 
     plan: PicturePlan
     scene: Scene
     counts: np.ndarray
     image: np.ndarray
     irradiance: np.ndarray
+    segmentation: np.ndarray
     label: dict
 
 
@@ -580,6 +583,7 @@ def make_picture(ds: Dataset, index: int, b: _Bases | None = None) -> Picture:
 
     Raises KeyboardInterrupt when Ctrl-C or SIGTERM cut its render short (a partial picture is
     never a picture of the dataset)."""
+    from eyelume.analysis.labels import picture_labels
     from eyelume.analysis.truth import eye_truth
     from eyelume.compile import compile_scene
     from eyelume.detectors.sensor import digitize, electrons_per_w_mm2
@@ -606,20 +610,20 @@ def make_picture(ds: Dataset, index: int, b: _Bases | None = None) -> Picture:
         n_e = skin["median_w_mm2"] * electrons_per_w_mm2(sc.sensor, float(sc.wavelength_nm))
         shot = 1.0 / math.sqrt(n_e) if n_e > 0 else None
     truth = eye_truth(cs)
-    rows, cols = digital.counts.shape
+    labels, segmentation = picture_labels(
+        cs, digital.counts, digital.saturated, irradiance, result.regions, truth
+    )
     label = {
         "index": index,
         "seed": plan.seed,
         "image": _file(ds, "images", index, "png"),
         "irradiance": _file(ds, "irradiance", index, "npy") if ds.irradiance else None,
-        "segmentation": None,
+        "segmentation": _file(ds, "segmentation", index, "png"),
         "image_bits": ds.image_bits,
-        "size_px": [cols, rows],
-        "pixel_convention": PIXEL_CONVENTION,
         "varied": plan.varied,
         "person": person,
         "glasses": plan.glasses,
-        **_truth_label(truth),
+        **labels,
         "render": {
             "estimator": "fast",
             "samples_per_pixel": result.samples_per_pixel,
@@ -628,30 +632,9 @@ def make_picture(ds: Dataset, index: int, b: _Bases | None = None) -> Picture:
             **budget,
         },
     }
-    return Picture(plan, sc, digital.counts, image, irradiance.astype(np.float32), label)
-
-
-def _truth_label(truth: dict) -> dict:
-    """The label's truth entries (gaze, pupil centre, glints) from :func:`eye_truth`."""
-    pupil = truth["pupil"]
-    return {
-        "gaze_deg": truth["visual_axis_deg"],
-        "optical_gaze_deg": truth["gaze_deg"],
-        "pupil": {
-            "center_px": pupil["centre_px"],
-            "diameter_mm": pupil["diameter_mm"],
-            "visible_share": pupil["visible_fraction"],
-        },
-        "glints": [
-            {
-                "led": g["led"],
-                "position_px": g["centre_px"],
-                "on_cornea": g["on_cornea"],
-                "visible": g["visible"],
-            }
-            for g in truth["glints"]
-        ],  # fmt: skip
-    }
+    return Picture(
+        plan, sc, digital.counts, image, irradiance.astype(np.float32), segmentation, label
+    )
 
 
 # --- files ------------------------------------------------------------------------------------
@@ -678,6 +661,7 @@ def write_picture(pic: Picture, out: Path) -> None:
     """The picture's files in ``out`` (the label names them), each written atomically."""
     label = pic.label
     _write_atomic(out / label["image"], _png(pic.image))
+    _write_atomic(out / label["segmentation"], _png(pic.segmentation))
     if label["irradiance"] is not None:
         buf = io.BytesIO()
         np.save(buf, pic.irradiance)
@@ -705,7 +689,7 @@ def _picture_task(context: str, out: str, index: int) -> tuple[dict, float]:
 
 
 def _folders(ds: Dataset) -> list[str]:
-    return ["images", *(["irradiance"] if ds.irradiance else [])]
+    return ["images", "segmentation", *(["irradiance"] if ds.irradiance else [])]
 
 
 def _prepare(ds: Dataset, b: _Bases, out: Path, resume: bool) -> None:
@@ -720,6 +704,7 @@ def _prepare(ds: Dataset, b: _Bases, out: Path, resume: bool) -> None:
         "scene_json_sha256": _sha(b.base),
         "glasses_scene_json_sha256": None if b.glasses is None else _sha(b.glasses),
         "picture_key_sha256": prefix,
+        "adc_bits": b.base.sensor.adc_bits,
     }
     old_path = out / DATASET_FILE
     if old_path.is_file():
@@ -734,6 +719,8 @@ def _prepare(ds: Dataset, b: _Bases, out: Path, resume: bool) -> None:
                 file=old_path,
             )
     write_json(old_path, record)
+    schema = resources.files("eyelume.analysis") / "dataset_label.schema.json"
+    _write_atomic(out / SCHEMA_FILE, schema.read_bytes())
     for folder in _folders(ds):
         (out / folder).mkdir(exist_ok=True)
         for stale in (out / folder).glob(".*.tmp"):
