@@ -1500,6 +1500,9 @@ def dataset(
                 lock_timeout_s=lock_timeout,
                 note=lambda msg: err.print(f"[yellow]{msg}[/]", highlight=False),
             )
+        except OSError as exc:  # a full disk, a folder made read-only meanwhile
+            bar.stop()
+            _fail(f"--out {out}: {exc}; the finished pictures are kept: --resume continues")
         except KeyboardInterrupt:
             bar.stop()
             err.print(f"interrupted: the finished pictures are in {out}; --resume continues")

@@ -695,8 +695,12 @@ def _folders(ds: Dataset) -> list[str]:
 def _prepare(ds: Dataset, b: _Bases, out: Path, resume: bool) -> None:
     """Refuse a folder that is not this dataset's to continue; write dataset.json; make the
     picture folders and drop temporary files a killed run left."""
-    from eyelume import __version__
+    from importlib.metadata import PackageNotFoundError, version
 
+    try:
+        __version__ = version("eyelume")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        __version__ = "unknown"
     prefix = b.key_prefix()
     record = {
         "dataset": ds.model_dump(mode="json"),
