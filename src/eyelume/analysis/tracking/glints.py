@@ -180,9 +180,13 @@ def _bright_mask(u8: np.ndarray, floor8: int, params) -> tuple[np.ndarray, np.nd
         w = max(5, int(round(min(rows, cols) / 16.0)))
         w = w if w % 2 else w + 1
     lv = params.glint_level
-    local = cv2.addWeighted(cv2.blur(u8, (w, w)), 1.0 - lv, u8, 0.0, 255.0 * lv)
-    # u8 ≥ local and u8 > floor8, i.e. u8 ≥ max(local, floor8 + 1): one comparison
-    above = cv2.compare(u8, cv2.max(local, float(floor8 + 1)), cv2.CMP_GE)
+    # u8 ≥ local and u8 > floor8, i.e. u8 ≥ max(local, floor8 + 1): one comparison, with
+    # local = addWeighted(box mean, 1 − level, ·, 0, 255 level) and the max taken by a look-up
+    # table over the box mean's 256 values, made by the same two OpenCV calls (the same bytes
+    # as on the whole picture, without two full-picture passes).
+    levels = np.arange(256, dtype=np.uint8).reshape(1, 256)
+    lut = cv2.max(cv2.addWeighted(levels, 1.0 - lv, levels, 0.0, 255.0 * lv), float(floor8 + 1))
+    above = cv2.compare(u8, cv2.LUT(cv2.blur(u8, (w, w)), lut), cv2.CMP_GE)
     k = params.glint_close_px
     if k is None:
         k = int(round(min(rows, cols) / 160.0))

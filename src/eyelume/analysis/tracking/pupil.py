@@ -315,10 +315,19 @@ def _refine_edge(
 
 
 def _fit(x: np.ndarray, y: np.ndarray, diam: float) -> Ellipse | None:
+    """:func:`_fit_points` of the points (x, y)."""
     if len(x) < 5:
         return None
-    e = Ellipse.from_box(cv2.fitEllipse(np.column_stack([x, y]).astype(np.float32)))
-    ok = np.isfinite([e.cx, e.cy, e.a, e.b]).all() and 0 < min(e.a, e.b)
+    return _fit_points(np.column_stack([x, y]).astype(np.float32), diam)
+
+
+def _fit_points(pts: np.ndarray, diam: float) -> Ellipse | None:
+    """``cv2.fitEllipse`` of ``pts`` ((n, 2) float32) as an :class:`Ellipse`, or None when there
+    are fewer than 5, it is degenerate, or it is larger than 5 × ``diam``."""
+    if len(pts) < 5:
+        return None
+    e = Ellipse.from_box(cv2.fitEllipse(pts))
+    ok = all(map(math.isfinite, (e.cx, e.cy, e.a, e.b))) and 0 < min(e.a, e.b)
     return e if ok and max(e.a, e.b) < 5.0 * diam else None
 
 
@@ -343,11 +352,12 @@ def _best_run(x, y, e: Ellipse, d: np.ndarray, diam: float, params):
     and spreads are taken for all of them at once.)"""
     n = len(x)
     fits, runs = [], []
+    pts = np.column_stack([x, y]).astype(np.float32)
     for frac in (0.5, 0.3):
         m = max(params.min_edge_points, int(frac * n))
         for s0 in range(0, n, max(1, n // 12)):
             idx = (s0 + np.arange(m)) % n
-            h = _fit(x[idx], y[idx], diam)
+            h = _fit_points(pts[idx], diam)
             if h is not None:
                 fits.append(h)
                 runs.append(idx)
@@ -507,26 +517,38 @@ def _stride(n: int) -> int:
 
 def _fill_glints(roi: np.ndarray, bright: np.ndarray, params) -> None:
     """Each glint of ``bright`` (grown by its own radius r, ≥ ``glint_margin_px``, + 2 px) takes
-    the darkest value of ``roi`` within r + 2 px, in place: glints of one size class (⌈r⌉) at
-    a time, so a large bright blob (a saturated patch of skin taken for a glint) does not make
-    every small glint reach as far."""
-    _, lab, stats, _ = cv2.connectedComponentsWithStats(bright, connectivity=8)
+    the darkest value of ``roi`` within r + 2 px, in place: each glint with its own reach, so a
+    large bright blob (a saturated patch of skin taken for a glint) does not make every small
+    glint reach as far.
+
+    Worked glint by glint in its own window — the glint's box grown by its reach g, and for the
+    erosion that box padded by the element's half-width (outside the roi nothing counts, as for
+    the whole roi) — which gives the same pixels as a dilation and an erosion of the whole roi
+    per size class, at a fraction of the cost when the glints are spread over the picture."""
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(bright, connectivity=8)
+    if n < 2:
+        return
+    rows, cols = roi.shape
     radius = np.ceil(np.sqrt(stats[:, cv2.CC_STAT_AREA] / math.pi)).astype(int)
-    radius[0] = -1
     src = roi.copy()
-    lab8 = lab.astype(np.uint8) if len(radius) <= 256 else None
-    for rc in np.unique(radius[1:]):
-        if lab8 is not None:  # a look-up table over the labels: one pass, no index array
-            lut = np.zeros(256, np.uint8)
-            lut[: len(radius)][radius == rc] = 255
-            own = cv2.LUT(lab8, lut)
-        else:
-            own = np.where(radius[lab] == rc, 255, 0).astype(np.uint8)
+    for i in range(1, n):
+        rc = int(radius[i])
+        x, y, w, h = (int(v) for v in stats[i, :4])
         g = int(math.ceil(max(params.glint_margin_px, rc))) + 2
+        gx0, gy0 = max(0, x - g), max(0, y - g)
+        gx1, gy1 = min(cols, x + w + g), min(rows, y + h + g)
+        own = cv2.compare(lab[gy0:gy1, gx0:gx1], i, cv2.CMP_EQ)
         grown = cv2.dilate(own, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2))
-        k = 2 * (int(rc) + 2) + 1
-        eroded = cv2.erode(src, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
-        np.copyto(roi, np.minimum(roi, eroded), where=grown > 0)
+        k = 2 * (rc + 2) + 1
+        r = k // 2
+        ex0, ey0 = max(0, gx0 - r), max(0, gy0 - r)
+        ex1, ey1 = min(cols, gx1 + r), min(rows, gy1 + r)
+        eroded = cv2.erode(
+            src[ey0:ey1, ex0:ex1], cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+        )
+        eroded = eroded[gy0 - ey0 : gy1 - ey0, gx0 - ex0 : gx1 - ex0]
+        sub = roi[gy0:gy1, gx0:gx1]
+        np.copyto(sub, np.minimum(sub, eroded), where=grown > 0)
 
 
 def work_picture(
@@ -1229,7 +1251,13 @@ def _implausible(e: Ellipse, params) -> str | None:
 def _group_medians(vals: np.ndarray, k: np.ndarray, n: int, min_count: int = 3) -> np.ndarray:
     """The median (as :func:`median`) of ``vals`` in each group ``k`` = 0 … n − 1, NaN for a
     group of fewer than ``min_count`` values: one sort by (group, value) for all the groups."""
-    sv = vals[np.lexsort((vals, k))].astype(np.float64)
+    if vals.dtype.kind in "iu" and vals.dtype.itemsize <= 2:
+        # Integers: one sort of (group, value) packed in an int64 (the same order as the
+        # lexsort below, ~3 × faster).
+        key = (k.astype(np.int64) << 32) + (vals.astype(np.int64) + 65536)
+        sv = ((np.sort(key) & 0xFFFFFFFF) - 65536).astype(np.float64)
+    else:
+        sv = vals[np.lexsort((vals, k))].astype(np.float64)
     counts = np.bincount(k, minlength=n)
     starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
     hi = starts + counts // 2
