@@ -173,9 +173,13 @@ def _odd(n: float) -> int:
 
 def _order_stats(a: np.ndarray, ks: tuple[int, ...]) -> list[float]:
     """The ``ks``-th smallest of the values ``a`` (1-D), as floats: for 8- and 16-bit pictures
-    by counting (``np.bincount``: exact, and ``np.partition`` is slow on their many equal
-    values), else by ``np.partition``."""
-    if a.dtype in (np.uint8, np.uint16):
+    of ≥ 2048 values by counting (``cv2.calcHist`` or ``np.bincount``: exact, and
+    ``np.partition`` is slow on their many equal values), else by ``np.partition``."""
+    if a.dtype == np.uint8 and a.size >= 8192:  # OpenCV's histogram: ~2 × np.bincount's speed
+        hist = cv2.calcHist([np.ascontiguousarray(a)], [0], None, [256], [0, 256])
+        cum = np.cumsum(hist.ravel().astype(np.int64))
+        return [float(v) for v in np.searchsorted(cum, ks, side="right")]
+    if a.dtype in (np.uint8, np.uint16) and a.size >= 2048:
         cum = np.cumsum(np.bincount(a))
         return [float(v) for v in np.searchsorted(cum, ks, side="right")]
     p = np.partition(a, sorted(set(ks)))
