@@ -225,20 +225,23 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     x1, y1 = min(cols, bx + bw + m + 2), min(rows, by + bh + m + 2)
     own = np.zeros((y1 - y0, x1 - x0), np.uint8)
     cv2.drawContours(own, [c], 0, 255, thickness=-1, offset=(-x0, -y0))
-    area = int(np.count_nonzero((above[y0:y1, x0:x1] > 0) & (own > 0)))
+    # (The masks are 0/255 bytes: OpenCV's bitwise operations and counts on them.)
+    area = cv2.countNonZero(cv2.bitwise_and(above[y0:y1, x0:x1], own))
     if area < params.glint_min_area_px or area > max_area:
         return None
-    win = img[y0:y1, x0:x1].astype(np.float64)
-    others = (bright[y0:y1, x0:x1] > 0) & (own == 0)
-    d_own = cv2.distanceTransform(cv2.bitwise_not(own), cv2.DIST_L2, 3)
+    raw = img[y0:y1, x0:x1]
+    win = raw.astype(np.float64)
+    not_own = cv2.bitwise_not(own)
+    others = cv2.bitwise_and(bright[y0:y1, x0:x1], not_own)
+    d_own = cv2.distanceTransform(not_own, cv2.DIST_L2, 3)
     region = d_own <= m
     background = d_own > m
-    if others.any():
-        d_oth = cv2.distanceTransform((~others).astype(np.uint8) * 255, cv2.DIST_L2, 3)
+    if cv2.countNonZero(others):
+        d_oth = cv2.distanceTransform(cv2.bitwise_not(others), cv2.DIST_L2, 3)
         region &= d_own <= d_oth
         background &= d_oth > m
-    base = median(win[background]) if background.any() else float(win.min())
-    peak = float(win[own > 0].max())
+    base = median(raw[background]) if background.any() else float(win.min())
+    peak = float(cv2.minMaxLoc(raw, own)[1])
     if peak - base < rise:
         return None  # a noise speck (or, over-exposed, saturated skin), not a glint
     wgt = np.where(region, np.maximum(win - base, 0.0), 0.0)
