@@ -496,8 +496,12 @@ def noise_sigma(u8: np.ndarray) -> float:
         return 0.0
     k = _stride((rows - 2) * (cols - 2))
     # Integer pictures in int32 (exact), whose |M * I| then fits 16 bits for a ≤ 12-bit
-    # camera and has its median counted (:func:`median`); others in float32.
-    wide = np.int32 if u8.dtype.kind in "iu" and u8.itemsize <= 2 else np.float32
+    # camera and has its median counted (:func:`median`); 8-bit ones in int16 (|M * I| ≤
+    # 16 × 255: exact, and half the memory traffic); others in float32.
+    if u8.dtype == np.uint8:
+        wide = np.int16
+    else:
+        wide = np.int32 if u8.dtype.kind in "iu" and u8.itemsize <= 2 else np.float32
 
     def at(dr: int, dc: int) -> np.ndarray:  # every k-th pixel's neighbour (dr, dc)
         return u8[1 + dr : rows - 1 + dr : k, 1 + dc : cols - 1 + dc : k].astype(wide)
@@ -508,7 +512,9 @@ def noise_sigma(u8: np.ndarray) -> float:
         + (at(-1, -1) + at(-1, 1) + at(1, -1) + at(1, 1))
     )
     r = np.abs(r)
-    if wide is np.int32 and r.size and int(r.max()) < 65536:
+    if wide is np.int16:
+        r = r.view(np.uint16)
+    elif wide is np.int32 and r.size and int(r.max()) < 65536:
         r = r.astype(np.uint16)
     return 1.4826 * median(r) / 6.0
 
