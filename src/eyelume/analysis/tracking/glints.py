@@ -162,8 +162,13 @@ def glint_blobs(
     returned holds only the glints found (not the saturated skin).
     """
     rows, cols = u8.shape
-    above, bright = _bright_mask(u8, floor8, params)
-    contours, hier = cv2.findContours(bright, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    above, bright, (x0, y0, x1, y1) = _bright_mask(u8, floor8, params)
+    if x1 <= x0:
+        return [], bright
+    # The outlines in the box holding the mask (0 on its edges): the same, with its offset.
+    contours, hier = cv2.findContours(
+        bright[y0:y1, x0:x1], cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE, offset=(x0, y0)
+    )
     if hier is None:
         return [], bright
     max_area = max(params.glint_min_area_px, params.glint_max_area_frac * rows * cols)
@@ -184,15 +189,26 @@ def glint_blobs(
     return blobs, bright
 
 
-def _bright_mask(u8: np.ndarray, floor8: int, params) -> tuple[np.ndarray, np.ndarray]:
+def _bright_mask(u8: np.ndarray, floor8: int, params):
     """Glint pixels of the picture smoothed by ``glint_smooth_px`` (above the floor and
     ``glint_level`` of the way from the local mean to 255) and the same mask closed by
-    ``glint_close_px`` (uint8 0/255 both)."""
+    ``glint_close_px`` (uint8 0/255 both), and a box (x0, y0, x1, y1) holding every non-zero
+    pixel of both with a 0 border (or the picture's edge) around them.
+
+    Glint pixels are above ``floor8``, ~1 % of a picture (glints and the brightest skin): the
+    box mean, the comparison and the closing are worked only on the box of those pixels
+    padded by what each reaches (the box mean's half-width, the closing's k // 2 + 1, as
+    :func:`~.pupil._closing` argues) — the same bytes as on the whole picture, for a third
+    of the work on a headset frame."""
     rows, cols = u8.shape
     w = params.glint_window_px
     if w is None:
         w = max(5, int(round(min(rows, cols) / 16.0)))
         w = w if w % 2 else w + 1
+    k = params.glint_close_px
+    if k is None:
+        k = int(round(min(rows, cols) / 160.0))
+        k = k if k % 2 else k + 1
     lv = params.glint_level
     # u8 ≥ local and u8 > floor8, i.e. u8 ≥ max(local, floor8 + 1): one comparison, with
     # local = addWeighted(box mean, 1 − level, ·, 0, 255 level) and the max taken by a look-up
@@ -200,15 +216,27 @@ def _bright_mask(u8: np.ndarray, floor8: int, params) -> tuple[np.ndarray, np.nd
     # as on the whole picture, without two full-picture passes).
     levels = np.arange(256, dtype=np.uint8).reshape(1, 256)
     lut = cv2.max(cv2.addWeighted(levels, 1.0 - lv, levels, 0.0, 255.0 * lv), float(floor8 + 1))
-    above = cv2.compare(u8, cv2.LUT(cv2.blur(u8, (w, w)), lut), cv2.CMP_GE)
-    k = params.glint_close_px
-    if k is None:
-        k = int(round(min(rows, cols) / 160.0))
-        k = k if k % 2 else k + 1
+    above = np.zeros_like(u8)
+    bx, by, bw, bh = cv2.boundingRect(cv2.compare(u8, float(floor8), cv2.CMP_GT))
+    if bw == 0:
+        return above, (above if k <= 1 else np.zeros_like(u8)), (0, 0, 0, 0)
+    r = w // 2
+    wx0, wy0 = max(0, bx - r), max(0, by - r)
+    wx1, wy1 = min(cols, bx + bw + r), min(rows, by + bh + r)
+    local = cv2.LUT(cv2.blur(u8[wy0:wy1, wx0:wx1], (w, w)), lut)
+    inner = (slice(by, by + bh), slice(bx, bx + bw))
+    above[inner] = cv2.compare(
+        u8[inner], local[by - wy0 : by - wy0 + bh, bx - wx0 : bx - wx0 + bw], cv2.CMP_GE
+    )
+    pad = max(1, k // 2 + 1)
+    box = (max(0, bx - pad), max(0, by - pad), min(cols, bx + bw + pad), min(rows, by + bh + pad))
     if k <= 1:
-        return above, above
+        return above, above, box
+    x0, y0, x1, y1 = box
+    bright = np.zeros_like(u8)
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-    return above, cv2.morphologyEx(above, cv2.MORPH_CLOSE, disc)
+    bright[y0:y1, x0:x1] = cv2.morphologyEx(above[y0:y1, x0:x1], cv2.MORPH_CLOSE, disc)
+    return above, bright, box
 
 
 def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
