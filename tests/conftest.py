@@ -17,6 +17,43 @@ from eyelume.compile import compile_scene
 #: counts above a ~7 background: ~7) by ~4σ.
 FIG6B_RAYS = 80_000_000
 
+#: Session fixtures too costly to build once per pytest-xdist worker (the 80 M-ray render is
+#: ~40 s of one core): their tests, and every test of a module that shares a module fixture with
+#: them, run on one worker.
+COSTLY_SESSION_FIXTURES = frozenset({"fig6b_render"})
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Under ``pytest -n N --dist loadgroup`` (the README's test command), keep together on one
+    worker the tests that share a costly fixture, so that it is built once, as in a serial run:
+    a module's tests that use a module- (or class-, package-) scoped fixture, and the tests of
+    :data:`COSTLY_SESSION_FIXTURES`; modules linked by such a fixture form one group. Other tests
+    are dealt out one by one. Without xdist the ``xdist_group`` marks are inert."""
+    parent: dict[str, str] = {}
+
+    def find(k: str) -> str:
+        while parent.setdefault(k, k) != k:
+            k = parent[k]
+        return k
+
+    keys_of = {}
+    for item in items:
+        keys = []
+        info = getattr(item, "_fixtureinfo", None)  # doctests of src/ have none
+        for name, defs in (info.name2fixturedefs if info else {}).items():
+            scope = defs[-1].scope
+            if scope in ("module", "class", "package"):
+                keys.append(f"module:{item.nodeid.split('::')[0]}")
+            elif scope == "session" and name in COSTLY_SESSION_FIXTURES:
+                keys.append(f"session:{name}")
+        for k in keys[1:]:
+            parent[find(k)] = find(keys[0])
+        keys_of[item] = keys
+    for item, keys in keys_of.items():
+        if keys and not any(m.name == "xdist_group" for m in item.iter_markers()):
+            item.add_marker(pytest.mark.xdist_group(find(keys[0]).split(":", 1)[1]))
+
 
 @pytest.fixture
 def rng(request) -> np.random.Generator:
