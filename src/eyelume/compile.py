@@ -34,6 +34,14 @@ from eyelume.kernels import sequential as Q
 from eyelume.kernels.bins import PlaneGrid, eye_plane_grid, picture_grid
 from eyelume.kernels.sampling import cos_power_tables, led_direction, profile_tables
 from eyelume.kernels.tables import (
+    A_AX,
+    A_AZ,
+    A_KIND,
+    A_P,
+    A_R,
+    A_X,
+    A_Z,
+    AIM_IMAGE,
     CHAIN_COLS,
     CHAIN_STEPS,
     N_AIM,
@@ -1545,6 +1553,70 @@ _PUPIL_MARGIN = 1.15  # real pupils of off-axis points are larger and shifted: a
 _IRIS = ("iris", "iris root")
 
 
+#: The angle (rad) of the rays :func:`_pupil_through_elements` traces from the pupil's centre.
+_PUPIL_RAY_ANGLE = 1e-3
+
+
+def _pupil_through_elements(
+    surfaces: SurfaceTable, names: list[str], lf: np.ndarray, ep_z: float, ep_r: float
+) -> np.ndarray | None:
+    """The entrance pupil (centre (0, 0, ``ep_z``), radius ``ep_r``, camera frame) imaged
+    through the optical elements the camera's line of sight meets, as an ``AIM_IMAGE`` aim row
+    (probability 0; :mod:`eyelume.kernels.sampling`), or None when it meets none. Three real
+    rays from the pupil's centre — along the axis and at :data:`_PUPIL_RAY_ANGLE` in x and in
+    y — are followed from the lens's first vertex through the element surfaces by the stronger
+    branch (as :func:`_view_through_elements`) until the next thing they meet is not an
+    element; the image's centre C is the mean of the points of the axial ray nearest each
+    tilted one, its radius ``ep_r`` |u / u′| (u, u′ the tilted ray's angles to the axial ray
+    before and after: the pupil's lateral magnification, in air on both sides), the row's
+    axis the axial ray's direction after the elements. A pupil imaged at infinity (u′ = 0)
+    gives None."""
+    sf, si = surfaces.sf, surfaces.si
+    z0 = float(lf[0, Q.L_Z]) - 1e-6
+    u = _PUPIL_RAY_ANGLE
+    starts = [np.array([0.0, 0.0, -1.0]), np.array([u, 0.0, -1.0]), np.array([0.0, u, -1.0])]
+    out = []
+    for d in starts:
+        d = d / np.linalg.norm(d)
+        p = np.array([0.0, 0.0, ep_z]) + d * (z0 - ep_z) / d[2]
+        met = 0
+        for _ in range(_VIEW_EVENTS):
+            s, t = G.nearest_hit(sf, si, *p, *d)
+            if s < 0 or not names[s].startswith("element "):
+                break
+            met += 1
+            p = p + t * d
+            n = np.array(G.surface_normal(sf, si, s, *p))
+            f = I.interface_at(sf, si, s, float(d @ n))
+            ok, *dt = I.refract(*d, *n, f.n1 / f.n2)
+            if ok and 1.0 - f.reflectance - f.absorptance >= f.reflectance:
+                d = np.array(dt)
+            else:
+                d = np.array(I.reflect(*d, *n))
+            d = d / np.linalg.norm(d)
+        out.append((met, p, d))
+    (met, p0, a), tilted = out[0], out[1:]
+    if met == 0 or any(m != met for m, _, _ in tilted):
+        return None
+    centres, mags = [], []
+    for _, p1, d1 in tilted:
+        cross = np.cross(a, d1)
+        sin_u = float(np.linalg.norm(cross))
+        if sin_u < 1e-12:
+            return None
+        # the point of the axial line p0 + s a nearest the line p1 + q d1
+        w = p1 - p0
+        b = float(a @ d1)
+        s = (float(w @ a) - b * float(w @ d1)) / (1.0 - b * b)
+        centres.append(p0 + s * a)
+        mags.append(math.sin(u) / sin_u)
+    row = np.zeros(N_AIM)
+    row[A_X : A_Z + 1] = np.mean(centres, axis=0)
+    row[A_R], row[A_KIND] = ep_r * float(np.mean(mags)), AIM_IMAGE
+    row[A_AX : A_AZ + 1] = a
+    return row
+
+
 def _mirrored_lens(lf: np.ndarray) -> np.ndarray:
     rev = lf[::-1].copy()
     rev[:, Q.L_Z] = -rev[:, Q.L_Z]
@@ -1736,6 +1808,9 @@ def _camera_tables(
     iris_c, iris_r = _cornea_image(scene, frame, ep_z, ep_r)
     through = np.array([name in _IRIS for name in names], dtype=np.int64)
     cornea = names.index(scene.eye.surfaces[0].name)
+    # seen through elements (a fold mirror, an eyepiece), light reaches the lens from the face
+    # along lines through the pupil's image, not the pupil itself
+    image = _pupil_through_elements(surfaces, names, lf, ep_z, ep_r) if scene.elements else None
     for s, name in enumerate(names):
         if surfaces.si[s, G.ACTION] != G.ACT_OPAQUE:
             continue
@@ -1743,11 +1818,14 @@ def _camera_tables(
             if surfaces.sf[s, rho_col] <= 0.0:
                 continue
             if name in _IRIS:
-                aim[s, side] = (*iris_c, iris_r, AIM_PROBABILITY)
+                aim[s, side, : A_P + 1] = (*iris_c, iris_r, AIM_PROBABILITY)
             elif name == "retina" or (name == "sclera" and side == 0):
                 continue  # inside the eye behind the crystalline lens: cosine sampling
+            elif image is not None:
+                aim[s, side] = image
+                aim[s, side, A_P] = AIM_PROBABILITY
             else:
-                aim[s, side] = (0.0, 0.0, ep_z, ep_r, AIM_PROBABILITY)
+                aim[s, side, : A_P + 1] = (0.0, 0.0, ep_z, ep_r, AIM_PROBABILITY)
     return CameraTables(
         lf_rev,
         np.ascontiguousarray(lf_open),

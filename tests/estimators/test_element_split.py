@@ -21,11 +21,11 @@ import numpy as np
 import pytest
 
 import eyelume
-from eyelume.compile import compile_scene
+from eyelume.compile import _PUPIL_MARGIN, compile_scene
 from eyelume.estimators import fast as F
 from eyelume.estimators.camera import aim_chief, into_scene
 from eyelume.estimators.fast_run import primary_surface_map
-from eyelume.kernels.bins import from_grid
+from eyelume.kernels.bins import bin_of, from_grid
 from eyelume.kernels.tables import Ray
 from eyelume.scene.glass import load_catalog
 
@@ -81,3 +81,118 @@ def test_a_camera_path_splits_at_each_element_surface_before_its_first_vertex():
             reached.append(out.vertex.beta)
     assert set(np.round(reached, 12)) == {round(rho, 12)}
     assert 0.8 < len(reached) / 399 < 0.99  # about R_mirror T_back T_front ≈ 0.91 of them
+
+
+def _reaches_the_sensor(cs, x, y, z, dx, dy, dz) -> bool:
+    """Whether the ray from (x, y, z) along d, taking each element surface's stronger branch,
+    enters the lens and lands on the sensor (as a light path deposits, fast._follow)."""
+    from eyelume.kernels import geometry as G
+    from eyelume.kernels.interact import interface_at, reflect, refract
+    from eyelume.kernels.sequential import LENS_PASSED, trace_lens
+
+    sf, si = cs.tables.surfaces.sf, cs.tables.surfaces.si
+    for _ in range(16):
+        s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
+        if s < 0:
+            return False
+        if si[s, G.ACTION] == G.ACT_LENS:
+            status, x, y, z, dx, dy, dz, _, _ = trace_lens(
+                cs.tables.lens.lf, x, y, z, dx, dy, dz, None, 0, False
+            )
+            if status != LENS_PASSED:
+                return False
+            t = (cs.tables.lens.image_z - z) / dz
+            return bool(bin_of(cs.tables.picture, x + t * dx, y + t * dy)[2])
+        if si[s, G.ACTION] != G.ACT_REFRACT:
+            return False
+        x, y, z = x + t * dx, y + t * dy, z + t * dz
+        nx, ny, nz = G.surface_normal(sf, si, s, x, y, z)
+        f = interface_at(sf, si, s, dx * nx + dy * ny + dz * nz)
+        ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
+        if ok and 1.0 - f.reflectance - f.absorptance >= f.reflectance:
+            dx, dy, dz = tx, ty, tz
+        else:
+            dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz)
+    return False
+
+
+def test_light_paths_aim_at_the_pupils_image_through_the_eyepiece_and_the_fold():
+    """A light path scattered by the face aims (80 % of its draws) at the camera's pupil: on
+    paper2005-integrated at its image through the hot mirror and the eyepiece (real, ~0.9 m
+    beyond the face, ×17), not at the pupil itself, which the face sees straight past the
+    eyepiece's rim and 60° off the camera's axis: none of those directions reached the
+    sensor. Here most do (the defensive mixture keeps either unbiased: the forward–fast χ²)."""
+    from eyelume.kernels.sampling import aimed_mixture
+    from eyelume.kernels.tables import A_KIND, A_P, AIM_IMAGE
+
+    scene = eyelume.load_scene("paper2005-integrated")
+    cs = compile_scene(scene)
+    labels, sides = primary_surface_map(cs)
+    lid = cs.surface_names.index("upper eyelid")
+    rows, cols = np.nonzero(labels == lid)
+    row, col = int(rows[len(rows) // 2]), int(cols[len(cols) // 2])
+    xs, ys = from_grid(cs.tables.picture, col + 0.5, row + 0.5)
+    chief = aim_chief(cs.camera, xs, ys)
+    r = into_scene(cs.camera, xs, ys, chief.qx, chief.qy)
+    out = F._camera_branch(
+        np.uint64(1), cs.tables, cs.camera, Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz), 1.0, True,
+        True, _scratch(),
+    )  # fmt: skip
+    v = out.vertex
+    assert v.s == lid
+    image = cs.camera.aim[lid, sides[row, col]]
+    assert image[A_KIND] == AIM_IMAGE and image[A_P] > 0.5
+    straight = image.copy()  # the pupil itself, as aimed before
+    ep_r = scene.camera.ideal.pupil_radius_mm * _PUPIL_MARGIN
+    straight[:5] = (0.0, 0.0, cs.camera.entrance_pupil_z, ep_r, image[A_P])
+    straight[A_KIND] = 0
+    rng = np.random.default_rng(5)
+    n = 2000
+    counts = {}
+    for name, aim in (("image", image), ("pupil", straight)):
+        hits = 0
+        for u1, u2 in rng.random((n, 2)):
+            d = aimed_mixture(0.0, u1, u2, aim, v.x, v.y, v.z, v.nx, v.ny, v.nz)
+            hits += _reaches_the_sensor(cs, v.x, v.y, v.z, *d)
+        counts[name] = hits
+    assert counts["pupil"] == 0
+    assert counts["image"] > 0.4 * n, counts
+
+
+def test_a_fold_mirrors_aim_is_the_pupil_mirrored_in_its_plane():
+    """Through a plane mirror alone the pupil's image is the pupil mirrored in the mirror's
+    plane, the same size: vr-offaxis folded by a 45° mirror (tests/estimators/
+    test_elements_agreement.py's case)."""
+    from eyelume.kernels import geometry as G
+    from eyelume.kernels.tables import A_AX, A_AZ, A_KIND, A_R, A_X, A_Z, AIM_IMAGE
+    from eyelume.scene.io import apply_overrides
+
+    fold = {
+        "kind": "mirror",
+        "name": "fold",
+        "position_mm": [0.0, 0.0, 33.0],
+        "direction": [0.0, -1.0, -1.0],
+        "semi_diameter_mm": 12.0,
+    }
+    scene = apply_overrides(
+        eyelume.load_scene("vr-offaxis"),
+        {
+            "elements": [fold],
+            "camera.position_mm": [0.0, -30.0, 33.0],
+            "camera.look_at_mm": [0.0, 0.0, 33.0],
+            "camera.ideal.focus_distance_mm": 63.0,
+        },
+    )
+    cs = compile_scene(scene)
+    sf = cs.tables.surfaces.sf
+    m = int(cs.camera.element_rows[0])
+    o, nrm = sf[m, G.OX : G.OZ + 1], sf[m, G.R20 : G.R22 + 1]
+    e = np.array([0.0, 0.0, cs.camera.entrance_pupil_z])
+    mirrored = e - 2.0 * ((e - o) @ nrm) * nrm
+    lid = cs.surface_names.index("upper eyelid")
+    row = cs.camera.aim[lid, 1]
+    assert row[A_KIND] == AIM_IMAGE
+    assert row[A_X : A_Z + 1] == pytest.approx(mirrored, abs=1e-6)
+    a = np.array([0.0, 0.0, -1.0])
+    assert row[A_AX : A_AZ + 1] == pytest.approx(a - 2.0 * (a @ nrm) * nrm, abs=1e-9)
+    assert row[A_R] == pytest.approx(scene.camera.ideal.pupil_radius_mm * _PUPIL_MARGIN, rel=1e-6)

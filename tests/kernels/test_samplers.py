@@ -33,7 +33,7 @@ from eyelume.kernels.sampling import (
     uniform_disk,
     uniform_disk_pdf,
 )
-from eyelume.kernels.tables import A_P, A_R, A_Z, N_AIM, LedTable
+from eyelume.kernels.tables import A_AZ, A_KIND, A_P, A_R, A_Z, AIM_IMAGE, N_AIM, LedTable
 
 FAMILY_ALPHA = 1e-3
 M_LED = 8.76  # cos^m of a 22.5° half-intensity half-angle
@@ -171,6 +171,16 @@ def _aim_row(p: float) -> np.ndarray:
     return row
 
 
+def _image_row(z: float) -> np.ndarray:
+    """An AIM_IMAGE row: the pupil's image, a sphere of radius AIM_R about (0, 0, z), the
+    camera's rays leaving the elements along −z — at z > 0 (behind the origin on those rays)
+    the light is aimed toward it, at z < 0 (a real image they meet after the origin) away from
+    it: a cone about +z either way."""
+    row = np.zeros(N_AIM)
+    row[A_Z], row[A_R], row[A_P], row[A_KIND], row[A_AZ] = z, AIM_R, 0.8, AIM_IMAGE, -1.0
+    return row
+
+
 @dataclass
 class Case:
     name: str
@@ -243,6 +253,22 @@ def _cases() -> list[Case]:
                     lambda n: _mixture(_uniforms(n, 3, seed), row, NORMAL),
                     lambda v: _mixture_pdf(v, row, NORMAL),
                     a_edges=(rim,),
+                    res=(40, 40),
+                ),
+            )
+        )
+    # the pupil's image through elements: a uniform cone of cos half-angle √(1 − R²/Z²)
+    cone_rim = math.sqrt(1.0 - (AIM_R / AIM_Z) ** 2)
+    for z, seed in ((AIM_Z, 10), (-AIM_Z, 11)):
+        row = _image_row(z)
+        cases.append(
+            Case(
+                f"aimed_mixture (pupil image at z = {z:g})",
+                lambda row=row, seed=seed: ChiSquareTest(
+                    SPHERE,
+                    lambda n: _mixture(_uniforms(n, 3, seed), row, NORMAL),
+                    lambda v: _mixture_pdf(v, row, NORMAL),
+                    a_edges=(cone_rim,),
                     res=(40, 40),
                 ),
             )

@@ -31,7 +31,8 @@ Every light path runs LED → … → camera. We split path space by how the pat
    parts, and goes on through refraction; a transmitted path that the posterior cornea
    transmits onto the iris belongs to part 1 and ends there. At a Lambertian vertex it scatters
    into a mixture of directions aimed at the camera's entrance pupil (for the iris, its
-   paraxial image through the cornea) and cosine directions (defensive mixture: weight
+   paraxial image through the cornea; seen through optical elements, its image through
+   them) and cosine directions (defensive mixture: weight
    (cos θ/π) / pdf_mix ≤ 1/(1 − p_aim)), so aimed rays the cornea bends away from the lens cost
    time, never bias. Paths reaching the sensor deposit their power in their pixel.
 3. **Straight into the lens** (an LED the camera sees, beside a wide lens): estimated from the

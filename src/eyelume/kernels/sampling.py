@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
-from eyelume.kernels.tables import A_P, A_R, A_X, A_Y, A_Z
+from eyelume.kernels.tables import A_AX, A_AY, A_AZ, A_KIND, A_P, A_R, A_X, A_Y, A_Z, AIM_DISK
 
 _INV_PI = 1.0 / math.pi
 
@@ -134,10 +134,47 @@ def aimed_disk_pdf(aim_row, x, y, z, dx, dy, dz):
 
 
 @njit(cache=True, inline="always")
+def image_cone(aim_row, x, y, z):
+    """The cone :func:`aimed_mixture` draws from for an ``AIM_IMAGE`` row, seen from P = (x, y,
+    z): (wx, wy, wz, cos_max), w its unit axis, cos_max = √(1 − r²/|C − P|²) (−1, the whole
+    sphere, when P is within r of C). The camera's rays that leave the elements along the
+    row's axis a all pass through the pupil's image C (paraxially), so the light from P that
+    reaches the pupil runs along the line CP: toward C when C lies behind P on the camera's
+    rays ((C − P) · a ≤ 0: a virtual image, or a real one the rays crossed before P), away
+    from C when they reach P first and converge at C beyond it."""
+    vx, vy, vz = aim_row[A_X] - x, aim_row[A_Y] - y, aim_row[A_Z] - z
+    dist = math.sqrt(vx * vx + vy * vy + vz * vz)
+    r = aim_row[A_R]
+    if dist <= r:
+        return 0.0, 0.0, 1.0, -1.0
+    s = 1.0 / dist
+    if vx * aim_row[A_AX] + vy * aim_row[A_AY] + vz * aim_row[A_AZ] > 0.0:
+        s = -s
+    return vx * s, vy * s, vz * s, math.sqrt(1.0 - r * r / (dist * dist))
+
+
+@njit(cache=True, inline="always")
+def aimed_pdf(aim_row, x, y, z, dx, dy, dz):
+    """Density per steradian of the aimed part of :func:`aimed_mixture` at unit direction d:
+    :func:`aimed_disk_pdf` for an ``AIM_DISK`` row, else uniform in :func:`image_cone`."""
+    if aim_row[A_KIND] == AIM_DISK:
+        return aimed_disk_pdf(aim_row, x, y, z, dx, dy, dz)
+    if aim_row[A_P] <= 0.0:
+        return 0.0
+    wx, wy, wz, cos_max = image_cone(aim_row, x, y, z)
+    return uniform_cone_pdf(dx * wx + dy * wy + dz * wz, cos_max)
+
+
+@njit(cache=True, inline="always")
 def aimed_mixture(u0, u1, u2, aim_row, x, y, z, nx, ny, nz):
     """Direction from (x, y, z) drawn from the defensive mixture: with probability p =
-    aim_row[A_P] toward a uniform point of the aim disk, else cosine-weighted about unit n.
-    Density :func:`aimed_mixture_pdf`."""
+    aim_row[A_P] toward a uniform point of the aim disk (``AIM_DISK``) or uniformly in the
+    cone of the pupil's image (``AIM_IMAGE``, :func:`image_cone`), else cosine-weighted about
+    unit n. Density :func:`aimed_mixture_pdf`."""
+    if u0 < aim_row[A_P] and aim_row[A_KIND] != AIM_DISK:
+        wx, wy, wz, cos_max = image_cone(aim_row, x, y, z)
+        lx, ly, lz = uniform_cone(u1, u2, cos_max)
+        return about_axis(lx, ly, lz, wx, wy, wz)
     if u0 < aim_row[A_P]:
         r = aim_row[A_R] * math.sqrt(u1)
         phi = 2.0 * math.pi * u2
@@ -158,7 +195,7 @@ def aimed_mixture_pdf(aim_row, x, y, z, nx, ny, nz, dx, dy, dz):
     if cos_n <= 0.0:
         return 0.0
     p = aim_row[A_P]
-    return (1.0 - p) * cos_n * _INV_PI + p * aimed_disk_pdf(aim_row, x, y, z, dx, dy, dz)
+    return (1.0 - p) * cos_n * _INV_PI + p * aimed_pdf(aim_row, x, y, z, dx, dy, dz)
 
 
 @njit(cache=True, inline="always")

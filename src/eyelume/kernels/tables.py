@@ -44,6 +44,12 @@ __all__ = [
     "A_Z",
     "A_R",
     "A_P",
+    "A_KIND",
+    "A_AX",
+    "A_AY",
+    "A_AZ",
+    "AIM_DISK",
+    "AIM_IMAGE",
     "N_AIM",
     "TRANSMIT_A",
     "TRANSMIT",
@@ -52,9 +58,13 @@ __all__ = [
     "CHAIN_COLS",
 ]
 
-# aim table columns: disk centre xyz (its normal is world +z), radius (mm), probability
-A_X, A_Y, A_Z, A_R, A_P = range(5)
-N_AIM = 5
+# aim table columns: centre xyz, radius (mm), probability of aiming, kind, and for AIM_IMAGE
+# an axis: AIM_DISK aims at a disk (its normal world +z: the entrance pupil seen straight);
+# AIM_IMAGE at the entrance pupil's image through optical elements, a sphere about the centre,
+# the axis the camera's line of sight leaves the elements along (kernels/sampling.py)
+A_X, A_Y, A_Z, A_R, A_P, A_KIND, A_AX, A_AY, A_AZ = range(9)
+N_AIM = 9
+AIM_DISK, AIM_IMAGE = 0, 1
 
 #: A specular chain's step (CameraTables.chains): transmitted arriving from side A only (the
 #: cornea, entered from outside), transmitted from either side, or reflected.
@@ -135,7 +145,8 @@ class CameraTables(NamedTuple):
     ``lf_rev``; ``stop_radius`` (mm); ``image_z``, ``rear_z`` (world z of the sensor and of the
     last lens vertex); ``exit_pupil_z``, ``exit_pupil_magnification`` (paraxial exit pupil);
     ``entrance_pupil_z``; ``aim`` (n_surfaces, 2, N_AIM): per Lambertian face and side (0 = A,
-    1 = B) the disk to aim scattered light at and the probability of aiming;
+    1 = B) the disk (or the pupil's image through elements, ``A_KIND``) to aim scattered light
+    at and the probability of aiming;
     ``through_cornea`` (n_surfaces,) int64: 1 where next-event estimation goes through the
     cornea (the iris); ``cornea``: the surface index of the anterior cornea (``cornea + 1`` is
     the posterior one); ``split_grid``: a camera path continues from its first Lambertian
