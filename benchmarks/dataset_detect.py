@@ -208,8 +208,9 @@ def main() -> None:
     ap.add_argument("--glint-radius", type=float, default=3.0)
     ap.add_argument("--min-visible", type=float, default=0.5)
     ap.add_argument("--no-record", action="store_true", help="do not append to results")
+    ap.add_argument("--made-with", help="how DIR was made (recorded; --make records its own)")
     args = ap.parse_args()
-    made = None
+    made = args.made_with
     if args.make:
         folder = args.keep or Path(tempfile.mkdtemp(prefix="eyelume-ds-")) / "set"
         made = make_dataset(args.make, args.seed, args.workers, folder)
