@@ -1302,7 +1302,9 @@ def _one_sided(img, wp: WorkPicture, e: Ellipse, pupil_level: float, bright, par
     x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
     y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
     u, v = _grid_local(e, x0, x1, y0, y1, s)
-    rho = np.hypot(u / e.a, v / e.b)
+    u /= e.a
+    v /= e.b
+    rho = np.hypot(u, v)
     ring = (rho > r0) & (rho < r1) & (bright[y0:y1:s, x0:x1:s] == 0)
     if wp.invalid is not None:
         ring &= ~wp.invalid[y0:y1:s, x0:x1:s]
@@ -1313,7 +1315,7 @@ def _one_sided(img, wp: WorkPicture, e: Ellipse, pupil_level: float, bright, par
     if step <= 0:
         return None
     n = params.surround_sectors
-    k = ((np.arctan2(v[ring] / e.b, u[ring] / e.a) + math.pi) / (2 * math.pi) * n).astype(int) % n
+    k = ((np.arctan2(v[ring], u[ring]) + math.pi) / (2 * math.pi) * n).astype(int) % n
     meds = _group_medians(vals, k, n)
     meds = meds[np.isfinite(meds)]
     if not len(meds):
