@@ -311,3 +311,17 @@ def test_labels_are_streamed_from_the_store(tmp_path):
         store.close()
     lines = (tmp_path / "labels.jsonl").read_text(encoding="utf-8").splitlines()
     assert lines == ['{"index": 0}', '{"index": 1}', '{"index": 2}']
+
+
+def test_glasses_add_the_glasses_scenes_elements_to_their_share_of_pictures(tmp_path):
+    text = BASE + "[glasses]\nshare = 0.5\nscene = 'vr-offaxis-glasses'\n"
+    ds = D.load_dataset(write(tmp_path, text, pictures=8))
+    plans = [D.plan_picture(ds, i) for i in range(8)]
+    on = next(p.index for p in plans if p.glasses)
+    off = next(p.index for p in plans if not p.glasses)
+    lens = load_scene("vr-offaxis-glasses").elements
+    b = D.bases(ds)
+    assert D.picture_scene(b, plans[on])[0].elements == lens
+    assert D.picture_scene(b, plans[off])[0].elements == []
+    pic = D.make_picture(ds, on, b)
+    assert pic.label["glasses"] is True and pic.image.shape == (40, 40)
