@@ -167,7 +167,7 @@ def main() -> None:
     print("   warming the Numba cache (one picture, not timed)…", flush=True)
     run_child(1, 1, None)
     only = set(a.only.split(","))
-    out: dict = {"runs": []}
+    out: dict = {"runs": []}  # one line per run in results/dataset.jsonl
     plan = [(a.pictures, 1, None, "pool1"), (a.pictures, 2, None, "pool2"),
             (a.pictures, 2, "local", "dask2")]  # fmt: skip
     plan = [x for x in plan if x[3] in only]
@@ -177,6 +177,7 @@ def main() -> None:
         r = run_child(pictures, workers, dask)
         r["config"] = tag
         out["runs"].append(r)
+        C.append_result(RESULTS, {**info, "run": r})  # each run kept as it finishes
         steady = r["steady_per_hour"]
         print(
             f"   {tag:7s} {pictures:3d} pictures, {workers} workers{' (dask)' if dask else ''}: "
@@ -190,12 +191,12 @@ def main() -> None:
             f"render < shot noise in {r['share_render_below_shot_noise']:.0%}",
             flush=True,
         )
-    best = [r.get("projected_uncontended_per_hour") for r in out["runs"] if r["workers"] == 2]
+    best = [r.get("projected_uncontended_per_hour") for r in out["runs"]
+            if r["workers"] == 2 and r["steady_pictures"] >= 4]  # fmt: skip
     best = [x for x in best if x]
     if best:
         print(f"   projection on 2 idle cores from the steady CPU cost: {max(best):.0f}/h "
               "(target ≥ 1000 labelled pictures per hour)")  # fmt: skip
-    C.append_result(RESULTS, {**info, **out})
 
 
 if __name__ == "__main__":
