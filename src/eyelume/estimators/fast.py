@@ -19,11 +19,15 @@ Every light path runs LED → … → camera. We split path space by how the pat
    then continues by cosine sampling: the first vertex always, with weight ρ, in g²
    directions, one in each of g × g strata of the cosine-weighted hemisphere (the light faces
    send each other is most of what varies between samples; g = ``run.continuation_grid``, at
-   least 3 on the iris; in one direction for the part the cornea reflects, a ~2 % share);
-   later ones by Russian roulette. LEDs are points, so a camera path never hits one: these
-   connections are the only way it receives light. Before its first Lambertian vertex, it
-   also splits at each optical element's surface, the weaker part followed after it
-   (:func:`_camera_branch`).
+   least 3 on the iris; in one direction for the part the cornea reflects, a ~2 % share),
+   the strata spread only over the directions outside the vertex's free cone
+   (:func:`~eyelume.kernels.geometry.free_cone`: the cone about the normal whose rays meet
+   nothing that can send light back, so carry exactly 0 — on vr-offaxis about half the
+   cosine-weighted hemisphere over the periorbital skin, where ~80 % of the rays met
+   nothing), each weighted by that region's share 1 − sin²θ₀; later ones by Russian
+   roulette. LEDs are points, so a camera path never hits one: these connections are the
+   only way it receives light. Before its first Lambertian vertex, it also splits at each
+   optical element's surface, the weaker part followed after it (:func:`_camera_branch`).
 2. **First hit the cornea, except the refracted paths of part 1** (the glints, the light the
    cornea reflects onto the face, whatever enters the pupil): estimated from the LEDs. A light
    path leaves an LED uniformly inside the cone that holds the anterior cornea's bounding sphere
@@ -512,14 +516,22 @@ def _path_radiance(state, scene, cam, ray, beta, split, grid, scratch):
     if v.s >= 0:
         g = max(grid, IRIS_GRID) if cam.through_cornea[v.s] else grid
         k = g * g
+        sf, si = scene.surfaces.sf, scene.surfaces.si
+        # the directions within θ₀ of the normal meet nothing that sends light (free_cone):
+        # sample only sin²θ ∈ [s0, 1] (cosine-weighted there), × its share 1 − s0
+        s0 = G.free_cone(sf, si, v.s, v.x, v.y, v.z, v.nx, v.ny, v.nz)
+        share = 1.0 - s0
+        if share <= 0.0:
+            k = 0
         for j in range(k):
             state, u1 = next_uniform(state)
             state, u2 = next_uniform(state)
             # stratum j: ring j // g of equal area, sector j % g (Malley: r = √u1, φ = 2π u2)
-            lx, ly, lz = cosine_hemisphere((j // g + u1) / g, (j % g + u2) / g)
+            lx, ly, lz = cosine_hemisphere(s0 + share * (j // g + u1) / g, (j % g + u2) / g)
             ex, ey, ez = about_axis(lx, ly, lz, v.nx, v.ny, v.nz)
+            b = v.beta * share / k
             more = _camera_branch(
-                state, scene, cam, Ray(v.x, v.y, v.z, ex, ey, ez), v.beta / k, False, False, scratch
+                state, scene, cam, Ray(v.x, v.y, v.z, ex, ey, ez), b, False, False, scratch
             )
             state = more.state
             radiance += more.radiance

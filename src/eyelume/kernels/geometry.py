@@ -273,3 +273,112 @@ def occluded(sf, si, x, y, z, dx, dy, dz, t_max):
         if intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max) > 0.0:
             return True
     return False
+
+
+#: Longest clipped cylinder (in radii) :func:`free_cone` covers by spheres; a longer one (an
+#: unclipped cylinder) is bounded by its bounding sphere.
+_MAX_PIECES = 32
+
+
+@njit(cache=True, inline="always")
+def _sphere_gap(cx, cy, cz, r, x, y, z, nx, ny, nz):
+    """cos(β − α) for the sphere (centre c, radius r) seen from x: β the angle between unit n
+    and the direction toward c, α = asin(r/|c − x|) the sphere's angular radius, so every
+    direction within β − α of n misses the sphere. 2.0 when they overlap (β ≤ α, or x inside
+    the sphere: no direction about n is safe). On the sphere (x on another surface of the same
+    sphere, to 1e-12 of r) its cone is the half-space of directions toward c (α = 90°)."""
+    vx, vy, vz = cx - x, cy - y, cz - z
+    d2 = vx * vx + vy * vy + vz * vz
+    if d2 <= r * r:
+        d = math.sqrt(d2)
+        if d < r * (1.0 - 1e-12):
+            return 2.0
+        # on the sphere (to rounding): it is met by the directions toward its inside only
+        cb = (vx * nx + vy * ny + vz * nz) / d
+        return math.sqrt(1.0 - cb * cb) if cb < 0.0 else 2.0
+    d = math.sqrt(d2)
+    cb = (vx * nx + vy * ny + vz * nz) / d
+    sa = r / d
+    ca = math.sqrt(1.0 - sa * sa)
+    if cb >= ca:
+        return 2.0
+    return cb * ca + math.sqrt(max(0.0, 1.0 - cb * cb)) * sa
+
+
+@njit(cache=True, inline="always")
+def _surface_gap(sf, si, s, own, x, y, z, nx, ny, nz):
+    """cos θ below which a direction about n at x surely misses surface ``s`` (the shapes of
+    :func:`free_cone`): −2.0 when ``s`` can be skipped, 2.0 when no cone about n is safe."""
+    action = si[s, ACTION]
+    if action == ACT_LENS:
+        return -2.0
+    if action == ACT_OPAQUE and sf[s, RHO_A] <= 0.0 and sf[s, RHO_B] <= 0.0:
+        return -2.0
+    shape = si[s, SHAPE]
+    ox, oy, oz = sf[s, OX], sf[s, OY], sf[s, OZ]
+    ax, ay, az = sf[s, R20], sf[s, R21], sf[s, R22]  # local z: plane normal, cylinder axis
+    if shape == SHAPE_CONIC and sf[s, CURV] == 0.0:
+        if s == own:
+            return -2.0
+        # both the half-space of directions toward its plane and the cone of its bounding
+        # sphere hold every direction that meets it: the narrower bound counts
+        c = _sphere_gap(sf[s, BX], sf[s, BY], sf[s, BZ], sf[s, BR], x, y, z, nx, ny, nz)
+        h = (x - ox) * ax + (y - oy) * ay + (z - oz) * az
+        cb = -(nx * ax + ny * ay + nz * az) if h > 0.0 else nx * ax + ny * ay + nz * az
+        if abs(h) >= 1e-9 and cb < 0.0:  # n points away from the plane
+            c = min(c, math.sqrt(1.0 - cb * cb))  # cos(β − 90°)
+        return c
+    if shape == SHAPE_SPHERE:
+        if s == own and (x - ox) * nx + (y - oy) * ny + (z - oz) * nz > 0.0:
+            return -2.0
+        return _sphere_gap(ox, oy, oz, sf[s, RADIUS], x, y, z, nx, ny, nz)
+    if shape != SHAPE_CYLINDER:
+        return _sphere_gap(sf[s, BX], sf[s, BY], sf[s, BZ], sf[s, BR], x, y, z, nx, ny, nz)
+    px, py, pz = x - ox, y - oy, z - oz
+    pa = px * ax + py * ay + pz * az
+    if s == own and (px - pa * ax) * nx + (py - pa * ay) * ny + (pz - pa * az) * nz > 0.0:
+        return -2.0
+    r = sf[s, RADIUS]
+    length = sf[s, ZHI] - sf[s, ZLO]
+    if not length <= _MAX_PIECES * r:
+        return _sphere_gap(sf[s, BX], sf[s, BY], sf[s, BZ], sf[s, BR], x, y, z, nx, ny, nz)
+    m = max(1, math.ceil(length / r))
+    step = length / m
+    rp = math.sqrt(r * r + 0.25 * step * step)
+    c = -1.0
+    for i in range(m):
+        t = sf[s, ZLO] + (i + 0.5) * step
+        c = max(c, _sphere_gap(ox + t * ax, oy + t * ay, oz + t * az, rp, x, y, z, nx, ny, nz))
+    return c
+
+
+@per_ray
+def free_cone(sf, si, own, x, y, z, nx, ny, nz):
+    """sin²θ₀ of a cone about unit normal n at point x on surface ``own`` (−1: none) whose
+    directions meet nothing that can send light back along them: the rays from x within θ₀ of
+    n miss every surface but the imaging lens (``ACT_LENS``, where a camera path ends) and the
+    opaque ones black on both sides (ρ = 0: LED and camera bodies, the retina), so what they
+    carry is exactly 0. 0.0 when no such cone is found; 1.0 when nothing lies within 90° of n
+    (the whole hemisphere about n is empty).
+
+    Each surface is bounded by shapes whose angular extent from x is exact: a plane (conic of
+    curvature 0) by its bounding sphere or its whole plane — the half-space of directions
+    toward it — whichever is narrower, except ``own`` (a ray leaving a plane never meets it
+    again); a sphere by its whole sphere; a clipped
+    cylinder by spheres covering its clipped length in pieces of at most one radius (radius
+    ≤ √(R² + (R/2)²)); any other surface, and a cylinder longer than ``_MAX_PIECES`` radii, by
+    its bounding sphere. ``own`` being a sphere or cylinder seen from outside (n away from its
+    centre or axis) is skipped too: a ray leaving a convex surface outward never meets it
+    again. A direction within θ₀ of n is then at more than each shape's angular radius from
+    it (θ₀ = min over shapes of β − α, :func:`_sphere_gap`). Deterministic in (x, n), so a
+    continuation sampled only outside the cone, with its density renormalised, stays
+    unbiased (:func:`eyelume.estimators.fast._path_radiance`)."""
+    cmax = -1.0  # cos θ₀ so far: the largest cos(β − α) over the shapes
+    for s in range(sf.shape[0]):
+        c = _surface_gap(sf, si, s, own, x, y, z, nx, ny, nz)
+        if c > 1.0:
+            return 0.0
+        cmax = max(cmax, c)
+    if cmax <= 0.0:
+        return 1.0
+    return 1.0 - cmax * cmax
