@@ -23,6 +23,20 @@ FIG6B_RAYS = 80_000_000
 COSTLY_SESSION_FIXTURES = frozenset({"fig6b_render"})
 
 
+def _shared_fixture_keys(item) -> list[str]:
+    """What a test shares with others: ``module:<file>`` for a module-, class- or package-scoped
+    fixture, ``session:<name>`` for one of :data:`COSTLY_SESSION_FIXTURES`."""
+    keys = []
+    info = getattr(item, "_fixtureinfo", None)  # doctests of src/ have none
+    for name, defs in (info.name2fixturedefs if info else {}).items():
+        scope = defs[-1].scope
+        if scope in ("module", "class", "package"):
+            keys.append(f"module:{item.nodeid.split('::')[0]}")
+        elif scope == "session" and name in COSTLY_SESSION_FIXTURES:
+            keys.append(f"session:{name}")
+    return keys
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """Under ``pytest -n N --dist loadgroup`` (the README's test command), keep together on one
@@ -30,6 +44,8 @@ def pytest_collection_modifyitems(config, items):
     a module's tests that use a module- (or class-, package-) scoped fixture, and the tests of
     :data:`COSTLY_SESSION_FIXTURES`; modules linked by such a fixture form one group. Other tests
     are dealt out one by one. Without xdist the ``xdist_group`` marks are inert."""
+    if not config.pluginmanager.hasplugin("xdist"):  # the mark is xdist's (--strict-markers)
+        return
     parent: dict[str, str] = {}
 
     def find(k: str) -> str:
@@ -39,14 +55,7 @@ def pytest_collection_modifyitems(config, items):
 
     keys_of = {}
     for item in items:
-        keys = []
-        info = getattr(item, "_fixtureinfo", None)  # doctests of src/ have none
-        for name, defs in (info.name2fixturedefs if info else {}).items():
-            scope = defs[-1].scope
-            if scope in ("module", "class", "package"):
-                keys.append(f"module:{item.nodeid.split('::')[0]}")
-            elif scope == "session" and name in COSTLY_SESSION_FIXTURES:
-                keys.append(f"session:{name}")
+        keys = _shared_fixture_keys(item)
         for k in keys[1:]:
             parent[find(k)] = find(keys[0])
         keys_of[item] = keys
