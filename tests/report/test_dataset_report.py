@@ -222,3 +222,45 @@ def test_cli_report_on_a_dataset_folder(tmp_path):
     assert "<h1>Dataset fake-set</h1>" in (tmp_path / "p.html").read_text(encoding="utf-8")
     res = runner.invoke(app, ["report", str(tmp_path / "set"), "--scene", "vr-offaxis"])
     assert res.exit_code == 2 and "is a dataset's folder" in res.output, res.output
+
+
+@pytest.mark.slow
+def test_a_tiny_dataset_made_by_eyelume_dataset_is_read_exported_and_scored(tmp_path):
+    """`eyelume dataset` itself (vr-offaxis at 64 × 64 px over the same field, 2 pictures, 2
+    samples per pixel) read back: its pictures and segmentations export to OpenEDS' layout, the
+    label's pupil-ellipse centre falls on OpenEDS' pupil class there (ds-labels' ellipse and
+    segmentation agree through the export's pixel mapping), the page is written and the
+    detector benchmark scores every picture."""
+    from eyelume.scene.io import load_scene, save_scene
+
+    small = load_scene("vr-offaxis", {"sensor.cols": 64, "sensor.rows": 64,
+                                      "sensor.pixel_pitch_um": 3.0 * 400 / 64})  # fmt: skip
+    save_scene(small, tmp_path / "small.toml")
+    (tmp_path / "tiny.toml").write_text(
+        'name = "tiny"\nscene = "small.toml"\nseed = 2\npictures = 2\nimage_bits = 8\n'
+        'irradiance = false\nsamples_per_pixel = 2\n[gaze]\ndistribution = "uniform"\n'
+        "horizontal = [-10.0, 10.0]\nvertical = [-5.0, 5.0]\n",
+        encoding="utf-8",
+    )
+    res = CliRunner().invoke(app, ["dataset", str(tmp_path / "tiny.toml"), "--out",
+                                   str(tmp_path / "set"), "--workers", "1"])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    ds = read_dataset(tmp_path / "set")
+    assert (ds.name, ds.seed, len(ds.labels)) == ("tiny", 2, 2)
+    summary = export_openeds(tmp_path / "set", tmp_path / "eds")
+    manifest = json.loads((tmp_path / "eds" / "eyelume_export.json").read_text())
+    assert summary.pictures == 2 and all(summary.class_pixels[k] > 0 for k in (1, 2, 3))
+    for lab, rec in zip(ds.labels, manifest["pictures"], strict=True):
+        ids = np.load(tmp_path / "eds" / rec["label"])
+        assert ids.dtype == np.uint8 and ids.shape == (400, 640) and ids.max() <= 3
+        if lab["pupil"]["visible_share"] > 0.9:
+            cx, cy = lab["pupil"]["ellipse"]["center_px"]
+            s, (ox, oy) = rec["scale"], rec["offset_px"]
+            assert ids[_to_export(cy, s, oy), _to_export(cx, s, ox)] == 3
+    page = write_report(tmp_path / "set")
+    assert page.read_text(encoding="utf-8").count("<img ") == 2
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+    import dataset_detect as bench
+
+    rows = [bench.score_picture(read_picture(ds, lab), lab, None, None) for lab in ds.labels]
+    assert bench.summarise(rows)["pictures"] == 2
