@@ -457,6 +457,15 @@ def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, control:
             break
         err = judged(run.estimate(False))
         _say(progress, run, err)
+    # The glints are the light paths' alone (a point LED's specular image cannot be met by a
+    # camera path) and the stopping rule looks at the skin: a run that stops at 2 or 3 samples
+    # per pixel keeps at least the light paths of the least fixed budget (planned_sets(1):
+    # 8 samples per pixel), so no glint is left with too few paths to appear. Path i depends
+    # on its index and the seed only: the same first paths as a fixed 8-sample render's.
+    floor = int(round(ratio * math.prod(planned_sets(1))))
+    if run.sets and run.paths < floor and not stop.requested:
+        work.planned = max(work.planned, work.done) + floor - run.paths
+        run._light_to(floor, stop, work.tick)
     return run, err
 
 
