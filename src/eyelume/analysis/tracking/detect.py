@@ -395,7 +395,12 @@ def _black_border(img: np.ndarray, min_frac: float = 0.005) -> np.ndarray | None
     edge = (img[0], img[-1], img[:, 0], img[:, -1])
     if not any((e == lo).any() for e in edge):
         return None
-    flat = cv2.compare(img, float(lo), cv2.CMP_EQ) if img.dtype != np.float64 else None
+    # (OpenCV takes an array of 4 or fewer elements for a scalar: a 1 × 1 picture failed)
+    flat = (
+        cv2.compare(img, float(lo), cv2.CMP_EQ)
+        if img.dtype != np.float64 and img.size > 4
+        else None
+    )
     if flat is None:
         flat = (img == lo).astype(np.uint8)
     if cv2.countNonZero(flat) < min_frac * img.size:
