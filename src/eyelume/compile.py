@@ -757,6 +757,18 @@ def _check_view(
 _VIEW_EVENTS = 16  # element surfaces the line of sight may cross or be folded by
 
 
+def _stronger_step(sf, si, s: int, p: np.ndarray, d: np.ndarray):
+    """At the point ``p`` of element surface ``s``, the ray ``d`` goes on along the stronger
+    part: refracted when the transmittance 1 − R − A is at least R, else reflected. Returns
+    (p, unit direction, reflected)."""
+    n = np.array(G.surface_normal(sf, si, s, *p))
+    f = I.interface_at(sf, si, s, float(d @ n))
+    ok, *dt = I.refract(*d, *n, f.n1 / f.n2)
+    reflected = not (ok and 1.0 - f.reflectance - f.absorptance >= f.reflectance)
+    d = np.array(I.reflect(*d, *n)) if reflected else np.array(dt)
+    return p, d / np.linalg.norm(d), reflected
+
+
 def _view_through_elements(
     scene: Scene, surfaces: SurfaceTable, names: list[str], lf: np.ndarray
 ) -> bool:
@@ -777,16 +789,8 @@ def _view_through_elements(
         if s < 0 or not names[s].startswith("element "):
             break
         met.append(names[s].rsplit(" ", 1)[0])
-        p = p + t * d
-        n = np.array(G.surface_normal(sf, si, s, *p))
-        f = I.interface_at(sf, si, s, float(d @ n))
-        ok, *dt = I.refract(*d, *n, f.n1 / f.n2)
-        if ok and 1.0 - f.reflectance - f.absorptance >= f.reflectance:
-            d = np.array(dt)
-        else:
-            d = np.array(I.reflect(*d, *n))
-            folded = True
-        d = d / np.linalg.norm(d)
+        p, d, reflected = _stronger_step(sf, si, s, p + t * d, d)
+        folded = folded or reflected
     else:
         s = -1
     if not met:
@@ -1585,15 +1589,7 @@ def _pupil_through_elements(
             if s < 0 or not names[s].startswith("element "):
                 break
             met += 1
-            p = p + t * d
-            n = np.array(G.surface_normal(sf, si, s, *p))
-            f = I.interface_at(sf, si, s, float(d @ n))
-            ok, *dt = I.refract(*d, *n, f.n1 / f.n2)
-            if ok and 1.0 - f.reflectance - f.absorptance >= f.reflectance:
-                d = np.array(dt)
-            else:
-                d = np.array(I.reflect(*d, *n))
-            d = d / np.linalg.norm(d)
+            p, d, _ = _stronger_step(sf, si, s, p + t * d, d)
         out.append((met, p, d))
     (met, p0, a), tilted = out[0], out[1:]
     if met == 0 or any(m != met for m, _, _ in tilted):
