@@ -4,6 +4,7 @@ and their labels kept, no worker left, exit 143) and --resume finishing the rest
 
 from __future__ import annotations
 
+import importlib
 import json
 import signal
 import sqlite3
@@ -114,3 +115,64 @@ def test_sigterm_keeps_the_finished_pictures_and_resume_finishes(tmp_path):
     assert res.exit_code == 0, res.output
     labels = (out / "labels.jsonl").read_text(encoding="utf-8").splitlines()
     assert [json.loads(x)["index"] for x in labels] == list(range(8))
+
+
+STUDY = """
+name = "s"
+scene = "tiny.toml"
+metrics = ["safety"]
+[[vary]]
+path = "leds.height_mm"
+values = [20.0, 30.0]
+"""
+
+
+@pytest.mark.parametrize("address", ["nonsense:1", "foo://bar"])
+@pytest.mark.parametrize("command", ["dataset", "study"])
+def test_an_unreachable_or_malformed_dask_address_is_one_line_exit_2_within_seconds(
+    tmp_path, command, address
+):
+    """Dask's own client waits 30 s and more for a scheduler that is not there (a fresh user
+    saw the command hang): the runner's connect timeout refuses it in a few seconds, naming
+    --dask and the address, from both commands (the same executor code)."""
+    p = write(tmp_path, pictures=2)
+    if command == "study":
+        p = tmp_path / "study.toml"
+        p.write_text(STUDY, encoding="utf-8")
+    t0 = time.monotonic()
+    res = runner.invoke(app, [command, str(p), "--out", str(tmp_path / "out"), "--dask", address])
+    seconds = time.monotonic() - t0
+    assert res.exit_code == 2, res.output
+    lines = [x for x in res.output.splitlines() if x.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error:"), res.output
+    assert f"--dask {address}" in lines[0] and "Traceback" not in res.output
+    assert seconds < 20, f"{seconds:.0f} s to refuse --dask {address}"
+    assert not (tmp_path / "out").exists()  # refused before anything is written
+
+
+def test_resume_into_another_datasets_folder_is_refused_before_any_render(tmp_path, monkeypatch):
+    """--resume into a folder of another dataset file: one line, exit 2, before the opening
+    line and before any render (a fresh user waited ~27 s for the refusal)."""
+    from eyelume.optimize import dataset as D
+
+    p = write(tmp_path, pictures=2)
+    out = tmp_path / "out"
+    out.mkdir()
+    ds = D.load_dataset(p)
+    D._prepare(ds, D.bases(ds), out, resume=False)  # the folder as `eyelume dataset` begins it
+    other = tmp_path / "other.toml"
+    other.write_text(p.read_text(encoding="utf-8").replace("seed = 3", "seed = 4"), "utf-8")
+
+    def no_render(*args, **kwargs):
+        raise AssertionError("rendered before refusing the folder")
+
+    monkeypatch.setattr(importlib.import_module("eyelume.render"), "render", no_render)
+    monkeypatch.setattr("eyelume.optimize.runner.run_tasks", no_render)
+    before = sorted(x.name for x in out.iterdir())
+    res = runner.invoke(app, ["dataset", str(other), "--out", str(out), "--resume"])
+    assert res.exit_code == 2, res.output
+    lines = [x for x in res.output.splitlines() if x.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error:"), res.output
+    assert "another dataset" in lines[0] and "differs in seed" in lines[0]
+    assert f"{out}: {out}" not in lines[0]  # the folder named once
+    assert sorted(x.name for x in out.iterdir()) == before

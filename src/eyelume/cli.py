@@ -1435,6 +1435,9 @@ def _check_executor(workers: int | None, dask: str | None, lock_timeout: float) 
         )
     if not 0 <= lock_timeout <= 86400:
         _fail(f"--lock-timeout {lock_timeout}: must be 0 to 86400 s")
+    from eyelume.optimize.runner import check_scheduler
+
+    check_scheduler(dask)  # a malformed address or none answering: one line, in seconds
 
 
 @app.command()
@@ -1464,12 +1467,12 @@ def dataset(
     """Make a labelled dataset of eye pictures: the sensor's picture (PNG), the irradiance
     (.npy) and one label line each (labels.jsonl), every picture committed at once to
     OUT/results.sqlite (resumable: --resume makes the missing ones, the same bytes)."""
-    from eyelume.optimize.dataset import load_dataset, refuse_not_empty, run_dataset
+    from eyelume.optimize.dataset import check_out, load_dataset, run_dataset
 
     _check_executor(workers, dask, lock_timeout)
     ds = load_dataset(dataset_file)
     _check_out(out)
-    refuse_not_empty(out, resume)
+    check_out(ds, out, resume)  # not empty, or another dataset's: one line, before any render
     if (Path(out) / "results.sqlite").exists():
         from eyelume.optimize.store import read_rows
 

@@ -101,6 +101,7 @@ __all__ = [
     "Dataset",
     "Picture",
     "PicturePlan",
+    "check_out",
     "load_dataset",
     "make_picture",
     "picture_seed",
@@ -710,25 +711,43 @@ def _prepare(ds: Dataset, b: _Bases, out: Path, resume: bool) -> None:
         "picture_key_sha256": prefix,
         "adc_bits": b.base.sensor.adc_bits,
     }
-    old_path = out / DATASET_FILE
-    if old_path.is_file():
-        try:
-            old = json.loads(old_path.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            old = {}
-        if old.get("picture_key_sha256") != prefix:
-            raise StoreError(
-                f"{out}: holds pictures of another dataset file or scene "
-                f"({_differences(old.get('dataset') or {}, record['dataset'])}); use a new --out",
-                file=old_path,
-            )
-    write_json(old_path, record)
+    _refuse_another(ds, b, out)
+    write_json(out / DATASET_FILE, record)
     schema = resources.files("eyelume.analysis") / "dataset_label.schema.json"
     _write_atomic(out / SCHEMA_FILE, schema.read_bytes())
     for folder in _folders(ds):
         (out / folder).mkdir(exist_ok=True)
         for stale in (out / folder).glob(".*.tmp"):
             stale.unlink(missing_ok=True)
+
+
+def _refuse_another(ds: Dataset, b: _Bases, out: Path) -> None:
+    """StoreError when ``out`` holds a dataset.json of another dataset file or scene (its
+    picture key differs: :meth:`_Bases.key_prefix`), naming the fields that differ."""
+    old_path = out / DATASET_FILE
+    if not old_path.is_file():
+        return
+    try:
+        old = json.loads(old_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        old = {}
+    if not isinstance(old, dict) or old.get("picture_key_sha256") != b.key_prefix():
+        differ = _differences((old or {}).get("dataset") or {}, ds.model_dump(mode="json"))
+        raise StoreError(
+            f"holds pictures of another dataset file or scene ({DATASET_FILE} {differ}); "
+            "use a new --out",
+            file=out,
+        )
+
+
+def check_out(ds: Dataset, out: str | Path, resume: bool, b: _Bases | None = None) -> None:
+    """The checks of ``out`` that need no picture, made before any render (the command line
+    makes them before its opening line): without ``resume`` a folder that is not empty
+    (:func:`refuse_not_empty`); with it, a folder of another dataset file or scene. StoreError
+    in one line."""
+    out = Path(out)
+    refuse_not_empty(out, resume)
+    _refuse_another(ds, b or bases(ds), out)
 
 
 def _sha(scene: Scene) -> str:
@@ -806,7 +825,7 @@ def run_dataset(
     out = Path(out)
     b = bases(ds)
     prefix = b.key_prefix()
-    refuse_not_empty(out, resume)
+    check_out(ds, out, resume, b)
     store = ResultStore(out, LOCK_TIMEOUT_S if lock_timeout_s is None else lock_timeout_s)
     store.on_wait = note
     try:

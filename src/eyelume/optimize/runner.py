@@ -31,14 +31,14 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
-from eyelume.errors import StoreError
+from eyelume.errors import OptionError, StoreError
 from eyelume.json_files import write_json
 from eyelume.optimize.store import LOCK_TIMEOUT_S, ResultStore
 from eyelume.optimize.study import Study, plan_runs, run_key, run_metrics
 from eyelume.scene.io import load_scene
 from eyelume.scene.model import Scene
 
-__all__ = ["run_study", "run_tasks"]
+__all__ = ["check_scheduler", "run_study", "run_tasks"]
 
 
 def _init_worker(parent: int | None = None) -> None:
@@ -235,6 +235,35 @@ def _run_on_pool(workers, fn, tasks, commit, window) -> None:
     pool.shutdown()
 
 
+#: Seconds to reach a Dask scheduler (:func:`_connect`) before the address is refused; a
+#: scheduler that is up answers in well under a second, even across a network.
+DASK_CONNECT_TIMEOUT_S = 5.0
+
+
+def _connect(client_cls, address: str):
+    """A ``dask.distributed.Client`` of the scheduler at ``address``; OptionError naming
+    ``--dask`` and the address when it is malformed or nothing answers there within
+    :data:`DASK_CONNECT_TIMEOUT_S` (Dask's own default waits 30 s and more)."""
+    try:
+        return client_cls(address, timeout=DASK_CONNECT_TIMEOUT_S)
+    except (OSError, ValueError, TypeError) as exc:  # TimeoutError is an OSError
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise OptionError(
+            f"--dask {address}: no Dask scheduler reached there ({reason}); give 'local' or "
+            "a running scheduler's address, e.g. tcp://host:8786"
+        ) from None
+
+
+def check_scheduler(address: str | None) -> None:
+    """Refuse a ``dask`` scheduler address that is malformed or where nothing answers, before
+    any work (:func:`_connect`; OptionError); None and "local" need no check."""
+    if address is None or address == "local":
+        return
+    from dask.distributed import Client
+
+    _connect(Client, address).close()
+
+
 def _run_on_dask(address, workers, fn, tasks, commit, window) -> None:
     """The same tasks on a Dask cluster: a new LocalCluster for "local", else the scheduler at
     ``address``; each result is committed by this process as it arrives."""
@@ -247,7 +276,7 @@ def _run_on_dask(address, workers, fn, tasks, commit, window) -> None:
         )
         client = Client(cluster)
     else:
-        client = Client(address)
+        client = _connect(Client, address)
     try:
         client.run(_init_worker)
         if window is None:
