@@ -1537,8 +1537,9 @@ def report(
     landscapes, the best runs and the best run's stored eye-plane pattern and eye image (--scene
     stores them). Reads the store read-only: a study still running is reported as far as it has
     committed; a read-only FOLDER needs --out (and no --scene)."""
-    from eyelume.report.html import write_report
+    from eyelume.report.html import check_report_folder, write_report
 
+    check_report_folder(folder)  # missing, a file, a render's or no kind: one line first
     if out is not None:
         if out.is_dir():
             _fail(f"--out {out}: is a folder; give the page's file name, e.g. {out}/report.html")

@@ -224,6 +224,28 @@ def test_cli_report_on_a_dataset_folder(tmp_path):
     assert res.exit_code == 2 and "is a dataset's folder" in res.output, res.output
 
 
+@pytest.mark.parametrize("kind", ["missing", "file", "render", "empty"])
+def test_cli_report_on_what_is_no_study_or_dataset_folder_says_what_it_takes(tmp_path, kind):
+    """A fresh user's `eyelume report nosuchdir` was told to run a study: the one line says
+    what the path is (missing, a file, a render's folder, neither) and what report takes."""
+    folder = tmp_path / "nosuchdir"
+    if kind == "file":
+        folder.write_text("x", encoding="utf-8")
+    elif kind != "missing":
+        folder.mkdir()
+    if kind == "render":
+        (folder / "summary.json").write_text("{}", encoding="utf-8")
+    res = CliRunner().invoke(app, ["report", str(folder)])
+    assert res.exit_code == 2, res.output
+    lines = [x for x in res.output.splitlines() if x.strip()]
+    assert len(lines) == 1 and lines[0].startswith(f"error: {folder}: "), res.output
+    said = {"missing": "no such folder", "file": "is a file", "render": "a render's folder",
+            "empty": "neither a study's nor a dataset's folder"}  # fmt: skip
+    assert said[kind] in lines[0]
+    assert "study's folder" in lines[0] and "dataset's" in lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["nosuchdir"] or kind == "missing"
+
+
 @pytest.mark.slow
 def test_a_tiny_dataset_made_by_eyelume_dataset_is_read_exported_and_scored(tmp_path):
     """`eyelume dataset` itself (vr-offaxis at 64 × 64 px over the same field, 2 pictures, 2

@@ -35,7 +35,7 @@ from eyelume.report.plots import (
 )
 from eyelume.report.tracking_outputs import save_error_maps
 
-__all__ = ["write_dataset_report", "write_report"]
+__all__ = ["check_report_folder", "write_dataset_report", "write_report"]
 
 
 #: Run when a page has loaded: counts the figures that decoded and measures the layout, for a
@@ -324,6 +324,34 @@ def _best_warning(rows: list[dict], best: list[dict]) -> str:
     )
 
 
+#: What ``eyelume report`` takes, said when it is given something else.
+_TAKES = (
+    "eyelume report takes a study's folder (`eyelume study --out`: results.sqlite) or a "
+    "dataset's (`eyelume dataset --out`: labels.jsonl)"
+)
+
+
+def check_report_folder(folder: str | Path) -> str:
+    """ "study" or "dataset": the kind of folder ``folder`` is. StoreError in one line for a
+    path that does not exist, a file, a render's folder (``eyelume render --out``: its
+    figures are already there) or a folder of neither kind, saying what the report takes."""
+    folder = Path(folder)
+    if not folder.exists():
+        raise StoreError(f"no such folder; {_TAKES}", file=folder)
+    if not folder.is_dir():
+        raise StoreError(f"is a file, not a folder; {_TAKES}", file=folder)
+    if (folder / "labels.jsonl").exists() or (folder / "dataset.json").exists():
+        return "dataset"
+    if (folder / "results.sqlite").exists():
+        return "study"
+    if (folder / "summary.json").is_file():
+        raise StoreError(
+            f"a render's folder (summary.json): its figures are already in it; {_TAKES}",
+            file=folder,
+        )
+    raise StoreError(f"neither a study's nor a dataset's folder; {_TAKES}", file=folder)
+
+
 def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
     """Write the study's page to ``out`` (default ``folder/report.html``) from what its store
     has committed and the best run's stored pictures; returns the page's path. The store is
@@ -333,7 +361,7 @@ def write_report(folder: str | Path, out: str | Path | None = None) -> Path:
     from eyelume.optimize.store import read_rows
 
     folder = Path(folder)
-    if (folder / "labels.jsonl").exists() or (folder / "dataset.json").exists():
+    if check_report_folder(folder) == "dataset":
         return write_dataset_report(folder, out)
     rows, note = read_rows(folder)
     if not rows:
