@@ -176,3 +176,26 @@ def test_resume_into_another_datasets_folder_is_refused_before_any_render(tmp_pa
     assert "another dataset" in lines[0] and "differs in seed" in lines[0]
     assert f"{out}: {out}" not in lines[0]  # the folder named once
     assert sorted(x.name for x in out.iterdir()) == before
+
+
+def test_a_first_run_says_it_compiles_the_kernels_before_it_does(tmp_path, monkeypatch):
+    """On a fresh machine the kernels' compilation is a minute of silence: `dataset` says so in
+    one line, as `render` does (its _warm_up), and compiles them in the parent before the
+    workers start (they then load them from the shared cache)."""
+    import eyelume.estimators.fast_run as fast_run
+    from eyelume.optimize import dataset as D
+
+    calls = []
+    monkeypatch.setattr(fast_run, "kernels_cached", lambda *a: False)
+    monkeypatch.setattr(fast_run, "warm_up", lambda cs: calls.append("warm_up") or 0.0)
+
+    def run(*args, **kwargs):
+        calls.append("run_dataset")
+        return 0
+
+    monkeypatch.setattr(D, "run_dataset", run)
+    p = write(tmp_path, pictures=2)
+    res = runner.invoke(app, ["dataset", str(p), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert "compiling kernels (first run only" in res.output
+    assert calls == ["warm_up", "run_dataset"]

@@ -1481,6 +1481,13 @@ def dataset(
         f"dataset {ds.name}: {ds.pictures} pictures into {out} "
         "(Ctrl-C, then --resume, loses nothing)"
     )
+    if dask in (None, "local"):
+        # the workers share this machine's Numba cache: compile the kernels here once, saying
+        # so on a fresh machine (a minute of silence otherwise), and they load them from it
+        from eyelume.compile import compile_scene
+        from eyelume.optimize.dataset import bases
+
+        _warm_up(compile_scene(bases(ds).base))
     with _progress_bar("[bold]pictures", "{task.completed}/{task.total}") as bar:
         task = bar.add_task("dataset", total=ds.pictures)
         first = [True]
