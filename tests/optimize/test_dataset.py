@@ -325,3 +325,36 @@ def test_glasses_add_the_glasses_scenes_elements_to_their_share_of_pictures(tmp_
     assert D.picture_scene(b, plans[off])[0].elements == []
     pic = D.make_picture(ds, on, b)
     assert pic.label["glasses"] is True and pic.image.shape == (40, 40)
+
+
+# --- the folder's lock ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("end", ["finished", "interrupted"])
+def test_no_lock_file_is_left_after_a_run_finished_or_interrupted(tmp_path, monkeypatch, end):
+    """The store's ``.lock`` is held while a run writes (a second writer is refused) and
+    removed when the run ends, also by Ctrl-C/SIGTERM (the interrupt run_tasks raises)."""
+    from eyelume.optimize import runner
+    from eyelume.optimize.store import ResultStore, StoreBusy
+
+    ds = D.load_dataset(write(tmp_path, pictures=2))
+    out = tmp_path / "out"
+    seen = []
+
+    def tasks_here(fn, tasks, commit, workers=None, dask=None, window=None):
+        seen.append((out / ".lock").is_file())
+        with pytest.raises(StoreBusy):
+            ResultStore(out)  # another writer, while this run holds the folder
+        if end == "interrupted":
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(runner, "run_tasks", tasks_here)
+    if end == "interrupted":
+        with pytest.raises(KeyboardInterrupt):
+            D.run_dataset(ds, out, workers=1)
+    else:
+        assert D.run_dataset(ds, out, workers=1) == 0
+    assert seen == [True]
+    assert not (out / ".lock").exists(), sorted(p.name for p in out.iterdir())
+    ResultStore(out).close()  # the folder takes a writer again
+    assert not (out / ".lock").exists()

@@ -5,7 +5,9 @@ commit is atomic and durable after it returns, readers never block the writer, a
 server and no dependency (Parquet parts would need pyarrow and one file per run). Rows are keyed
 by the SHA-256 of the run's exact inputs, so a resumed study skips what is done. One study at a
 time may write to a folder: an exclusive ``flock`` on ``.lock`` (released by the kernel when the
-process dies, however it dies) refuses a second one with a clear error.
+process dies, however it dies) refuses a second one with a clear error. The writer removes
+``.lock`` when it closes the store (a finished run, Ctrl-C, SIGTERM, an error); only a process
+killed outright (``kill -9``) leaves it, unlocked and harmless: the next writer takes it.
 
 Readers (``eyelume report``) never take that lock and never write: :func:`read_rows` opens the
 database read-only (SQLite ``mode=ro``), so it reports what is committed while a study is still
@@ -36,6 +38,9 @@ from eyelume.errors import StoreError
 from eyelume.json_files import dumps, finite_or_null
 
 __all__ = ["LOCK_TIMEOUT_S", "ResultStore", "StoreBusy", "StoreLocked", "read_rows"]
+
+#: The file a writer holds an exclusive ``flock`` on (module docstring); removed when it ends.
+LOCK_FILE = ".lock"
 
 #: Seconds a commit waits for another program's write lock before the study stops.
 LOCK_TIMEOUT_S = 60.0
@@ -110,14 +115,7 @@ class ResultStore:
         self.lock_timeout_s = float(lock_timeout_s)
         self.on_wait: Callable[[str], None] | None = None
         self.folder.mkdir(parents=True, exist_ok=True)
-        self._lock = open(self.folder / ".lock", "a+")  # noqa: SIM115 - held for the run
-        try:
-            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            self._lock.close()
-            raise StoreBusy(
-                f"{self.folder}: another study is writing here; wait for it or use another --out"
-            ) from None
+        self._lock = self._take_lock()
         self._lock.seek(0)
         self._lock.truncate()
         self._lock.write(str(os.getpid()))
@@ -222,7 +220,39 @@ class ResultStore:
         for row in cursor:
             yield from _as_rows([row])
 
+    def _take_lock(self):
+        """The folder's ``.lock``, opened and held (``flock``, exclusive): StoreBusy while
+        another process holds it. A holder removes the file before it lets go
+        (:meth:`_unlock`), so a lock taken on a file that is no longer the folder's ``.lock``
+        (removed between our open and our flock) is dropped and the new file taken instead:
+        two writers never hold locks on two different files."""
+        path = self.folder / LOCK_FILE
+        while True:
+            f = open(path, "a+")  # noqa: SIM115 - held for the run
+            try:
+                fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                f.close()
+                raise StoreBusy(
+                    f"{self.folder}: another study is writing here; wait for it or use another "
+                    "--out"
+                ) from None
+            try:
+                if os.stat(path).st_ino == os.fstat(f.fileno()).st_ino:
+                    return f
+            except FileNotFoundError:
+                pass
+            f.close()
+
     def _unlock(self) -> None:
+        """Remove ``.lock`` while still holding it, then let go (:meth:`_take_lock`): a
+        finished or interrupted run leaves no lock file. Only ``kill -9`` (or a crash of the
+        interpreter) leaves one; the kernel has released its lock, so it stops nobody and the
+        next run takes it and removes it in turn."""
+        try:
+            (self.folder / LOCK_FILE).unlink(missing_ok=True)
+        except OSError:  # a folder made read-only meanwhile: the file stays, unlocked
+            pass
         fcntl.flock(self._lock, fcntl.LOCK_UN)
         self._lock.close()
 
