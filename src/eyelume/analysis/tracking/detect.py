@@ -632,7 +632,11 @@ def _assign_leds(centres: np.ndarray, led_azimuths_deg, max_ang: float):
     n, n_led = len(centres), len(led_azimuths_deg)
     if n < 2 and n_led > 1:
         return [None] * n, "", []
-    ref = tuple(np.median(centres, axis=0)) if n else (0.0, 0.0)
+    if n:  # np.median(centres, axis=0) without its overhead: the middle one or two's mean
+        s = np.sort(centres, axis=0)
+        ref = tuple(s[n // 2] if n % 2 else (s[n // 2 - 1] + s[n // 2]) / 2)
+    else:
+        ref = (0.0, 0.0)
     leds, ref = match_leds(centres, led_azimuths_deg, ref, max_ang, with_reference=True)
     leds = list(leds)
     if n == 2 and n_led > 2:

@@ -174,9 +174,9 @@ def _odd(n: float) -> int:
 
 def _order_stats(a: np.ndarray, ks: tuple[int, ...]) -> list[float]:
     """The ``ks``-th smallest of the values ``a`` (1-D), as floats: for 8- and 16-bit pictures
-    by counting (:func:`_counted_order_stats`: exact, and ``np.partition`` is slow on their
-    many equal values), else by ``np.partition``."""
-    if a.dtype == np.uint8 or a.dtype == np.uint16:
+    (and 32-bit integers) by counting (:func:`_counted_order_stats`: exact, and
+    ``np.partition`` is slow on their many equal values), else by ``np.partition``."""
+    if a.dtype == np.uint8 or a.dtype == np.uint16 or a.dtype == np.int32:
         return _counted_order_stats(np.ascontiguousarray(a), np.array(ks, np.int64)).tolist()
     p = np.partition(a, sorted(set(ks)))
     return [float(p[k]) for k in ks]
@@ -184,7 +184,7 @@ def _order_stats(a: np.ndarray, ks: tuple[int, ...]) -> list[float]:
 
 @njit(cache=True, nogil=True)
 def _counted_order_stats(a, ks):
-    """The ``ks``-th smallest (0-based) of the 8- or 16-bit values ``a`` (1-D, not empty), as
+    """The ``ks``-th smallest (0-based) of the integer values ``a`` (1-D, not empty), as
     float64: the values counted over their range [min, max] (the first value whose running
     count exceeds k, as ``np.searchsorted(np.cumsum(counts), k, side="right")``), or sorted
     when that range is over 4 × their number. One compiled pass instead of NumPy's bincount
@@ -558,13 +558,10 @@ def noise_sigma(u8: np.ndarray) -> float:
     if rows < 3 or cols < 3:
         return 0.0
     k = _stride((rows - 2) * (cols - 2), 5e3)
-    # Integer pictures in int32 (exact), whose |M * I| then fits 16 bits for a ≤ 12-bit
-    # camera and has its median counted (:func:`median`); 8-bit ones in int16 (|M * I| ≤
-    # 16 × 255: exact, and half the memory traffic); others in float32.
-    if u8.dtype == np.uint8:
-        wide = np.int16
-    else:
-        wide = np.int32 if u8.dtype.kind in "iu" and u8.itemsize <= 2 else np.float32
+    if u8.dtype.kind in "iu" and u8.itemsize <= 2:
+        # Integer pictures: |M * I| in integers (exact) by one compiled pass, its median counted.
+        return 1.4826 * median(_immerkaer_abs(u8, k)) / 6.0
+    wide = np.float32  # others in float32
 
     def at(dr: int, dc: int) -> np.ndarray:  # every k-th pixel's neighbour (dr, dc)
         return u8[1 + dr : rows - 1 + dr : k, 1 + dc : cols - 1 + dc : k].astype(wide)
@@ -574,12 +571,35 @@ def noise_sigma(u8: np.ndarray) -> float:
         - 2 * (at(-1, 0) + at(1, 0) + at(0, -1) + at(0, 1))
         + (at(-1, -1) + at(-1, 1) + at(1, -1) + at(1, 1))
     )
-    r = np.abs(r)
-    if wide is np.int16:
-        r = r.view(np.uint16)
-    elif wide is np.int32 and r.size and int(r.max()) < 65536:
-        r = r.astype(np.uint16)
-    return 1.4826 * median(r) / 6.0
+    return 1.4826 * median(np.abs(r)) / 6.0
+
+
+@njit(cache=True, nogil=True)
+def _immerkaer_abs(img, k):
+    """|M * I| (:func:`noise_sigma`) at every k-th inner pixel of the integer picture ``img``
+    each way, in row order (int32 1-D; exact: ≤ 16 × 65535)."""
+    rows, cols = img.shape
+    ny = (rows - 3) // k + 1
+    nx = (cols - 3) // k + 1
+    out = np.empty(ny * nx, np.int32)
+    n = 0
+    for r in range(1, rows - 1, k):
+        for c in range(1, cols - 1, k):
+            v = 4 * np.int32(img[r, c]) - 2 * (
+                np.int32(img[r - 1, c])
+                + np.int32(img[r + 1, c])
+                + np.int32(img[r, c - 1])
+                + np.int32(img[r, c + 1])
+            )
+            v += (
+                np.int32(img[r - 1, c - 1])
+                + np.int32(img[r - 1, c + 1])
+                + np.int32(img[r + 1, c - 1])
+                + np.int32(img[r + 1, c + 1])
+            )
+            out[n] = abs(v)
+            n += 1
+    return out
 
 
 def _stride(n: int, keep: float = 2e4) -> int:
@@ -1432,8 +1452,11 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     m, p = median_and_percentile(vals, params.core_quantile)
     # On the input (the working picture's glints are filled flat, which would hide noise).
     win = img[y0:y1, x0:x1].astype(np.float32)
-    lap = cv2.filter2D(win, cv2.CV_32F, _IMMERKAER, borderType=cv2.BORDER_REFLECT)
-    noise = 1.4826 * median(np.abs(lap[inside])) / 6.0
+    lap = np.abs(cv2.filter2D(win, cv2.CV_32F, _IMMERKAER, borderType=cv2.BORDER_REFLECT)[inside])
+    if img.dtype.kind in "iu" and img.itemsize <= 2:
+        # Integers (|M * I| ≤ 16 × 65535: exact in float32 and in int32): counted, not sorted.
+        lap = lap.astype(np.int32)
+    noise = 1.4826 * median(lap) / 6.0
     # An integer picture's median and percentiles move in whole steps: ≥ 1 step (an 8-bit
     # close-up's pupil, median 2 DN over black, 5th percentile at it, is uniform).
     noise = max(noise, 0.5 * (wp.hi - wp.lo) / 255.0, 1.0 if img.dtype.kind in "iu" else 0.0)
