@@ -134,6 +134,57 @@ def _grid_local(e: Ellipse, x0: int, x1: int, y0: int, y1: int, step: int = 1):
     return dx * c + dy * s, -dx * s + dy * c
 
 
+def _scaled_args(e: Ellipse) -> tuple[float, ...]:
+    """(cx, cy, cos θ, sin θ, a, b) of ``e`` as floats, for the compiled grids below."""
+    return (float(e.cx), float(e.cy), math.cos(e.theta), math.sin(e.theta), float(e.a), float(e.b))
+
+
+@njit(cache=True, nogil=True)
+def _inside_scaled(box, ell, lim):
+    """Which pixel centres of the box (x0, x1, y0, y1) = [x0, x1) × [y0, y1) have (s / a)² +
+    (q / b)² < ``lim``, (s, q) their coordinates along and across the ellipse ``ell`` = (cx,
+    cy, cos θ, sin θ, a, b) (:meth:`Ellipse.local`): (rows, cols) bool, the same arithmetic as
+    on :func:`_grid_local`'s arrays, in one compiled pass."""
+    x0, x1, y0, y1 = box
+    cx, cy, c, sn, a, b = ell
+    out = np.empty((max(0, y1 - y0), max(0, x1 - x0)), np.bool_)
+    for r in range(y1 - y0):
+        dy = float(y0 + r) - cy
+        for k in range(x1 - x0):
+            dx = float(x0 + k) - cx
+            u = (dx * c + dy * sn) / a
+            v = (-dx * sn + dy * c) / b
+            out[r, k] = u * u + v * v < lim
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _ring_scaled(box, step, ell, radii):
+    """(s / a, q / b) of every ``step``-th pixel centre of the box (x0, x1, y0, y1) about the
+    ellipse ``ell`` (as :func:`_inside_scaled`; :func:`_grid_local`'s arrays divided by the
+    semi-axes) and which lie strictly between the scaled radii ``radii`` = (r0, r1) (hypot),
+    in one compiled pass: the same numbers."""
+    x0, x1, y0, y1 = box
+    cx, cy, c, sn, a, b = ell
+    r0, r1 = radii
+    ny = max(0, (y1 - y0 + step - 1) // step)
+    nx = max(0, (x1 - x0 + step - 1) // step)
+    uo = np.empty((ny, nx))
+    vo = np.empty((ny, nx))
+    ring = np.empty((ny, nx), np.bool_)
+    for r in range(ny):
+        dy = float(y0 + r * step) - cy
+        for k in range(nx):
+            dx = float(x0 + k * step) - cx
+            u = (dx * c + dy * sn) / a
+            v = (-dx * sn + dy * c) / b
+            rho = math.hypot(u, v)
+            uo[r, k] = u
+            vo[r, k] = v
+            ring[r, k] = rho > r0 and rho < r1
+    return uo, vo, ring
+
+
 def sampson_distance(e: Ellipse, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Signed first-order distance (px) of points to the ellipse, > 0 outside.
 
@@ -1377,11 +1428,8 @@ def _one_sided(img, wp: WorkPicture, e: Ellipse, pupil_level: float, bright, par
     s = max(1, int(reach / 40.0))
     x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
     y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
-    u, v = _grid_local(e, x0, x1, y0, y1, s)
-    u /= e.a
-    v /= e.b
-    rho = np.hypot(u, v)
-    ring = (rho > r0) & (rho < r1) & (bright[y0:y1:s, x0:x1:s] == 0)
+    u, v, ring = _ring_scaled((x0, x1, y0, y1), s, _scaled_args(e), (float(r0), float(r1)))
+    ring &= bright[y0:y1:s, x0:x1:s] == 0
     if wp.invalid is not None:
         ring &= ~wp.invalid[y0:y1:s, x0:x1:s]
     if not ring.any():
@@ -1438,8 +1486,7 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
     if x1 - x0 < 3 or y1 - y0 < 3:
         return ""
-    u, v = _grid_local(e, x0, x1, y0, y1)
-    inside = (u / e.a) ** 2 + (v / e.b) ** 2 < 0.81
+    inside = _inside_scaled((x0, x1, y0, y1), _scaled_args(e), 0.81)
     glints = bright[y0:y1, x0:x1]
     if glints.any():
         inside &= _grown_glints_box(glints, params)[0] == 0
