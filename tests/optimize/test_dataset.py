@@ -108,6 +108,55 @@ def test_a_bad_dataset_file_is_one_line_naming_the_field(tmp_path, edit, words):
         assert w in text, (w, text)
 
 
+NOISE = "samples_per_pixel = 1"
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "field", "value"),
+    [
+        (NOISE, 'render_noise = "senzor"', "render_noise", "'senzor'"),
+        (NOISE, "render_noise = -0.1", "render_noise", "-0.1"),
+        ("[2.0, 7.0]", '[2.0, "x"]', "vary[0].range[1]", "'x'"),
+        ("[-0.5, 0.5]]", '[-0.5, "a"]]', "vary[1].range[2][1]", "'a'"),
+        ("eye.pupil_diameter_mm", "eye.pupil_size", "vary[0].path", "'eye.pupil_size'"),
+        ("eye.pupil_diameter_mm", "iris.size", "vary[0].path", "'iris.size'"),
+        ("eye.pupil_diameter_mm", "eye..x", "vary[0].path", "'eye..x'"),
+    ],
+)  # fmt: skip
+def test_a_bad_field_is_named_as_the_user_wrote_it_with_the_value_given(
+    tmp_path, old, new, field, value
+):
+    """A fresh user read pydantic's paths (``render_noise.literal['sensor']``,
+    ``vary.0.range.tuple[float, float].1``), ``render_noise = -0.1`` as a top-level problem and
+    a bad [[vary]] path quoted with its range's value: the line names the field as the TOML has
+    it and the value given there (the scene files' formatter, eyelume.scene.io)."""
+    p = write(tmp_path)
+    p.write_text(p.read_text(encoding="utf-8").replace(old, new, 1), encoding="utf-8")
+    with pytest.raises(SceneError) as exc:
+        D.load_dataset(p)
+    text = str(exc.value)
+    assert text.startswith(f"dataset {p}: field '{field}' = {value}: "), text
+    assert "literal[" not in text and "tuple[" not in text and "top level" not in text
+
+
+def test_a_study_vary_path_that_is_no_field_is_named_with_the_path(tmp_path):
+    from eyelume.optimize.study import load_study
+
+    p = tmp_path / "study.toml"
+    p.write_text(
+        'name = "s"\nscene = "paper2005"\nmetrics = ["safety"]\n[[vary]]\npath = "leds.hight_mm"\n'
+        "values = [20.0, 30.0]\n",
+        encoding="utf-8",
+    )
+    with pytest.raises(SceneError) as exc:
+        load_study(p)
+    assert str(exc.value).startswith(f"study {p}: field 'vary[0].path' = 'leds.hight_mm': ")
+    p.write_text(p.read_text(encoding="utf-8").replace("[20.0, 30.0]", "[20.0, [1]]"), "utf-8")
+    with pytest.raises(SceneError) as exc:
+        load_study(p)
+    assert "vary[0].values[1]" in str(exc.value) and "list[" not in str(exc.value)
+
+
 def test_not_toml_and_missing_file_are_one_line(tmp_path):
     p = tmp_path / "ds.toml"
     p.write_text("name = [", encoding="utf-8")

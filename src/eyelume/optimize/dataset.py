@@ -85,12 +85,12 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from eyelume.errors import EyelumeError, GeometryError, SceneError, StoreError
 from eyelume.json_files import dumps, write_json
 from eyelume.optimize.study import beside, read_input_file
-from eyelume.scene.io import apply_overrides, load_scene
+from eyelume.scene.io import apply_overrides, load_scene, not_a_path
 from eyelume.scene.model import Scene
 from eyelume.scene.model import _Model as _Table  # extra keys, NaN and true-for-a-number refused
 from eyelume.scene.population import Person, Population, sample_people
@@ -229,12 +229,17 @@ class Dataset(_Table):
     vary: list[DatasetVary] = []
     glasses: Glasses | None = None
 
+    @field_validator("render_noise")
+    @classmethod
+    def _relative_error(cls, value):
+        """A relative error in (0, 1): an error of the field itself, so its one line names
+        ``render_noise`` and the value given."""
+        if isinstance(value, float) and not 0.0 < value < 1.0:
+            raise ValueError("must be 'sensor' or a relative error in (0, 1), e.g. 0.02")
+        return value
+
     @model_validator(mode="after")
     def _budget(self) -> Dataset:
-        if isinstance(self.render_noise, float) and not 0.0 < self.render_noise < 1.0:
-            raise ValueError(
-                f"render_noise = {self.render_noise}: 'sensor' or a relative error in (0, 1)"
-            )
         if self.samples_per_pixel is not None and self.render_noise is not None:
             raise ValueError("give render_noise or samples_per_pixel, not both")
         return self
@@ -286,6 +291,11 @@ def _check_vary(ds: Dataset, base: Scene, where: str) -> None:
             try:
                 apply_overrides(base, {v.path: value})
             except EyelumeError as exc:
+                if not_a_path(exc, v.path):
+                    raise SceneError(
+                        "not a field of the scene (a dotted path such as eye.pupil_diameter_mm)",
+                        file=where, field=f"vary[{i}].path", value=v.path,
+                    ) from None  # fmt: skip
                 raise SceneError(
                     exc.message if exc.field else str(exc),
                     file=where,

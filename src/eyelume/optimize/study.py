@@ -48,10 +48,17 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, ValidationError, model_validator
 
 from eyelume.errors import EyelumeError
-from eyelume.scene.io import SceneError, apply_overrides, load_scene, preset_names
+from eyelume.scene.io import (
+    SceneError,
+    apply_overrides,
+    load_scene,
+    not_a_path,
+    preset_names,
+    validation_error,
+)
 from eyelume.scene.model import Scene
 from eyelume.scene.model import _Model as _Table  # extra keys, NaN and true-for-a-number refused
 from eyelume.scene.population import Population, sample_people
@@ -135,14 +142,8 @@ def read_input_file(path: Path, kind: str, model: type[_Table]):
         raise SceneError(f"{kind} {p}: not valid TOML: {exc}") from None
     try:
         return model.model_validate(data)
-    except ValueError as exc:
-        first = exc.errors()[0] if hasattr(exc, "errors") else {"loc": (), "msg": str(exc)}
-        loc = ".".join(str(x) for x in first.get("loc", ())) or "(top level)"
-        value = first.get("input")
-        msg = str(first.get("msg")).removeprefix("Value error, ")
-        if first.get("type") in ("missing", "extra_forbidden") or isinstance(value, dict):
-            raise SceneError(f"{kind} {p}: field '{loc}': {msg}") from None
-        raise SceneError(msg, file=f"{kind} {p}", field=loc, value=value) from None
+    except ValidationError as exc:  # the scene files' formatter, the TOML's own field names
+        raise validation_error(exc, data, f"{kind} {p}", brackets=True) from None
 
 
 def beside(path: Path, scene: str) -> str:
@@ -230,6 +231,11 @@ def _check_runs(study: Study, base: Scene, path: Path) -> None:
             try:
                 apply_overrides(base, {v.path: value})
             except EyelumeError as exc:
+                if not_a_path(exc, v.path):
+                    raise SceneError(
+                        "not a field of the scene (a dotted path such as leds.height_mm)",
+                        file=f"study {path}", field=f"vary[{i}].path", value=v.path,
+                    ) from None  # fmt: skip
                 raise SceneError(
                     exc.message if exc.field else str(exc),
                     file=f"study {path}",

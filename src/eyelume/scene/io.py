@@ -21,7 +21,15 @@ from eyelume.scene.eye import check_eye_geometry
 from eyelume.scene.model import QE_CURVES, RING_FIELDS, Scene
 from eyelume.scene.textfile import decode_text
 
-__all__ = ["SceneError", "apply_overrides", "load_scene", "preset_names", "save_scene"]
+__all__ = [
+    "SceneError",
+    "apply_overrides",
+    "load_scene",
+    "not_a_path",
+    "preset_names",
+    "save_scene",
+    "validation_error",
+]
 
 _PRESETS = "eyelume.scene.presets"
 
@@ -89,16 +97,108 @@ def _resolved(base: Path, name: str, field: str) -> str:
         raise SceneError(f"not a usable file path ({exc})", field=field, value=name) from None
 
 
-def _format_loc(loc: tuple[Any, ...]) -> str:
-    """A pydantic error location as a dotted scene path, without pydantic's own tags (validator
-    functions, and the member of a union such as ``float | list[float]`` that was tried)."""
-    return ".".join(str(p) for p in loc if not _is_tag(p))
+def _format_loc(loc: tuple[Any, ...], data: Any = None, brackets: bool = False) -> str:
+    """A pydantic error location as the user's field: without pydantic's own tags (validator
+    functions, and the member of a union such as ``float | list[float]`` or ``Literal['sensor']
+    | float`` that was tried), found by walking ``data`` (the validated input) along it — a
+    name that is a key of the table there is a field, whatever it is called. Dotted as a scene
+    path (``elements.0.front``, what ``--set`` takes), or with ``brackets`` as a TOML file reads
+    (``vary[0].range[1]``)."""
+    parts: list[Any] = []
+    node = data
+    for part in loc:
+        if isinstance(part, int):
+            parts.append(part)
+            ok = isinstance(node, list | tuple) and -len(node) <= part < len(node)
+            node = node[part] if ok else None
+        elif isinstance(node, dict) and part in node:
+            parts.append(part)
+            node = node[part]
+        elif not (_is_tag(part) or (isinstance(node, dict) and part[:1].isupper())) and (
+            node is None or isinstance(node, dict)
+        ):
+            parts.append(part)  # a field absent from the input (required, or beyond it)
+            node = None
+    if not brackets:
+        return ".".join(str(p) for p in parts)
+    text = ""
+    for p in parts:
+        text += f"[{p}]" if isinstance(p, int) else (f".{p}" if text else str(p))
+    return text
+
+
+#: Union members pydantic names by their type (``float | list[float]`` → "float", "list[float]").
+_TYPE_TAGS = frozenset({"bool", "bytes", "dict", "float", "int", "list", "none", "str", "tuple"})
 
 
 def _is_tag(part: Any) -> bool:
     return isinstance(part, str) and (
-        part.startswith("function-") or part.startswith("constrained-") or part.startswith("list[")
+        part in _TYPE_TAGS
+        or part.startswith(("function-", "constrained-", "is-instance[", "lax-or-strict["))
+        or part.startswith(("list[", "tuple[", "literal[", "dict[", "set[", "nullable["))
     )
+
+
+def _union_choice(loc: tuple[Any, ...]) -> int | None:
+    """The position in ``loc`` of the union member tried (a type tag or a model's class name),
+    or None."""
+    for i, part in enumerate(loc):
+        if (
+            isinstance(part, str)
+            and not part.startswith(("function-", "constrained-"))
+            and (_is_tag(part) or part[:1].isupper())
+        ):
+            return i
+    return None
+
+
+def _first_error(errors: list[dict]) -> tuple[dict, str]:
+    """(the error to report, its message). Pydantic reports a value that fits no member of a
+    union once per member; the member with the fewest errors, then the one that got deepest
+    into the value, is what the user meant (a range [[1, 2], [3, "a"]] is a list of pairs with
+    one bad number, not a pair of bad numbers). When
+    the members tie with one error each at the same place, their wants are joined ("Input
+    should be 'sensor' or a valid number")."""
+    first = errors[0]
+    msg = first["msg"].removeprefix("Value error, ")
+    i = _union_choice(tuple(first["loc"]))
+    if i is None:
+        return first, msg
+    prefix = tuple(first["loc"][:i])
+    members: dict[Any, list[dict]] = {}
+    for e in errors:
+        loc = tuple(e["loc"])
+        if loc[:i] == prefix and len(loc) > i and _union_choice(loc) == i:
+            members.setdefault(loc[i], []).append(e)
+    best = min(members.values(), key=lambda v: (len(v), -len(v[0]["loc"])))
+    chosen = best[0]
+    msg = chosen["msg"].removeprefix("Value error, ")
+    single = [v[0] for v in members.values() if len(v) == 1]
+    if len(best) == 1 and len(single) > 1 and len({tuple(e["loc"][i + 1 :]) for e in single}) == 1:
+        wants = [e["msg"].removeprefix("Value error, ") for e in single]
+        if all(w.startswith("Input should be ") for w in wants):
+            msg = " or ".join([wants[0], *(w.removeprefix("Input should be ") for w in wants[1:])])
+    return chosen, msg
+
+
+def validation_error(exc: ValidationError, data: Any, origin: str, brackets: bool = False):
+    """The first problem of pydantic's ``exc`` as one-line SceneError naming ``origin`` (the
+    file), the user's field (:func:`_format_loc`: dotted, or with ``brackets`` as in a TOML
+    input file) and the value they gave; an unknown field and a missing one said so. The one
+    formatter of every validated input: scenes, population files, study and dataset files."""
+    err, msg = _first_error(exc.errors())
+    loc = tuple(err["loc"])
+    field = _format_loc(loc, data, brackets) or "(top level)"
+    if err["type"] == "extra_forbidden":
+        return SceneError("unknown field", file=origin, field=field)
+    if err["type"] == "missing":
+        return SceneError("is required", file=origin, field=field)
+    value = err.get("input", _lookup(data, loc))
+    if field == "(top level)":
+        return SceneError(f"{origin}: {msg}")
+    if isinstance(value, dict):
+        return SceneError(f"{origin}: {field}: {msg}")
+    return SceneError(msg, file=origin, field=field, value=value)
 
 
 def _lookup(data: Any, loc: tuple[Any, ...]) -> Any:
@@ -117,20 +217,7 @@ def validate_scene(data: dict[str, Any], origin: str = "scene") -> Scene:
     try:
         scene = Scene.model_validate(data)
     except ValidationError as exc:
-        err = exc.errors()[0]
-        loc = tuple(err["loc"])
-        field = _format_loc(loc) or "(top level)"
-        msg = err["msg"].removeprefix("Value error, ")
-        if err["type"] == "extra_forbidden":
-            raise SceneError("unknown field", file=origin, field=field) from None
-        if err["type"] == "missing":
-            raise SceneError("is required", file=origin, field=field) from None
-        value = err.get("input", _lookup(data, loc))
-        if not loc:
-            raise SceneError(f"{origin}: {msg}") from None
-        if isinstance(value, dict):
-            raise SceneError(f"{origin}: {field}: {msg}") from None
-        raise SceneError(msg, file=origin, field=field, value=value) from None
+        raise validation_error(exc, data, origin) from None
     try:
         check_eye_geometry(scene.eye)
     except GeometryError as exc:
@@ -247,6 +334,19 @@ def _override_data(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str,
         else:
             node[last] = value
     return data
+
+
+def not_a_path(exc: Exception, path: str) -> bool:
+    """Whether ``exc``, raised by :func:`apply_overrides` with an override of ``path``, is about
+    the path itself — not a dotted path, no such item, no such field (or table) of the scene —
+    rather than about the value given to it."""
+    if not isinstance(exc, SceneError):
+        return False
+    if exc.field is None and exc.message.startswith(f"override '{path}'"):
+        return True
+    return exc.message == "unknown field" and (
+        exc.field == path or path.startswith(f"{exc.field}.")
+    )
 
 
 def apply_overrides(scene: Scene, overrides: dict[str, Any]) -> Scene:

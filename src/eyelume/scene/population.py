@@ -51,7 +51,7 @@ from scipy.special import ndtr, ndtri
 
 from eyelume.errors import EyelumeError, SceneError
 from eyelume.scene.eye import LIMBUS_MISMATCH_MM
-from eyelume.scene.io import apply_overrides
+from eyelume.scene.io import apply_overrides, validation_error
 from eyelume.scene.model import Scene
 from eyelume.scene.model import _Model as _Table
 
@@ -213,15 +213,7 @@ def parse_population(data: Any, origin: str = "population") -> Population:
     try:
         return Population.model_validate(data)
     except ValidationError as exc:
-        err = exc.errors()[0]
-        loc = ".".join(str(p) for p in err["loc"] if not str(p).startswith("function-"))
-        msg = err["msg"].removeprefix("Value error, ")
-        if err["type"] == "extra_forbidden":
-            raise SceneError("unknown field", file=origin, field=loc) from None
-        value = err.get("input")
-        if not loc or isinstance(value, dict):
-            raise SceneError(f"{origin}: {loc + ': ' if loc else ''}{msg}") from None
-        raise SceneError(msg, file=origin, field=loc, value=value) from None
+        raise validation_error(exc, data, origin) from None
 
 
 @dataclass(frozen=True)
