@@ -330,10 +330,52 @@ def test_eye_openness_against_the_lid_margins_projected():
     e = label["iris"]["ellipse"]
     a, b = e["semi_axes_px"]
     th = math.radians(e["angle_deg"])
-    chord = 2 / math.sqrt(math.cos(th) ** 2 / a**2 + math.sin(th) ** 2 / b**2)
+    chord = 2 / math.sqrt(math.sin(th) ** 2 / a**2 + math.cos(th) ** 2 / b**2)  # along y
     expected = (px[1, 1] - px[0, 1]) / chord
     assert label["eye_openness"] == pytest.approx(expected, abs=1.5 / chord)
     assert 0.7 < label["eye_openness"] < 0.95  # the lids cover the limbus's top and bottom
+
+
+#: A limbus ellipse for the synthetic columns below: centre (2, 20), a = 12 px along x, b = 8 px
+#: along y, so its vertical chord through the centre is 16 px: the iris spans y ∈ [12, 28].
+LIMBUS = {"center_px": [2.0, 20.0], "semi_axes_px": [12.0, 8.0], "angle_deg": 0.0}
+
+
+def _column(eyeball_rows: range, rows: int = 40) -> np.ndarray:
+    """A 5-column primary map: eyelid (5) everywhere, eyeball rows as iris (2), one as sclera."""
+    m = np.full((rows, 5), L._CLASS["eyelid"], dtype=np.uint8)
+    m[list(eyeball_rows), :] = L._CLASS["iris"]
+    if len(eyeball_rows):
+        m[eyeball_rows[0], :] = L._CLASS["sclera"]
+    return m
+
+
+@pytest.mark.parametrize(
+    ("eyeball", "expected"),
+    [
+        (range(0, 40), 1.0),  # wide open, sclera above and below the iris: still 1
+        (range(5, 35), 1.0),  # lids beyond the iris's top and bottom
+        (range(15, 25), 10.0 / 16.0),  # y ∈ [14.5, 24.5] of the iris's [12, 28]
+        (range(10, 26), 13.5 / 16.0),  # [9.5, 25.5] ∩ [12, 28] = [12, 25.5]
+        (range(20, 21), 1.0 / 16.0),  # the centre's row alone
+        (range(0, 20), 0.0),  # the lower lid over the centre: closed
+        (range(0, 0), 0.0),  # closed
+    ],
+)
+def test_eye_openness_is_the_visible_share_of_the_iris_height(eyeball, expected):
+    """In [0, 1] by construction: 1 with the lids wide open (the fresh user's 1.18 and 1.61
+    counted the sclera above and below the iris), 0 closed, and partial values computed by
+    hand from the pixel edges and the limbus's chord."""
+    got = L.eye_openness(_column(eyeball), LIMBUS)
+    assert got == pytest.approx(expected, abs=1e-12)
+    assert 0.0 <= got <= 1.0
+
+
+def test_eye_openness_of_vr_offaxis_in_primary_gaze_is_at_most_one():
+    """vr-offaxis in primary gaze, where the fresh user saw 1.18: the lids leave all or nearly
+    all of the iris's height visible in this camera's view."""
+    _, _, label, _ = _picture("vr-offaxis", SMALL)
+    assert 0.5 < label["eye_openness"] <= 1.0
 
 
 def test_a_glint_off_the_cornea_is_placed_on_the_sclera_by_fermats_principle():

@@ -313,14 +313,29 @@ def _ellipse_label(points) -> dict | None:
 
 
 def eye_openness(primary: np.ndarray, limbus: dict | None) -> float | None:
-    """The lid aperture over the iris's (limbus's) height, in the picture: in the pixel column
-    nearest the limbus ellipse's centre, the length (px) of the unbroken run of eyeball pixels
-    (sclera, iris, pupil of the primary map ``primary``, :func:`primary_classes`: glints do
-    not break it) through the centre's row, over the limbus ellipse's vertical chord through
-    its centre, 2 / √(cos²θ/a² + sin²θ/b²). 0: the lids meet over the iris's centre; about
-    0.8 for the presets' open eye in primary gaze (lid margins 4.5 mm above and 5.5 mm below
-    a 12 mm limbus); above 1 when the lids uncover sclera above and below the iris. None when
-    there is no limbus ellipse or its centre is outside the picture."""
+    """The share of the iris's height that the lids leave visible, in the picture; in [0, 1]
+    by construction.
+
+    In the pixel column c nearest the limbus ellipse's centre (cx, cy) the iris spans
+    y ∈ [cy − h/2, cy + h/2], h = 2 / √(sin²θ/a² + cos²θ/b²) its vertical chord through the
+    centre (px); the lids leave open the unbroken run of eyeball pixels (sclera, iris, pupil
+    of the primary map ``primary``, :func:`primary_classes`, glints taken as what is under
+    them) through the centre's row, rows top to bottom, i.e. y ∈ [top − ½, bottom + ½].
+    Openness = the length of the overlap of the two intervals over h:
+
+    * 1: neither lid covers any of the iris's height in that column (wide open; sclera showing
+      above or below the iris is not counted, so a wider aperture is still 1);
+    * 0: the lids cover the iris's centre (closed, or all but closed);
+    * e.g. about 0.8 for the paper rig's open eye in primary gaze (lid margins 4.5 mm above and
+      5.5 mm below a 12 mm limbus: each lid covers a band of the iris).
+
+    (The point at y = cy + t of the centre's column is on the ellipse when
+    (t sin θ)²/a² + (t cos θ)²/b² = 1, the module's ellipse convention; before issue 17's
+    review the chord had sin and cos swapped — the horizontal chord for an upright ellipse.)
+
+    This is the "visible iris height" measure of eye-openness labels (the lid aperture over the
+    iris diameter, capped at the iris). None when there is no limbus ellipse or its centre is
+    outside the picture."""
     if limbus is None:
         return None
     rows, cols = primary.shape
@@ -330,7 +345,7 @@ def eye_openness(primary: np.ndarray, limbus: dict | None) -> float | None:
         return None
     a, b = limbus["semi_axes_px"]
     th = math.radians(limbus["angle_deg"])
-    chord = 2.0 / math.sqrt(math.cos(th) ** 2 / a**2 + math.sin(th) ** 2 / b**2)
+    chord = 2.0 / math.sqrt(math.sin(th) ** 2 / a**2 + math.cos(th) ** 2 / b**2)
     eyeball = np.isin(primary[:, c], [_CLASS["sclera"], _CLASS["iris"], _CLASS["pupil"]])
     if not eyeball[r]:
         return 0.0
@@ -340,7 +355,8 @@ def eye_openness(primary: np.ndarray, limbus: dict | None) -> float | None:
     bottom = r
     while bottom < rows - 1 and eyeball[bottom + 1]:
         bottom += 1
-    return float((bottom - top + 1) / chord)
+    seen = min(bottom + 0.5, cy + chord / 2) - max(top - 0.5, cy - chord / 2)
+    return float(min(1.0, max(0.0, seen / chord)))
 
 
 # -------------------------------------------------------------------------------- camera
