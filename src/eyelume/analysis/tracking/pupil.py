@@ -360,72 +360,89 @@ def _refine_edge(
     replicated.)"""
     nx, ny = e.outward_normal(x, y)
     t = np.arange(-reach, reach + 1e-9, 0.5)
-    n, m = len(x), len(t)
-    # The profile and its parallels ± off px along the tangent, sampled in one remap. The
-    # sample positions x + nx t − off ny (and y + ny t + off nx) are taken in float64 and
-    # written straight into the float32 maps remap reads (the same floats as converting them
-    # afterwards, without the float64 copies).
-    offs = [0.0] + [float(s) for off in range(1, tangential + 1) for s in (-off, off)]
-    k = len(offs)
-    px = x[:, None] + nx[:, None] * t[None, :]
-    py = y[:, None] + ny[:, None] * t[None, :]
-    mx = np.empty((k, n, m), np.float32)
-    my = np.empty((k, n, m), np.float32)
-    for o, off in enumerate(offs):
-        np.subtract(px, (off * ny)[:, None], out=mx[o], casting="unsafe")
-        np.add(py, (off * nx)[:, None], out=my[o], casting="unsafe")
-    s32 = cv2.remap(
-        img,
-        mx.reshape(k * n, m),
-        my.reshape(k * n, m),
-        cv2.INTER_LINEAR,
-        borderMode=cv2.BORDER_REPLICATE,
-    ).reshape(k, n, m)
-    # Their mean in float64 (each float32 is exact in it), summed in NumPy's order for an
-    # axis-0 sum: ((v₀ + v₁) + v₂) / k.
-    if k > 1:
-        v = np.add(s32[0], s32[1], dtype=np.float64)
-        for o in range(2, k):
-            v += s32[o]
-    else:
-        v = s32[0].astype(np.float64)
-    v /= k
+    n = len(x)
+    if n == 0:
+        return x.copy(), y.copy(), np.zeros(0, bool)
+    # The profile and its parallels ± off px along the tangent, sampled in one remap; the
+    # sample positions x + nx t − off ny (and y + ny t + off nx) taken in float64 and written
+    # straight into the float32 maps remap reads (:func:`_profile_maps`).
+    offs = np.array([0.0] + [float(s) for off in range(1, tangential + 1) for s in (-off, off)])
+    mx, my = _profile_maps(x, y, nx, ny, t, offs)
+    s32 = cv2.remap(img, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     # Each profile's own edge level, from the pupil's level toward its outer half (the iris
     # there), but never above the iris's typical level (the median over the profiles): an
     # iris shaded by a lid lowers the level where it is darker, while a profile whose outer
     # half reaches a brighter neighbour (a lid's skin, the sclera, a glint's skirt) does not
     # lift its level up the edge — that pushed the top of eyelume's renders' pupils outward,
-    # 0.15 px on average (the former cap, median + 3 σ of the MAD, let it through).
-    outer = _row_medians(v[:, t >= 0.5 * reach])
-    outer = np.minimum(outer, median(outer))
-    v -= (pupil_level + fraction * (outer - pupil_level))[:, None]
-    # The rising crossings (a few a profile), interpolated, and each profile's nearest to 0.
-    # (cv2.findNonZero on the bool mask's bytes: (j, i) in row order, as np.nonzero, 3 × faster)
-    found = cv2.findNonZero(((v[:, :-1] < 0) & (v[:, 1:] >= 0)).view(np.uint8))
-    ok = np.zeros(n, bool)
-    tj = np.zeros(n)
-    if found is None:
-        return x + nx * tj, y + ny * tj, ok
-    found = found.reshape(-1, 2)
-    i, j = found[:, 1].astype(np.intp), found[:, 0].astype(np.intp)
-    v0 = v[i, j]
-    tc = t[j] + 0.5 * (v0 / (v0 - v[i, j + 1]))
-    # Per profile (the crossings come in row order), the first of those nearest to 0: a
-    # stable sort by (profile, |tc|) taking each profile's first, without the sort.
-    a = np.abs(tc)
-    new = np.empty(len(i), bool)
-    new[0] = True
-    np.not_equal(i[1:], i[:-1], out=new[1:])
-    starts = np.flatnonzero(new)
-    grp = np.cumsum(new) - 1
-    cand = np.flatnonzero(a == np.minimum.reduceat(a, starts)[grp])
-    keep = np.empty(len(cand), bool)
-    keep[0] = True
-    np.not_equal(grp[cand[1:]], grp[cand[:-1]], out=keep[1:])
-    first = cand[keep]
-    ok[i[first]] = True
-    tj[i[first]] = tc[first]
+    # 0.15 px on average (the former cap, median + 3 σ of the MAD, let it through). Then the
+    # rising crossings of that level, interpolated, and each profile's nearest to 0
+    # (:func:`_nearest_crossings`).
+    outer_from = int(np.searchsorted(t, 0.5 * reach, side="left"))  # t ≥ reach / 2
+    ok, tj = _nearest_crossings(s32, n, t, outer_from, float(pupil_level), float(fraction))
     return x + nx * tj, y + ny * tj, ok
+
+
+@njit(cache=True, nogil=True)
+def _profile_maps(x, y, nx, ny, t, offs):
+    """remap's float32 maps (len(offs) · n, len(t)) of :func:`_refine_edge`'s samples: row
+    o · n + i holds x_i + nx_i t − offs_o ny_i (and y_i + ny_i t + offs_o nx_i), taken in
+    float64 as NumPy takes them on broadcast arrays, then rounded to float32."""
+    n, m, k = x.size, t.size, offs.size
+    mx = np.empty((k * n, m), np.float32)
+    my = np.empty((k * n, m), np.float32)
+    for i in range(n):
+        for j in range(m):
+            px = x[i] + nx[i] * t[j]
+            py = y[i] + ny[i] * t[j]
+            for o in range(k):
+                mx[o * n + i, j] = px - offs[o] * ny[i]
+                my[o * n + i, j] = py + offs[o] * nx[i]
+    return mx, my
+
+
+@njit(cache=True, nogil=True)
+def _nearest_crossings(s32, n, t, outer_from, pupil_level, fraction):
+    """:func:`_refine_edge`'s crossings from remap's samples ``s32`` (k · n, len(t)) float32,
+    k parallel profiles per point: the profile v = their mean (float64, summed in order); its
+    edge level pupil_level + fraction (o − pupil_level), o the median of v over t[outer_from:]
+    capped at the median of those over all profiles; the rising crossings of that level
+    (v_j < level ≤ v_j+1) interpolated, t_j + 0.5 (v_j / (v_j − v_j+1)) after subtracting it,
+    and per profile the one nearest to 0 (the first of equals). Returns (found, t of it or 0)
+    — the same numbers as the array operations they replace."""
+    m = t.size
+    k = s32.shape[0] // n
+    v = np.empty((n, m))
+    for i in range(n):
+        for j in range(m):
+            acc = np.float64(s32[i, j])
+            for o in range(1, k):
+                acc += np.float64(s32[o * n + i, j])
+            v[i, j] = acc / k
+    cnt = m - outer_from
+    h = cnt // 2
+    outer = np.empty(n)
+    for i in range(n):
+        p = np.sort(v[i, outer_from:])
+        outer[i] = p[h] if cnt % 2 else 0.5 * (p[h - 1] + p[h])
+    p = np.sort(outer)
+    hn = n // 2
+    cap = p[hn] if n % 2 else 0.5 * (p[hn - 1] + p[hn])
+    ok = np.zeros(n, np.bool_)
+    tj = np.zeros(n)
+    for i in range(n):
+        o = min(outer[i], cap)
+        level = pupil_level + fraction * (o - pupil_level)
+        best = np.inf
+        for j in range(m - 1):
+            v0 = v[i, j] - level
+            v1 = v[i, j + 1] - level
+            if v0 < 0 and v1 >= 0:
+                tc = t[j] + 0.5 * (v0 / (v0 - v1))
+                if abs(tc) < best:
+                    best = abs(tc)
+                    tj[i] = tc
+                    ok[i] = True
+    return ok, tj
 
 
 def _fit(x: np.ndarray, y: np.ndarray, diam: float) -> Ellipse | None:
