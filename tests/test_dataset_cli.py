@@ -199,3 +199,18 @@ def test_a_first_run_says_it_compiles_the_kernels_before_it_does(tmp_path, monke
     assert res.exit_code == 0, res.output
     assert "compiling kernels (first run only" in res.output
     assert calls == ["warm_up", "run_dataset"]
+
+
+def test_study_and_dataset_share_their_executor_options():
+    """--resume, --workers, --dask and --lock-timeout are one set of options (cli.py's shared
+    Annotated aliases): the same names, defaults and help in `study` and `dataset`."""
+    import typer
+
+    commands = typer.main.get_command(app).commands
+    shared = ("resume", "workers", "dask", "lock_timeout")
+
+    def options(name):
+        params = {p.name: p for p in commands[name].params}
+        return {k: (params[k].opts, params[k].default, params[k].help) for k in shared}
+
+    assert options("study") == options("dataset")

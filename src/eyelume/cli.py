@@ -1348,28 +1348,42 @@ def optimize_tracking_cmd(
         _exit_interrupted()
 
 
+# The options `study` and `dataset` share (the executor's checked by _check_executor).
+ResumeOpt = Annotated[
+    bool,
+    typer.Option(
+        help="Continue in OUT: what is finished there is kept and skipped (after Ctrl-C, "
+        "SIGTERM, a crash or kill -9)."
+    ),
+]
+WorkersOpt = Annotated[
+    int | None, typer.Option(help="Worker processes (default: every core).")
+]  # fmt: skip
+DaskOpt = Annotated[
+    str | None,
+    typer.Option(
+        help="Run on Dask: 'local' starts a LocalCluster, else a scheduler address (refused "
+        "when none answers within 5 s)."
+    ),
+]
+LockTimeoutOpt = Annotated[
+    float,
+    typer.Option(
+        "--lock-timeout",
+        help="Seconds a commit waits (after SQLite's 5 s) while another program holds the "
+        "store's write lock, before the run stops (exit 2; --resume continues).",
+    ),
+]
+
+
 @app.command()
 def study(
     study_file: Annotated[Path, typer.Argument(help="The study file (TOML).")],
     out: Annotated[Path, typer.Option("--out", help="The study's folder (its result store).")],
-    resume: Annotated[
-        bool, typer.Option(help="Skip the runs already in OUT (after Ctrl-C or a crash).")
-    ] = False,
-    workers: Annotated[
-        int | None, typer.Option(help="Worker processes (default: every core).")
-    ] = None,
-    dask: Annotated[
-        str | None,
-        typer.Option(help="Run on Dask: 'local' starts a LocalCluster, else a scheduler address."),
-    ] = None,
-    lock_timeout: Annotated[
-        float,
-        typer.Option(
-            "--lock-timeout",
-            help="Seconds a commit waits (after SQLite's 5 s) while another program holds the "
-            "store's write lock, before the study stops (exit 2; --resume continues).",
-        ),
-    ] = 60.0,
+    resume: ResumeOpt = False,
+    workers: WorkersOpt = None,
+    dask: DaskOpt = None,
+    lock_timeout: LockTimeoutOpt = 60.0,
 ) -> None:
     """Run a study: the base scene with parameters varied by their dotted paths, metrics per
     run, each finished run committed at once to OUT/results.sqlite (resumable)."""
@@ -1444,25 +1458,10 @@ def _check_executor(workers: int | None, dask: str | None, lock_timeout: float) 
 def dataset(
     dataset_file: Annotated[Path, typer.Argument(help="The dataset file (TOML).")],
     out: Annotated[Path, typer.Option("--out", help="The dataset's folder (created).")],
-    resume: Annotated[
-        bool,
-        typer.Option(help="Continue the dataset in OUT (after Ctrl-C, SIGTERM or a crash)."),
-    ] = False,
-    workers: Annotated[
-        int | None, typer.Option(help="Worker processes (default: every core).")
-    ] = None,
-    dask: Annotated[
-        str | None,
-        typer.Option(help="Run on Dask: 'local' starts a LocalCluster, else a scheduler address."),
-    ] = None,
-    lock_timeout: Annotated[
-        float,
-        typer.Option(
-            "--lock-timeout",
-            help="Seconds a commit waits (after SQLite's 5 s) while another program holds the "
-            "store's write lock, before the run stops (exit 2; --resume continues).",
-        ),
-    ] = 60.0,
+    resume: ResumeOpt = False,
+    workers: WorkersOpt = None,
+    dask: DaskOpt = None,
+    lock_timeout: LockTimeoutOpt = 60.0,
 ) -> None:
     """Make a labelled dataset of eye pictures: the sensor's picture (PNG), the irradiance
     (.npy) and one label line each (labels.jsonl), every picture committed at once to
