@@ -260,6 +260,34 @@ def test_a_picture_label_holds_its_draws_and_truth(tmp_path):
     jsonschema.validate(json.loads(D.dumps(lab, indent=None)), schema)
 
 
+def test_the_openeds_map_is_exact_under_the_glints_and_the_export_copies_it(tmp_path):
+    """The folder stores the OpenEDS view with the class under each glint from the scene
+    (openeds_map with the primary surface map), so dataset-export is exact instead of taking
+    the nearest pixel's class (a fresh user's finding). (This 40 × 40 picture at 1 sample per
+    pixel has no glint region: test_labels' synthetic map checks the class under a glint.)"""
+    from eyelume.analysis.labels import _CLASS, openeds_map, primary_classes
+    from eyelume.compile import compile_scene
+    from eyelume.report.dataset_outputs import export_openeds
+
+    ds = D.load_dataset(write(tmp_path, pictures=1))
+    pic = D.make_picture(ds, 0)
+    under = primary_classes(compile_scene(pic.scene))
+    assert np.array_equal(pic.openeds, openeds_map(pic.segmentation, under))
+    # every pixel, glints and reflections included (test_labels: openeds_map with the primary
+    # map puts the class under a glint), is the primary surface's class, skin and lids as 0
+    shown = np.where(under >= _CLASS["skin"], 0, under)
+    assert np.array_equal(pic.openeds, shown)
+    assert pic.label["segmentation_openeds"] == "segmentation_openeds/000000.png"
+    out = tmp_path / "set"
+    out.mkdir()
+    D._prepare(ds, D.bases(ds), out, resume=False)
+    D.write_picture(pic, out)
+    (out / D.LABELS_FILE).write_text(D.dumps(pic.label, indent=None) + "\n", encoding="utf-8")
+    export_openeds(out, tmp_path / "export", size=None)
+    got = np.load(tmp_path / "export" / "train" / "labels" / "000000.npy")
+    assert np.array_equal(got, pic.openeds)
+
+
 @pytest.mark.slow
 def test_killed_then_resumed_equals_an_uninterrupted_run_and_one_picture_alone(tmp_path):
     """kill -9 of the command and its worker mid-dataset, then --resume (1 worker): the same

@@ -656,8 +656,11 @@ def picture_labels(
     irradiance: np.ndarray | None,
     masks: dict[str, np.ndarray],
     truth: dict,
-) -> tuple[dict, np.ndarray]:
-    """The labels of one picture and its segmentation.
+    openeds: bool = False,
+) -> tuple[dict, np.ndarray] | tuple[dict, np.ndarray, np.ndarray]:
+    """The labels of one picture and its segmentation (with ``openeds``, also its exact
+    OpenEDS map: :func:`openeds_map` with the primary surface map, the class under every glint
+    and reflection pixel as the scene has it).
 
     Parameters
     ----------
@@ -724,4 +727,6 @@ def picture_labels(
         "camera": {k: camera[k] for k in ("K", "dist", "R", "t_mm", "intrinsics_fit_rms_px")},
         "leds": _leds(cs),
     }
+    if openeds:
+        return label, seg, openeds_map(seg, under)
     return label, seg

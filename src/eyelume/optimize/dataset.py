@@ -63,10 +63,11 @@ that picture's own median skin pixel. A number is a fixed rel_error target;
 study's :class:`~eyelume.optimize.store.ResultStore`: one row per picture, the label as its
 metrics), ``labels.jsonl`` (rewritten from the store, sorted by index, when a run ends or is
 interrupted), ``schema.json`` (the label lines' JSON schema), ``images/``, ``irradiance/``,
-``segmentation/`` (the class ids of :mod:`eyelume.analysis.labels`). A worker writes a
-picture's files (each to a temporary name, then renamed) and returns its label; the parent
-commits it: a picture is done when its label is in the store, and ``resume`` renders the
-others again, overwriting their files with the same bytes.
+``segmentation/`` (the class ids of :mod:`eyelume.analysis.labels`), ``segmentation_openeds/``
+(OpenEDS' ids 0–3, exact under the glints: what ``eyelume dataset-export`` copies). A
+worker writes a picture's files (each to a temporary name, then renamed) and returns its
+label; the parent commits it: a picture is done when its label is in the store, and
+``resume`` renders the others again, overwriting their files with the same bytes.
 """
 
 from __future__ import annotations
@@ -549,8 +550,10 @@ class Picture:
     picture ``counts`` ((rows, cols) uint16 DN), the ``image`` written to the PNG (uint8 or
     uint16), the ``irradiance`` ((rows, cols) float32 W/mm² at the scene's wavelength), the
     ``segmentation`` ((rows, cols) uint8 class ids, :data:`eyelume.analysis.labels.
-    SEGMENTATION_CLASSES`) and the ``label`` (one line of labels.jsonl: the bookkeeping keys
-    and :func:`eyelume.analysis.labels.picture_labels`' labels)."""
+    SEGMENTATION_CLASSES`), the ``label`` (one line of labels.jsonl: the bookkeeping keys
+    and :func:`eyelume.analysis.labels.picture_labels`' labels) and ``openeds`` ((rows, cols)
+    uint8 OpenEDS ids 0–3, exact: the class under each glint and reflection pixel from the
+    scene's primary surface map, :func:`eyelume.analysis.labels.openeds_map`)."""
 
     plan: PicturePlan
     scene: Scene
@@ -559,6 +562,7 @@ class Picture:
     irradiance: np.ndarray
     segmentation: np.ndarray
     label: dict
+    openeds: np.ndarray | None = None
 
 
 def _render_options(ds: Dataset, sc: Scene, seed: int):
@@ -621,8 +625,8 @@ def make_picture(ds: Dataset, index: int, b: _Bases | None = None) -> Picture:
         n_e = skin["median_w_mm2"] * electrons_per_w_mm2(sc.sensor, float(sc.wavelength_nm))
         shot = 1.0 / math.sqrt(n_e) if n_e > 0 else None
     truth = eye_truth(cs)
-    labels, segmentation = picture_labels(
-        cs, digital.counts, digital.saturated, irradiance, result.regions, truth
+    labels, segmentation, openeds = picture_labels(
+        cs, digital.counts, digital.saturated, irradiance, result.regions, truth, openeds=True
     )
     label = {
         "index": index,
@@ -630,6 +634,7 @@ def make_picture(ds: Dataset, index: int, b: _Bases | None = None) -> Picture:
         "image": _file(ds, "images", index, "png"),
         "irradiance": _file(ds, "irradiance", index, "npy") if ds.irradiance else None,
         "segmentation": _file(ds, "segmentation", index, "png"),
+        "segmentation_openeds": _file(ds, "segmentation_openeds", index, "png"),
         "image_bits": ds.image_bits,
         "varied": plan.varied,
         "person": person,
@@ -644,8 +649,9 @@ def make_picture(ds: Dataset, index: int, b: _Bases | None = None) -> Picture:
         },
     }
     return Picture(
-        plan, sc, digital.counts, image, irradiance.astype(np.float32), segmentation, label
-    )
+        plan, sc, digital.counts, image, irradiance.astype(np.float32), segmentation, label,
+        openeds,
+    )  # fmt: skip
 
 
 # --- files ------------------------------------------------------------------------------------
@@ -673,6 +679,8 @@ def write_picture(pic: Picture, out: Path) -> None:
     label = pic.label
     _write_atomic(out / label["image"], _png(pic.image))
     _write_atomic(out / label["segmentation"], _png(pic.segmentation))
+    if pic.openeds is not None:
+        _write_atomic(out / label["segmentation_openeds"], _png(pic.openeds))
     if label["irradiance"] is not None:
         buf = io.BytesIO()
         np.save(buf, pic.irradiance)
@@ -700,7 +708,8 @@ def _picture_task(context: str, out: str, index: int) -> tuple[dict, float]:
 
 
 def _folders(ds: Dataset) -> list[str]:
-    return ["images", "segmentation", *(["irradiance"] if ds.irradiance else [])]
+    return ["images", "segmentation", "segmentation_openeds",
+            *(["irradiance"] if ds.irradiance else [])]  # fmt: skip
 
 
 def _prepare(ds: Dataset, b: _Bases, out: Path, resume: bool) -> None:

@@ -34,11 +34,16 @@ What differs, and what was decided:
   picture's largest DN (said in ``eyelume_export.json``).
 * **Classes.** The OpenEDS view of eyelume's segmentation (ids 0–7, ``segmentation/*.png``):
   skin (4) and eyelid (5) → 0 background (OpenEDS' annotators marked only sclera, iris and
-  pupil); a glint (6) or spurious reflection (7) pixel → the class under it, taken as the class
-  (after 4, 5 → 0) of the nearest pixel that is neither 6 nor 7 (exact Euclidean distance
-  transform): ds-labels' :func:`eyelume.analysis.labels.openeds_map` without the primary
-  surface map, which the folder does not hold. When a label line gives
-  ``segmentation_openeds`` (an exact primary-surface map, uint8 0–3) that file is used as is.
+  pupil); a glint (6) or spurious reflection (7) pixel → the class under it. ``eyelume
+  dataset`` writes that map exactly (``segmentation_openeds/``, named by the label line's
+  ``segmentation_openeds``: :func:`eyelume.analysis.labels.openeds_map` with the scene's
+  primary surface map) and the export copies it as is. Only a label line without it (a
+  dataset made before it was written) is mapped here, a glint or reflection pixel taking the
+  class (after 4, 5 → 0) of the nearest pixel that is neither 6 nor 7 (exact Euclidean
+  distance transform). The error is confined to the pixels of a glint or reflection that
+  straddles a class boundary (pupil/iris, iris/sclera, a lid margin): within it the mapped
+  boundary is the line equidistant from the two classes outside it instead of the true one,
+  so a pixel may be wrong by at most the spot's diameter (a few pixels for a glint).
 * **Content.** OpenEDS pictures are of real people under the headset's own LEDs; ours are
   renders: no motion blur, no make-up, no tear film. Only ``train`` (or the ``split`` named) is
   written; OpenEDS' other parts (sequences, key points, gaze) are not.
@@ -224,8 +229,9 @@ def read_segmentation(ds: DatasetFolder, label: dict, shape: tuple[int, int]) ->
 def openeds_view(seg: np.ndarray) -> np.ndarray:
     """OpenEDS' ids (0–3) from eyelume's (0–7, (rows, cols) uint8): 4 skin, 5 eyelid → 0; each
     6 glint or 7 reflection pixel → the (mapped) class of its nearest pixel that is neither
-    (:func:`eyelume.analysis.labels.openeds_map` without the primary surface map, which a
-    dataset folder does not hold: Euclidean distance transform). A map of glints and
+    (:func:`eyelume.analysis.labels.openeds_map` without the primary surface map: Euclidean
+    distance transform; the export uses it only for a label line without the exact
+    ``segmentation_openeds``, module doc). A map of glints and
     reflections only becomes 0. ValueError on a map that is not 2-D or holds another id."""
     from eyelume.analysis.labels import openeds_map
 
