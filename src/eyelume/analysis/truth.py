@@ -228,6 +228,14 @@ class _View:
         found = _solve(residual, guess)
         if found is None and cs.scene.elements:  # a folded view: the straight guess misleads
             found = _solve(residual, np.zeros(2))
+        if found is None and cs.scene.elements:
+            # the eye turned far (paper2005-integrated at ±30°): the picture's centre looks
+            # past the turned cornea's cap, so Newton from there meets rays that miss it;
+            # start from the point's own image without the cornea (its chief ray through the
+            # elements alone, which meets no cap), a fraction of a millimetre away
+            straight = _direct_image(self, point, _line_of_sight(self))
+            if straight is not None:
+                found = _solve(residual, straight)
         return found
 
 
