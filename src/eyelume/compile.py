@@ -1660,6 +1660,35 @@ def _cornea_image(
     return c + (radius - z_eye) * u, abs(mag) * pupil_r
 
 
+def _cornea_image_of_row(scene: Scene, frame: Frame, row: np.ndarray) -> np.ndarray:
+    """An ``AIM_IMAGE`` aim row (:func:`_pupil_through_elements`: the camera's pupil imaged
+    through the elements, centre C, radius r, the camera's rays' direction a there) imaged
+    once more, through the cornea into the eye: the aim of the light the iris scatters toward
+    the camera seen through elements. Paraxial, about the line from the anterior cornea's
+    centre of curvature c through C (a sphere images about any line through its centre), as
+    :func:`_cornea_image`: C in front of the eye ((C − c) · a < 0) is an object
+    |C − c| − R before the vertex c + R û (û = unit(C − c)); C beyond it (the camera's rays
+    converge toward C behind the face) a virtual one, |C − c| + R behind the vertex
+    c − R û. The row keeps its kind and axis a (inside the eye the rays still run along the
+    camera's: :func:`eyelume.kernels.sampling.image_cone` tells toward from away by it); its
+    centre is the image, its radius r times the cornea's magnification."""
+    eye = eye_paraxial(scene)
+    cornea = ParaxialSystem(eye.curvatures[:2], eye.gaps[:1], eye.indices[:3])
+    radius = scene.eye.surfaces[0].radius_mm
+    c = frame.point(eye_point(scene, [0.0, 0.0, -radius]))
+    centre, a = row[A_X : A_Z + 1], row[A_AX : A_AZ + 1]
+    w = centre - c
+    dist = float(np.linalg.norm(w))
+    sign = -1.0 if float(w @ a) > 0.0 else 1.0
+    u = sign * w / dist
+    distance = sign * dist - radius  # the object before the anterior vertex c + R u
+    z_eye = scene.eye.surfaces[0].thickness_mm + cornea.image_distance(distance)
+    out = row.copy()
+    out[A_X : A_Z + 1] = c + (radius - z_eye) * u
+    out[A_R] = row[A_R] * abs(cornea.magnification(distance))
+    return out
+
+
 def connected_by_newton(element: Element, n: float) -> bool:
     """Whether next-event estimation connects LEDs through ``element`` by Newton's method
     (:mod:`eyelume.estimators.cornea_nee`): a plate, a plane mirror or a lens of paraxial power
@@ -1807,13 +1836,20 @@ def _camera_tables(
     # seen through elements (a fold mirror, an eyepiece), light reaches the lens from the face
     # along lines through the pupil's image, not the pupil itself
     image = _pupil_through_elements(surfaces, names, lf, ep_z, ep_r) if scene.elements else None
+    # the iris is seen through the cornea and then the elements: its light aims at the pupil's
+    # image through both, not at the camera's own pupil through the cornea (on
+    # paper2005-integrated that lies past the eyepiece's rim, 60° off the camera's axis)
+    iris_image = None if image is None else _cornea_image_of_row(scene, frame, image)
     for s, name in enumerate(names):
         if surfaces.si[s, G.ACTION] != G.ACT_OPAQUE:
             continue
         for side, rho_col in ((0, G.RHO_A), (1, G.RHO_B)):
             if surfaces.sf[s, rho_col] <= 0.0:
                 continue
-            if name in _IRIS:
+            if name in _IRIS and iris_image is not None:
+                aim[s, side] = iris_image
+                aim[s, side, A_P] = AIM_PROBABILITY
+            elif name in _IRIS:
                 aim[s, side, : A_P + 1] = (*iris_c, iris_r, AIM_PROBABILITY)
             elif name == "retina" or (name == "sclera" and side == 0):
                 continue  # inside the eye behind the crystalline lens: cosine sampling
