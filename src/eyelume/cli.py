@@ -1395,9 +1395,9 @@ def study(
     _check_executor(workers, dask, lock_timeout)
     _check_out(out)
     if (Path(out) / "results.sqlite").exists():
-        from eyelume.optimize.store import read_rows
+        from eyelume.optimize.store import check_store
 
-        read_rows(out)  # a damaged store is one line before the banner, not after it
+        check_store(out)  # a damaged store is one line before the banner, not after it
     total = run_count(st)
     err.print(f"study {st.name}: {total} runs into {out} (Ctrl-C, then --resume, loses nothing)")
     with _progress_bar("[bold]runs", "{task.completed}/{task.total}") as bar:
@@ -1473,9 +1473,9 @@ def dataset(
     _check_out(out)
     check_out(ds, out, resume)  # not empty, or another dataset's: one line, before any render
     if (Path(out) / "results.sqlite").exists():
-        from eyelume.optimize.store import read_rows
+        from eyelume.optimize.store import check_store
 
-        read_rows(out)  # a damaged store is one line before the banner, not after it
+        check_store(out)  # a damaged store is one line before the banner, not after it
     err.print(
         f"dataset {ds.name}: {ds.pictures} pictures into {out} "
         "(Ctrl-C, then --resume, loses nothing)"

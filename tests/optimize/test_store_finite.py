@@ -78,3 +78,21 @@ def test_a_store_with_nan_tokens_is_read_and_reported(tmp_path):
     text = re.sub(r"data:image/[a-z]+;base64,[A-Za-z0-9+/=]+", "", page)
     assert "run 1:" in text and "nan" not in text.lower().replace("nanometre", "")
     assert "not a finite number" in page
+
+
+def test_check_store_counts_the_runs_without_reading_them_and_refuses_a_damaged_store(tmp_path):
+    """What `study`/`dataset` --resume check before their banner: the count read_rows would
+    give, and the same StoreError for a damaged or missing store."""
+    from eyelume.optimize.store import check_store
+
+    store = ResultStore(tmp_path / "s")
+    for i in range(3):
+        store.put(f"k{i}", i, "s", {"leds.height_mm": 20.0 + i}, {"skin_cv": 0.1}, 1.0)
+    store.close()
+    assert check_store(tmp_path / "s") == len(read_rows(tmp_path / "s")[0]) == 3
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "results.sqlite").write_bytes(b"not a database at all" * 100)
+    with pytest.raises(StoreError):
+        check_store(tmp_path / "bad")
+    with pytest.raises(StoreError, match="no results.sqlite"):
+        check_store(tmp_path / "missing")

@@ -37,7 +37,14 @@ import numpy as np
 from eyelume.errors import StoreError
 from eyelume.json_files import dumps, finite_or_null
 
-__all__ = ["LOCK_TIMEOUT_S", "ResultStore", "StoreBusy", "StoreLocked", "read_rows"]
+__all__ = [
+    "LOCK_TIMEOUT_S",
+    "ResultStore",
+    "StoreBusy",
+    "StoreLocked",
+    "check_store",
+    "read_rows",
+]
 
 #: The file a writer holds an exclusive ``flock`` on (module docstring); removed when it ends.
 LOCK_FILE = ".lock"
@@ -266,6 +273,20 @@ def read_rows(folder: str | Path) -> tuple[list[dict], str | None]:
     SQLite ``mode=ro``, or ``immutable=1`` where the folder cannot be written (the note says
     so: runs still in the write-ahead log are then missing). StoreError for a missing or
     damaged store."""
+    return _read(
+        folder, lambda db: _as_rows(db.execute(f"SELECT {_COLUMNS} FROM runs ORDER BY idx"))
+    )
+
+
+def check_store(folder: str | Path) -> int:
+    """The number of committed runs of the store in ``folder``, read as :func:`read_rows`
+    reads it but without loading the runs (memory does not grow with the store: what the
+    commands check before a ``--resume``). StoreError for a missing or damaged store."""
+    return _read(folder, lambda db: db.execute("SELECT count(*) FROM runs").fetchone()[0])[0]
+
+
+def _read(folder, query):
+    """(query(connection), note): :func:`read_rows`'s read-only opening of results.sqlite."""
     path = Path(folder) / "results.sqlite"
     if not path.is_file():
         raise StoreError("no results.sqlite (run `eyelume study` first)", file=Path(folder))
@@ -283,10 +304,10 @@ def read_rows(folder: str | Path) -> tuple[list[dict], str | None]:
         try:
             db = sqlite3.connect(target, uri=True, timeout=_FIRST_WAIT_S)
             try:
-                rows = _as_rows(db.execute(f"SELECT {_COLUMNS} FROM runs ORDER BY idx"))
+                answer = query(db)
             finally:
                 db.close()
-            return rows, note
+            return answer, note
         except sqlite3.OperationalError as exc:
             if "no such table" in str(exc):
                 raise _damaged(path, exc) from None
