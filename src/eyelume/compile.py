@@ -44,6 +44,11 @@ from eyelume.kernels.tables import (
     AIM_IMAGE,
     CHAIN_COLS,
     CHAIN_STEPS,
+    G_AX,
+    G_AZ,
+    G_COS,
+    G_P,
+    GLINT_AIM_COLS,
     N_AIM,
     REFLECT,
     TRANSMIT,
@@ -1613,6 +1618,116 @@ def _pupil_through_elements(
     return row
 
 
+#: Share of each LED's cornea-leg light paths aimed at its glint's specular point
+#: (:func:`_glint_aims`; the rest drawn over the whole cornea as before, which keeps the
+#: mixture unbiased wherever the aim is off).
+GLINT_AIM_PROBABILITY = 0.125
+#: The aimed cone's half-angle over the linearised preimage of the entrance pupil (the largest
+#: angle from the specular direction at which a reflected ray still meets the pupil's rim).
+_GLINT_CONE_MARGIN = 1.25
+_GLINT_NEWTON_STEP = 1e-6  # rad: the finite-difference step of the Jacobian
+_GLINT_TOLERANCE_MM = 1e-6  # the specular ray's miss of the pupil's centre when solved
+
+
+def _pupil_plane_hit(sf, si, cornea: int, p: np.ndarray, d: np.ndarray, ep_z: float):
+    """Where the ray from ``p`` along unit ``d``, reflected by the anterior cornea (its first
+    hit, else None), crosses the entrance pupil's plane z = ``ep_z`` toward the camera (x, y;
+    None when it leaves away from it), with the reflection point and direction."""
+    s, t = G.nearest_hit(sf, si, *p, *d)
+    if s != cornea:
+        return None
+    x = p + t * d
+    n = np.array(G.surface_normal(sf, si, s, *x))
+    r = d - 2.0 * float(d @ n) * n
+    if r[2] <= 1e-9:
+        return None
+    q = x + (ep_z - x[2]) / r[2] * r
+    return q[:2], x, r
+
+
+def _glint_direction(sf, si, cornea, p, centre, radius, ep_z):
+    """The direction from an LED at ``p`` to the anterior cornea's specular point for the
+    entrance pupil's centre (0, 0, ``ep_z``), and the Jacobian (mm/rad) of the reflected ray's
+    crossing of the pupil's plane in two directions across it, or None. Started at a sphere's
+    specular point (``centre``, ``radius``: the cornea's vertex sphere; the fixed point X = C +
+    r (û_P + û_E)/|û_P + û_E| of the bisector), solved on the real surface by Newton's method
+    with finite differences."""
+    e = np.array([0.0, 0.0, ep_z])
+    x = centre + radius * _unit(_unit(p - centre) + _unit(e - centre))
+    for _ in range(30):
+        x = centre + radius * _unit(_unit(p - x) + _unit(e - x))
+    d = _unit(x - p)
+    h = _GLINT_NEWTON_STEP
+    for _ in range(12):
+        hit = _pupil_plane_hit(sf, si, cornea, p, d, ep_z)
+        if hit is None:
+            return None
+        f = hit[0]
+        e1 = _unit(np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0]))
+        e2 = np.cross(d, e1)
+        cols = []
+        for v in (e1, e2):
+            moved = _pupil_plane_hit(sf, si, cornea, p, _unit(d + h * v), ep_z)
+            if moved is None:
+                return None
+            cols.append((moved[0] - f) / h)
+        jac = np.column_stack(cols)
+        if float(np.hypot(*f)) < _GLINT_TOLERANCE_MM:
+            return d, jac, hit[1], hit[2]
+        try:
+            step = np.linalg.solve(jac, -f)
+        except np.linalg.LinAlgError:
+            return None
+        d = _unit(d + step[0] * e1 + step[1] * e2)
+    return None
+
+
+def _unit(v) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    return v / np.linalg.norm(v)
+
+
+def _glint_aims(
+    scene: Scene,
+    frame: Frame,
+    surfaces: SurfaceTable,
+    cornea: int,
+    led_points: np.ndarray,
+    ep: tuple[float, float],
+) -> np.ndarray:
+    """Per LED the cone its light paths aim at its glint (:attr:`CameraTables.glint_aim`): about
+    the direction to the anterior cornea's specular point for the entrance pupil's centre
+    (``ep`` = (z, radius), camera frame; :func:`_glint_direction`), of half-angle
+    :data:`_GLINT_CONE_MARGIN` × r_EP / σ_min(J) (J the Jacobian of the reflected ray's
+    crossing of the pupil's plane, so that every reflected ray through the pupil comes from
+    inside it), drawn with probability :data:`GLINT_AIM_PROBABILITY`. No aim (probability 0)
+    for an LED whose specular ray is not found, meets something before the lens (a lid) or in
+    a scene with optical elements (their glints are drawn by the element legs)."""
+    out = np.zeros((led_points.shape[0], GLINT_AIM_COLS))
+    if scene.elements:
+        return out
+    sf, si = surfaces.sf, surfaces.si
+    ep_z, ep_r = ep
+    radius = scene.eye.surfaces[0].radius_mm
+    centre = frame.point(eye_point(scene, [0.0, 0.0, -radius]))
+    for k, p in enumerate(np.asarray(led_points, dtype=float)):
+        found = _glint_direction(sf, si, cornea, p, centre, radius, ep_z)
+        if found is None:
+            continue
+        d, jac, x, r = found
+        s, _ = G.nearest_hit(sf, si, *(x + 1e-6 * r), *r)
+        if s < 0 or si[s, G.ACTION] != G.ACT_LENS:
+            continue  # the glint is hidden (a lid, the camera body)
+        sigma_min = float(np.linalg.svd(jac, compute_uv=False)[-1])
+        if not sigma_min > 0.0:
+            continue
+        half = min(_GLINT_CONE_MARGIN * ep_r / sigma_min, 0.5 * math.pi)
+        out[k, G_AX : G_AZ + 1] = d
+        out[k, G_COS] = math.cos(half)
+        out[k, G_P] = GLINT_AIM_PROBABILITY
+    return out
+
+
 def _mirrored_lens(lf: np.ndarray) -> np.ndarray:
     rev = lf[::-1].copy()
     rev[:, Q.L_Z] = -rev[:, Q.L_Z]
@@ -1873,6 +1988,7 @@ def _camera_tables(
         cornea,
         int(scene.run.continuation_grid),
         *_element_chains(scene, surfaces, names, led_points, cornea),
+        _glint_aims(scene, frame, surfaces, cornea, led_points, (ep_z, ep_r)),
     )
 
 

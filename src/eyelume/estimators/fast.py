@@ -31,7 +31,10 @@ Every light path runs LED → … → camera. We split path space by how the pat
 2. **First hit the cornea, except the refracted paths of part 1** (the glints, the light the
    cornea reflects onto the face, whatever enters the pupil): estimated from the LEDs. A light
    path leaves an LED uniformly inside the cone that holds the anterior cornea's bounding sphere
-   (weighted I(α)/pdf), is split at the cornea into its reflected (× R) and transmitted (× T)
+   or, with a small probability, inside the narrow cone about the direction to the LED's glint
+   (the cornea point that reflects it into the entrance pupil), weighted I(α)/pdf_mix
+   (:func:`_light_path`: the glints, formed by light paths alone, then need ~100 × fewer of
+   them), is split at the cornea into its reflected (× R) and transmitted (× T)
    parts, and goes on through refraction; a transmitted path that the posterior cornea
    transmits onto the iris belongs to part 1 and ends there. At a Lambertian vertex it scatters
    into a mixture of directions aimed at the camera's entrance pupil (for the iris, its
@@ -87,6 +90,11 @@ from eyelume.kernels.sampling import (
 from eyelume.kernels.sequential import LENS_PASSED, trace_lens
 from eyelume.kernels.tables import (
     CHAIN_STEPS,
+    G_AX,
+    G_AY,
+    G_AZ,
+    G_COS,
+    G_P,
     REFLECT,
     TRANSMIT_A,
     Facet,
@@ -906,21 +914,45 @@ def _mirror_pdf(sf, si, row, port, ray):
 
 
 @per_ray
-def _element_share(sf, si, cam, port, s, ray, pdf):
+def _element_share(sf, si, cam, port, s, k, ray, pdf):
     """The balance-heuristic weight (Veach 1997) of a light path's first leg, drawn with
     density ``pdf``, whose first hit is element surface ``s``: four legs draw such paths —
     the cornea leg, surface s's own leg (:func:`_element_path`), and with a lens (``port`` ≥
     0) the lens leg (:func:`_direct_path`) and s's ghost leg (:func:`_ghost_path`) — and
-    each weights them pdf / Σ pdf, so that together they count each path once."""
-    total = _cone_pdf(sf, cam.cornea, ray) + _cone_pdf(sf, s, ray)
+    each weights them pdf / Σ pdf, so that together they count each path once (the cornea
+    leg's density LED k's mixture, :func:`_cornea_leg_pdf`)."""
+    total = _cornea_leg_pdf(sf, cam, k, ray) + _cone_pdf(sf, s, ray)
     if port >= 0:
         total += _cone_pdf(sf, port, ray) + _mirror_pdf(sf, si, s, port, ray)
     return pdf / total
 
 
 @per_ray
+def _cornea_leg_pdf(sf, cam, k, ray):
+    """Density per steradian of the cornea leg's direction (dx, dy, dz) of ``ray`` from LED k
+    (:func:`_light_path`): the mixture (1 − p) U_cornea + p U_glint of the cone that holds the
+    anterior cornea's bounding sphere and LED k's glint cone (``cam.glint_aim[k]``, drawn with
+    probability p; U uniform in a cone)."""
+    a = cam.glint_aim[k]
+    pdf = _cone_pdf(sf, cam.cornea, ray)
+    p = a[G_P]
+    if p <= 0.0:
+        return pdf
+    cos_t = ray.dx * a[G_AX] + ray.dy * a[G_AY] + ray.dz * a[G_AZ]
+    return (1.0 - p) * pdf + p * uniform_cone_pdf(cos_t, a[G_COS])
+
+
+@per_ray
 def _light_path(i, seed, scene, cam, tally, port):
-    """Light path ``i``: LED i mod N toward the cornea, split there (see module docstring)."""
+    """Light path ``i``: LED i mod N toward the cornea, split there (see module docstring).
+
+    Its first direction is drawn from a mixture: with probability p = ``cam.glint_aim[k, G_P]``
+    uniformly in the small cone about the direction to LED k's glint's specular point (the
+    cornea point that reflects it into the entrance pupil: every such draw the cornea reflects
+    toward the lens), else uniformly in the cone that holds the anterior cornea's bounding
+    sphere; weighted I(α) / pdf_mix (:func:`_cornea_leg_pdf`; one-sample multiple importance
+    sampling with the balance heuristic, Veach 1997 §9.2.4), so unbiased wherever the aim is
+    off. With p = 0 the draws are the whole-cornea cone's alone, as before."""
     sf, si = scene.surfaces.sf, scene.surfaces.si
     leds = scene.leds
     cornea = cam.cornea
@@ -934,11 +966,32 @@ def _light_path(i, seed, scene, cam, tally, port):
     cos_max = math.sqrt(1.0 - rb * rb / (dist * dist))
     state, u1 = next_uniform(state)
     state, u2 = next_uniform(state)
-    lx, ly, lz = uniform_cone(u1, u2, cos_max)
-    dx, dy, dz = about_axis(lx, ly, lz, wx / dist, wy / dist, wz / dist)
-    # path i serves LED i mod N: a share 1/N of the paths estimates each LED's light;
-    # 2π (1 − cos_max) = 1 / uniform_cone_pdf
-    w = n_leds * radiant_intensity(leds, k, dx, dy, dz) * 2.0 * math.pi * (1.0 - cos_max)
+    aim = cam.glint_aim[k]
+    p_aim = aim[G_P]
+    if p_aim <= 0.0:
+        lx, ly, lz = uniform_cone(u1, u2, cos_max)
+        dx, dy, dz = about_axis(lx, ly, lz, wx / dist, wy / dist, wz / dist)
+        # path i serves LED i mod N: a share 1/N of the paths estimates each LED's light;
+        # 2π (1 − cos_max) = 1 / uniform_cone_pdf
+        w = n_leds * radiant_intensity(leds, k, dx, dy, dz) * 2.0 * math.pi * (1.0 - cos_max)
+        pdf = 1.0 / (2.0 * math.pi * (1.0 - cos_max))
+    else:
+        # the mixture: u1 below p_aim draws in the glint's cone (u1 / p_aim), else in the
+        # cornea's ((u1 − p_aim) / (1 − p_aim)); each draw's density in the other cone by its
+        # polar cosine there
+        pdf_c = 1.0 / (2.0 * math.pi * (1.0 - cos_max))
+        pdf_g = 1.0 / (2.0 * math.pi * (1.0 - aim[G_COS]))
+        if u1 < p_aim:
+            lx, ly, lz = uniform_cone(u1 / p_aim, u2, aim[G_COS])
+            dx, dy, dz = about_axis(lx, ly, lz, aim[G_AX], aim[G_AY], aim[G_AZ])
+            cos_c = (dx * wx + dy * wy + dz * wz) / dist
+            pdf = p_aim * pdf_g + (1.0 - p_aim) * uniform_cone_pdf(cos_c, cos_max)
+        else:
+            lx, ly, lz = uniform_cone((u1 - p_aim) / (1.0 - p_aim), u2, cos_max)
+            dx, dy, dz = about_axis(lx, ly, lz, wx / dist, wy / dist, wz / dist)
+            cos_g = dx * aim[G_AX] + dy * aim[G_AY] + dz * aim[G_AZ]
+            pdf = (1.0 - p_aim) * pdf_c + p_aim * uniform_cone_pdf(cos_g, aim[G_COS])
+        w = n_leds * radiant_intensity(leds, k, dx, dy, dz) / pdf
     if w <= 0.0:
         return
     s, t = G.nearest_hit(sf, si, px, py, pz, dx, dy, dz)
@@ -946,8 +999,7 @@ def _light_path(i, seed, scene, cam, tally, port):
         if s >= 0 and si[s, G.ACTION] == G.ACT_REFRACT and _is_element(cam, s):
             # first hit an element's surface: one of three legs that draw these paths (the
             # glints seen through an element are mostly drawn here, aimed at the cornea)
-            pdf = 1.0 / (2.0 * math.pi * (1.0 - cos_max))
-            w *= _element_share(sf, si, cam, port, s, Ray(px, py, pz, dx, dy, dz), pdf)
+            w *= _element_share(sf, si, cam, port, s, k, Ray(px, py, pz, dx, dy, dz), pdf)
             _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, k, 0, -2)
         return  # first hit elsewhere: the camera paths' share (or nothing)
     x, y, z = px + t * dx, py + t * dy, pz + t * dz
@@ -999,7 +1051,7 @@ def _direct_path(i, seed, scene, cam, tally, port):
     if s >= 0 and s != port and si[s, G.ACTION] == G.ACT_REFRACT and _is_element(cam, s):
         # an element in the way: the LED seen through it or by it (one of three legs)
         pdf = _cone_pdf(sf, port, Ray(px, py, pz, dx, dy, dz))
-        w *= _element_share(sf, si, cam, port, s, Ray(px, py, pz, dx, dy, dz), pdf)
+        w *= _element_share(sf, si, cam, port, s, k, Ray(px, py, pz, dx, dy, dz), pdf)
         _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, k, 0, -2)
         return
     if s != port:
@@ -1042,7 +1094,7 @@ def _element_path(i, seed, scene, cam, tally, row, port):
     if s != row:
         return
     pdf = _cone_pdf(sf, row, Ray(px, py, pz, dx, dy, dz))
-    w *= _element_share(sf, si, cam, port, row, Ray(px, py, pz, dx, dy, dz), pdf)
+    w *= _element_share(sf, si, cam, port, row, k, Ray(px, py, pz, dx, dy, dz), pdf)
     _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, k, 0, -2)
 
 
@@ -1079,7 +1131,7 @@ def _ghost_path(i, seed, scene, cam, tally, row, port):
     if s != row:
         return
     pdf = _mirror_pdf(sf, si, row, port, Ray(px, py, pz, dx, dy, dz))
-    w *= _element_share(sf, si, cam, port, row, Ray(px, py, pz, dx, dy, dz), pdf) / pdf
+    w *= _element_share(sf, si, cam, port, row, k, Ray(px, py, pz, dx, dy, dz), pdf) / pdf
     _follow(state, w, Ray(px, py, pz, dx, dy, dz), scene, cam, tally, k, 0, -2)
 
 

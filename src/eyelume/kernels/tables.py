@@ -56,6 +56,12 @@ __all__ = [
     "REFLECT",
     "CHAIN_STEPS",
     "CHAIN_COLS",
+    "G_AX",
+    "G_AY",
+    "G_AZ",
+    "G_COS",
+    "G_P",
+    "GLINT_AIM_COLS",
 ]
 
 # aim table columns: centre xyz, radius (mm), probability of aiming, kind, and for AIM_IMAGE
@@ -137,6 +143,12 @@ class LedTable(NamedTuple):
     equal_power: bool
 
 
+#: Columns of :attr:`CameraTables.glint_aim`: the cone's unit axis, cos of its half-angle, the
+#: share of draws aimed in it.
+G_AX, G_AY, G_AZ, G_COS, G_P = range(5)
+GLINT_AIM_COLS = 5
+
+
 class CameraTables(NamedTuple):
     """The camera as the camera-side (fast) estimator sees it (:mod:`eyelume.estimators.camera`).
 
@@ -158,7 +170,12 @@ class CameraTables(NamedTuple):
     through one element that next-event estimation connects by Newton's method
     (:mod:`eyelume.estimators.cornea_nee`): an element's first step is the surface the LED
     faces, its own chain toward any face and, with the cornea's two steps appended, toward the
-    iris; ``n_chains`` 0 without elements."""
+    iris; ``n_chains`` 0 without elements.
+
+    ``glint_aim`` (n_leds, GLINT_AIM_COLS) float64: per LED the cone its light paths aim at
+    the cornea's specular point for the camera (the glint): unit axis (camera frame), cos of
+    its half-angle, and the share of the LED's cornea-leg draws aimed in it (0: none, every
+    draw in the cone that holds the cornea; :mod:`eyelume.estimators.fast`)."""
 
     lf_rev: np.ndarray
     lf_open: np.ndarray
@@ -175,6 +192,7 @@ class CameraTables(NamedTuple):
     split_grid: int
     element_rows: np.ndarray
     chains: np.ndarray
+    glint_aim: np.ndarray
 
 
 class SceneTables(NamedTuple):
