@@ -258,3 +258,26 @@ def test_the_study_command_plans_its_runs_once(tmp_path, monkeypatch):
     first = study_module.plan_runs(st)
     first[0]["leds.height_mm"] = -1.0
     assert study_module.plan_runs(st) == plan(st) and len(made) == 1
+
+
+@pytest.mark.parametrize("cached", [False, True])
+def test_track_says_so_before_the_detectors_first_compilation(tmp_path, monkeypatch, cached):
+    """On a fresh machine the first `track` compiled the detector's Numba passes in silence
+    (43 s at load 13). The probe itself: a Numba cache dir that holds nothing reads False."""
+    import eyelume.cli as cli
+    from tests.analysis.test_detect import draw_eye
+
+    monkeypatch.setattr(cli, "_detect_kernels_cached", lambda: cached)
+    path = tmp_path / "eye.npy"
+    np.save(path, draw_eye().astype(np.float64))
+    res = runner.invoke(app, ["track", str(path), "--leds", "0,90,180,270"])
+    assert res.exit_code == 0, res.output
+    said = "compiling detection kernels (first run only" in res.stderr
+    assert said is not cached, res.stderr
+
+
+def test_the_detector_cache_probe_reads_an_empty_cache_as_a_first_run(tmp_path):
+    code = "from eyelume.cli import _detect_kernels_cached as p; print(p())"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "empty")}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.strip() == "False", out
