@@ -1090,8 +1090,21 @@ def evaluate_tracking_cmd(
     out: Annotated[Path, typer.Option("--out", help="Folder for the outputs (created).")],
     scene: SceneOpt = "paper2005",
     samples: Annotated[
-        int, typer.Option(help="Camera samples per pixel of each rendered frame.")
-    ] = 16,
+        int | None,
+        typer.Option(
+            help="Camera samples per pixel of each rendered frame (default 16; with "
+            "--population the default is --render-noise sensor)."
+        ),
+    ] = None,
+    render_noise: Annotated[
+        str | None,
+        typer.Option(
+            help="Render each frame to a noise instead of --samples: 'sensor' (the sensor's own "
+            "shot noise on the skin, from one pilot render per person or scene; the default "
+            "with --population: a tracker sees the sensor's noise, rendering below it is "
+            "wasted) or a relative error such as 0.05."
+        ),
+    ] = None,
     seed: Annotated[int, typer.Option(help="Random seed of every frame.")] = 0,
     population: Annotated[
         int,
@@ -1136,19 +1149,22 @@ def evaluate_tracking_cmd(
 
     _refuse_gaze(set_, "evaluate-tracking")
     sc = _load(scene, set_)
-    _check_counts(samples=samples, seed=seed)
     sampled = _people_options(population, population_seed, population_file, tracked_deg,
                               named_population)  # fmt: skip
+    samples, noise = _tracking_budget(samples, render_noise, sampled is not None)
+    _check_counts(samples=samples, seed=seed)
     check_estimator(sc, "fast", compile_scene(sc))  # its frames are the fast estimator's
     _check_out(out)
     if sampled is not None:
-        _people_run(sc, *sampled, samples, seed, tracked_deg, out)
+        _people_run(sc, *sampled, samples, seed, tracked_deg, out, noise)
         return
     t0 = time.perf_counter()
-    report, partial = _tracking_parts(sc, samples, seed, named_population, out)
+    report, partial = _tracking_parts(sc, samples, seed, named_population, out, noise)
     meta = {
         "scene": sc.name,
-        "samples_per_pixel": samples,
+        "samples_per_pixel": samples if noise is None else None,
+        "render_noise": noise,
+        "render_budget": report.summary.get("render_budget"),
         "seed": seed,
         "sensor": [sc.sensor.cols, sc.sensor.rows],
         "wall_time_s": round(time.perf_counter() - t0, 2),
@@ -1194,6 +1210,21 @@ def _tracking_ambient_line(rated: dict) -> str:
     return "sunlight: " + ("; ".join(parts) if parts else "no ratio bounded (no ambient there)")
 
 
+def _tracking_budget(samples: int | None, noise: str | None, people: bool):
+    """(samples per pixel, render_noise or None) of evaluate-tracking's --samples and
+    --render-noise: both refused together; neither: 'sensor' over sampled people, else 16
+    samples per pixel."""
+    from eyelume.optimize.render_budget import parse_render_noise
+
+    if samples is not None and noise is not None:
+        _fail(f"--samples {samples} and --render-noise {noise}: give one render budget")
+    if noise is not None:
+        return 16, parse_render_noise(noise)
+    if samples is None:
+        return (16, "sensor") if people else (16, None)
+    return samples, None
+
+
 def _people_options(n: int, seed: int | None, path: Path | None, tracked_deg: float,
                     named: bool):  # fmt: skip
     """(Population, size, seed) of --population/--population-seed/--population-file, or None
@@ -1220,7 +1251,7 @@ def _people_options(n: int, seed: int | None, path: Path | None, tracked_deg: fl
 
 
 def _people_run(sc, pop, size: int, pop_seed: int, samples: int, seed: int, tracked_deg: float,
-                out: Path) -> None:  # fmt: skip
+                out: Path, noise: str | float | None = None) -> None:  # fmt: skip
     """evaluate-tracking over ``size`` sampled people: progress with an ETA, population.json and
     people.csv; Ctrl-C or SIGTERM keeps the people finished (nothing before the first)."""
     from eyelume.estimators.interrupt import PartialRun
@@ -1233,7 +1264,8 @@ def _people_run(sc, pop, size: int, pop_seed: int, samples: int, seed: int, trac
     partial = None
     try:
         results = _counted("people", size * people_frame_count(), "frames", evaluate_people,
-                           people, samples_per_pixel=samples, seed=seed)  # fmt: skip
+                           people, samples_per_pixel=samples, seed=seed,
+                           render_noise=noise)  # fmt: skip
     except PartialRun as exc:
         if not exc.done:
             _interrupted_with_nothing("the first person")
@@ -1241,9 +1273,14 @@ def _people_run(sc, pop, size: int, pop_seed: int, samples: int, seed: int, trac
     rows = [r.row(tracked_deg) for r in results]
     summary = population_summary(rows, tracked_deg)
     dists = resolved_distributions(sc, pop)
+    used = [r["render_budget"]["samples_per_pixel_used"] for r in rows if r.get("render_budget")]
     meta = {
         "scene": sc.name,
-        "samples_per_pixel": samples,
+        "samples_per_pixel": samples if noise is None else None,
+        "render_noise": noise,
+        "samples_per_pixel_used": [min(u[0] for u in used), max(u[1] for u in used)]
+        if used and all(used)
+        else None,
         "seed": seed,
         "sensor": [sc.sensor.cols, sc.sensor.rows],
         "population_seed": pop_seed,
@@ -1268,7 +1305,7 @@ def _people_run(sc, pop, size: int, pop_seed: int, samples: int, seed: int, trac
         _exit_interrupted()
 
 
-def _tracking_parts(sc, samples: int, seed: int, population: bool, out: Path):
+def _tracking_parts(sc, samples: int, seed: int, population: bool, out: Path, noise=None):
     """(the nominal report, a partial note or None) of evaluate-tracking under a progress bar
     with an ETA, the population's folders written when asked. Ctrl-C or SIGTERM keeps the
     gazes (or population members) finished; before any, the command ends (nothing written)."""
@@ -1287,7 +1324,8 @@ def _tracking_parts(sc, samples: int, seed: int, population: bool, out: Path):
     if not population:
         try:
             report = _counted("tracking", frames, "frames", evaluate_tracking, sc,
-                              samples_per_pixel=samples, seed=seed)  # fmt: skip
+                              samples_per_pixel=samples, seed=seed,
+                              render_noise=noise)  # fmt: skip
         except PartialRun as exc:
             if exc.done is None:
                 _interrupted_with_nothing("the first test gaze")
@@ -1296,7 +1334,8 @@ def _tracking_parts(sc, samples: int, seed: int, population: bool, out: Path):
     try:
         total = frames * len(POPULATION)
         members = _counted("population", total, "frames", evaluate_population, sc,
-                           samples_per_pixel=samples, seed=seed)  # fmt: skip
+                           samples_per_pixel=samples, seed=seed,
+                           render_noise=noise)  # fmt: skip
     except PartialRun as exc:
         if "nominal" not in exc.done:
             _interrupted_with_nothing("the nominal member")
@@ -1305,7 +1344,8 @@ def _tracking_parts(sc, samples: int, seed: int, population: bool, out: Path):
         err.print(member_line(name, rep), highlight=False)
     write_population_outputs(
         members, sc.name, out, partial,
-        {"samples_per_pixel": samples, "seed": seed, "sensor": [sc.sensor.cols, sc.sensor.rows]},
+        {"samples_per_pixel": samples if noise is None else None, "render_noise": noise,
+         "seed": seed, "sensor": [sc.sensor.cols, sc.sensor.rows]},
     )  # fmt: skip
     return members["nominal"], partial
 

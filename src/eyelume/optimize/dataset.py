@@ -49,7 +49,8 @@ visual axis the eye then has.
 with ``rel_error`` — below the sensor's shot noise there, 1/sqrt(N̄) for the N̄ mean
 photo-electrons of the median skin pixel (:func:`eyelume.detectors.sensor.electrons_per_w_mm2`).
 N̄ is not known before the picture is rendered, so a pilot render finds it
-(:func:`sensor_noise_target`): the same scene sampled by a coarse grid of :data:`PILOT_COLS`
+(:func:`eyelume.optimize.render_budget.sensor_noise_target`, shared with tracking
+evaluation): the same scene sampled by a coarse grid of :data:`PILOT_COLS`
 columns over the same field (irradiance is per unit area, so a coarse pixel reads the mean of
 the fine ones under it; the median over the skin's few hundred coarse pixels is within a per
 cent or so), :data:`PILOT_SAMPLES` samples per pixel, its own seed; the target is
@@ -90,6 +91,12 @@ from pydantic import Field, field_validator, model_validator
 
 from eyelume.errors import EyelumeError, GeometryError, SceneError, StoreError
 from eyelume.json_files import dumps, write_json
+from eyelume.optimize.render_budget import (  # noqa: F401 - the dataset's budget names
+    PILOT_COLS,
+    PILOT_SAMPLES,
+    SENSOR_NOISE_MARGIN,
+    sensor_noise_target,
+)
 from eyelume.optimize.study import beside, read_input_file
 from eyelume.scene.io import apply_overrides, load_scene, not_a_path
 from eyelume.scene.model import Scene
@@ -131,14 +138,6 @@ _SEED_TAG = 0xDA7A5EED
 _GAZE_TAG = 0x6A2E
 _GLASSES_TAG = 0x6_1A55
 _VARY_TAG = 0x7A_12E5
-
-#: render_noise = "sensor": the pilot's columns (its rows in proportion), samples per pixel,
-#: and the share of the shot noise aimed at (module docstring).
-PILOT_COLS = 48
-PILOT_SAMPLES = 8
-SENSOR_NOISE_MARGIN = 0.9
-#: Mixed into the pilot's seed, so its samples are not the picture's.
-_PILOT_TAG = 0x9170
 
 
 # --- the dataset file ---------------------------------------------------------------------------
@@ -506,42 +505,6 @@ def picture_scene(b: _Bases, plan: PicturePlan) -> tuple[Scene, dict | None]:
 #: plane's direct irradiance apart from the picture (0.3–0.7 s a picture on 21 × 15 bins), which
 #: no label uses; the picture is the same bit for bit (tests/optimize/test_dataset.py).
 _NO_EYE_PLANE = {"eye_plane.cols": 1, "eye_plane.rows": 1}
-
-
-def sensor_noise_target(scene: Scene, seed: int) -> tuple[float, float]:
-    """(rel_error target, the pilot's median skin electrons N̄) for ``render_noise =
-    "sensor"``: :data:`SENSOR_NOISE_MARGIN` / sqrt(N̄), N̄ from a pilot render of ``scene``
-    sampled by :data:`PILOT_COLS` columns over the same field of the sensor (module docstring),
-    :data:`PILOT_SAMPLES` samples per pixel, seed derived from ``seed``.
-
-    Raises
-    ------
-    GeometryError
-        The pilot's picture shows no skin with light on it.
-    """
-    from eyelume.detectors.sensor import electrons_per_w_mm2
-    from eyelume.render import RenderOptions, render
-
-    s = scene.sensor
-    width, height = s.field_mm
-    cols = min(s.cols, PILOT_COLS)
-    rows = max(1, round(s.rows * cols / s.cols))
-    pilot = apply_overrides(
-        scene,
-        {"sensor.width_mm": width, "sensor.height_mm": height, "sensor.cols": cols,
-         "sensor.rows": rows},
-    )  # fmt: skip
-    pilot_seed = int(np.random.SeedSequence([seed, _PILOT_TAG]).generate_state(1)[0] >> 1)
-    opts = RenderOptions(estimator="fast", samples_per_pixel=PILOT_SAMPLES, seed=pilot_seed)
-    result = render(pilot, opts)
-    if result.interrupted:
-        raise KeyboardInterrupt
-    image = result.eye_image_at_scene_wavelength[result.regions["skin"]]
-    image = image[image > 0]
-    if not image.size:
-        raise GeometryError("the pilot picture shows no lit skin: give samples_per_pixel")
-    electrons = float(np.median(image)) * electrons_per_w_mm2(s, float(scene.wavelength_nm))
-    return SENSOR_NOISE_MARGIN / math.sqrt(electrons), electrons
 
 
 @dataclass

@@ -51,6 +51,7 @@ from eyelume.detectors.sensor import digitize
 from eyelume.errors import SceneError
 from eyelume.estimators.interrupt import PartialRun, run_unit
 from eyelume.optimize.delta_study import PAPER_CHOICE, with_placement
+from eyelume.optimize.render_budget import MAX_SAMPLES_PER_PIXEL, noise_options
 from eyelume.render import RenderOptions, render
 from eyelume.scene.io import apply_overrides
 from eyelume.scene.model import Scene
@@ -74,9 +75,19 @@ GAZE_H = (-20.0, 0.0, 20.0)
 GAZE_V = (-10.0, 0.0, 10.0)
 
 
-def render_frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> Frame:
-    """Render the eye at gaze (``h``, ``v``) degrees (fast estimator, ``samples`` per pixel),
-    read it out with the sensor model and analyse the picture against the truth.
+def render_frame(
+    scene: Scene,
+    h: float,
+    v: float,
+    samples: int,
+    seed: int,
+    rel_error: float | None = None,
+    max_samples: int = MAX_SAMPLES_PER_PIXEL,
+) -> Frame:
+    """Render the eye at gaze (``h``, ``v``) degrees (fast estimator, ``samples`` per pixel —
+    or, with ``rel_error``, until the median skin pixel's relative standard error is at most
+    that, capped at ``max_samples`` per pixel), read it out with the sensor model and analyse
+    the picture against the truth. The frame's ``samples_per_pixel`` is what the render used.
 
     (``h``, ``v``) is the target the person fixates: the eye turns so that its visual axis has
     these angles (:func:`eyelume.analysis.truth.optical_gaze_for`; the optical axis itself
@@ -85,7 +96,13 @@ def render_frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> F
     gh, gv = optical_gaze_for(scene, h, v)
     sc = apply_overrides(scene, {"eye.gaze_horizontal_deg": gh, "eye.gaze_vertical_deg": gv})
     cs = compile_scene(sc)
-    result = render(cs, RenderOptions(estimator="fast", samples_per_pixel=samples, seed=seed))
+    if rel_error is None:
+        opts = RenderOptions(estimator="fast", samples_per_pixel=samples, seed=seed)
+    else:
+        opts = RenderOptions(
+            estimator="fast", rel_error=rel_error, max_samples_per_pixel=max_samples, seed=seed
+        )
+    result = render(cs, opts)
     digital = digitize(result.eye_image_at_scene_wavelength, sc.sensor, sc.wavelength_nm, seed)
     azimuths = led_picture_azimuths(cs)
     frame = analyse_frame(
@@ -97,6 +114,7 @@ def render_frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> F
         led_pattern_px=led_picture_pattern(cs),
     )
     frame.saturated_share = digital.saturated_pixels / max(digital.counts.size, 1)
+    frame.samples_per_pixel = int(result.samples_per_pixel)
     if result.ambient is not None:  # ambient.sun: the LEDs' signal against the sunlight's
         rated = signal_to_ambient(
             result.led_image_at_scene_wavelength, result.ambient.eye_image, result.regions
@@ -105,7 +123,7 @@ def render_frame(scene: Scene, h: float, v: float, samples: int, seed: int) -> F
     return frame
 
 
-def evaluate_tracking(
+def evaluate_tracking(  # noqa: PLR0913 - grids, budget, calibration: one option each
     scene: Scene,
     test_h: Sequence[float] = TEST_H,
     test_v: Sequence[float] = TEST_V,
@@ -114,6 +132,7 @@ def evaluate_tracking(
     progress: Callable[[str], None] | None = None,
     calibration_scene: Scene | None = None,
     calibrate: bool | tuple[Sequence[float], Sequence[float]] = True,
+    render_noise: str | float | None = None,
 ) -> TrackingReport:
     """Render, detect and estimate gaze over the calibration and test grids (module doc).
 
@@ -126,7 +145,24 @@ def evaluate_tracking(
     ``progress(message)`` once per frame, calibration frames first (:func:`frame_count`
     frames; a progress bar counts them). Ctrl-C or SIGTERM stops it after the frames finished:
     :class:`~eyelume.estimators.interrupt.PartialRun` whose ``done`` is the report over the
-    test gazes finished (None when none had: the calibration alone estimates nothing)."""
+    test gazes finished (None when none had: the calibration alone estimates nothing).
+
+    ``render_noise`` (default None: ``samples_per_pixel`` for every frame): "sensor" renders
+    every frame to the sensor's own shot noise on the skin, a number to that relative error
+    (:mod:`eyelume.optimize.render_budget`; at most :data:`~eyelume.optimize.render_budget.
+    MAX_SAMPLES_PER_PIXEL` per pixel). The sensor's
+    target comes from one pilot per scene (the scene and the calibration scene), not per
+    frame: the skin's photo-electrons do not follow the gaze. The report's
+    ``summary["render_budget"]`` says what was asked and the samples per pixel used."""
+    budgets: dict[int, tuple[float | None, dict]] = {}
+
+    def frame(sc: Scene, h: float, v: float):
+        if render_noise is None:
+            return run_unit(render_frame, sc, h, v, samples_per_pixel, seed)
+        if id(sc) not in budgets:
+            budgets[id(sc)] = run_unit(noise_options, sc, render_noise, seed)
+        return run_unit(render_frame, sc, h, v, samples_per_pixel, seed, budgets[id(sc)][0])
+
     cal_h, cal_v = calibrate if isinstance(calibrate, tuple) else (CALIBRATION_H, CALIBRATION_V)
     grid = [(h, v) for v in cal_v for h in cal_h] if calibrate else []
     tests = [(h, v) for v in test_v for h in test_h]
@@ -135,14 +171,14 @@ def evaluate_tracking(
     try:
         for h, v in grid:
             cal = calibration_scene or scene
-            calib.append(run_unit(render_frame, cal, h, v, samples_per_pixel, seed))
+            calib.append(frame(cal, h, v))
             if progress:
                 progress(f"calibration gaze ({h:+.0f}°, {v:+.0f}°)")
         # a test gaze of the calibration grid, rendered in the calibration's scene with the
         # same seed and budget, is the same picture: its PCCR error is the fit's in-sample residual
         same = calibration_scene is None or calibration_scene == scene
         for h, v in tests:
-            frames.append(run_unit(render_frame, scene, h, v, samples_per_pixel, seed))
+            frames.append(frame(scene, h, v))
             frames[-1].calibration = same and (h, v) in grid
             if progress:
                 f = frames[-1]
@@ -154,9 +190,30 @@ def evaluate_tracking(
         done = None
         if frames:
             done = analyse_frames(scene, compile_scene(scene).led.points, frames, calib)
+            done.summary["render_budget"] = _budget_summary(
+                render_noise, samples_per_pixel, budgets, frames + calib
+            )
         raise PartialRun(done, len(frames), len(tests), "test gazes") from None
     leds = compile_scene(scene).led.points
-    return analyse_frames(scene, leds, frames, calib)
+    report = analyse_frames(scene, leds, frames, calib)
+    report.summary["render_budget"] = _budget_summary(
+        render_noise, samples_per_pixel, budgets, frames + calib
+    )
+    return report
+
+
+def _budget_summary(noise, samples: int, budgets: dict, frames: list) -> dict:
+    """What the frames' renders were asked (``render_noise`` or ``samples_per_pixel``), each
+    scene's budget facts (:func:`eyelume.optimize.render_budget.noise_options`) and the
+    samples per pixel the frames used (min, max)."""
+    used = [f.samples_per_pixel for f in frames]
+    out: dict = {"render_noise": noise}
+    if noise is None:
+        out["samples_per_pixel_asked"] = samples
+    else:
+        out["scenes"] = [facts for _, facts in budgets.values()]
+    out["samples_per_pixel_used"] = [min(used), max(used)] if used else None
+    return out
 
 
 def frame_count(test_h=TEST_H, test_v=TEST_V, calibrate: bool | tuple = True) -> int:
@@ -214,6 +271,7 @@ class PersonResult:
             "pccr_max_deg": float(np.max(got)) if got else None,
             "geometric_mean_deg": float(np.mean(geo)) if geo else None,
             "score_deg": float(np.mean([FAILED_FRAME_DEG if e is None else e for e in err])),
+            "render_budget": self.report.summary.get("render_budget"),
             "tracked": bool(
                 frames and detected and len(got) == len(frames) and max(got) <= tracked_deg
             ),
@@ -229,12 +287,16 @@ def evaluate_people(
     samples_per_pixel: int = 8,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
+    render_noise: str | float | None = None,
 ) -> list[PersonResult]:
     """:func:`evaluate_tracking` for each sampled person (:func:`eyelume.scene.population.
     sample_people`, built with scenes) on the person grids (:data:`PEOPLE_CALIBRATION_H` …):
     each calibrates in their own eye, every frame with render seed ``seed``. A person's result
     depends on their scene and ``seed`` alone, so a chunk of people (a worker's) gives the same
     rows as the whole.
+
+    ``render_noise`` as in :func:`evaluate_tracking` ("sensor": one pilot per person, in their
+    own scene; None: ``samples_per_pixel`` for every frame).
 
     ``progress(message)`` once per frame, "person i: …" (:func:`people_frame_count` frames).
     Ctrl-C or SIGTERM stops it after the people finished:
@@ -246,6 +308,7 @@ def evaluate_people(
             rep = evaluate_tracking(
                 person.scene, PEOPLE_TEST_H, PEOPLE_TEST_V, samples_per_pixel, seed,
                 progress=say, calibrate=(PEOPLE_CALIBRATION_H, PEOPLE_CALIBRATION_V),
+                render_noise=render_noise,
             )  # fmt: skip
         except KeyboardInterrupt:
             raise PartialRun(out, len(out), len(people), "people") from None
@@ -317,6 +380,7 @@ def evaluate_population(
     samples_per_pixel: int = 16,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
+    render_noise: str | float | None = None,
 ) -> dict[str, TrackingReport]:
     """:func:`evaluate_tracking` for each member of ``population``: (name, scene overrides,
     whether the user calibrates in that state — False for a slip after calibration).
@@ -337,6 +401,7 @@ def evaluate_population(
                 seed,
                 calibration_scene=None if recalibrate else scene,
                 progress=None if progress is None else _prefixed(progress, name),
+                render_noise=render_noise,
             )
         except KeyboardInterrupt:
             raise PartialRun(out, len(out), len(population), "population members") from None

@@ -90,6 +90,7 @@ class Frame:
     glints_px: list | None = None
     false_glints: int = 0  # matched glints that are element ghosts (false_glints)
     ambient: dict | None = None  # ambient.sun: the frame's signal to ambient (ambient_ratios)
+    samples_per_pixel: int = 0  # camera samples per pixel its render used (0: not recorded)
     #: the test frame is the calibration frame of its gaze (same scene, seed and budget: the
     #: same picture), so its PCCR error is the fit's in-sample residual, not a measurement:
     #: left out of the PCCR statistics (:func:`summarise`) and marked "cal" on the error maps

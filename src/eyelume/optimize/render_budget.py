@@ -1,0 +1,126 @@
+"""The render budget of a picture that a tracker or a labelled dataset reads: render to the
+noise the sensor itself has, not below it.
+
+A camera's picture carries shot noise of relative size 1/sqrt(N) for N photo-electrons in a
+pixel; a render whose own Monte Carlo noise is well below that is wasted work, since the
+digitised picture (:func:`eyelume.detectors.sensor.digitize`) adds the sensor's noise anyway.
+``render_noise = "sensor"`` keeps the render's own noise — the median skin pixel's relative
+standard error, as :func:`eyelume.render.render` measures it with ``rel_error`` — below the
+sensor's shot noise there, 1/sqrt(N̄) for the N̄ mean photo-electrons of the median skin pixel
+(:func:`eyelume.detectors.sensor.electrons_per_w_mm2`). N̄ is not known before the picture is
+rendered, so a pilot render finds it (:func:`sensor_noise_target`): the same scene sampled by a
+coarse grid of :data:`PILOT_COLS` columns over the same field (irradiance is per unit area, so
+a coarse pixel reads the mean of the fine ones under it; the median over the skin's few hundred
+coarse pixels is within a per cent or so), :data:`PILOT_SAMPLES` samples per pixel, its own
+seed; the target is :data:`SENSOR_NOISE_MARGIN` / sqrt(N̄) (the margin absorbs the pilot's
+estimate). A number instead is a fixed ``rel_error`` target.
+
+Used by the labelled datasets (:mod:`eyelume.optimize.dataset`, one pilot per picture) and by
+tracking evaluation (:mod:`eyelume.optimize.tracking`, one pilot per scene: the skin's
+electrons do not follow the gaze, ``tests/optimize/test_render_budget.py``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from eyelume.errors import GeometryError, OptionError
+from eyelume.scene.io import apply_overrides
+from eyelume.scene.model import Scene
+
+__all__ = [
+    "MAX_SAMPLES_PER_PIXEL",
+    "PILOT_COLS",
+    "PILOT_SAMPLES",
+    "SENSOR_NOISE_MARGIN",
+    "noise_options",
+    "parse_render_noise",
+    "sensor_noise_target",
+]
+
+#: render_noise = "sensor": the pilot's columns (its rows in proportion), samples per pixel,
+#: and the share of the shot noise aimed at (module docstring).
+PILOT_COLS = 48
+PILOT_SAMPLES = 8
+SENSOR_NOISE_MARGIN = 0.9
+#: The cap on camera samples per pixel of a ``rel_error`` render (a dark scene stops there).
+MAX_SAMPLES_PER_PIXEL = 4096
+#: Mixed into the pilot's seed, so its samples are not the picture's.
+_PILOT_TAG = 0x9170
+
+
+def sensor_noise_target(scene: Scene, seed: int) -> tuple[float, float]:
+    """(rel_error target, the pilot's median skin electrons N̄) for ``render_noise =
+    "sensor"``: :data:`SENSOR_NOISE_MARGIN` / sqrt(N̄), N̄ from a pilot render of ``scene``
+    sampled by :data:`PILOT_COLS` columns over the same field of the sensor (module docstring),
+    :data:`PILOT_SAMPLES` samples per pixel, seed derived from ``seed``.
+
+    Raises
+    ------
+    GeometryError
+        The pilot's picture shows no skin with light on it.
+    KeyboardInterrupt
+        Ctrl-C or SIGTERM cut the pilot short.
+    """
+    from eyelume.detectors.sensor import electrons_per_w_mm2
+    from eyelume.render import RenderOptions, render
+
+    s = scene.sensor
+    width, height = s.field_mm
+    cols = min(s.cols, PILOT_COLS)
+    rows = max(1, round(s.rows * cols / s.cols))
+    pilot = apply_overrides(
+        scene,
+        {"sensor.width_mm": width, "sensor.height_mm": height, "sensor.cols": cols,
+         "sensor.rows": rows},
+    )  # fmt: skip
+    pilot_seed = int(np.random.SeedSequence([seed, _PILOT_TAG]).generate_state(1)[0] >> 1)
+    opts = RenderOptions(estimator="fast", samples_per_pixel=PILOT_SAMPLES, seed=pilot_seed)
+    result = render(pilot, opts)
+    if result.interrupted:
+        raise KeyboardInterrupt
+    image = result.eye_image_at_scene_wavelength[result.regions["skin"]]
+    image = image[image > 0]
+    if not image.size:
+        raise GeometryError("the pilot picture shows no lit skin: give samples_per_pixel")
+    electrons = float(np.median(image)) * electrons_per_w_mm2(s, float(scene.wavelength_nm))
+    return SENSOR_NOISE_MARGIN / math.sqrt(electrons), electrons
+
+
+def parse_render_noise(text: str, option: str = "--render-noise") -> str | float:
+    """``"sensor"`` or a relative error in (0, 1) from a command-line value.
+
+    Raises
+    ------
+    OptionError
+        Anything else, naming ``option`` and the value.
+    """
+    if text.strip().lower() == "sensor":
+        return "sensor"
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and 0.0 < value < 1.0):
+        raise OptionError(f"{option} {text}: 'sensor' or a relative error in (0, 1), e.g. 0.05")
+    return value
+
+
+def noise_options(
+    scene: Scene, noise: str | float, seed: int, max_samples: int = MAX_SAMPLES_PER_PIXEL
+) -> tuple[float, dict]:
+    """(rel_error target, the budget's facts) of ``noise`` ("sensor": the pilot's target for
+    ``scene`` and ``seed``, :func:`sensor_noise_target`; a number: that target). The facts:
+    ``budget`` ("sensor" or "render_noise"), ``target_rel_error``, ``pilot_skin_electrons``
+    (sensor only), ``max_samples_per_pixel``."""
+    facts: dict = {"budget": "render_noise"}
+    if noise == "sensor":
+        target, electrons = sensor_noise_target(scene, seed)
+        facts.update(budget="sensor", pilot_skin_electrons=electrons)
+    else:
+        target = float(noise)
+    facts["target_rel_error"] = target
+    facts["max_samples_per_pixel"] = max_samples
+    return target, facts
