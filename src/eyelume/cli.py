@@ -1135,6 +1135,10 @@ def evaluate_tracking_cmd(
             "lids, headset slip ±2 mm after calibration (one folder each)."
         ),
     ] = False,
+    workers: Annotated[
+        int,
+        typer.Option(help="With --population: people on this many processes (same results)."),
+    ] = 1,
     set_: SetOpt = None,
 ) -> None:
     """Tracking quality of the scene's illumination: render the eye over a 7 × 5 gaze grid
@@ -1153,10 +1157,14 @@ def evaluate_tracking_cmd(
                               named_population)  # fmt: skip
     samples, noise = _tracking_budget(samples, render_noise, sampled is not None)
     _check_counts(samples=samples, seed=seed)
+    if not 1 <= workers <= 256:
+        _fail(f"--workers {workers}: must be 1 to 256 processes")
+    if workers > 1 and sampled is None:
+        _fail(f"--workers {workers}: only with --population (the people run in parallel)")
     check_estimator(sc, "fast", compile_scene(sc))  # its frames are the fast estimator's
     _check_out(out)
     if sampled is not None:
-        _people_run(sc, *sampled, samples, seed, tracked_deg, out, noise)
+        _people_run(sc, *sampled, samples, seed, tracked_deg, out, noise, workers)
         return
     t0 = time.perf_counter()
     report, partial = _tracking_parts(sc, samples, seed, named_population, out, noise)
@@ -1251,7 +1259,7 @@ def _people_options(n: int, seed: int | None, path: Path | None, tracked_deg: fl
 
 
 def _people_run(sc, pop, size: int, pop_seed: int, samples: int, seed: int, tracked_deg: float,
-                out: Path, noise: str | float | None = None) -> None:  # fmt: skip
+                out: Path, noise: str | float | None = None, workers: int = 1) -> None:  # fmt: skip
     """evaluate-tracking over ``size`` sampled people: progress with an ETA, population.json and
     people.csv; Ctrl-C or SIGTERM keeps the people finished (nothing before the first)."""
     from eyelume.estimators.interrupt import PartialRun
@@ -1265,7 +1273,7 @@ def _people_run(sc, pop, size: int, pop_seed: int, samples: int, seed: int, trac
     try:
         results = _counted("people", size * people_frame_count(), "frames", evaluate_people,
                            people, samples_per_pixel=samples, seed=seed,
-                           render_noise=noise)  # fmt: skip
+                           render_noise=noise, workers=workers)  # fmt: skip
     except PartialRun as exc:
         if not exc.done:
             _interrupted_with_nothing("the first person")
@@ -1278,6 +1286,7 @@ def _people_run(sc, pop, size: int, pop_seed: int, samples: int, seed: int, trac
         "scene": sc.name,
         "samples_per_pixel": samples if noise is None else None,
         "render_noise": noise,
+        "workers": workers,
         "samples_per_pixel_used": [min(u[0] for u in used), max(u[1] for u in used)]
         if used and all(used)
         else None,

@@ -175,3 +175,32 @@ def test_noise_target_uses_the_pilot_seed_not_the_frames():
     assert rb.sensor_noise_target(sc, 11) == a
     b = rb.sensor_noise_target(sc, 12)
     assert b != a and np.isclose(a[1], b[1], rtol=0.2)
+
+
+@pytest.mark.slow
+def test_people_on_two_workers_give_the_rows_of_one(tmp_path):
+    """Real renders (vr-offaxis on 16 × 16 pixels, 8 samples per pixel: the numbers mean
+    little, their equality everything): `evaluate-tracking --population 2 --workers 2` writes
+    the same people rows as one process."""
+    rows = {}
+    for w in (1, 2):
+        out = tmp_path / f"w{w}"
+        res = runner.invoke(app, ["evaluate-tracking", "--scene", "vr-offaxis", "--population",
+                                  "2", "--samples", "1", "--workers", str(w), *TINY,
+                                  "--out", str(out)])  # fmt: skip
+        assert res.exit_code == 0, res.output
+        data = json.loads((out / "population.json").read_text(encoding="utf-8"))
+        assert data["meta"]["workers"] == w
+        rows[w] = (data["people"], data["summary"])
+    assert rows[1] == rows[2]
+    assert [r["person"] for r in rows[1][0]] == [0, 1]
+
+
+def test_workers_need_a_population(tmp_path):
+    out = tmp_path / "o"
+    res = runner.invoke(app, ["evaluate-tracking", "--scene", "vr-offaxis", "--workers", "2",
+                              *TINY, "--out", str(out)])  # fmt: skip
+    assert res.exit_code == 2 and "--workers 2: only with --population" in res.output
+    res = runner.invoke(app, ["evaluate-tracking", "--scene", "vr-offaxis", "--population", "2",
+                              "--workers", "0", *TINY, "--out", str(out)])  # fmt: skip
+    assert res.exit_code == 2 and "--workers 0" in res.output and not out.exists()

@@ -288,6 +288,7 @@ def evaluate_people(
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
     render_noise: str | float | None = None,
+    workers: int = 1,
 ) -> list[PersonResult]:
     """:func:`evaluate_tracking` for each sampled person (:func:`eyelume.scene.population.
     sample_people`, built with scenes) on the person grids (:data:`PEOPLE_CALIBRATION_H` …):
@@ -298,9 +299,16 @@ def evaluate_people(
     ``render_noise`` as in :func:`evaluate_tracking` ("sensor": one pilot per person, in their
     own scene; None: ``samples_per_pixel`` for every frame).
 
+    ``workers`` > 1 evaluates the people on that many processes (the study's executor,
+    :func:`eyelume.optimize.runner.run_tasks`; a person is one task): the same rows, in the
+    people's order, as in one process; ``progress`` then tells the frames of each person as
+    the person finishes.
+
     ``progress(message)`` once per frame, "person i: …" (:func:`people_frame_count` frames).
     Ctrl-C or SIGTERM stops it after the people finished:
     :class:`~eyelume.estimators.interrupt.PartialRun` with their results."""
+    if workers > 1 and len(people) > 1:
+        return _people_on_workers(people, samples_per_pixel, seed, progress, render_noise, workers)
     out: list[PersonResult] = []
     for person in people:
         say = None if progress is None else _prefixed(progress, f"person {person.index}")
@@ -314,6 +322,35 @@ def evaluate_people(
             raise PartialRun(out, len(out), len(people), "people") from None
         out.append(PersonResult(person.index, person.values, rep, person.not_applied))
     return out
+
+
+def _person_task(person, samples_per_pixel: int, seed: int, render_noise) -> PersonResult:
+    """One person's evaluation on a worker (module level: pickled by name)."""
+    return evaluate_people([person], samples_per_pixel, seed, render_noise=render_noise)[0]
+
+
+def _people_on_workers(people, samples_per_pixel, seed, progress, render_noise, workers):
+    """:func:`evaluate_people` with each person a task of :func:`~eyelume.optimize.runner.
+    run_tasks` on ``workers`` processes; Ctrl-C or SIGTERM stops the workers:
+    :class:`PartialRun` with the people finished, in their order."""
+    from eyelume.optimize.runner import run_tasks
+
+    done: dict[int, PersonResult] = {}
+    per = people_frame_count()
+
+    def commit(k: int, result: PersonResult) -> None:
+        done[k] = result
+        if progress:
+            for _ in range(per):
+                progress(f"person {result.index}: done")
+
+    tasks = ((k, (p, samples_per_pixel, seed, render_noise)) for k, p in enumerate(people))
+    try:
+        run_tasks(_person_task, tasks, commit, workers=workers)
+    except KeyboardInterrupt:
+        finished = [done[k] for k in sorted(done)]
+        raise PartialRun(finished, len(finished), len(people), "people") from None
+    return [done[k] for k in range(len(people))]
 
 
 def people_frame_count() -> int:
