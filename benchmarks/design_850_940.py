@@ -1,0 +1,265 @@
+"""The same LED ring at 850 and at 940 nm over sampled people (issue 15, item 4): the README's
+table of a design question answered end to end.
+
+    python benchmarks/design_850_940.py                 # the issue's: 50 people, ~hours on 2 cores
+    python benchmarks/design_850_940.py --people 4      # fewer
+    python benchmarks/design_850_940.py --stop-at 23:20 # stop at that UTC time: the people done
+
+On ``vr-offaxis`` (its ring of 8 LEDs, nothing else changed but the wavelength), for each of N
+people sampled from the anatomy distributions (``population.toml``, population seed 1, the same
+draws at both wavelengths: the skin's reflectance range follows the wavelength, Cooksey, Allen
+& Tsai 2017), this runs what ``eyelume evaluate-tracking --population N`` runs for a person
+(:func:`eyelume.optimize.tracking.evaluate_people`: 9 calibration and 6 test frames, each
+rendered to the sensor's own noise, ``--render-noise sensor``) at each wavelength:
+
+* the scene's ``wavelength_nm`` (850 or 940), which the LEDs follow (``leds.wavelength_nm``
+  unset), and with it the eye's indices (Atchison & Smith 2005), the tear film's reflection and
+  the sampled skin reflectance;
+* the sensor's QE from the built-in curve ``nir-global-shutter`` at the wavelength (the preset's
+  one number, 0.30, would not follow it);
+* sunlight on, as ``benchmarks/sunlight_850_940.py`` has it: AM1.5 direct, 40° above the
+  headset's horizontal, 30° to the side, through a 40 nm band-pass about the LEDs (830–870 nm or
+  920–960 nm). (A closed VR headset shields the eye from the sun; the sun here stands for the
+  ambient light a see-through or leaky headset lets in, the issue's question.)
+
+Per wavelength it reports:
+
+* **detection rate**: the mean over people of the share of their test frames with pupil and
+  every glint detected, and the share of people tracked (every test frame detected, every PCCR
+  error ≤ 2°, :data:`eyelume.optimize.tracking.TRACKED_DEG`);
+* **gaze error p95 (tracked people)**: the 95th percentile (numpy's linear interpolation) of the
+  PCCR gaze errors of every test frame of the tracked people (visual axis against the fixated
+  target, degrees);
+* **glint signal to ambient**: per person the weakest glint's peak over the sunlight on its
+  pixel in their worst test frame (``glint_signal_to_ambient_min``,
+  :func:`eyelume.analysis.ambient.signal_to_ambient`); the median and the 5th percentile over
+  people;
+* **eye-safety margin** (:func:`eyelume.analysis.safety.eye_safety`, IEC 62471 exempt group):
+  the corneal IR margin of the irradiance summed over the 8 LEDs, and the retinal thermal margin
+  of the worst LED with the burn-hazard weight R(λ) at the wavelength. The margins are the
+  headset's (nominal eye position), the same for every person.
+
+People run on ``--workers`` processes (the study's executor,
+:func:`eyelume.optimize.runner.run_tasks`; each (person, wavelength) a task, a pure function of
+its arguments). Ctrl-C, SIGTERM or ``--stop-at`` ends the run; the people finished at both
+wavelengths are reported (their number is the N of the JSON line). Appends one JSON line to
+``benchmarks/results/design_850_940.jsonl`` and prints the table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import math
+import os
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _common as C  # noqa: E402
+
+RESULTS = Path(__file__).parent / "results" / "design_850_940.jsonl"
+WAVELENGTHS = (850.0, 940.0)
+SUN = {"ambient.sun.elevation_deg": 40.0, "ambient.sun.azimuth_deg": 30.0}
+FILTERS = {850.0: (830.0, 870.0), 940.0: (920.0, 960.0)}
+
+
+def scene_at(name: str, wavelength: float):
+    """The preset at ``wavelength`` with the QE curve, the band-pass filter and the sun."""
+    import eyelume
+
+    lo, hi = FILTERS[wavelength]
+    return eyelume.load_scene(
+        name,
+        {
+            "wavelength_nm": wavelength,
+            "sensor.quantum_efficiency": "nir-global-shutter",
+            "sensor.filter.kind": "band_pass",
+            "sensor.filter.cut_on_nm": lo,
+            "sensor.filter.cut_off_nm": hi,
+            **SUN,
+        },
+    )
+
+
+def person_task(person, seed: int, render_noise) -> dict:
+    """One person at one wavelength: their row, their test frames' PCCR errors (None: no
+    estimate) and glint signal to ambient, the renders' time and samples per pixel."""
+    from eyelume.optimize.tracking import evaluate_people
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    (res,) = evaluate_people([person], 8, seed, render_noise=render_noise)
+    frames = res.report.frames
+    errors = [
+        None if f.pccr is None else math.hypot(f.pccr[0] - f.gaze[0], f.pccr[1] - f.gaze[1])
+        for f in frames
+    ]
+    sar = [
+        f.ambient["glint_signal_to_ambient_min"]
+        for f in frames
+        if f.ambient is not None and f.ambient.get("glint_signal_to_ambient_min") is not None
+    ]
+    every = [*frames, *res.report.calibration]
+    return {
+        "row": res.row(),
+        "pccr_errors_deg": errors,
+        "glint_signal_to_ambient": sar,
+        "wall_s": time.perf_counter() - t0,
+        "cpu_s": time.process_time() - c0,
+        "render_s": sum(f.render_s for f in every),
+        "samples_per_pixel": [f.samples_per_pixel for f in every],
+    }
+
+
+def _pct(values, q: float) -> float | None:
+    v = np.asarray([x for x in values if x is not None], dtype=float)
+    return float(np.percentile(v, q)) if v.size else None
+
+
+def summarise(done: list[dict], safety: dict) -> dict:
+    """The table's figures at one wavelength over the people ``done`` (module docstring)."""
+    rows = [d["row"] for d in done]
+    tracked = [d for d in done if d["row"]["tracked"]]
+    errors = [e for d in tracked for e in d["pccr_errors_deg"] if e is not None]
+    person_sar = [min(d["glint_signal_to_ambient"]) for d in done if d["glint_signal_to_ambient"]]
+    spp = [s for d in done for s in d["samples_per_pixel"]]
+    return {
+        "people": len(done),
+        "detection_rate_mean": float(np.mean([r["detection_rate"] for r in rows])),
+        "share_tracked": float(np.mean([r["tracked"] for r in rows])),
+        "tracked_people": len(tracked),
+        "gaze_error_p95_tracked_deg": _pct(errors, 95),
+        "gaze_error_median_tracked_deg": _pct(errors, 50),
+        "glint_signal_to_ambient_median": _pct(person_sar, 50),
+        "glint_signal_to_ambient_p5": _pct(person_sar, 5),
+        "people_with_ratio": len(person_sar),
+        "corneal_margin_summed_leds": safety["corneal_margin"],
+        "retinal_margin_worst_led": safety["retinal_margin"],
+        "burn_hazard_weight": safety["burn_hazard_weight"],
+        "corneal_irradiance_w_m2": safety["corneal_irradiance_w_m2"],
+        "samples_per_pixel_range": [min(spp), max(spp)] if spp else None,
+        "cpu_s_per_person": float(np.mean([d["cpu_s"] for d in done])),
+    }
+
+
+def _args():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scene", default="vr-offaxis")
+    ap.add_argument("--people", type=int, default=50)
+    ap.add_argument("--population-seed", type=int, default=1)
+    ap.add_argument("--seed", type=int, default=0, help="render seed of every frame")
+    ap.add_argument("--render-noise", default="sensor", help="'sensor' or a relative error")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--stop-at", default=None, help="UTC HH:MM: stop then, report the people done")
+    return ap.parse_args()
+
+
+def _stop_timer(stop_at: str | None) -> None:
+    """SIGINT to this process at ``stop_at`` (UTC HH:MM today): run_tasks stops its workers and
+    the people finished are reported."""
+    if not stop_at:
+        return
+    import signal
+
+    h, m = (int(x) for x in stop_at.split(":"))
+    now = dt.datetime.now(dt.UTC)
+    at = now.replace(hour=h, minute=m, second=0, microsecond=0)
+    delay = max(0.0, (at - now).total_seconds())
+    t = threading.Timer(delay, os.kill, (os.getpid(), signal.SIGINT))
+    t.daemon = True
+    t.start()
+
+
+def main() -> None:
+    from eyelume.analysis.safety import eye_safety
+    from eyelume.optimize.render_budget import parse_render_noise
+    from eyelume.optimize.runner import run_tasks
+    from eyelume.scene.population import sample_people
+
+    a = _args()
+    noise = parse_render_noise(a.render_noise)
+    info = {"machine": C.machine(), "command": C.command_line(), "load_start": C.loadavg()}
+    C.print_header("850 vs 940 nm over sampled people (vr-offaxis ring)", info["machine"])
+    scenes = {w: scene_at(a.scene, w) for w in WAVELENGTHS}
+    people = {w: sample_people(scenes[w], a.people, a.population_seed) for w in WAVELENGTHS}
+    safety = {w: eye_safety(scenes[w]) for w in WAVELENGTHS}
+    tasks = (((k, w), (people[w][k], a.seed, noise)) for k in range(a.people) for w in WAVELENGTHS)
+    done: dict = {}
+    t0 = time.perf_counter()
+
+    def commit(tag, result) -> None:
+        done[tag] = result
+        r = result["row"]
+        print(
+            f"   person {tag[0]} at {tag[1]:.0f} nm: detection {r['detection_rate']:.0%}, "
+            f"tracked {r['tracked']}, score {r['score_deg']:.2f}°, {result['cpu_s']:.0f} CPU-s "
+            f"({time.perf_counter() - t0:.0f} s)",
+            flush=True,
+        )
+
+    _stop_timer(a.stop_at)
+    interrupted = False
+    try:
+        run_tasks(person_task, tasks, commit, workers=a.workers)
+    except KeyboardInterrupt:
+        interrupted = True
+    wall = time.perf_counter() - t0
+    both = sorted(k for k in range(a.people) if all((k, w) in done for w in WAVELENGTHS))
+    table = {
+        f"{w:.0f} nm": summarise([done[(k, w)] for k in both], safety[w])
+        for w in WAVELENGTHS
+        if both
+    }
+    out = {
+        "time_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        **info,
+        "load_end": C.loadavg(),
+        "scene": a.scene,
+        "people_asked": a.people,
+        "people_done": len(both),
+        "people": both,
+        "interrupted": interrupted,
+        "population_seed": a.population_seed,
+        "seed": a.seed,
+        "render_noise": noise,
+        "workers": a.workers,
+        "wall_s": round(wall, 1),
+        "sun": SUN,
+        "filters_nm": {f"{w:.0f}": FILTERS[w] for w in WAVELENGTHS},
+        "table": table,
+        "rows": {f"{k[1]:.0f}/{k[0]}": v["row"] for k, v in sorted(done.items())},
+    }
+    print_table(table)
+    print(f"   {len(both)} of {a.people} people at both wavelengths; {wall:.0f} s wall")
+    RESULTS.parent.mkdir(exist_ok=True)
+    with RESULTS.open("a", encoding="utf-8") as f:
+        f.write(json.dumps(out) + "\n")
+    print(f"appended to {RESULTS}", file=sys.stderr)
+
+
+def print_table(table: dict) -> None:
+    keys = [
+        ("detection_rate_mean", "detection rate (mean over people)", "{:.1%}"),
+        ("share_tracked", "people tracked", "{:.0%}"),
+        ("gaze_error_p95_tracked_deg", "gaze error p95, tracked people (°)", "{:.2f}"),
+        ("glint_signal_to_ambient_median", "glint signal/ambient, median", "{:.3g}"),
+        ("glint_signal_to_ambient_p5", "glint signal/ambient, p5", "{:.3g}"),
+        ("corneal_margin_summed_leds", "corneal IR margin (8 LEDs summed)", "{:.3g}"),
+        ("retinal_margin_worst_led", "retinal thermal margin (worst LED)", "{:.3g}"),
+    ]
+    print(f"{'':40s}" + "".join(f"{n:>12s}" for n in table))
+    for k, label, fmt in keys:
+        cells = [
+            "—" if t[k] is None else fmt.format(t[k]) for t in table.values()
+        ]  # fmt: skip
+        print(f"{label:40s}" + "".join(f"{c:>12s}" for c in cells))
+
+
+if __name__ == "__main__":
+    main()
