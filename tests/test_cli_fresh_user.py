@@ -281,3 +281,22 @@ def test_the_detector_cache_probe_reads_an_empty_cache_as_a_first_run(tmp_path):
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "empty")}
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     assert out.returncode == 0 and out.stdout.strip() == "False", out
+
+
+@pytest.mark.parametrize("command", ["optimize-tracking", "reproduce"])
+def test_generator_commands_refuse_the_integrated_preset_with_the_reason(tmp_path, command):
+    """optimize-tracking and reproduce move the paper's ring over the generator's grid, whose
+    eye plane is lit in free space: on paper2005-integrated (an eyepiece and a hot mirror)
+    their placements lie behind or beside the elements (6 of optimize-tracking's 27 in the
+    camera's body, 19 lighting the eye through the eyepiece: measured with
+    compile.element_light_shares), so they refuse it in one line, exit 2, saying why and what
+    judges a placement instead — before any work."""
+    head = [command, "paper2005-integrated"] if command == "reproduce" else [command]
+    scene = [] if command == "reproduce" else ["--scene", "paper2005-integrated"]
+    res = runner.invoke(app, [*head, *scene, "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2
+    line = _one_line(res)
+    assert "elements.0 (eyepiece), elements.1 (hot mirror)" in line, line
+    assert "lit in free space" in line and "behind or beside" in line, line
+    assert "eyelume evaluate-tracking --set leds.distance_mm" in line, line
+    assert not (tmp_path / "o").exists()

@@ -243,9 +243,18 @@ def _check_counts(samples: int, seed: int) -> None:
 
 
 def _refuse_elements(sc, command: str) -> None:
-    """The commands built on the paper's generator (``sweep-leds``: LEDs and the eye plane in
-    free space, by definition) would ignore the scene's optical elements: a scene with some is
-    refused before any work, naming them."""
+    """The commands built on the paper's generator refuse a scene with optical elements before
+    any work, naming them and the reason. The generator (``sweep-leds``) lights its eye plane
+    in free space: an element between the LEDs and the eye (a spectacle lens) is ignored by
+    it, so its δ-optimal placement, which both commands report, would be judged on a light
+    that never reaches the eye. And the placements they move the paper's ring over (the
+    generator's grid, distance 20–70 mm; optimize-tracking's 27, 50–70 mm) put the LEDs
+    behind or beside the elements of a scene that has them near the eye: on
+    paper2005-integrated 6 of optimize-tracking's 27 place an LED inside the camera's body and
+    19 send over 10⁻³ of an LED's light through or off the eyepiece or the hot mirror first
+    (``compile.element_light_shares``), which the fast estimator refuses for a converging
+    lens; 2 are free. The frames themselves would render and track (``evaluate-tracking``
+    does, through elements): a placement is judged that way, one at a time."""
     if sc.elements:
         names = ", ".join(
             f"elements.{k}" + (f" ({el.name})" if el.name else "")
@@ -253,8 +262,12 @@ def _refuse_elements(sc, command: str) -> None:
         )
         _fail(
             f"{command} places LEDs by the paper's generator, whose eye plane is lit in free "
-            f"space, and the scene has {names}, which it would ignore: take them out "
-            "(--set elements=[]), or judge the scene with `eyelume evaluate-tracking`"
+            f"space, and the scene has {names}, which it would ignore; and its grid of ring "
+            "placements (distance 20-70 mm) puts LEDs behind or beside such elements (on "
+            "paper2005-integrated 25 of optimize-tracking's 27 placements are inside the "
+            "camera's body or light the eye through the eyepiece): take them out "
+            "(--set elements=[]), or judge one placement at a time with "
+            "`eyelume evaluate-tracking --set leds.distance_mm=...`"
         )
 
 
