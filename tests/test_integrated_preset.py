@@ -169,3 +169,20 @@ def test_tracking_frames_find_every_glint_at_its_truth(gaze):
         assert math.dist(g.centre_px, truth[g.led]) < 1.0, (g.led, g.centre_px, truth[g.led])
     pixels = scene.sensor.cols * scene.sensor.rows
     assert frame.saturated_share * pixels <= sum(g.area_px for g in det.glints)
+
+
+def test_tracking_millimetres_see_through_the_eyepiece(integrated):
+    """The tracking summary's millimetre figures (pupil error) take the eye plane's mm per
+    pixel: through the eyepiece and the fold, the paraxial calculation's total magnification
+    (eyepiece m_e × camera v / D), not the pinhole camera's own (2.46 × too small a scale);
+    without elements the pinhole's, unchanged."""
+    from eyelume.analysis.tracking.evaluate import picture_mm_per_px, pinhole_camera
+
+    scene, cs = integrated
+    m_e, _, d = _paraxial(scene)
+    f, s = scene.camera.ideal.efl_mm, scene.camera.ideal.focus_distance_mm
+    v = 1.0 / (1.0 / f - 1.0 / s)
+    pitch = cs.picture.width_mm / cs.picture.cols
+    assert picture_mm_per_px(scene) == pytest.approx(pitch / (m_e * v / d), rel=1e-4)
+    paper = eyelume.load_scene("paper2005")
+    assert picture_mm_per_px(paper) == pinhole_camera(paper).scale_mm

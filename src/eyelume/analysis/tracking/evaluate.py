@@ -54,6 +54,7 @@ __all__ = [
     "pinhole_camera",
     "led_picture_azimuths",
     "led_picture_pattern",
+    "picture_mm_per_px",
     "tracking_score",
 ]
 
@@ -122,6 +123,36 @@ def pinhole_camera(scene: Scene) -> PinholeCamera:
         magnification=fo.magnification,
         frame=None if cs.frame.is_identity else cs.frame,
     )
+
+
+def picture_mm_per_px(scene: Scene, camera: PinholeCamera | None = None) -> float:
+    """Millimetres of the eye plane (z = 0, world) per picture pixel, the scale of the
+    tracking summary's millimetre figures: the pinhole camera's on the plane in focus
+    (:func:`pinhole_camera`, ``scale_mm``); with optical elements between the eye and the
+    camera (an eyepiece magnifies, a fold mirror folds), the pinhole sees none of them, so the
+    scale is taken from real chief rays instead — those of the sensor points ±ε along x and
+    along y, past the elements (:func:`eyelume.analysis.truth._chief_ray`), met with the eye
+    plane: the mean of the two spans over 2ε, times the sensor's millimetres per pixel."""
+    if not scene.elements:
+        return (camera or pinhole_camera(scene)).scale_mm
+    from eyelume.analysis.truth import _chief_ray
+    from eyelume.compile import compile_scene
+
+    cs = compile_scene(scene)
+    eps = 0.005  # mm on the sensor: paraxial, ~0.4 px of paper2005-integrated
+    spans = []
+    for axis in (0, 1):
+        hits = []
+        for sign in (-1.0, 1.0):
+            xs = np.zeros(2)
+            xs[axis] = sign * eps
+            ray = _chief_ray(cs, cs.camera, *xs)
+            if ray is None:
+                return (camera or pinhole_camera(scene)).scale_mm
+            p, d = cs.frame.world_point(ray[0]), cs.frame.world_vector(ray[1])
+            hits.append(p - p[2] / d[2] * d)
+        spans.append(float(np.linalg.norm(hits[1] - hits[0])) / (2 * eps))
+    return float(np.mean(spans)) * cs.picture.width_mm / cs.picture.cols
 
 
 def led_picture_azimuths(cs) -> list[float]:
@@ -350,8 +381,7 @@ def analyse_frames(
             f.geometric = (-f.geometric[0], f.geometric[1])
         if f.geometric is not None and kappa is not None:
             f.geometric = (f.geometric[0] + kappa[0], f.geometric[1] + kappa[1])
-    mm_per_px = camera.scale_mm  # mm per pixel on the plane in focus
-    report = TrackingReport(frames, calibration, mm_per_px)
+    report = TrackingReport(frames, calibration, picture_mm_per_px(scene, camera))
     report.summary = summarise(report, pccr_calibrated=pccr is not None)
     report.summary["geometric_kappa_deg"] = None if kappa is None else list(kappa)
     report.summary["safety"] = eye_safety(scene)
