@@ -477,9 +477,13 @@ def _fit_points(pts: np.ndarray, diam: float) -> Ellipse | None:
     are fewer than 5, it is degenerate, or it is larger than 5 × ``diam``."""
     if len(pts) < 5:
         return None
-    e = Ellipse.from_box(cv2.fitEllipse(pts))
-    ok = all(map(math.isfinite, (e.cx, e.cy, e.a, e.b))) and 0 < min(e.a, e.b)
-    return e if ok and max(e.a, e.b) < 5.0 * diam else None
+    # Ellipse.from_box's numbers, checked before the Ellipse is built.
+    (cx, cy), (w, h), ang = cv2.fitEllipse(pts)
+    cx, cy, a, b = float(cx), float(cy), 0.5 * float(w), 0.5 * float(h)
+    isfinite = math.isfinite
+    if not (isfinite(cx) and isfinite(cy) and isfinite(a) and isfinite(b)) or not 0 < min(a, b):
+        return None
+    return Ellipse(cx, cy, a, b, math.radians(ang)) if max(a, b) < 5.0 * diam else None
 
 
 def _sampson_many(fits: list[Ellipse], x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -502,22 +506,26 @@ def _best_run(x, y, e: Ellipse, d: np.ndarray, diam: float, params):
     its distances and σ, the smallest spread of a run about its own fit. (The runs' distances
     and spreads are taken for all of them at once.)"""
     n = len(x)
-    fits, runs = [], []
+    fits, runs = [], []  # runs: (start, length) of each fit's run
     pts = np.column_stack([x, y]).astype(np.float32)
+    # The outline twice over: a run of m ≤ n points from any start is one slice of it (the
+    # same points, in the same order, as indexing the outline by (start + arange(m)) % n).
+    pts2 = np.concatenate((pts, pts))
     for frac in (0.5, 0.3):
         m = max(params.min_edge_points, int(frac * n))
+        ar = None if m <= n else np.arange(m)
         for s0 in range(0, n, max(1, n // 12)):
-            idx = (s0 + np.arange(m)) % n
-            h = _fit_points(pts[idx], diam)
+            h = _fit_points(pts2[s0 : s0 + m] if ar is None else pts[(s0 + ar) % n], diam)
             if h is not None:
                 fits.append(h)
-                runs.append(idx)
+                runs.append((s0, m))
     sigmas = [1.4826 * median(d)]
     dist = np.abs(_sampson_many(fits, x, y)) if fits else np.zeros((0, n))
     spread = np.zeros(len(fits))
-    for m in sorted({len(r) for r in runs}):  # the runs of one length together
-        rows = [i for i, r in enumerate(runs) if len(r) == m]
-        own = np.take_along_axis(dist[rows], np.stack([runs[i] for i in rows]), axis=1)
+    for m in sorted({r[1] for r in runs}):  # the runs of one length together
+        rows = [i for i, r in enumerate(runs) if r[1] == m]
+        starts = np.array([runs[i][0] for i in rows])
+        own = np.take_along_axis(dist[rows], (starts[:, None] + np.arange(m)) % n, axis=1)
         spread[rows] = 1.4826 * _row_medians(own)
     sigma = min(sigmas + spread.tolist())
     tol = max(params.inlier_tol_px, 3.0 * sigma, params.inlier_tol_frac * diam)
