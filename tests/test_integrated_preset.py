@@ -186,3 +186,32 @@ def test_tracking_millimetres_see_through_the_eyepiece(integrated):
     assert picture_mm_per_px(scene) == pytest.approx(pitch / (m_e * v / d), rel=1e-4)
     paper = eyelume.load_scene("paper2005")
     assert picture_mm_per_px(paper) == pinhole_camera(paper).scale_mm
+
+
+def test_no_geometric_gaze_through_elements(monkeypatch):
+    """The geometric gaze model's pinhole camera looks straight at the eye: through the
+    eyepiece and fold its answers were 108° off on average (not an approximation, a wrong
+    answer). An element scene's summary has no geometric figure and says why; a scene without
+    elements keeps the model."""
+    import warnings
+
+    from eyelume.analysis.tracking import evaluate as ev
+
+    built = []
+    real = ev.GeometricGaze
+
+    def spy(*a, **k):
+        built.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(ev, "GeometricGaze", spy)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # the means of no frames
+        rep = ev.analyse_frames(
+            eyelume.load_scene("paper2005-integrated"), np.zeros((4, 3)), [], []
+        )
+        assert not built
+        g = rep.summary["gaze_geometric"]
+        assert g["not_applicable"] == ev.GEOMETRIC_NOT_THROUGH_ELEMENTS and g["frames"] == 0
+        rep = ev.analyse_frames(eyelume.load_scene("paper2005"), np.zeros((4, 3)), [], [])
+        assert built and "not_applicable" not in rep.summary["gaze_geometric"]

@@ -1199,6 +1199,8 @@ def evaluate_tracking_cmd(
     why = failure_reason(s)
 
     def deg(stats: dict) -> str:
+        if stats.get("not_applicable"):
+            return "none (no model through the optical elements)"
         return f"{stats['mean_deg']:.3g}° mean" if stats.get("mean_deg") is not None else "none"
 
     err.print(

@@ -346,6 +346,13 @@ def kappa_offset(
     return (0.0 - h, 0.0 - v)
 
 
+#: Why an element scene's summary has no geometric gaze (``gaze_geometric.not_applicable``).
+GEOMETRIC_NOT_THROUGH_ELEMENTS = (
+    "the geometric model's pinhole camera does not see through the scene's optical elements "
+    "(eyepiece, mirror, glasses): use gaze_pccr"
+)
+
+
 def analyse_frames(
     scene: Scene, leds_mm: np.ndarray, frames: list[Frame], calibration: list[Frame]
 ) -> TrackingReport:
@@ -368,13 +375,16 @@ def analyse_frames(
             np.array([f.pg_vector for f in usable]), np.array([f.gaze for f in usable])
         )
     camera = pinhole_camera(scene)
-    geometric = GeometricGaze(camera, leds_mm)
+    # the geometric model's camera is a pinhole looking straight at the eye: through optical
+    # elements (an eyepiece and fold, glasses) its glints' rays are not the camera's, and its
+    # answer would be wrong, not approximate (108° mean on paper2005-integrated): none then
+    geometric = None if scene.elements else GeometricGaze(camera, leds_mm)
     left = scene.eye_pose.which == "left"
-    kappa = kappa_offset(geometric, calibration, len(leds_mm), left)
+    kappa = None if geometric is None else kappa_offset(geometric, calibration, len(leds_mm), left)
     for f in frames:
         if pccr is not None and f.pg_vector is not None:
             f.pccr = tuple(float(x) for x in pccr.predict(np.array([f.pg_vector]))[0])
-        f.geometric = _geometric(geometric, f, len(leds_mm))
+        f.geometric = None if geometric is None else _geometric(geometric, f, len(leds_mm))
         if f.geometric is not None and left:
             # the model's angles are the world's (h toward +x); a left eye's scene gaze is
             # anatomical (h toward the nose, world −x): mirror to compare
@@ -384,6 +394,8 @@ def analyse_frames(
     report = TrackingReport(frames, calibration, picture_mm_per_px(scene, camera))
     report.summary = summarise(report, pccr_calibrated=pccr is not None)
     report.summary["geometric_kappa_deg"] = None if kappa is None else list(kappa)
+    if geometric is None:
+        report.summary["gaze_geometric"]["not_applicable"] = GEOMETRIC_NOT_THROUGH_ELEMENTS
     report.summary["safety"] = eye_safety(scene)
     return report
 
