@@ -214,3 +214,76 @@ def test_study_and_dataset_share_their_executor_options():
         return {k: (params[k].opts, params[k].default, params[k].help) for k in shared}
 
     assert options("study") == options("dataset")
+
+
+def test_a_file_that_is_not_text_is_refused_naming_the_byte(tmp_path):
+    """A fresh user's file with bytes 0x81 0x90 (neither UTF-8 nor Windows-1252) was read with
+    U+FFFD in their place and the dataset started."""
+    p = write(tmp_path)
+    p.write_bytes(b'name = "x\x81\x90"\n' + p.read_bytes().split(b"\n", 2)[2])
+    out = tmp_path / "out"
+    res = runner.invoke(app, ["dataset", str(p), "--out", str(out)])
+    assert res.exit_code == 2, res.output
+    lines = [x for x in res.output.splitlines() if x.strip()]
+    assert len(lines) == 1 and "ds.toml" in lines[0] and "byte 0x81" in lines[0], res.output
+    assert not out.exists()
+    p.write_bytes('name = "café"\n'.encode("cp1252") + p.read_bytes().split(b"\n", 1)[1])
+    from eyelume.optimize.dataset import load_dataset
+
+    assert load_dataset(p).name == "café"  # Windows-1252 text is still read
+
+
+def test_resume_with_fewer_pictures_is_refused(tmp_path, monkeypatch):
+    """Lowering `pictures` on --resume rewrote labels.jsonl and dataset.json for the first
+    pictures only, the others' files left unlabelled: refused in one line now."""
+    from eyelume.optimize import dataset as D
+
+    p = write(tmp_path, pictures=4)
+    out = tmp_path / "out"
+    out.mkdir()
+    ds = D.load_dataset(p)
+    D._prepare(ds, D.bases(ds), out, resume=False)
+    fewer = tmp_path / "fewer.toml"
+    fewer.write_text(p.read_text(encoding="utf-8").replace("pictures = 4", "pictures = 2"), "utf-8")
+    monkeypatch.setattr("eyelume.optimize.runner.run_tasks", None)  # nothing may run
+    before = sorted(x.name for x in out.iterdir())
+    res = runner.invoke(app, ["dataset", str(fewer), "--out", str(out), "--resume"])
+    assert res.exit_code == 2, res.output
+    lines = [x for x in res.output.splitlines() if x.strip()]
+    assert len(lines) == 1 and "pictures = 4" in lines[0] and "pictures = 2" in lines[0]
+    assert sorted(x.name for x in out.iterdir()) == before
+    more = tmp_path / "more.toml"
+    more.write_text(p.read_text(encoding="utf-8").replace("pictures = 4", "pictures = 6"), "utf-8")
+    D.check_out(D.load_dataset(more), out, resume=True)  # adding pictures stays allowed
+
+
+def test_ctrl_c_during_the_first_compilation_exits_130_in_one_line(monkeypatch):
+    """Numba turned a Ctrl-C inside an LLVM callback into RuntimeError('no compiled object
+    yet'): a 344-line traceback and exit 1. An error without a signal still propagates."""
+    import os
+    import signal
+
+    import typer
+
+    import eyelume.cli as cli
+
+    def compile_interrupted():
+        os.kill(os.getpid(), signal.SIGINT)  # handled at once, in the main thread
+        raise AssertionError("not reached")
+
+    def numba_swallowed():
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+        except KeyboardInterrupt:
+            raise RuntimeError("no compiled object yet for <Library '_camera_branch'>") from None
+
+    for fn in (compile_interrupted, numba_swallowed):
+        with pytest.raises(typer.Exit) as exc:
+            cli._interruptible_compile(fn)
+        assert exc.value.exit_code == 130
+
+    def broken():
+        raise RuntimeError("a real failure")
+
+    with pytest.raises(RuntimeError, match="a real failure"):
+        cli._interruptible_compile(broken)

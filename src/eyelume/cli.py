@@ -452,7 +452,23 @@ def _warm_up(cs) -> float:
     check_sensor_spectra(cs.scene)  # a bad QE table: one line before the long compilation
     if kernels_cached() is False:
         err.print("compiling kernels (first run only; about a minute)…")
-    return warm_up(cs)
+    return _interruptible_compile(warm_up, cs)
+
+
+def _interruptible_compile(fn, *args):
+    """``fn(*args)`` (a kernel warm-up); Ctrl-C or SIGTERM during it exits 130 / 143 in one
+    line, also when Numba turned the interrupt inside an LLVM callback into another error
+    (a fresh user's Ctrl-C during the first compilation was a 344-line traceback, exit 1)."""
+    from eyelume.estimators.interrupt import signal_seen
+
+    with signal_seen() as flag:
+        try:
+            return fn(*args)
+        except (KeyboardInterrupt, Exception):
+            if not flag.requested:
+                raise
+    err.print("interrupted while compiling the kernels: nothing was written")
+    _exit_interrupted()
 
 
 @app.command()

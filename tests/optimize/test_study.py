@@ -109,7 +109,7 @@ def test_same_results_with_one_or_two_workers(tmp_path):
 def test_a_busy_folder_is_refused(tmp_path):
     holder = ResultStore(tmp_path / "busy")
     try:
-        with pytest.raises(StoreBusy, match="another study"):
+        with pytest.raises(StoreBusy, match=r"another eyelume run \(study or dataset\)"):
             ResultStore(tmp_path / "busy")
     finally:
         holder.close()

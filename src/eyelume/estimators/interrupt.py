@@ -80,6 +80,31 @@ def interrupt_between_batches():
             signal.signal(s, h)
 
 
+@contextmanager
+def signal_seen():
+    """SIGINT and SIGTERM raise KeyboardInterrupt as usual and are recorded on the yielded
+    flag (``requested``, ``signum``; :func:`last_signal` too), so that code whose library turns
+    a KeyboardInterrupt into another error (Numba's compiler: "no compiled object yet" after
+    Ctrl-C inside an LLVM callback) can tell an interrupted call from a failed one."""
+    flag = _StopFlag()
+    if threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+
+    def handler(signum, frame):
+        _count[0] += 1
+        flag.requested = True
+        flag.signum = _last[0] = signum
+        raise KeyboardInterrupt
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield flag
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
 def sigterm_as_interrupt() -> None:
     """Make SIGTERM act as Ctrl-C in this process (KeyboardInterrupt, recorded by
     :func:`last_signal`), so a terminated command cleans up as an interrupted one does: it

@@ -720,13 +720,23 @@ def _refuse_another(ds: Dataset, b: _Bases, out: Path) -> None:
             "use a new --out",
             file=out,
         )
+    before = ((old or {}).get("dataset") or {}).get("pictures")
+    if isinstance(before, int) and ds.pictures < before:
+        # the store keeps the finished pictures, but labels.jsonl and dataset.json would be
+        # rewritten for the first ds.pictures only, the files beyond them left unlabelled
+        raise StoreError(
+            f"was made for pictures = {before}; pictures = {ds.pictures} would leave "
+            f"{before - ds.pictures} of them unlabelled (--resume only adds pictures): "
+            "use a new --out",
+            file=out,
+        )
 
 
 def check_out(ds: Dataset, out: str | Path, resume: bool, b: _Bases | None = None) -> None:
     """The checks of ``out`` that need no picture, made before any render (the command line
     makes them before its opening line): without ``resume`` a folder that is not empty
-    (:func:`refuse_not_empty`); with it, a folder of another dataset file or scene. StoreError
-    in one line."""
+    (:func:`refuse_not_empty`); with it, a folder of another dataset file or scene, or of the
+    same one made for more pictures than ``ds.pictures``. StoreError in one line."""
     out = Path(out)
     refuse_not_empty(out, resume)
     _refuse_another(ds, b or bases(ds), out)

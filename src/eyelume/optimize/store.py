@@ -241,8 +241,8 @@ class ResultStore:
             except BlockingIOError:
                 f.close()
                 raise StoreBusy(
-                    f"{self.folder}: another study is writing here; wait for it or use another "
-                    "--out"
+                    f"{self.folder}: another eyelume run (study or dataset) is writing here; "
+                    "wait for it or use another --out"
                 ) from None
             try:
                 if os.stat(path).st_ino == os.fstat(f.fileno()).st_ino:

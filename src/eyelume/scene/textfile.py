@@ -24,8 +24,10 @@ def decode_text(raw: bytes, path: Path, error: type[Exception]) -> str:
     """Text of a data file whose encoding is not declared: UTF-16 with a byte-order mark,
     UTF-16 LE or BE without one (mostly ASCII text: the NUL bytes of one parity give it away),
     UTF-8 (with or without a BOM), else Windows-1252 (a spreadsheet's or a vendor's legacy
-    text; the five bytes it leaves undefined become U+FFFD). ``error`` (an exception class
-    taking one message) is raised, naming the file, for UTF-16 that does not decode.
+    text). ``error`` (an exception class taking one message) is raised, naming the file, for
+    UTF-16 that does not decode and for bytes that are neither UTF-8 nor Windows-1252 (the five
+    bytes 0x81, 0x8D, 0x8F, 0x90, 0x9D that Windows-1252 leaves undefined: named, with their
+    offset, instead of read as U+FFFD).
 
     Examples
     --------
@@ -55,8 +57,17 @@ def decode_text(raw: bytes, path: Path, error: type[Exception]) -> str:
                     raise error(f"{path}: looks like {codec.upper()} but {exc.reason}") from None
     try:
         return raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        return raw.decode("cp1252", errors="replace")
+    except UnicodeDecodeError as exc8:
+        try:
+            return raw.decode("cp1252")
+        except UnicodeDecodeError as exc:
+            # 0x81, 0x8D, 0x8F, 0x90, 0x9D: neither UTF-8 nor Windows-1252, so not text this
+            # reads: refused rather than read with its characters replaced
+            byte = raw[exc.start]
+            raise error(
+                f"{path}: not text in UTF-8, UTF-16 or Windows-1252 (byte 0x{byte:02x} at "
+                f"offset {exc.start}; as UTF-8: {exc8.reason} at offset {exc8.start})"
+            ) from None
 
 
 def read_text_file(path: str | Path, error: type[Exception]) -> str:
