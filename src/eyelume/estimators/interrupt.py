@@ -58,8 +58,11 @@ class _StopFlag:
 
 
 @contextmanager
-def interrupt_between_batches():
-    """Turn the first SIGINT or SIGTERM into a request to stop after the current batch."""
+def _flagged(raise_first: bool):
+    """SIGINT and SIGTERM recorded on the yielded :class:`_StopFlag` (and :func:`last_signal`)
+    while the block runs, the previous handlers restored after it; KeyboardInterrupt on the
+    first signal with ``raise_first``, else on the second only. Off the main thread (where no
+    handler can be set) the flag is yielded and never set."""
     flag = _StopFlag()
     if threading.current_thread() is not threading.main_thread():
         yield flag
@@ -67,10 +70,12 @@ def interrupt_between_batches():
 
     def handler(signum, frame):
         _count[0] += 1
-        if flag.requested:
+        if flag.requested and not raise_first:
             raise KeyboardInterrupt
         flag.requested = True
         flag.signum = _last[0] = signum
+        if raise_first:
+            raise KeyboardInterrupt
 
     previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
@@ -80,29 +85,18 @@ def interrupt_between_batches():
             signal.signal(s, h)
 
 
-@contextmanager
+def interrupt_between_batches():
+    """Turn the first SIGINT or SIGTERM into a request to stop after the current batch (a
+    context manager yielding the flag; the second signal raises KeyboardInterrupt)."""
+    return _flagged(raise_first=False)
+
+
 def signal_seen():
     """SIGINT and SIGTERM raise KeyboardInterrupt as usual and are recorded on the yielded
     flag (``requested``, ``signum``; :func:`last_signal` too), so that code whose library turns
     a KeyboardInterrupt into another error (Numba's compiler: "no compiled object yet" after
     Ctrl-C inside an LLVM callback) can tell an interrupted call from a failed one."""
-    flag = _StopFlag()
-    if threading.current_thread() is not threading.main_thread():
-        yield flag
-        return
-
-    def handler(signum, frame):
-        _count[0] += 1
-        flag.requested = True
-        flag.signum = _last[0] = signum
-        raise KeyboardInterrupt
-
-    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        yield flag
-    finally:
-        for s, h in previous.items():
-            signal.signal(s, h)
+    return _flagged(raise_first=True)
 
 
 def sigterm_as_interrupt() -> None:
