@@ -300,3 +300,19 @@ def test_generator_commands_refuse_the_integrated_preset_with_the_reason(tmp_pat
     assert "lit in free space" in line and "behind or beside" in line, line
     assert "eyelume evaluate-tracking --set leds.distance_mm" in line, line
     assert not (tmp_path / "o").exists()
+
+
+def test_optimize_tracking_refuses_a_camera_that_sees_no_eye(tmp_path):
+    """paper2005-integrated without its elements (the element refusal's own hint) has a camera
+    looking at nothing: optimize-tracking scored 29 placements inf° and named one
+    'tracking-optimal', exit 0, where render and evaluate-tracking refuse the scene."""
+    out = tmp_path / "o"
+    res = runner.invoke(
+        app,
+        ["optimize-tracking", "--scene", "paper2005-integrated", "--set", "elements=[]",
+         "--out", str(out)],
+    )  # fmt: skip
+    assert res.exit_code == 2, res.output
+    line = _one_line(res)
+    assert "camera: sees no eye" in line, line
+    assert not out.exists()

@@ -1402,6 +1402,7 @@ def optimize_tracking_cmd(
     """Choose the LEDs for tracking itself: 27 placements scored by the gaze error of the whole
     pipeline over 9 gazes, against the generator's δ-optimal placement and the paper's."""
     from eyelume.analysis.targets import gaussian_target
+    from eyelume.compile import compile_scene
     from eyelume.estimators.interrupt import PartialRun
     from eyelume.optimize.sweep import sweep_leds
     from eyelume.optimize.tracking import sweep_tracking
@@ -1413,6 +1414,7 @@ def optimize_tracking_cmd(
     if not 0 <= delta < 1:
         _fail(f"--delta {delta}: must be in [0, 1)")
     _refuse_elements(sc, "optimize-tracking")
+    compile_scene(sc)  # a camera that sees no eye: one line, not 29 placements scored inf
     _check_out(out)
     b = sweep_leds(sc, gaussian_target(delta, sc.eye_plane)).best
     dopt = (b["height_mm"], b["distance_mm"], b["pitch_deg"])
