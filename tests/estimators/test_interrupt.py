@@ -27,13 +27,18 @@ def test_ctrl_c_writes_the_finished_batches(tmp_path):
         str(out),
     ]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    first = proc.stderr.readline()  # printed once the scene is compiled, as tracing starts
-    if first.startswith("compiling kernels"):  # a cold Numba cache says so first
-        first = proc.stderr.readline()
-    assert "tracing" in first, first
-    time.sleep(2.0)  # the first batch may still compile the kernel: the stop waits for it
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=300)
+    try:
+        first = proc.stderr.readline()  # printed once the scene is compiled, as tracing starts
+        if first.startswith("compiling kernels"):  # a cold Numba cache says so first
+            first = proc.stderr.readline()
+        assert "tracing" in first, first
+        time.sleep(2.0)  # the first batch may still compile the kernel: the stop waits for it
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=300)
+    finally:  # a failed check must not leave a 10⁹-ray render running
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
     assert proc.returncode == 130, err
     summary = json.loads((out / "summary.json").read_text())
     assert summary["interrupted"] is True
