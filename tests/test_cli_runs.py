@@ -249,8 +249,8 @@ def test_contradictory_options_are_refused_before_any_work(tmp_path, monkeypatch
 @pytest.mark.parametrize(
     ("vary", "words"),
     [
-        ("grid = [20.0, nan, 3]", ["vary.0.grid.1", "nan"]),
-        ("random = [20.0, inf]\nsamples = 3", ["vary.0.random.1", "inf"]),
+        ("grid = [20.0, nan, 3]", ["vary[0].grid[1]", "nan"]),
+        ("random = [20.0, inf]\nsamples = 3", ["vary[0].random[1]", "inf"]),
         ("values = [20.0, -5]", ["vary[0].values (leds.height_mm)", "-5"]),
         ("grid = [-10.0, 30.0, 5]", ["vary[0].grid (leds.height_mm)", "-10.0"]),
         ('values = [20.0, "tall"]', ["vary[0].values (leds.height_mm)", "'tall'"]),
