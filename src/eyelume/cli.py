@@ -424,7 +424,7 @@ def _warm_up_forward(cs) -> float | None:
     kernel = getattr(forward, "_trace_batch", None)
     if kernel is not None and kernels_cached((kernel,)) is False:
         err.print("compiling kernels (first run only; about a minute)…")
-    return warm_up_forward(cs)
+    return _interruptible_compile(warm_up_forward, cs)
 
 
 def _detect_kernels_cached() -> bool | None:
