@@ -167,6 +167,8 @@ def _ring_scaled(box, step, ell, radii):
     x0, x1, y0, y1 = box
     cx, cy, c, sn, a, b = ell
     r0, r1 = radii
+    lo2, lo2b = r0 * r0 * (1.0 - 1e-9), r0 * r0 * (1.0 + 1e-9)
+    hi2, hi2b = r1 * r1 * (1.0 + 1e-9), r1 * r1 * (1.0 - 1e-9)
     ny = max(0, (y1 - y0 + step - 1) // step)
     nx = max(0, (x1 - x0 + step - 1) // step)
     uo = np.empty((ny, nx))
@@ -178,10 +180,18 @@ def _ring_scaled(box, step, ell, radii):
             dx = float(x0 + k * step) - cx
             u = (dx * c + dy * sn) / a
             v = (-dx * sn + dy * c) / b
-            rho = math.hypot(u, v)
             uo[r, k] = u
             vo[r, k] = v
-            ring[r, k] = rho > r0 and rho < r1
+            # hypot (slow) only near the radii: u² + v² decides the rest (its rounding is
+            # ~1e-16 relative, far inside the 1e-9 margins), the same answers.
+            q = u * u + v * v
+            if q < lo2 or q > hi2:
+                ring[r, k] = False
+            elif q > lo2b and q < hi2b:
+                ring[r, k] = True
+            else:
+                rho = math.hypot(u, v)
+                ring[r, k] = rho > r0 and rho < r1
     return uo, vo, ring
 
 
@@ -410,13 +420,16 @@ def _profile_maps(x, y, nx, ny, t, offs):
     n, m, k = x.size, t.size, offs.size
     mx = np.empty((k * n, m), np.float32)
     my = np.empty((k * n, m), np.float32)
-    for i in range(n):
-        for j in range(m):
-            px = x[i] + nx[i] * t[j]
-            py = y[i] + ny[i] * t[j]
-            for o in range(k):
-                mx[o * n + i, j] = px - offs[o] * ny[i]
-                my[o * n + i, j] = py + offs[o] * nx[i]
+    # Row by row (contiguous writes): the same float64 sums, each rounded once to float32.
+    for o in range(k):
+        off = offs[o]
+        for i in range(n):
+            r = o * n + i
+            xi, yi, nxi, nyi = x[i], y[i], nx[i], ny[i]
+            ox, oy = off * nyi, off * nxi
+            for j in range(m):
+                mx[r, j] = (xi + nxi * t[j]) - ox
+                my[r, j] = (yi + nyi * t[j]) + oy
     return mx, my
 
 
@@ -432,18 +445,15 @@ def _nearest_crossings(s32, n, t, outer_from, pupil_level, fraction):
     m = t.size
     k = s32.shape[0] // n
     v = np.empty((n, m))
-    for i in range(n):
+    for i in range(n):  # row by row: the same sums, in the same order (o = 0, 1, …)
         for j in range(m):
-            acc = np.float64(s32[i, j])
-            for o in range(1, k):
-                acc += np.float64(s32[o * n + i, j])
-            v[i, j] = acc / k
-    cnt = m - outer_from
-    h = cnt // 2
-    outer = np.empty(n)
-    for i in range(n):
-        p = np.sort(v[i, outer_from:])
-        outer[i] = p[h] if cnt % 2 else 0.5 * (p[h - 1] + p[h])
+            v[i, j] = np.float64(s32[i, j])
+        for o in range(1, k):
+            for j in range(m):
+                v[i, j] += np.float64(s32[o * n + i, j])
+        for j in range(m):
+            v[i, j] /= k
+    outer = _row_medians_from(v, outer_from)
     p = np.sort(outer)
     hn = n // 2
     cap = p[hn] if n % 2 else 0.5 * (p[hn - 1] + p[hn])
@@ -463,6 +473,28 @@ def _nearest_crossings(s32, n, t, outer_from, pupil_level, fraction):
                     tj[i] = tc
                     ok[i] = True
     return ok, tj
+
+
+@njit(cache=True, nogil=True)
+def _row_medians_from(v, start):
+    """The median of each row of ``v`` (2-D float64, finite) over its columns ``start`` on:
+    each row's values insertion-sorted in one buffer (a dozen or two), the same values as
+    ``np.sort`` gives, without an array a row."""
+    n, m = v.shape
+    cnt = m - start
+    h = cnt // 2
+    out = np.empty(n)
+    buf = np.empty(max(cnt, 1))
+    for i in range(n):
+        for j in range(cnt):
+            x = v[i, start + j]
+            q = j
+            while q > 0 and buf[q - 1] > x:
+                buf[q] = buf[q - 1]
+                q -= 1
+            buf[q] = x
+        out[i] = buf[h] if cnt % 2 else 0.5 * (buf[h - 1] + buf[h])
+    return out
 
 
 def _fit(x: np.ndarray, y: np.ndarray, diam: float) -> Ellipse | None:
