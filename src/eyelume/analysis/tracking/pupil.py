@@ -31,7 +31,10 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
 4. **Full-resolution blob** (:func:`full_res_blob`): the picture (σ 1 px Gaussian) thresholded
    at the chosen level around the blob; glints touching it joined; a closing with an
    elliptical element of ≈ 0.15 × its diameter (odd, ≥ 3) fills what is left of a glint's
-   notch; refused when not compact (solidity < 0.8).
+   notch; refused when not compact (solidity < 0.8) — unless, with the glints' pixels left
+   out (:func:`_glint_forgiven`: the core dark without the glints' fill, and under a glint its
+   convex hull), it is one piece of solidity ≥ 0.9: a glint just outside a small pupil's edge,
+   filled with the pupil's dark, grows a bump on its blob.
 5. **Contrast and edge** (:func:`blob_contrast`, :func:`edge_points`, :func:`_refine_smoothed`):
    the pupil's median against its own surround (a ring 0.05–0.1 × its diameter outside), at
    least 5 σ of the pixel noise there (:func:`_local_noise`: shot noise grows with the signal,
@@ -1108,10 +1111,13 @@ class Blob:
     level: float
 
 
-def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, params):
+def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, params, img=None):
     """Step 4 (module doc): the candidate's blob at full resolution — the smoothed picture (σ 1
     px) thresholded at its level in a window around it, the component under its seed, glints
-    touching it joined, closed — or a refusal (not compact)."""
+    touching it joined, closed — or a refusal (not compact). When it is not compact and glints
+    are near, and ``img`` (the picture ``wp`` was made from) is given, it is judged again with
+    the glints' pixels left out (:func:`_glint_forgiven`), then held to
+    ``pupil_min_solidity_glints``."""
     rows, cols = wp.u8.shape
     bx, by, bw, bh = (v * f for v in cand.bbox)
     diam0 = math.sqrt(4.0 * cand.area * f * f / math.pi)
@@ -1156,13 +1162,18 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
                 cv2.bitwise_or(comp[box], cv2.LUT(glab.astype(np.uint8), lut), dst=comp[box])
             else:
                 comp[box][joined[glab]] = 255
-    closed = _closing(comp, k)
-    contours, _ = cv2.findContours(closed, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    contour = max(contours, key=cv2.contourArea)
-    c_area = cv2.contourArea(contour)
-    hull_area = cv2.contourArea(cv2.convexHull(contour))
+    closed, contour, solidity = _closed_solidity(comp, k)
     area = float(cv2.countNonZero(closed))
-    solidity = c_area / hull_area if hull_area > 0 else 0.0
+    if solidity < params.pupil_min_solidity and gx1 > gx0 and img is not None:
+        # Glints beside the pupil change its blob where they are (a glint a few px outside
+        # the edge is filled with the pupil's dark and grows a bump on it): judged again with
+        # the glints' pixels left out (:func:`_glint_forgiven`), by a stricter measure.
+        forgiven = _glint_forgiven(img, (x0, y0, x1, y1), raw, near_glint, wp, cand.level)
+        if forgiven is not None:
+            closed2, contour2, solidity2 = _closed_solidity(forgiven[0], k)
+            if solidity2 >= params.pupil_min_solidity_glints:
+                closed, contour, solidity, raw = closed2, contour2, solidity2, forgiven[1]
+                area = float(cv2.countNonZero(closed))
     if solidity < params.pupil_min_solidity:
         return Refusal(
             f"no pupil: the darkest blob ({int(area)} px) is not compact "
@@ -1170,6 +1181,55 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
         )
     diam = math.sqrt(4.0 * area / math.pi)
     return Blob(x0, y0, closed, raw, near_glint, contour, area, diam, cand.level)
+
+
+def _closed_solidity(comp: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """The blob ``comp`` (0/255) closed by the k × k element (:func:`_closing`), its largest
+    outer contour, and that contour's solidity (its area / its convex hull's; 0 when flat)."""
+    closed = _closing(comp, k)
+    contours, _ = cv2.findContours(closed, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    contour = max(contours, key=cv2.contourArea)
+    c_area = cv2.contourArea(contour)
+    hull_area = cv2.contourArea(cv2.convexHull(contour))
+    return closed, contour, c_area / hull_area if hull_area > 0 else 0.0
+
+
+def _glint_forgiven(img, window, raw, near_glint, wp: WorkPicture, level: float):
+    """The blob with the glints' pixels left out: (blob, raw) on the window, or None.
+
+    The working picture fills each glint with the darkest value within its reach
+    (:func:`_fill_glints`), so that a glint inside the pupil punches no hole in its blob; but a
+    glint a few px outside the edge is then filled with the pupil's dark too and grows a bump
+    on it (vr-offaxis at 100 × 100: 1–3 px glints 2–4 px outside a 16–20 px pupil, solidity
+    0.71–0.77). Here the glints are left out instead, as eye trackers leave glint pixels out of
+    the pupil (PuRe, ElSe, Pupil Labs' 2D detector): the core C is the pixels of ``raw`` that
+    are dark in the picture without the fill (the same 8-bit scale, smoothing and ``level``)
+    and off the grown glint mask G (``near_glint``, which the edge points and the pupil's level
+    leave out too); the blob is C ∪ (G ∩ hull(C)) — under a glint, the core's convex hull: a
+    bump is cut off, a notch a glint cut into the edge is filled (the convex deficiency under a
+    glint is forgiven). Away from the glints nothing changes: lashes, shadows and folds are
+    judged as before. ``raw`` (the pupil's level is its median) becomes C ∪ (raw ∩ G ∩ hull(C)).
+
+    None when C is empty or not one piece: a glint on a pupil's edge does not cut it in two
+    (a real close-up whose dark iris the glints' fill had joined to the pupil had a core of two
+    pieces, and its forgiven blob was answered 5 px off)."""
+    x0, y0, x1, y1 = window
+    src = img[y0:y1, x0:x1]
+    if src.dtype not in (np.uint8, np.uint16, np.int16, np.float32):
+        src = src.astype(np.float32)  # as work_picture scales it
+    alpha = 255.0 / (wp.hi - wp.lo)
+    plain = cv2.convertScaleAbs(src, alpha=alpha, beta=-wp.lo * alpha)
+    if wp.invalid is not None:
+        plain[wp.invalid[y0:y1, x0:x1]] = 255
+    smooth = cv2.GaussianBlur(plain, (5, 5), 1.0)
+    _, dark = cv2.threshold(smooth, level, 255, cv2.THRESH_BINARY_INV)
+    core = cv2.bitwise_and(cv2.bitwise_and(raw, dark), cv2.bitwise_not(near_glint))
+    if cv2.connectedComponents(core, connectivity=8)[0] != 2:
+        return None
+    hull = np.zeros_like(raw)
+    cv2.fillConvexPoly(hull, cv2.convexHull(cv2.findNonZero(core)), 255)
+    under = cv2.bitwise_and(near_glint, hull)
+    return cv2.bitwise_or(core, under), cv2.bitwise_or(core, cv2.bitwise_and(raw, under))
 
 
 def _closing(mask: np.ndarray, k: int) -> np.ndarray:
@@ -1535,7 +1595,7 @@ def _fit_candidates(img, wp, picks, f: int, bright, params, reasons: list[str]):
     """Steps 4–7 on the chosen candidates in turn (at most ``max_candidates``): the first
     fit, or None with each candidate's refusal appended to ``reasons``."""
     for cand in picks[: params.max_candidates]:
-        blob = full_res_blob(wp, cand, f, bright, params)
+        blob = full_res_blob(wp, cand, f, bright, params, img)
         if not blob:
             reasons.append(blob.reason)
             continue
