@@ -31,7 +31,9 @@ from eyelume.scene.glass import load_catalog
 
 
 def _scratch() -> F.Scratch:
-    return F.Scratch(np.empty(4), np.empty((F.ELEMENT_BRANCHES, 7)), np.zeros(1, dtype=np.int64))
+    return F.Scratch(
+        np.empty(4), np.empty((F.ELEMENT_BRANCHES, 7)), np.zeros(1, dtype=np.int64), np.empty(64)
+    )
 
 
 def test_a_camera_path_splits_at_each_element_surface_before_its_first_vertex():
@@ -57,7 +59,9 @@ def test_a_camera_path_splits_at_each_element_surface_before_its_first_vertex():
     betas = set()
     for seed in (1, 2, 3, 12345):
         scratch = _scratch()
-        out = F._camera_branch(np.uint64(seed), cs.tables, cs.camera, ray, 1.0, True, True, scratch)
+        out = F._camera_branch(
+            np.uint64(seed), cs.tables, cs.camera, ray, 1.0, True, True, scratch, -3.0
+        )
         assert out.vertex.s == lid
         assert out.vertex.beta == pytest.approx(rho * r_m * t_b * t_f, rel=1e-12)
         betas.add(out.vertex.beta)
@@ -74,7 +78,7 @@ def test_a_camera_path_splits_at_each_element_surface_before_its_first_vertex():
     for seed in range(1, 400):
         scratch = _scratch()
         out = F._camera_branch(
-            np.uint64(seed), cs.tables, cs.camera, ray, 1.0, False, True, scratch
+            np.uint64(seed), cs.tables, cs.camera, ray, 1.0, False, True, scratch, -3.0
         )
         assert scratch.count[0] == 0
         if out.vertex.s == lid:
@@ -136,7 +140,7 @@ def test_light_paths_aim_at_the_pupils_image_through_the_eyepiece_and_the_fold()
     r = into_scene(cs.camera, xs, ys, chief.qx, chief.qy)
     out = F._camera_branch(
         np.uint64(1), cs.tables, cs.camera, Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz), 1.0, True,
-        True, _scratch(),
+        True, _scratch(), -3.0,
     )  # fmt: skip
     v = out.vertex
     assert v.s == lid

@@ -323,8 +323,12 @@ def test_one_led_through_the_cornea_is_the_sum_on_average():
                 True,
                 True,
                 F.Scratch(
-                    np.empty(8), np.empty((F.ELEMENT_BRANCHES, 7)), np.zeros(1, dtype=np.int64)
+                    np.empty(8),
+                    np.empty((F.ELEMENT_BRANCHES, 7)),
+                    np.zeros(1, dtype=np.int64),
+                    np.empty(cs.sf.shape[0]),
                 ),
+                -3.0,
             )
             v = out.vertex
             if v.s != iris:

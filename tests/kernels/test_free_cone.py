@@ -108,3 +108,38 @@ def test_the_free_cone_is_wide_on_the_periorbital_skin_of_vr_offaxis(rng):
     ]
     assert len(shares) > 50
     assert np.median(shares) > 0.3
+
+
+@pytest.mark.parametrize(
+    "preset", ["vr-offaxis", "paper2005", "eyetrackvr", "glasses-frame", "paper2005-integrated"]
+)
+def test_the_search_within_reach_finds_what_the_full_search_finds(preset, rng):
+    """``nearest_hit_within`` skips, for a ray leaving a vertex at polar cosine cos θ, every
+    surface whose gap (``free_cone_gaps``) is below cos θ: the same surface and the same
+    distance as ``nearest_hit``, bit for bit, for cosine-distributed directions at the
+    vertices the camera sees (straight and by the cornea's reflection) — the rays the fast
+    estimator's continuation sends (half of them grazing, within 30° of the face), and
+    ``free_cone_gaps`` gives ``free_cone``'s value."""
+    cs = compile_scene(eyelume.load_scene(preset))
+    pixels = rng.choice(cs.picture.cols * cs.picture.rows, 120, replace=False)
+    vertices = _first_vertices(cs, pixels, False) + _first_vertices(cs, pixels, True)
+    assert len(vertices) > 80
+    gaps = np.empty(cs.sf.shape[0])
+    skipped = hits = 0
+    for s, (x, y, z), (nx, ny, nz) in vertices:
+        s0 = G.free_cone_gaps(cs.sf, cs.si, s, x, y, z, nx, ny, nz, gaps)
+        assert s0 == G.free_cone(cs.sf, cs.si, s, x, y, z, nx, ny, nz)
+        for u1, u2 in rng.uniform(size=(100, 2)):
+            u1 = u1 if u2 < 0.5 else 1.0 - 0.25 * u1  # half of them within 30° of the face
+            lx, ly, lz = (
+                math.sqrt(u1) * math.cos(6.2832 * u2),
+                math.sqrt(u1) * math.sin(6.2832 * u2),
+                math.sqrt(1.0 - u1),
+            )
+            d = about_axis(lx, ly, lz, nx, ny, nz)
+            full = G.nearest_hit(cs.sf, cs.si, x, y, z, *d)
+            within = G.nearest_hit_within(cs.sf, cs.si, x, y, z, *d, gaps, lz)
+            assert within == full, (preset, cs.surface_names[s], full, within)
+            skipped += int(np.sum(lz > gaps))
+            hits += full[0] >= 0
+    assert skipped > 0 and hits > 0

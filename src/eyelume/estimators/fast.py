@@ -151,11 +151,14 @@ class Scratch(NamedTuple):
     :func:`sampled_irradiance`, and the weaker parts split off at optical elements' surfaces
     by one camera path (:func:`_camera_branch`), followed after it: ``rays``
     (ELEMENT_BRANCHES, 7) rows of (x, y, z, dx, dy, dz, throughput), ``count`` (1,) int64 the
-    rows in use."""
+    rows in use; ``gaps`` (n_surfaces,) the first vertex's
+    :func:`~eyelume.kernels.geometry.free_cone_gaps`, by which its continuation rays' first
+    nearest-hit search skips the surfaces out of their reach."""
 
     e_led: np.ndarray
     rays: np.ndarray
     count: np.ndarray
+    gaps: np.ndarray
 
 
 class Vertex(NamedTuple):
@@ -376,7 +379,7 @@ def _glint_choice(state, f, dx, dy, dz, nx, ny, nz):
 
 
 @per_ray
-def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch):
+def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch, cos0):  # noqa: PLR0913
     """Follow one camera path along ``ray`` with throughput ``beta``.
 
     With ``split``, the first refracting interface of the eye met before any Lambertian
@@ -394,15 +397,21 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch):
     paths followed without ``split``, are chosen between by chance (R, A, T). With
     ``first_vertex`` the path stops after the NEE at its first Lambertian vertex and hands
     that vertex back for its continuation; otherwise every vertex continues by Russian
-    roulette. Returns a :class:`CameraPath`."""
+    roulette. ``cos0`` > −2: the ray leaves a vertex whose ``scratch.gaps`` are set, at polar
+    cosine ``cos0`` about its normal, and its first search skips what it cannot reach
+    (:func:`~eyelume.kernels.geometry.nearest_hit_within`: the same hit). Returns a
+    :class:`CameraPath`."""
     sf, si = scene.surfaces.sf, scene.surfaces.si
     leds = scene.leds
     x, y, z, dx, dy, dz = ray
     radiance = 0.0
     branch = Branch(Ray(0.0, 0.0, 0.0, 0.0, 0.0, 0.0), 0.0)
     has_branch = False
-    for _ in range(scene.max_events):
-        s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
+    for event in range(scene.max_events):
+        if event == 0 and cos0 > -2.0:
+            s, t = G.nearest_hit_within(sf, si, x, y, z, dx, dy, dz, scratch.gaps, cos0)
+        else:
+            s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
         if s < 0:
             break
         action = si[s, G.ACTION]
@@ -518,7 +527,7 @@ def _path_radiance(state, scene, cam, ray, beta, split, grid, scratch):
     """A camera path with its first Lambertian vertex's continuation(s) in ``grid``² strata
     (at least IRIS_GRID² on the iris); see _camera_branch. Returns (state, radiance,
     has_branch, branch)."""
-    out = _camera_branch(state, scene, cam, ray, beta, split, True, scratch)
+    out = _camera_branch(state, scene, cam, ray, beta, split, True, scratch, -3.0)
     state, radiance = out.state, out.radiance
     v = out.vertex
     if v.s >= 0:
@@ -527,7 +536,7 @@ def _path_radiance(state, scene, cam, ray, beta, split, grid, scratch):
         sf, si = scene.surfaces.sf, scene.surfaces.si
         # the directions within θ₀ of the normal meet nothing that sends light (free_cone):
         # sample only sin²θ ∈ [s0, 1] (cosine-weighted there), × its share 1 − s0
-        s0 = G.free_cone(sf, si, v.s, v.x, v.y, v.z, v.nx, v.ny, v.nz)
+        s0 = G.free_cone_gaps(sf, si, v.s, v.x, v.y, v.z, v.nx, v.ny, v.nz, scratch.gaps)
         share = 1.0 - s0
         if share <= 0.0:
             k = 0
@@ -538,9 +547,8 @@ def _path_radiance(state, scene, cam, ray, beta, split, grid, scratch):
             lx, ly, lz = cosine_hemisphere(s0 + share * (j // g + u1) / g, (j % g + u2) / g)
             ex, ey, ez = about_axis(lx, ly, lz, v.nx, v.ny, v.nz)
             b = v.beta * share / k
-            more = _camera_branch(
-                state, scene, cam, Ray(v.x, v.y, v.z, ex, ey, ez), b, False, False, scratch
-            )
+            cont = Ray(v.x, v.y, v.z, ex, ey, ez)
+            more = _camera_branch(state, scene, cam, cont, b, False, False, scratch, lz)
             state = more.state
             radiance += more.radiance
     return state, radiance, out.has_branch, out.branch
@@ -636,6 +644,7 @@ def _camera_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139
             np.empty(leds.points.shape[0]),
             np.empty((ELEMENT_BRANCHES, 7)),
             np.zeros(1, dtype=np.int64),
+            np.empty(surfaces.sf.shape[0]),
         )
         for m in range(first_set, first_set + n_sets):
             state = stream_start(pseed, m)

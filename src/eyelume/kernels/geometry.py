@@ -258,6 +258,32 @@ def nearest_hit(sf, si, x, y, z, dx, dy, dz):
 
 
 @per_ray
+def nearest_hit_within(sf, si, x, y, z, dx, dy, dz, gaps, cos_t):
+    """:func:`nearest_hit` for a ray whose direction makes polar cosine ``cos_t`` with the
+    normal n of the point it leaves, given ``gaps`` (:func:`free_cone_gaps` at that point and
+    n): surface s is skipped when cos_t > gaps[s] (the direction lies within the cone about n
+    that surely misses it), the others tested as :func:`nearest_hit` tests them — the same
+    answer, bit for bit, at the cost of one comparison for each surface out of reach (most of
+    a skin vertex's continuation rays meet nothing, ~80 % on vr-offaxis)."""
+    best_t = math.inf
+    best_s = -1
+    for s in range(sf.shape[0]):
+        if cos_t > gaps[s]:
+            continue
+        cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
+        tc = cx * dx + cy * dy + cz * dz
+        br = sf[s, BR]
+        d2 = cx * cx + cy * cy + cz * cz - tc * tc
+        if d2 > br * br or tc + br < 0.0 or tc - br > best_t:
+            continue
+        t = intersect_surface(sf, si, s, x, y, z, dx, dy, dz, best_t)
+        if t > 0.0:
+            best_t = t
+            best_s = s
+    return best_s, best_t
+
+
+@per_ray
 def occluded(sf, si, x, y, z, dx, dy, dz, t_max):
     """Whether any surface meets the ray at a distance in (T_MIN, ``t_max``): the shadow-ray
     test of next-event estimation. The same answer as ``nearest_hit``'s ``t < t_max`` (a hit
@@ -306,14 +332,27 @@ def _sphere_gap(cx, cy, cz, r, x, y, z, nx, ny, nz):
 
 
 @njit(cache=True, inline="always")
+def _sends_nothing(sf, si, s):
+    """Whether surface ``s`` ends a camera path with nothing: the imaging lens, or opaque and
+    black on both faces (ρ = 0: LED and camera bodies, the retina)."""
+    action = si[s, ACTION]
+    if action == ACT_LENS:
+        return True
+    return action == ACT_OPAQUE and sf[s, RHO_A] <= 0.0 and sf[s, RHO_B] <= 0.0
+
+
+@njit(cache=True, inline="always")
 def _surface_gap(sf, si, s, own, x, y, z, nx, ny, nz):
     """cos θ below which a direction about n at x surely misses surface ``s`` (the shapes of
     :func:`free_cone`): −2.0 when ``s`` can be skipped, 2.0 when no cone about n is safe."""
-    action = si[s, ACTION]
-    if action == ACT_LENS:
+    if _sends_nothing(sf, si, s):
         return -2.0
-    if action == ACT_OPAQUE and sf[s, RHO_A] <= 0.0 and sf[s, RHO_B] <= 0.0:
-        return -2.0
+    return _shape_gap(sf, si, s, own, x, y, z, nx, ny, nz)
+
+
+@njit(cache=True, inline="always")
+def _shape_gap(sf, si, s, own, x, y, z, nx, ny, nz):
+    """:func:`_surface_gap` for any surface, whatever it sends back."""
     shape = si[s, SHAPE]
     ox, oy, oz = sf[s, OX], sf[s, OY], sf[s, OZ]
     ax, ay, az = sf[s, R20], sf[s, R21], sf[s, R22]  # local z: plane normal, cylinder axis
@@ -379,6 +418,33 @@ def free_cone(sf, si, own, x, y, z, nx, ny, nz):
         if c > 1.0:
             return 0.0
         cmax = max(cmax, c)
+    if cmax <= 0.0:
+        return 1.0
+    return 1.0 - cmax * cmax
+
+
+@per_ray
+def free_cone_gaps(sf, si, own, x, y, z, nx, ny, nz, gaps):
+    """:func:`free_cone` (the same value), and into ``gaps`` (n_surfaces,) for each surface s
+    the polar cosine about n above which a direction from x surely misses it (2.0: none
+    does; −2.0: ``own``, which a ray leaving it never meets again), what
+    :func:`nearest_hit_within` skips by. The surfaces :func:`free_cone` leaves out because they
+    send nothing back (the lens, the black bodies) are bounded all the same — a ray meeting one
+    ends there, so skipping it is not the same answer — except that a cheap test stands in
+    for their shapes: their bounding sphere (they are small)."""
+    cmax = -1.0
+    blocked = False
+    for s in range(sf.shape[0]):
+        if _sends_nothing(sf, si, s):
+            gaps[s] = _sphere_gap(sf[s, BX], sf[s, BY], sf[s, BZ], sf[s, BR], x, y, z, nx, ny, nz)
+            continue
+        c = _shape_gap(sf, si, s, own, x, y, z, nx, ny, nz)
+        gaps[s] = c
+        if c > 1.0:
+            blocked = True
+        cmax = max(cmax, c)
+    if blocked:
+        return 0.0
     if cmax <= 0.0:
         return 1.0
     return 1.0 - cmax * cmax
