@@ -166,7 +166,8 @@ def test_psf_none_reproduces_the_render_before_the_psf():
     6400 pixels moved, the sum +0.02 %; the forward arrays unchanged, bit for bit) and the
     light paths aimed at each glint (fast arrays only: 64 of 6400 pixels moved, the sum
     +1 %: at this budget, 51 200 light paths, drawn over the whole cornea no glint got a
-    single path; aimed, all eight are there)."""
+    single path; aimed, all eight are there) and the specular connections' analytic Jacobian
+    (fast arrays only: 1734 of 6400 pixels moved, median 8e-9, at most 0.11 standard errors)."""
     ref = np.load(REF)
     sc = apply_overrides(load_scene("vr-offaxis"), {**SMALL, "camera.psf": "none"})
     f = eyelume.render(sc, eyelume.RenderOptions(estimator="fast", samples_per_pixel=4, seed=3))

@@ -48,7 +48,6 @@ __all__ = [
     "straight_plane",
 ]
 
-_H = 1e-4  # mm: forward-difference step on the parametrisation plane
 _TOL2 = 1e-10  # mm²: converged when h(a) is within 1e-5 mm of x
 
 
@@ -134,10 +133,142 @@ def _event(surfaces, s, mode, ray):
     return ok, tx, ty, tz, 1.0 - f.reflectance - f.absorptance
 
 
+class ChainJacobian(NamedTuple):
+    """:func:`_through_jacobian`'s answer: the :class:`ChainHit` and ∂(u, v)/∂(a₁, a₂)
+    (mm/mm): ``j11`` = ∂u/∂a₁, ``j21`` = ∂v/∂a₁, ``j12`` = ∂u/∂a₂, ``j22`` = ∂v/∂a₂."""
+
+    hit: ChainHit
+    j11: float
+    j21: float
+    j12: float
+    j22: float
+
+
+@njit(cache=True, inline="always")
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True, inline="always")
+def _axpy(a, x, y):
+    """a x + y for 3-vectors."""
+    return (a * x[0] + y[0], a * x[1] + y[1], a * x[2] + y[2])
+
+
+@njit(cache=True, inline="always")
+def _normal_derivative(sf, si, s, x, y, z, dp):
+    """dn: the change of surface ``s``'s world unit normal n at its point (x, y, z) when the
+    point moves along the surface by dp (world): n = m/|m|, m the gradient
+    :func:`~eyelume.kernels.geometry.surface_normal` normalises, whose change in the local frame
+    is diag(D) · dp_local (D per shape), so dn = (dm − n (n · dm)) / |m|."""
+    px, py, pz = G.to_local(sf, s, x, y, z)
+    qx, qy, qz = G.dir_to_local(sf, s, dp[0], dp[1], dp[2])
+    shape = si[s, G.SHAPE]
+    if shape == G.SHAPE_CONIC or shape == G.SHAPE_QUADRIC:
+        c = sf[s, G.CURV]
+        cy = sf[s, G.CURV_Y] if shape == G.SHAPE_QUADRIC else c
+        e = c * (1.0 + sf[s, G.CONIC])
+        mx, my, mz = -c * px, -cy * py, 1.0 - e * pz
+        dmx, dmy, dmz = -c * qx, -cy * qy, -e * qz
+    elif shape == G.SHAPE_SPHERE:
+        mx, my, mz = px, py, pz
+        dmx, dmy, dmz = qx, qy, qz
+    elif shape == G.SHAPE_LASHES:
+        m2 = sf[s, G.CURV] * sf[s, G.CURV]
+        mx, my, mz = px, py, -m2 * pz
+        dmx, dmy, dmz = qx, qy, -m2 * qz
+    else:  # cylinder
+        mx, my, mz = px, py, 0.0
+        dmx, dmy, dmz = qx, qy, 0.0
+    inv = 1.0 / math.sqrt(mx * mx + my * my + mz * mz)
+    lx, ly, lz = mx * inv, my * inv, mz * inv
+    k = lx * dmx + ly * dmy + lz * dmz
+    wx, wy, wz = G.dir_to_world(
+        sf, s, (dmx - k * lx) * inv, (dmy - k * ly) * inv, (dmz - k * lz) * inv
+    )
+    return (wx, wy, wz)
+
+
+@njit(cache=True, inline="always")
+def _event_derivative(mode, eta, r, n, dr, dn):
+    """The change of the direction leaving a specular event (``mode``; refraction with n₁/n₂ =
+    ``eta``, as :func:`~eyelume.kernels.interact.refract` computes it, or reflection) when
+    the arriving unit direction r changes by dr and the unit normal n by dn."""
+    if mode == REFLECT:  # r' = r − 2 (r·n) n
+        rn = _dot(r, n)
+        drn = _dot(dr, n) + _dot(r, dn)
+        return (
+            dr[0] - 2.0 * (drn * n[0] + rn * dn[0]),
+            dr[1] - 2.0 * (drn * n[1] + rn * dn[1]),
+            dr[2] - 2.0 * (drn * n[2] + rn * dn[2]),
+        )
+    cos_i = -_dot(r, n)
+    sign = 1.0
+    if cos_i < 0.0:  # refract flips n toward the incoming ray
+        sign = -1.0
+        cos_i = -cos_i
+    nx, ny, nz = sign * n[0], sign * n[1], sign * n[2]
+    dnx, dny, dnz = sign * dn[0], sign * dn[1], sign * dn[2]
+    dcos_i = -(dr[0] * nx + dr[1] * ny + dr[2] * nz + r[0] * dnx + r[1] * dny + r[2] * dnz)
+    cos_t = math.sqrt(max(0.0, 1.0 - eta * eta * max(0.0, 1.0 - cos_i * cos_i)))
+    k = eta * cos_i - cos_t  # t = eta r + k n
+    dk = eta * dcos_i - eta * eta * cos_i * dcos_i / cos_t
+    return (
+        eta * dr[0] + dk * nx + k * dnx,
+        eta * dr[1] + dk * ny + k * dny,
+        eta * dr[2] + dk * nz + k * dnz,
+    )
+
+
+@njit(cache=True, inline="always")
+def _event_jacobian(surfaces, s, mode, ray, t, do1, do2, dr1, dr2):  # noqa: PLR0913
+    """:func:`_event` at surface ``s`` for ``ray`` (its origin the hit, reached after a leg of
+    length t), and the changes of the hit point and of the leaving direction with a₁ and a₂,
+    from those of the leg's origin (``do1``, ``do2``) and direction (``dr1``, ``dr2``).
+    Returns (ok, dx, dy, dz, T or R, do1, do2, dr1, dr2)."""
+    sf, si = surfaces.sf, surfaces.si
+    ox, oy, oz, rx, ry, rz = ray
+    nx, ny, nz = G.surface_normal(sf, si, s, ox, oy, oz)
+    cos_d = rx * nx + ry * ny + rz * nz
+    zero = (0.0, 0.0, 0.0)
+    if cos_d <= 0.0 and mode == TRANSMIT_A:
+        return False, rx, ry, rz, 0.0, zero, zero, zero, zero
+    f = interface_at(sf, si, s, cos_d)
+    if mode == REFLECT:
+        ok = True
+        tx, ty, tz = reflect(rx, ry, rz, nx, ny, nz)
+        tr = f.reflectance
+    else:
+        ok, tx, ty, tz = refract(rx, ry, rz, nx, ny, nz, f.n1 / f.n2)
+        tr = 1.0 - f.reflectance - f.absorptance
+    if not ok:
+        return False, rx, ry, rz, 0.0, zero, zero, zero, zero
+    n = (nx, ny, nz)
+    r = (rx, ry, rz)
+    # the hit point's change: dO' = dO + dt r + t dr, dt = −n·(dO + t dr)/(n·r)
+    w1 = _axpy(t, dr1, do1)
+    w2 = _axpy(t, dr2, do2)
+    do1 = _axpy(-_dot(n, w1) / cos_d, r, w1)
+    do2 = _axpy(-_dot(n, w2) / cos_d, r, w2)
+    dn1 = _normal_derivative(sf, si, s, ox, oy, oz, do1)
+    dn2 = _normal_derivative(sf, si, s, ox, oy, oz, do2)
+    eta = f.n1 / f.n2
+    dr1 = _event_derivative(mode, eta, r, n, dr1, dn1)
+    dr2 = _event_derivative(mode, eta, r, n, dr2, dn2)
+    return True, tx, ty, tz, tr, do1, do2, dr1, dr2
+
+
 @per_ray
-def _through(surfaces, chain, led, plane, a1, a2, rc):
+def _through_jacobian(surfaces, chain, led, plane, a1, a2, rc):
     """The ray from LED point ``led`` (px, py, pz) toward plane point a = (a1, a2) through the
-    chain, met with the receiver's tangent plane. Returns a :class:`ChainHit`."""
+    chain, met with the receiver's tangent plane (its miss (u, v) there), and the Jacobian
+    ∂(u, v)/∂(a₁, a₂) of the miss, carried along the chain by differentiating each step (ray
+    differentials, Igehy 1999): the emission direction d = (q − P)/|q − P|, each
+    intersection (the point stays on the surface: dt = −n · (dO + t dr)/(n · r)), each
+    refraction or reflection with the normal's change along the surface
+    (:func:`_normal_derivative`), and the receiver's tangent plane. One trace instead of the
+    three a forward-difference Jacobian needs. Returns a :class:`ChainJacobian`."""
+    sf, si = surfaces.sf, surfaces.si
     px, py, pz = led
     o, e1, e2 = plane.o, plane.e1, plane.e2
     qx = o[0] + a1 * e1[0] + a2 * e2[0]
@@ -146,19 +277,30 @@ def _through(surfaces, chain, led, plane, a1, a2, rc):
     dx, dy, dz = qx - px, qy - py, qz - pz
     inv = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
     dx, dy, dz = dx * inv, dy * inv, dz * inv
-    fail = ChainHit(False, 0.0, 0.0, 0.0, dx, dy, dz, qx, qy, qz)
+    fail = ChainJacobian(ChainHit(False, 0.0, 0.0, 0.0, dx, dy, dz, qx, qy, qz), 0.0, 0.0, 0.0, 0.0)
+    d = (dx, dy, dz)
+    # ∂d/∂a_i = (e_i − d (d · e_i)) / |q − P|
+    dr1 = _axpy(-_dot(d, e1), d, e1)
+    dr1 = (dr1[0] * inv, dr1[1] * inv, dr1[2] * inv)
+    dr2 = _axpy(-_dot(d, e2), d, e2)
+    dr2 = (dr2[0] * inv, dr2[1] * inv, dr2[2] * inv)
+    do1 = (0.0, 0.0, 0.0)
+    do2 = (0.0, 0.0, 0.0)
     ox, oy, oz = px, py, pz
     rx, ry, rz = dx, dy, dz
     trans = 1.0
     for j in range(chain.n):
         s = chain.surf[j]
-        t = G.intersect_surface(surfaces.sf, surfaces.si, s, ox, oy, oz, rx, ry, rz, math.inf)
+        t = G.intersect_surface(sf, si, s, ox, oy, oz, rx, ry, rz, math.inf)
         if t < 0.0:
             return fail
         ox, oy, oz = ox + t * rx, oy + t * ry, oz + t * rz
-        ok, rx, ry, rz, tr = _event(surfaces, s, chain.mode[j], Ray(ox, oy, oz, rx, ry, rz))
+        ok, tx, ty, tz, tr, do1, do2, dr1, dr2 = _event_jacobian(
+            surfaces, s, chain.mode[j], Ray(ox, oy, oz, rx, ry, rz), t, do1, do2, dr1, dr2
+        )
         if not ok:
             return fail
+        rx, ry, rz = tx, ty, tz
         trans *= tr
     den = rx * rc.nx + ry * rc.ny + rz * rc.nz
     if den >= 0.0:  # must arrive on the lit side, against n
@@ -167,7 +309,15 @@ def _through(surfaces, chain, led, plane, a1, a2, rc):
     hx, hy, hz = ox + t * rx - rc.x, oy + t * ry - rc.y, oz + t * rz - rc.z
     u = hx * rc.e1[0] + hy * rc.e1[1] + hz * rc.e1[2]
     v = hx * rc.e2[0] + hy * rc.e2[1] + hz * rc.e2[2]
-    return ChainHit(t > 0.0, u, v, trans, dx, dy, dz, qx, qy, qz)
+    # the miss's change: dH = dO + dt r + t dr, dt = −(n_r·dO + t n_r·dr)/(n_r·r)
+    nr = (rc.nx, rc.ny, rc.nz)
+    r = (rx, ry, rz)
+    dh1 = _axpy(-(_dot(nr, do1) + t * _dot(nr, dr1)) / den, r, _axpy(t, dr1, do1))
+    dh2 = _axpy(-(_dot(nr, do2) + t * _dot(nr, dr2)) / den, r, _axpy(t, dr2, do2))
+    hit = ChainHit(t > 0.0, u, v, trans, dx, dy, dz, qx, qy, qz)
+    return ChainJacobian(
+        hit, _dot(dh1, rc.e1), _dot(dh1, rc.e2), _dot(dh2, rc.e1), _dot(dh2, rc.e2)
+    )
 
 
 @per_ray
@@ -218,15 +368,11 @@ def led_through_chain(surfaces, chain, plane, target, leds, k, rc):
     a2 = gx * e2[0] + gy * e2[1] + gz * e2[2]
     found = False
     for _ in range(30):
-        h = _through(surfaces, chain, led, plane, a1, a2, rc)
+        hj = _through_jacobian(surfaces, chain, led, plane, a1, a2, rc)
+        h = hj.hit
         if not h.ok:
             break
-        h1 = _through(surfaces, chain, led, plane, a1 + _H, a2, rc)
-        h2 = _through(surfaces, chain, led, plane, a1, a2 + _H, rc)
-        if not (h1.ok and h2.ok):
-            break
-        j11, j21 = (h1.u - h.u) / _H, (h1.v - h.v) / _H
-        j12, j22 = (h2.u - h.u) / _H, (h2.v - h.v) / _H
+        j11, j21, j12, j22 = hj.j11, hj.j21, hj.j12, hj.j22
         det = j11 * j22 - j12 * j21
         if det == 0.0 or math.isnan(det):
             break
