@@ -116,7 +116,8 @@ def test_the_free_cone_is_wide_on_the_periorbital_skin_of_vr_offaxis(rng):
 def test_the_search_within_reach_finds_what_the_full_search_finds(preset, rng):
     """``nearest_hit_within`` skips, for a ray leaving a vertex at polar cosine cos θ, every
     surface whose gap (``free_cone_gaps``) is below cos θ: the same surface and the same
-    distance as ``nearest_hit``, bit for bit, for cosine-distributed directions at the
+    distance as ``nearest_hit``, bit for bit (and ``occluded_within`` the same answer as
+    ``occluded``), for cosine-distributed directions at the
     vertices the camera sees (straight and by the cornea's reflection) — the rays the fast
     estimator's continuation sends (half of them grazing, within 30° of the face), and
     ``free_cone_gaps`` gives ``free_cone``'s value."""
@@ -140,6 +141,10 @@ def test_the_search_within_reach_finds_what_the_full_search_finds(preset, rng):
             full = G.nearest_hit(cs.sf, cs.si, x, y, z, *d)
             within = G.nearest_hit_within(cs.sf, cs.si, x, y, z, *d, gaps, lz)
             assert within == full, (preset, cs.surface_names[s], full, within)
+            t_max = 40.0 * u2  # a shadow ray's length (mm): the same answer as occluded
+            assert G.occluded_within(cs.sf, cs.si, x, y, z, *d, t_max, gaps, lz) == G.occluded(
+                cs.sf, cs.si, x, y, z, *d, t_max
+            )
             skipped += int(np.sum(lz > gaps))
             hits += full[0] >= 0
     assert skipped > 0 and hits > 0

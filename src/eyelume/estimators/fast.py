@@ -163,7 +163,8 @@ class Scratch(NamedTuple):
 
 class Vertex(NamedTuple):
     """The first Lambertian vertex of a camera path: surface ``s`` (−1: none), the point, its
-    normal toward the arriving light and the throughput × ρ there."""
+    normal toward the arriving light, the throughput × ρ there and its free cone's sin²θ₀
+    (:func:`~eyelume.kernels.geometry.free_cone_gaps`, the gaps in the path's scratch)."""
 
     s: int
     x: float
@@ -173,6 +174,7 @@ class Vertex(NamedTuple):
     ny: float
     nz: float
     beta: float
+    s0: float
 
 
 class CameraPath(NamedTuple):
@@ -277,6 +279,31 @@ def direct_irradiance(surfaces, leds, facet):
     e = 0.0
     for k in range(leds.points.shape[0]):
         e += led_irradiance(surfaces, leds, k, facet)
+    return e
+
+
+@per_ray
+def direct_irradiance_within(surfaces, leds, facet, gaps):
+    """:func:`direct_irradiance` at a vertex whose ``gaps``
+    (:func:`~eyelume.kernels.geometry.free_cone_gaps`) are known: each shadow ray skips the
+    surfaces out of its reach (:func:`~eyelume.kernels.geometry.occluded_within`). The same
+    value, bit for bit."""
+    x, y, z, nx, ny, nz = facet
+    e = 0.0
+    for k in range(leds.points.shape[0]):
+        vx, vy, vz = leds.points[k, 0] - x, leds.points[k, 1] - y, leds.points[k, 2] - z
+        d2 = vx * vx + vy * vy + vz * vz
+        d = math.sqrt(d2)
+        ux, uy, uz = vx / d, vy / d, vz / d
+        cos_s = ux * nx + uy * ny + uz * nz
+        if cos_s <= 0.0:
+            continue
+        if led_cos_alpha(leds, k, -ux, -uy, -uz) <= 0.0:
+            continue
+        t_max = d * (1.0 - 1e-9) - 1e-6
+        if G.occluded_within(surfaces.sf, surfaces.si, x, y, z, ux, uy, uz, t_max, gaps, cos_s):
+            continue
+        e += radiant_intensity(leds, k, -ux, -uy, -uz) * cos_s / d2
     return e
 
 
@@ -407,6 +434,7 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch, c
     radiance = 0.0
     branch = Branch(Ray(0.0, 0.0, 0.0, 0.0, 0.0, 0.0), 0.0)
     has_branch = False
+    s0 = 0.0
     for event in range(scene.max_events):
         if event == 0 and cos0 > -2.0:
             s, t = G.nearest_hit_within(sf, si, x, y, z, dx, dy, dz, scratch.gaps, cos0)
@@ -430,7 +458,10 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch, c
             if not from_b:
                 nx, ny, nz = -nx, -ny, -nz
             if first_vertex:
-                e = direct_irradiance(scene.surfaces, leds, Facet(x, y, z, nx, ny, nz))
+                # the vertex's reach, for its shadow rays and its continuation's first search
+                s0 = G.free_cone_gaps(sf, si, s, x, y, z, nx, ny, nz, scratch.gaps)
+                facet = Facet(x, y, z, nx, ny, nz)
+                e = direct_irradiance_within(scene.surfaces, leds, facet, scratch.gaps)
             else:
                 facet = Facet(x, y, z, nx, ny, nz)
                 state, e = sampled_irradiance(state, scene.surfaces, leds, facet, scratch.e_led)
@@ -450,7 +481,7 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch, c
                 e += _element_nee(state, scene.surfaces, cam, s, leds, facet, first_vertex)
             radiance += beta * rho * _INV_PI * e
             if first_vertex:
-                vertex = Vertex(s, x, y, z, nx, ny, nz, beta * rho)
+                vertex = Vertex(s, x, y, z, nx, ny, nz, beta * rho, s0)
                 return CameraPath(state, radiance, has_branch, branch, vertex)
             state, u = next_uniform(state)
             if u >= rho:
@@ -506,7 +537,7 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch, c
         dx *= inv
         dy *= inv
         dz *= inv
-    vertex = Vertex(-1, x, y, z, 0.0, 0.0, 1.0, 0.0)
+    vertex = Vertex(-1, x, y, z, 0.0, 0.0, 1.0, 0.0, 0.0)
     return CameraPath(state, radiance, has_branch, branch, vertex)
 
 
@@ -533,10 +564,9 @@ def _path_radiance(state, scene, cam, ray, beta, split, grid, scratch):
     if v.s >= 0:
         g = max(grid, IRIS_GRID) if cam.through_cornea[v.s] else grid
         k = g * g
-        sf, si = scene.surfaces.sf, scene.surfaces.si
         # the directions within θ₀ of the normal meet nothing that sends light (free_cone):
         # sample only sin²θ ∈ [s0, 1] (cosine-weighted there), × its share 1 − s0
-        s0 = G.free_cone_gaps(sf, si, v.s, v.x, v.y, v.z, v.nx, v.ny, v.nz, scratch.gaps)
+        s0 = v.s0
         share = 1.0 - s0
         if share <= 0.0:
             k = 0

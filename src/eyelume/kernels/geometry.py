@@ -301,6 +301,25 @@ def occluded(sf, si, x, y, z, dx, dy, dz, t_max):
     return False
 
 
+@per_ray
+def occluded_within(sf, si, x, y, z, dx, dy, dz, t_max, gaps, cos_t):
+    """:func:`occluded` for a ray leaving a vertex at polar cosine ``cos_t`` about its normal,
+    skipping the surfaces out of its reach (``gaps``, as :func:`nearest_hit_within`): the same
+    answer, bit for bit."""
+    for s in range(sf.shape[0]):
+        if cos_t > gaps[s]:
+            continue
+        cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
+        tc = cx * dx + cy * dy + cz * dz
+        br = sf[s, BR]
+        d2 = cx * cx + cy * cy + cz * cz - tc * tc
+        if d2 > br * br or tc + br < 0.0 or tc - br > t_max:
+            continue
+        if intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max) > 0.0:
+            return True
+    return False
+
+
 #: Longest clipped cylinder (in radii) :func:`free_cone` covers by spheres; a longer one (an
 #: unclipped cylinder) is bounded by its bounding sphere.
 _MAX_PIECES = 32
