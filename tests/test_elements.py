@@ -758,3 +758,42 @@ def test_regions_follow_a_mirror_fold():
     cs = compile_scene(eyelume.load_scene("vr-offaxis", FOLDED | two))
     with pytest.warns(RegionWarning, match=r"elements.0 is a mirror .*R = 0.92.*R = 0.1"):
         region_masks(cs, reflections=False)
+
+
+def _cli_lines(args):
+    res = runner.invoke(app, args)
+    return res, [ln for ln in res.stderr.splitlines() if ln.strip()]
+
+
+@pytest.mark.parametrize(
+    ("second", "says"),
+    [
+        ({"name": "window"}, "elements.1.name = 'window', as elements.0's"),
+        ({"name": ""}, "elements.1.name = '' (unnamed), as elements.0, both a plate"),
+    ],
+)
+def test_two_elements_of_one_name_are_refused(tmp_path, second, says):
+    """truth.json's ghost chains name an element's surfaces by its name (its kind when
+    unnamed): two plates both called "window" (or both unnamed) made them ambiguous and were
+    accepted. One line naming the second element's name, exit 2; renamed, they compile."""
+    first = PLATE | ({"name": ""} if not second["name"] else {})
+    other = PLATE | {"position_mm": [0.0, 0.0, 40.0], "semi_diameter_mm": 10.0} | second
+    res, lines = _cli_lines(["info", "--scene", _scene_file(tmp_path, [first, other]), "--json"])
+    assert res.exit_code == 2, res.output
+    assert len(lines) == 1 and says in lines[0], res.stderr
+    other |= {"name": "second window"}
+    res, _ = _cli_lines(["info", "--scene", _scene_file(tmp_path, [first, other]), "--json"])
+    assert res.exit_code == 0, res.output
+
+
+def test_an_element_behind_the_eye_plane_inside_the_head_is_refused(tmp_path):
+    """A small plate 40 mm behind the corneal vertex, inside the skull where no tissue is
+    modelled (it touches neither the eyeball nor a face solid), was accepted. Like an LED
+    (``leds: … crosses the eye plane``), an element must lie in front of the eye plane: one
+    line naming elements.0.position_mm and its value, exit 2."""
+    inside = PLATE | {"position_mm": [0.0, 0.0, -40.0], "semi_diameter_mm": 5.0}
+    res, lines = _cli_lines(["info", "--scene", _scene_file(tmp_path, [inside]), "--json"])
+    assert res.exit_code == 2, res.output
+    assert len(lines) == 1, res.stderr
+    assert "elements.0.position_mm = [0.0, 0.0, -40.0]" in lines[0], lines[0]
+    assert "behind the eye plane z = 0 mm" in lines[0], lines[0]

@@ -1443,12 +1443,37 @@ def _add_elements(t: _Table, scene: Scene) -> None:
               clip_z=(zlo, zhi), tally_a=tally, tally_b=tally)  # fmt: skip
 
 
+def _check_element_names(scene: Scene) -> None:
+    """Each element's name (its kind when unnamed, :func:`element_label`) is its own:
+    truth.json's ghost chains and the ledger name an element's surfaces by it. Raises
+    SceneError naming the second ``elements.k.name``."""
+    seen: dict[str, int] = {}
+    for k, el in enumerate(scene.elements):
+        name = el.name or el.kind
+        if name in seen:
+            was = (
+                f"{el.name!r}, as elements.{seen[name]}'s"
+                if el.name
+                else f"'' (unnamed), as elements.{seen[name]}, both a {el.kind}"
+            )
+            raise SceneError(
+                f"elements.{k}.name = {was}: truth.json's ghost chains name an element's "
+                "surfaces by its name (its kind when unnamed), so each element needs its own"
+            )
+        seen[name] = k
+
+
 def _check_elements(scene: Scene, led_centres: np.ndarray) -> None:
     """No element cuts the eye or the face (its sampled boundary, :func:`outline_points`),
-    an LED's body (world ``led_centres``) or another element. Raises SceneError naming the
-    element."""
+    reaches behind the eye plane (into the head, where no tissue is modelled: the eye plane
+    z through the eye's nominal corneal vertex, :func:`eye_plane_origin`, as the LEDs'
+    bodies, :func:`_check_leds`), cuts an LED's body (world ``led_centres``) or another
+    element; no two share a name (:func:`_check_element_names`). Raises SceneError naming
+    the element."""
+    _check_element_names(scene)
     shapes = []
     radii = scene.leds.body_radii_mm()
+    plane_z = float(eye_plane_origin(scene)[2])
     for k, el in enumerate(scene.elements):
         origin, rot = element_pose(scene, el)
         local = outline_points(el)
@@ -1460,6 +1485,14 @@ def _check_elements(scene: Scene, led_centres: np.ndarray) -> None:
                     f"elements.{k} ({el.name or el.kind} at {list(el.position_mm)} mm) reaches "
                     f"into {where} (at world {np.round(p, 2).tolist()} mm)"
                 )
+        back = world.reshape(-1, 3)[np.argmin(world[..., 2])]
+        if back[2] <= plane_z:
+            raise SceneError(
+                f"elements.{k}.position_mm = {list(el.position_mm)}: the element "
+                f"({el.name or el.kind}) reaches behind the eye plane z = {plane_z + 0.0:g} mm (to "
+                f"world {np.round(back, 2).tolist()} mm), into the head: elements go in front "
+                "of the eye, as the LEDs do"
+            )
         for i, c in enumerate(led_centres):
             if near_element(el, (rot @ (c - origin))[None], radii[i])[0]:
                 raise SceneError(
