@@ -87,20 +87,28 @@ CONVERGING = (
     ("command", "element", "says"),
     [
         ("optimize-tracking", PLATE, "places LEDs by the paper's generator"),
+        ("sweep-leds", PLATE, "places LEDs by the paper's generator"),
         ("evaluate-tracking", CONVERGING, "is a converging lens that takes"),
     ],
 )
 def test_tracking_with_elements_names_no_option_it_lacks(tmp_path, command, element, says):
     """optimize-tracking's generator lights the eye plane in free space, so it refuses any
-    element; evaluate-tracking renders with the fast estimator, which refuses a converging
-    lens before paper2005's LED ring (it takes ~24 % of their light first). Neither names
-    '--estimator forward', an option these commands lack; and the progress bar left no blank
-    line before the error where stderr is no terminal."""
+    element — and so does sweep-leds, the generator itself, which swept without them saying
+    nothing (its landscape and best placement were the free-space eye's); the refusal holds
+    for any scene (it quoted paper2005-integrated's counts whatever the scene).
+    evaluate-tracking renders with the fast estimator, which refuses a converging lens before
+    paper2005's LED ring (it takes ~24 % of their light first): it advises moving the LEDs
+    or taking the lens out, not a forward render (hundreds of frames at a tracking budget:
+    noise). None names '--estimator forward'; and the progress bar left no blank line before
+    the error where stderr is no terminal."""
     res = runner.invoke(app, [command, "--out", str(tmp_path / "o"), "--set", element])
     line = _one_line(res)
     assert res.output.startswith("error:"), repr(res.output)  # no blank line first
     assert says in line and "elements.0" in line, line
-    assert " --estimator forward" not in line.replace("render --estimator forward", "")
+    assert "--estimator forward" not in line, line
+    assert "paper2005-integrated 25" not in line, line
+    if command == "evaluate-tracking":
+        assert "move the LEDs so that less of their light meets elements.0 first" in line, line
     assert not (tmp_path / "o").exists()
 
 
@@ -283,7 +291,7 @@ def test_the_detector_cache_probe_reads_an_empty_cache_as_a_first_run(tmp_path):
     assert out.returncode == 0 and out.stdout.strip() == "False", out
 
 
-@pytest.mark.parametrize("command", ["optimize-tracking", "reproduce"])
+@pytest.mark.parametrize("command", ["optimize-tracking", "reproduce", "sweep-leds"])
 def test_generator_commands_refuse_the_integrated_preset_with_the_reason(tmp_path, command):
     """optimize-tracking and reproduce move the paper's ring over the generator's grid, whose
     eye plane is lit in free space: on paper2005-integrated (an eyepiece and a hot mirror)
@@ -297,7 +305,7 @@ def test_generator_commands_refuse_the_integrated_preset_with_the_reason(tmp_pat
     assert res.exit_code == 2
     line = _one_line(res)
     assert "elements.0 (eyepiece), elements.1 (hot mirror)" in line, line
-    assert "lit in free space" in line and "behind or beside" in line, line
+    assert "lit in free space" in line and "behind, inside or beside" in line, line
     assert "eyelume evaluate-tracking --set leds.distance_mm" in line, line
     assert not (tmp_path / "o").exists()
 

@@ -243,18 +243,20 @@ def _check_counts(samples: int, seed: int) -> None:
 
 
 def _refuse_elements(sc, command: str) -> None:
-    """The commands built on the paper's generator refuse a scene with optical elements before
-    any work, naming them and the reason. The generator (``sweep-leds``) lights its eye plane
-    in free space: an element between the LEDs and the eye (a spectacle lens) is ignored by
-    it, so its δ-optimal placement, which both commands report, would be judged on a light
-    that never reaches the eye. And the placements they move the paper's ring over (the
-    generator's grid, distance 20–70 mm; optimize-tracking's 27, 50–70 mm) put the LEDs
-    behind or beside the elements of a scene that has them near the eye: on
-    paper2005-integrated 6 of optimize-tracking's 27 place an LED inside the camera's body and
-    19 send over 10⁻³ of an LED's light through or off the eyepiece or the hot mirror first
-    (``compile.element_light_shares``), which the fast estimator refuses for a converging
-    lens; 2 are free. The frames themselves would render and track (``evaluate-tracking``
-    does, through elements): a placement is judged that way, one at a time."""
+    """The commands built on the paper's generator (``sweep-leds`` itself, ``reproduce``,
+    ``optimize-tracking``) refuse a scene with optical elements before any work, naming them
+    and the reason, in words that hold for any scene. The generator lights its eye plane in
+    free space: an element between the LEDs and the eye (a spectacle lens) is ignored by it
+    (``sweep-leds`` swept without them, saying nothing), so its δ-optimal placement, which
+    the commands report, would be judged on a light that never reaches the eye. And the
+    placements they move the paper's ring over (the generator's grid, distance 20–70 mm;
+    optimize-tracking's 27, 50–70 mm) put the LEDs behind or beside the elements of a scene
+    that has them near the eye: on paper2005-integrated 6 of optimize-tracking's 27 place an
+    LED inside the camera's body and 19 send over 10⁻³ of an LED's light through or off the
+    eyepiece or the hot mirror first (``compile.element_light_shares``), which the fast
+    estimator refuses for a converging lens; 2 are free. The frames themselves would render
+    and track (``evaluate-tracking`` does, through elements): a placement is judged that way,
+    one at a time."""
     if sc.elements:
         names = ", ".join(
             f"elements.{k}" + (f" ({el.name})" if el.name else "")
@@ -262,11 +264,11 @@ def _refuse_elements(sc, command: str) -> None:
         )
         _fail(
             f"{command} places LEDs by the paper's generator, whose eye plane is lit in free "
-            f"space, and the scene has {names}, which it would ignore; and its grid of ring "
-            "placements (distance 20-70 mm) puts LEDs behind or beside such elements (on "
-            "paper2005-integrated 25 of optimize-tracking's 27 placements are inside the "
-            "camera's body or light the eye through the eyepiece): take them out "
-            "(--set elements=[]), or judge one placement at a time with "
+            f"space, and the scene has {names}, which it would ignore (what they refract, "
+            "fold or reflect of the LEDs' light); and a grid of ring placements (distance "
+            "20-70 mm) puts LEDs behind, inside or beside elements near the eye: take them "
+            "out (--set elements=[]) to place LEDs for the free-space eye, or judge one "
+            "placement at a time, with the elements, by "
             "`eyelume evaluate-tracking --set leds.distance_mm=...`"
         )
 
@@ -783,6 +785,7 @@ def sweep_leds_cmd(
         _fail(f"--delta {delta}: must be in [0, 1)")
     delta = 0.3 if delta is None else delta
     sc = _load(scene, set_)
+    _refuse_elements(sc, "sweep-leds")
     _check_out(out)
     try:
         goal = (
@@ -1190,7 +1193,7 @@ def evaluate_tracking_cmd(
         _fail(f"--workers {workers}: must be 1 to 256 processes")
     if workers > 1 and sampled is None:
         _fail(f"--workers {workers}: only with --population (the people run in parallel)")
-    check_estimator(sc, "fast", compile_scene(sc))  # its frames are the fast estimator's
+    check_estimator(sc, "fast", compile_scene(sc), command="evaluate-tracking")
     _check_out(out)
     if sampled is not None:
         _people_run(sc, *sampled, samples, seed, tracked_deg, out, noise, workers)

@@ -495,7 +495,25 @@ class RenderOptions:
     max_samples_per_pixel: int | None = None
 
 
-def check_estimator(scene: Scene, estimator: str, compiled: CompiledScene | None = None) -> None:
+#: What to do about a scene the fast estimator refuses, in a command that renders with it only
+#: (evaluate-tracking, dataset): a forward render is no way out there (hundreds of frames at a
+#: tracking budget: ~10³ × the fast estimator's time for the same noise through an element,
+#: benchmarks/integrated.py), so the advice is the scene's. ``{element}`` names the element.
+FAST_ONLY_ADVICE = (
+    "{command} renders its frames with the fast estimator only (a forward render of each "
+    "at its budget would be noise): move the LEDs so that less of their light meets "
+    "{element} first (beside it on the eye side, as paper2005-integrated's ring sits beside "
+    "its eyepiece), or take it out (--set elements=[])"
+)
+
+
+def check_estimator(
+    scene: Scene,
+    estimator: str,
+    compiled: CompiledScene | None = None,
+    *,
+    command: str | None = None,
+) -> None:
     """Refuse (SceneError) an estimator that cannot render ``scene`` well: the fast one for a
     scene where a converging lens or a curved mirror (an element whose LED light is not
     connected by Newton's method, :func:`eyelume.compile.connected_by_newton`: several roots)
@@ -504,7 +522,11 @@ def check_estimator(scene: Scene, estimator: str, compiled: CompiledScene | None
     compiled here). Below it, that light (an LED beside an eyepiece grazing its front) is the
     light paths' alone — unbiased, as the forward agreement on paper2005-integrated checks
     (tests/estimators/test_integrated_agreement.py) — while every camera path through and off
-    the element is traced from the camera, whatever its power."""
+    the element is traced from the camera, whatever its power.
+
+    ``command``: a command that renders with the fast estimator only (evaluate-tracking,
+    dataset): the refusal advises moving the LEDs (:data:`FAST_ONLY_ADVICE`), not ``eyelume
+    render --estimator forward``, render's own way out."""
     if estimator != "fast" or not scene.elements:
         return
     curved = [
@@ -522,11 +544,16 @@ def check_estimator(scene: Scene, estimator: str, compiled: CompiledScene | None
         if share > CONVERGING_SHARE_LIMIT:
             el = scene.elements[k]
             what = "a curved mirror" if el.kind == "mirror" else "a converging lens"
+            advice = (
+                "render it with `eyelume render --estimator forward`"
+                if command is None
+                else FAST_ONLY_ADVICE.format(command=command, element=f"elements.{k}")
+            )
             raise SceneError(
                 f"estimator = 'fast': elements.{k} ({el.name or el.kind}) is {what} that takes "
                 f"{share:.2%} of LED {cs.led_indices[led]}'s light first (more than "
                 f"{CONVERGING_SHARE_LIMIT:.1%}), which the fast estimator leaves to its light "
-                "paths: render it with `eyelume render --estimator forward`"
+                f"paths: {advice}"
             )
 
 

@@ -337,7 +337,7 @@ def _check_scenes(ds: Dataset, base: Scene, where: str) -> None:
         try:
             check_sensor_spectra(sc)
             cs = compile_scene(sc)
-            check_estimator(sc, "fast", cs)
+            check_estimator(sc, "fast", cs, command="dataset")
         except EyelumeError as exc:
             raise SceneError(f"{where}: field '{field}': {exc}") from None
     if ds.samples_per_pixel is None and not region_masks(cs, reflections=False)["skin"].any():
