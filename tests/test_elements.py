@@ -765,6 +765,51 @@ def _cli_lines(args):
     return res, [ln for ln in res.stderr.splitlines() if ln.strip()]
 
 
+_INTEGRATED_INFO = ["info", "--scene", "paper2005-integrated", "--json"]
+
+
+def test_a_beamsplitter_turned_to_send_the_view_nowhere_is_still_refused():
+    """Both branches of a 50/50 beamsplitter are followed now (a fold with R ≤ T compiles,
+    tests/test_integrated_preset.py); turned so that its reflection goes away from the eye
+    (+z) and its transmission past it (−x), neither reaches the eye: one line naming the
+    path, exit 2."""
+    sets = [
+        "elements.1.front.coating.reflectance=0.5",
+        "elements.1.front.coating.transmittance=0.5",
+        "elements.1.direction=[0.70710678, 0, 0.70710678]",
+    ]
+    res, lines = _cli_lines(_INTEGRATED_INFO + [x for v in sets for x in ("--set", v)])
+    assert res.exit_code == 2, res.output
+    assert len(lines) == 1, res.stderr
+    assert (
+        "sees no eye: its line of sight, through element 1 (hot mirror), ends on nothing"
+        in (lines[0])
+    )
+
+
+def test_a_hot_mirror_whose_cutoff_is_above_the_wavelength_is_named_as_the_cause():
+    """A hot mirror with its cut-off at 900 nm, above the LEDs' 850 nm, reflects only its
+    below-cut-off R: at R = 0.10 the camera still sees the eye by the fold, dimly, and a
+    warning names the cut-off; at R = 0 it sees none, and the one-line refusal names the
+    cut-off as the cause (it said only "ends on nothing" before)."""
+    cut = ["--set", "elements.1.front.coating.cutoff_nm=900"]
+    res, lines = _cli_lines(_INTEGRATED_INFO + cut)
+    assert res.exit_code == 0, res.output
+    warned = [ln for ln in lines if "cut-off" in ln]
+    assert len(warned) == 1, res.stderr
+    assert "element 1 (hot mirror) front reflects R = 0.1 at 850 nm" in warned[0]
+    assert "its cut-off 900 nm, elements.1.front.coating.cutoff_nm, is above" in warned[0]
+    res, lines = _cli_lines(
+        _INTEGRATED_INFO + cut + ["--set", "elements.1.front.coating.reflectance_below=0"]
+    )
+    assert res.exit_code == 2, res.output
+    assert len(lines) == 1, res.stderr
+    assert "sees no eye" in lines[0] and "reflects R = 0 at 850 nm" in lines[0], lines[0]
+    assert (
+        "cut-off 900 nm, elements.1.front.coating.cutoff_nm, is above the wavelength" in (lines[0])
+    )
+
+
 @pytest.mark.parametrize(
     ("second", "says"),
     [

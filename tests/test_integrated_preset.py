@@ -21,6 +21,7 @@ import pytest
 
 import eyelume
 from eyelume.analysis.ghosts import _chief_ray
+from eyelume.analysis.regions import region_masks
 from eyelume.analysis.truth import _through_elements, eye_truth
 from eyelume.compile import compile_scene
 from eyelume.scene.glass import load_catalog
@@ -215,3 +216,63 @@ def test_no_geometric_gaze_through_elements(monkeypatch):
         assert g["not_applicable"] == ev.GEOMETRIC_NOT_THROUGH_ELEMENTS and g["frames"] == 0
         rep = ev.analyse_frames(eyelume.load_scene("paper2005"), np.zeros((4, 3)), [], [])
         assert built and "not_applicable" not in rep.summary["gaze_geometric"]
+
+
+# -- the fold as a beamsplitter (R ≤ T) and a hot mirror with its cut-off on the wrong side --
+
+_TINY = {"sensor.cols": 40, "sensor.rows": 30}
+_HOT_R = 0.92  # the preset's hot mirror at 850 nm (paper2005-integrated.toml)
+
+
+def _fold(r: float | None = None, t: float | None = None, **more):
+    """paper2005-integrated on a 40 × 30 picture, its hot mirror's R and T at 850 nm set."""
+    sets = dict(_TINY)
+    if r is not None:
+        sets |= {
+            "elements.1.front.coating.reflectance": r,
+            "elements.1.front.coating.transmittance": t,
+        }
+    return eyelume.load_scene("paper2005-integrated", sets | more)
+
+
+@pytest.fixture(scope="module")
+def hot_render():
+    cs = compile_scene(_fold())
+    return cs, eye_truth(cs), eyelume.render(cs, eyelume.RenderOptions(samples_per_pixel=1, seed=5))
+
+
+@pytest.mark.parametrize(("r", "t"), [(0.5, 0.5), (0.45, 0.55)])
+def test_a_beamsplitter_fold_sees_the_eye_where_the_hot_mirror_does(hot_render, r, t):
+    """A 45° beamsplitter in the hot mirror's place (R = T = 0.5, and R = 0.45 < T = 0.55)
+    was refused ("sees no eye": the compile followed only the stronger branch, straight
+    through into nothing). Both branches are followed now: the reflected one reaches the
+    eye, so it compiles, the view is folded there (``view_branch`` 1 at the mirror), and the
+    picture's geometry does not depend on R: the truth's pupil centre and glints, and the
+    pupil, iris, sclera and skin masks (the geometric ones: the renders' own take out the
+    glints' pixels as rendered), are the 92/8 mirror's. Its brightness does: the eye
+    is lit straight by the LEDs (on the eye side of the eyepiece, none of their light meets
+    the fold first) and seen once through the fold, so every region's mean scales by
+    R / 0.92 (the eyepiece's two passes the same in both) — checked within 4 σ of the two
+    renders' own reported errors of the means (same seed: correlated, so conservative)."""
+    cs92, truth92, img92 = hot_render
+    cs = compile_scene(_fold(r, t))
+    mirror = cs.surface_names.index("element 1 (hot mirror) front")
+    assert cs.view_branch[mirror] == 1
+    truth = eye_truth(cs)
+    np.testing.assert_allclose(
+        truth["pupil"]["centre_px"], truth92["pupil"]["centre_px"], atol=1e-9
+    )
+    np.testing.assert_allclose(
+        [g["centre_px"] for g in truth["glints"]],
+        [g["centre_px"] for g in truth92["glints"]],
+        atol=1e-9,
+    )
+    masks, masks92 = region_masks(cs, reflections=False), region_masks(cs92, reflections=False)
+    img = eyelume.render(cs, eyelume.RenderOptions(samples_per_pixel=1, seed=5))
+    got, ref = img.region_stats(), img92.region_stats()
+    for name in ("pupil", "iris", "sclera", "skin"):
+        assert np.array_equal(masks[name], masks92[name]), name
+        a, b = got[name], ref[name]
+        ratio = a["mean_w_mm2"] / b["mean_w_mm2"]
+        sigma = ratio * math.hypot(a["mean_rel_error"], b["mean_rel_error"])
+        assert abs(ratio - r / _HOT_R) < 4 * sigma, (name, ratio, r / _HOT_R, sigma)

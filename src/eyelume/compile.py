@@ -21,9 +21,11 @@ The compiled scene holds, at the scene's wavelength, the named tables of
 
 from __future__ import annotations
 
+import heapq
 import math
 import warnings
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -223,6 +225,9 @@ class CompiledScene:
     led_ids: tuple[int, ...] | None = None
     # the sunlight's compile (compile_scene(..., sun=)): its one source is the sun, no LED emits
     sun: SunSource | None = None
+    # (n_surfaces,) int64: the camera's view at each element surface on its branch through the
+    # elements, 1 reflected, 0 refracted, −1 off it (the stronger part); _view_through_elements
+    view_branch: np.ndarray | None = None
 
     @property
     def led_indices(self) -> list[int]:
@@ -759,55 +764,210 @@ def _check_view(
         )
 
 
-_VIEW_EVENTS = 16  # element surfaces the line of sight may cross or be folded by
+_VIEW_EVENTS = 16  # element surfaces the line of sight may cross or be folded by along a branch
+#: A branch of the camera's line of sight through the optical elements that carries less than
+#: this share of it (the product of the R and T it takes) is no view of the eye
+#: (:func:`_view_through_elements`): an image 10⁻³ as bright as the unobstructed one is lost
+#: under the LEDs' direct light and the noise (ASSUMPTION: three decades, a 10-bit camera's
+#: range).
+VIEW_MIN_SHARE = 1e-3
+_VIEW_NODES = 256  # element-surface events the branch tree may follow in all
 
 
-def _stronger_step(sf, si, s: int, p: np.ndarray, d: np.ndarray):
-    """At the point ``p`` of element surface ``s``, the ray ``d`` goes on along the stronger
-    part: refracted when the transmittance 1 − R − A is at least R, else reflected. Returns
-    (p, unit direction, reflected)."""
+class ViewWarning(EyelumeWarning):
+    """The camera sees the eye through an element by its weak side of a coating's cut-off
+    (a hot mirror whose cut-off is on the wrong side of the wavelength): a dim eye image."""
+
+
+class _ViewStep(NamedTuple):
+    row: int  # the element surface's row
+    reflected: bool
+    share: float  # the R or T (1 on total internal reflection) the branch takes there
+
+
+class _ViewLeaf(NamedTuple):
+    steps: tuple[_ViewStep, ...]
+    weight: float  # the product of the steps' shares
+    end: int  # the surface row the branch ends on (−1: nothing, it leaves the scene)
+    reach: float  # the product of the shares of what leaves each surface (_view_branches)
+
+
+def _is_optical(names: list[str], s: int) -> bool:
+    """Whether row ``s`` is an element's optical surface (not its absorbing edge)."""
+    return s >= 0 and names[s].startswith("element ") and not names[s].endswith(" edge")
+
+
+def _view_branches(sf, si, names: list[str], p: np.ndarray, d: np.ndarray) -> list[_ViewLeaf]:
+    """The ray (p, d) followed through the optical elements along both branches at each
+    element surface — reflected (× R, × 1 on total internal reflection) and refracted (× T =
+    1 − R − A) as :func:`eyelume.kernels.interact.interface_at` gives them — up to
+    :data:`_VIEW_EVENTS` surfaces a branch and :data:`_VIEW_NODES` in all, those of the
+    largest ``reach`` first: the product over the steps of each branch's share of what leaves
+    the surface, R / (R + T) or T / (R + T) — what a surface absorbs does not count against
+    where the line of sight goes (an opaque plate, R = T = 0, hides the eye, which the truth
+    reports, but sends the view nowhere else: its stronger rule, refracted, reach 1); each
+    branch ends on the first thing it meets that is not an element's optical surface. Returns
+    the branches (zero-weight ones too, so that a refusal can say which branch would have
+    seen the eye)."""
+    heap = [(-1.0, 0, 1.0, p, d, ())]
+    leaves: list[_ViewLeaf] = []
+    tie = nodes = 0
+    while heap:
+        neg, _, weight, p, d, steps = heapq.heappop(heap)
+        s, t = G.nearest_hit(sf, si, *p, *d)
+        if not _is_optical(names, s) or len(steps) >= _VIEW_EVENTS:
+            leaves.append(_ViewLeaf(steps, weight, -1 if _is_optical(names, s) else s, -neg))
+            continue
+        nodes += 1
+        if nodes > _VIEW_NODES:
+            continue  # lighter than every branch already followed
+        x = p + t * d
+        n = np.array(G.surface_normal(sf, si, s, *x))
+        f = I.interface_at(sf, si, s, float(d @ n))
+        ok, *dt = I.refract(*d, *n, f.n1 / f.n2)
+        dr = np.array(I.reflect(*d, *n))
+        r, tr = (f.reflectance, 1.0 - f.reflectance - f.absorptance) if ok else (1.0, 0.0)
+        out = r + tr
+        kids = [(True, r, r / out if out > 0.0 else 0.0, dr)]
+        if ok:
+            kids.append((False, tr, tr / out if out > 0.0 else 1.0, np.array(dt)))
+        for reflected, share, part, dd in kids:
+            tie += 1
+            step = _ViewStep(s, reflected, float(share))
+            unit = dd / np.linalg.norm(dd)
+            heapq.heappush(heap, (neg * part, tie, weight * share, x, unit, (*steps, step)))
+    return leaves
+
+
+def _view_step(sf, si, view: np.ndarray, s: int, p: np.ndarray, d: np.ndarray):
+    """At the point ``p`` of element surface ``s``, the ray ``d`` goes on as the camera's view
+    does (``view``, :func:`_view_through_elements`): reflected where ``view[s]`` is 1,
+    refracted where it is 0; off the view's branch (−1) along the stronger part, refracted when
+    the transmittance 1 − R − A is at least R, else reflected; reflected on total internal
+    reflection. Returns (p, unit direction, reflected)."""
     n = np.array(G.surface_normal(sf, si, s, *p))
     f = I.interface_at(sf, si, s, float(d @ n))
     ok, *dt = I.refract(*d, *n, f.n1 / f.n2)
-    reflected = not (ok and 1.0 - f.reflectance - f.absorptance >= f.reflectance)
+    v = view[s]
+    reflected = not ok or v == 1 or (v < 0 and 1.0 - f.reflectance - f.absorptance < f.reflectance)
     d = np.array(I.reflect(*d, *n)) if reflected else np.array(dt)
     return p, d / np.linalg.norm(d), reflected
 
 
+def _step_words(scene: Scene, names: list[str], step: _ViewStep) -> str:
+    """``element 1 (hot mirror) front reflects R = 0.1`` (or ``passes T = …``), with, for a
+    fixed coating with a cut-off whose other side would serve this branch better, why: ``(its
+    cut-off 900 nm is above the 850 nm light: R = 0.92 only at ≥ 900 nm)``."""
+    name = names[step.row]
+    k, side = int(name.split()[1]), name.rsplit(" ", 1)[1]
+    el = scene.elements[k]
+    what = "reflects R" if step.reflected else "passes T"
+    words = f"{name} {what} = {step.share:.3g} at {scene.wavelength_nm:g} nm"
+    coat = el.surfaces[_SIDES.index(side)].coating
+    if coat is None or coat.model != "fixed" or coat.cutoff_nm is None:
+        return words
+    lam, cut = float(scene.wavelength_nm), float(coat.cutoff_nm)
+    other = coat.fixed_at(cut - 1.0 if lam >= cut else cut)
+    better = other[0] if step.reflected else other[1]
+    if better <= step.share:
+        return words
+    where = "above" if cut > lam else "at or below"
+    side_name = "≥" if lam < cut else "<"
+    return (
+        f"{words} (its cut-off {cut:g} nm, elements.{k}.{side}.coating.cutoff_nm, is {where} "
+        f"the wavelength: it {what} = {better:g} only at {side_name} {cut:g} nm)"
+    )
+
+
 def _view_through_elements(
-    scene: Scene, surfaces: SurfaceTable, names: list[str], lf: np.ndarray
-) -> bool:
+    scene: Scene, surfaces: SurfaceTable, names: list[str], lf: np.ndarray, *, strict: bool = True
+) -> tuple[bool, np.ndarray]:
     """The camera's line of sight (its axis, from the lens's first vertex toward the scene,
-    camera frame) followed through the optical elements, the stronger branch at each element
-    surface (refracted when T ≥ R, else reflected, as
-    :func:`eyelume.kernels.interact.interface_at` gives them). Returns whether a mirror folded
-    it (then :func:`_check_view`'s straight-line test does not apply). Raises SceneError when
-    the line of sight, having met an element, leaves the scene or ends on an LED or the camera
-    instead of the eye or the face."""
+    camera frame) followed through the optical elements along both branches at each element
+    surface (:func:`_view_branches`). The view is the branch of largest reach that ends on the
+    eye (else the face), if it carries at least :data:`VIEW_MIN_SHARE` of the line of sight
+    (its reach: absorption aside): a 45°
+    beamsplitter (R = T = 0.5, or R < T) folds the view onto the eye as a hot mirror does,
+    its straight-through branch leaving the scene.
+
+    Returns (folded, view): whether the view is reflected somewhere (then
+    :func:`_check_view`'s straight-line test does not apply), and ``view`` (n_surfaces,)
+    int64: per element surface on the view's branch 1 (the view reflects there) or 0
+    (refracts; reflects only on total internal reflection), −1 elsewhere (the stronger
+    branch: reflected where R > T). The truth, ghosts and regions follow the view by it
+    (:attr:`CompiledScene.view_branch`).
+
+    Raises SceneError in one line when no branch reaching the eye or the face carries that
+    share: naming the heaviest branch's path and where it ends (nothing, an LED, the camera),
+    and the branch that would reach the eye with the R or T that starves it (and, for a hot
+    mirror's cut-off on the wrong side of the wavelength, the cut-off); and a view that takes a
+    coating's weak side of its cut-off is warned about (:class:`ViewWarning`). Without
+    ``strict`` (a wavelength group's or the sun's compile, whose geometry the scene's own
+    compile checked: at another wavelength a hot mirror may pass what it folds at the scene's)
+    nothing is refused or warned about: the heaviest branch that reaches the eye or the face
+    is the view, whatever it carries, and with none the view is (True, all −1) (its picture
+    is dark; the straight-line test is not repeated)."""
     sf, si = surfaces.sf, surfaces.si
+    view = np.full(sf.shape[0], -1, dtype=np.int64)
+    if not scene.elements:
+        return False, view
     p = np.array([0.0, 0.0, float(lf[0, Q.L_Z]) - 1e-6])
-    d = np.array([0.0, 0.0, -1.0])
-    met: list[str] = []
-    folded = False
-    for _ in range(_VIEW_EVENTS):
-        s, t = G.nearest_hit(sf, si, *p, *d)
-        if s < 0 or not names[s].startswith("element "):
-            break
-        met.append(names[s].rsplit(" ", 1)[0])
-        p, d, reflected = _stronger_step(sf, si, s, p + t * d, d)
-        folded = folded or reflected
-    else:
-        s = -1
-    if not met:
-        return False
-    where = "nothing (it leaves the scene)" if s < 0 else names[s]
-    eye_or_face = {x.name for x in scene.eye.surfaces} | {"iris", "iris root", "sclera"}
-    if scene.face.enabled:
-        eye_or_face |= {x.name for x in scene.face.tissues}
-    if s < 0 or names[s] not in eye_or_face:
-        path = ", ".join(dict.fromkeys(met))
-        raise SceneError(f"camera: sees no eye: its line of sight, through {path}, ends on {where}")
-    return folded
+    leaves = _view_branches(sf, si, names, p, np.array([0.0, 0.0, -1.0]))
+    if len(leaves) == 1 and not leaves[0].steps:
+        return False, view
+    eye = {x.name for x in scene.eye.surfaces} | {"iris", "iris root", "sclera"}
+    face = {x.name for x in scene.face.tissues} if scene.face.enabled else set()
+
+    def rank(leaf: _ViewLeaf) -> tuple[bool, float]:
+        return names[leaf.end] in eye, leaf.reach
+
+    seeing = [x for x in leaves if x.steps and x.end >= 0 and names[x.end] in eye | face]
+    good = [x for x in seeing if x.reach >= VIEW_MIN_SHARE or not strict]
+    if not good and not strict:
+        return True, view
+    if not good:
+        heavy = max((x for x in leaves if x.steps), key=lambda x: x.reach)
+        seen = max(seeing, key=rank) if seeing else None
+        raise SceneError(_no_view(scene, names, heavy, seen))
+    best = max(good, key=rank)
+    for st in best.steps:
+        if view[st.row] < 0:
+            view[st.row] = int(st.reflected)
+    if strict:
+        _warn_cutoff(scene, names, best)
+    return any(st.reflected for st in best.steps), view
+
+
+def _no_view(scene: Scene, names: list[str], heavy: _ViewLeaf, seen: _ViewLeaf | None) -> str:
+    """The one line refusing a camera whose line of sight through the elements sees no eye:
+    the heaviest branch's path and end, and the branch that would reach the eye or the face
+    (``seen``) with the R or T under ½ that starve it (:func:`_step_words`)."""
+    path = ", ".join(dict.fromkeys(names[st.row].rsplit(" ", 1)[0] for st in heavy.steps))
+    where = "nothing (it leaves the scene)" if heavy.end < 0 else names[heavy.end]
+    msg = f"camera: sees no eye: its line of sight, through {path}, ends on {where}"
+    if seen is not None:
+        weak = [st for st in seen.steps if st.share < 0.5] or list(seen.steps)
+        msg += (
+            f"; the branch that reaches the {names[seen.end]} carries only "
+            f"{seen.reach:.2g} of it (less than {VIEW_MIN_SHARE:g}): "
+            + "; ".join(_step_words(scene, names, st) for st in weak)
+        )
+    return msg
+
+
+def _warn_cutoff(scene: Scene, names: list[str], best: _ViewLeaf) -> None:
+    """Warn (:class:`ViewWarning`) when the view's branch takes a coating's weak side of its
+    cut-off (:func:`_step_words` names it): the eye image is dim for a reason the user set."""
+    for st in best.steps:
+        words = _step_words(scene, names, st)
+        if "cut-off" in words:
+            warnings.warn(
+                f"camera: sees the {names[best.end]} only through {words}: its image carries "
+                f"{best.weight:.2g} of the light of the camera's line of sight",
+                ViewWarning,
+                stacklevel=4,
+            )
+            return
 
 
 def _compile_lens(
@@ -1600,15 +1760,21 @@ _PUPIL_RAY_ANGLE = 1e-3
 
 
 def _pupil_through_elements(
-    surfaces: SurfaceTable, names: list[str], lf: np.ndarray, ep_z: float, ep_r: float
+    surfaces: SurfaceTable,
+    names: list[str],
+    lf: np.ndarray,
+    ep_z: float,
+    ep_r: float,
+    view: np.ndarray,
 ) -> np.ndarray | None:
     """The entrance pupil (centre (0, 0, ``ep_z``), radius ``ep_r``, camera frame) imaged
     through the optical elements the camera's line of sight meets, as an ``AIM_IMAGE`` aim row
     (probability 0; :mod:`eyelume.kernels.sampling`), or None when it meets none. Three real
     rays from the pupil's centre — along the axis and at :data:`_PUPIL_RAY_ANGLE` in x and in
-    y — are followed from the lens's first vertex through the element surfaces by the stronger
-    branch (as :func:`_view_through_elements`) until the next thing they meet is not an
-    element; the image's centre C is the mean of the points of the axial ray nearest each
+    y — are followed from the lens's first vertex through the element surfaces along the
+    camera's view (``view``, :func:`_view_through_elements`: a beamsplitter's fold even where
+    R ≤ T) until the next thing they meet is not an element; the image's centre C is the
+    mean of the points of the axial ray nearest each
     tilted one, its radius ``ep_r`` |u / u′| (u, u′ the tilted ray's angles to the axial ray
     before and after: the pupil's lateral magnification, in air on both sides), the row's
     axis the axial ray's direction after the elements. A pupil imaged at infinity (u′ = 0)
@@ -1624,10 +1790,10 @@ def _pupil_through_elements(
         met = 0
         for _ in range(_VIEW_EVENTS):
             s, t = G.nearest_hit(sf, si, *p, *d)
-            if s < 0 or not names[s].startswith("element "):
+            if not _is_optical(names, s):
                 break
             met += 1
-            p, d, _ = _stronger_step(sf, si, s, p + t * d, d)
+            p, d, _ = _view_step(sf, si, view, s, p + t * d, d)
         out.append((met, p, d))
     (met, p0, a), tilted = out[0], out[1:]
     if met == 0 or any(m != met for m, _, _ in tilted):
@@ -1958,7 +2124,7 @@ def _element_chains(
     return np.asarray(element_rows, dtype=np.int64), table
 
 
-def _camera_tables(
+def _camera_tables(  # noqa: PLR0913 - the compiled parts it is made of
     scene: Scene,
     surfaces: SurfaceTable,
     names: list[str],
@@ -1967,6 +2133,7 @@ def _camera_tables(
     stop: int,
     frame: Frame,
     led_points: np.ndarray,
+    view: np.ndarray,
 ) -> CameraTables:
     """The camera as the camera-side estimator sees it (:class:`CameraTables`; the physics in
     :mod:`eyelume.estimators.camera`)."""
@@ -1983,7 +2150,9 @@ def _camera_tables(
     cornea = names.index(scene.eye.surfaces[0].name)
     # seen through elements (a fold mirror, an eyepiece), light reaches the lens from the face
     # along lines through the pupil's image, not the pupil itself
-    image = _pupil_through_elements(surfaces, names, lf, ep_z, ep_r) if scene.elements else None
+    image = (
+        _pupil_through_elements(surfaces, names, lf, ep_z, ep_r, view) if scene.elements else None
+    )
     # the iris is seen through the cornea and then the elements: its light aims at the pupil's
     # image through both, not at the camera's own pupil through the cornea (on
     # paper2005-integrated that lies past the eyepiece's rim, 60° off the camera's axis)
@@ -2213,13 +2382,15 @@ def compile_scene(
         np.ascontiguousarray(_stack_rows(t.rows_f)), np.ascontiguousarray(np.stack(t.rows_i))
     )
     picture, eye_plane = _grids(scene, frame)
-    folded = bool(scene.elements) and _view_through_elements(scene, surfaces, t.names, lens.lf)
+    # refused or warned about at the scene's own wavelength only
+    strict = group is None and sun is None
+    folded, view = _view_through_elements(scene, surfaces, t.names, lens.lf, strict=strict)
     _check_view(scene, frame, first, picture, straight=not folded)
     tables = SceneTables(surfaces, lens, led, picture, eye_plane, int(scene.run.max_events))
     return CompiledScene(
         scene=scene,
         tables=tables,
-        camera=_camera_tables(scene, surfaces, t.names, lens, first, stop, frame, led.points),
+        camera=_camera_tables(scene, surfaces, t.names, lens, first, stop, frame, led.points, view),
         surface_names=t.names,
         lens_indices=idx,
         stop_index=stop,
@@ -2230,6 +2401,7 @@ def compile_scene(
         first_order=first,
         led_ids=None if group is None else group.leds,
         sun=sun,
+        view_branch=view,
     )
 
 

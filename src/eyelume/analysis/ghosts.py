@@ -6,10 +6,11 @@ A *chain* is the ordered list of surfaces that reflect the LED's light on its wa
 (in the light's order): one element surface (``["spectacle front"]``: LED → that surface →
 camera), or an element surface and the anterior cornea in either order (``["cornea",
 "spectacle front"]``: LED → cornea → spectacle → camera). Between the reflections the light
-crosses any element surface it meets by the stronger branch (refracted through a window or a
-lens, so a back-surface ghost is refracted twice by the front; folded by a mirror), as
-:func:`eyelume.analysis.truth._through_elements` does. A chain whose element reflection is the
-stronger branch there (a mirror, a hot mirror: R > T) is the camera's ordinary view, not a
+crosses any element surface it meets by the camera's view's branch (refracted through a window
+or a lens, so a back-surface ghost is refracted twice by the front; folded by a mirror or a
+beamsplitter), as :func:`eyelume.analysis.truth._through_elements` does. A chain whose element
+reflection is the view's branch there (a mirror, a hot mirror, a beamsplitter that folds the
+view: :func:`eyelume.analysis.truth.view_reflects`) is the camera's ordinary view, not a
 ghost, and is not listed (the glints and ``leds_in_view`` already give it).
 
 Position: the sensor point whose real chief ray, reflected by the chain's surfaces in reverse
@@ -49,10 +50,12 @@ from eyelume.analysis.truth import (
     _ELEMENT_EVENTS,
     _basis,
     _solve,
-    _stronger_branch,
     _View,
+    _view_branch,
     sensor_to_pixel,
+    view_reflects,
 )
+from eyelume.detectors.receivers import BinnedPlane
 from eyelume.estimators.camera import aim_chief, into_scene
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import interface_at, reflect
@@ -96,12 +99,17 @@ def _label(cs, cornea: int, s: int) -> str:
     return name[name.index("(") + 1 : name.rindex(")")] + name[name.rindex(")") + 1 :]
 
 
-def _follow(cs, p, d, chain, target=None, strict=False):
+def _follow(cs, p, d, chain, target=None, strict=False, pupil_z=None):
     """The ray (p, d) reflected by the surfaces ``chain`` in order, crossing the element
-    surfaces it meets before each (stronger branch), then through the elements up to
-    ``target``. Returns (p, d, weight, reflectances) — weight the product of R and T along the
-    path, ``reflectances`` the R at each chain surface — or None when a chain surface is
-    missed (or, ``strict``, anything else is met first)."""
+    surfaces it meets before each (the view's branch), then through the elements up to
+    ``target`` (a point: no element beyond its foot on the ray), or, with ``pupil_z``, until
+    it crosses the plane z = ``pupil_z`` toward +z (camera frame: the entrance pupil's plane)
+    before the next element — through a fold the pupil lies off the ray's line before the
+    mirror, and a foot-of-target test stopped rays that meet the mirror's far half (LED 0's
+    glint on paper2005-integrated came out 500× too faint). Returns (p, d, weight,
+    reflectances) — weight the product of R and T along the path, ``reflectances`` the R at
+    each chain surface — or None when a chain surface is missed (or, ``strict``, anything
+    else is met first)."""
     w, refl = 1.0, []
     for s in chain:
         for _ in range(_ELEMENT_EVENTS):
@@ -113,7 +121,7 @@ def _follow(cs, p, d, chain, target=None, strict=False):
                         return None
                     break
                 p = p + th * d
-                d, f = _stronger_branch(cs, h, p, d)
+                d, f = _view_branch(cs, h, p, d)
                 w *= f
                 continue
             break
@@ -133,8 +141,10 @@ def _follow(cs, p, d, chain, target=None, strict=False):
         h, th = G.nearest_hit(cs.sf, cs.si, *p, *d)
         if not _is_element(cs, h) or (target is not None and th > (target - p) @ d):
             break
+        if pupil_z is not None and d[2] > 0.0 and (pupil_z - p[2]) / d[2] < th:
+            break
         p = p + th * d
-        d, f = _stronger_branch(cs, h, p, d)
+        d, f = _view_branch(cs, h, p, d)
         w *= f
     return p, d, w, refl
 
@@ -161,8 +171,10 @@ def _sensor_box(cs):
     return cs.picture.width_mm / 2.0, cs.picture.height_mm / 2.0
 
 
-def _find(v: _View, chain_cam: list[int], led: np.ndarray):
-    """The sensor point (mm) of the image of ``led`` by ``chain_cam`` (camera-side order)."""
+def _find(v: _View, chain_cam: list[int], led: np.ndarray, start: np.ndarray | None = None):
+    """The sensor point (mm) of the image of ``led`` by ``chain_cam`` (camera-side order):
+    Newton's method from ``start`` (sensor mm) when given, else (or when that fails) from the
+    best points of a coarse grid over the sensor."""
     cs, cam = v.cs, v.cam
     n = led / np.linalg.norm(led)  # a plane through the LED, ⟂ its direction from the origin
     g1, g2 = _basis(n)
@@ -173,6 +185,10 @@ def _find(v: _View, chain_cam: list[int], led: np.ndarray):
             return None
         return _miss(_follow(cs, *ray, chain_cam, led), led, n, g1, g2)
 
+    if start is not None:
+        found = _solve(residual, np.asarray(start, dtype=float))
+        if found is not None:
+            return found
     hw, hh = _sensor_box(cs)
     starts = []
     for x in np.linspace(-hw, hw, _GRID):
@@ -194,13 +210,12 @@ def _irradiance(v: _View, chain_led: list[int], row: int, led: np.ndarray, u: np
     ray is lost."""
     cs = v.cs
     zp = v.cam.entrance_pupil_z
-    target = np.array([0.0, 0.0, zp])
     a, b = _basis(u)
 
     def at_pupil(du):
         d = u + du[0] * a + du[1] * b
         d = d / np.linalg.norm(d)
-        got = _follow(cs, led, d, chain_led, target)
+        got = _follow(cs, led, d, chain_led, pupil_z=zp)
         if got is None or abs(got[1][2]) < 1e-12:
             return None
         p, dd = got[0], got[1] / np.linalg.norm(got[1])
@@ -259,9 +274,10 @@ def _one(v: _View, k: int, row: int, led: np.ndarray, chain_cam: list[int]):
     if not (-0.5 <= c < cs.picture.cols - 0.5 and -0.5 <= r < cs.picture.rows - 0.5):
         return None
     u, clear, refl = _emission(v, s, chain_cam, led)
-    for sf in chain_cam:  # the ordinary view (R > T: a mirror) is not a ghost
+    for sf in chain_cam:  # the ordinary view (a mirror's or a beamsplitter's fold) is no ghost
         f = interface_at(cs.sf, cs.si, sf, -1.0)
-        if _is_element(cs, sf) and f.reflectance > 1.0 - f.reflectance - f.absorptance:
+        t = 1.0 - f.reflectance - f.absorptance
+        if _is_element(cs, sf) and view_reflects(cs, sf, f.reflectance, t):
             return None
     chain_led = chain_cam[::-1]
     e = _irradiance(v, chain_led, row, led, u)
@@ -294,14 +310,18 @@ def _blur_px(cs, distance_mm: float) -> float:
     return width_mm * abs(fo.magnification) / (cs.picture.width_mm / cs.picture.cols)
 
 
-def ghost_truth(v: _View) -> list[dict]:
+def ghost_truth(v: _View, glints: list[dict] | None = None) -> list[dict]:
     """Every specular image of an LED that an optical element causes, inside the picture: per
     LED and chain (module doc) its ``led``, ``chain`` (surface names in the light's order),
     ``centre_px`` (OpenCV convention), ``visible`` (nothing else on the path, the LED emitting
     that way), ``reflectances`` (R at each chain surface, same order), the irradiance it gives
     at the entrance pupil (``pupil_irradiance_w_mm2``), ``flux_w`` (W into the entrance
-    pupil) and ``relative_to_glint`` (over the same LED's corneal glint, same method). A scene
-    without elements: []."""
+    pupil) and ``relative_to_glint`` (over the same LED's corneal glint, same method; None,
+    with ``relative_to_glint_note`` saying why, when that glint does not exist or gives no
+    irradiance). ``glints``: the truth's glints (:func:`eyelume.analysis.truth.eye_truth`), whose
+    pixels start the search for each LED's glint here (the coarse grid alone missed LED 0's
+    of paper2005-integrated, 0.11 mm from the sensor's centre between two grid points, and
+    its ghosts had no ``relative_to_glint``). A scene without elements: []."""
     cs = v.cs
     if not cs.scene.elements:
         return []
@@ -311,8 +331,21 @@ def ghost_truth(v: _View) -> list[dict]:
         if nm.startswith("element ") and not nm.endswith(" edge")
     ]
     out = []
+    known = {g["led"]: g for g in glints or []}
     for row, (k, led) in enumerate(zip(cs.led_indices, cs.led.points, strict=True)):
-        glint = _one_glint(v, row, led)
+        truth = known.get(k)
+        start = None
+        if truth is not None and truth["centre_px"] is not None:
+            start = np.array(BinnedPlane(cs.picture).from_pixel(*truth["centre_px"]), float)
+        glint = _one_glint(v, row, led, start)
+        note = None
+        if not glint:
+            note = (
+                "no corneal glint of this LED: " + (truth["reason"] or "none found")
+                if truth is not None and truth["centre_px"] is None
+                else "its corneal glint gives no irradiance at the entrance pupil (a ray of it "
+                "lost) or was not found"
+            )
         for s in surfaces:
             for chain_cam in ([s], [s, v.cornea], [v.cornea, s]):
                 e = _one(v, k, row, led, chain_cam)
@@ -320,13 +353,16 @@ def ghost_truth(v: _View) -> list[dict]:
                     continue
                 pe = e["pupil_irradiance_w_mm2"]
                 e["relative_to_glint"] = None if (pe is None or not glint) else pe / glint
+                if e["relative_to_glint"] is None:
+                    e["relative_to_glint_note"] = note or "the ghost's irradiance was not found"
                 out.append(e)
     return out
 
 
-def _one_glint(v: _View, row: int, led: np.ndarray) -> float | None:
-    """The corneal glint's irradiance at the entrance pupil (W/mm²), same method."""
-    s = _find(v, [v.cornea], led)
+def _one_glint(v: _View, row: int, led: np.ndarray, start=None) -> float | None:
+    """The corneal glint's irradiance at the entrance pupil (W/mm²), same method (its search
+    started at ``start``, sensor mm, when given)."""
+    s = _find(v, [v.cornea], led, start)
     if s is None:
         return None
     u, _, _ = _emission(v, s, [v.cornea], led)

@@ -127,7 +127,7 @@ def _warn_mirrors(cs: CompiledScene) -> None:
                 f"elements.{k} is a mirror that reflects more than it transmits at one LED "
                 f"wavelength (R = {r:g}, T = {t:g}) and not at another (R = {lo_r:g}, "
                 f"T = {lo_t:g}): the eye image's regions (pupil, iris, sclera, skin) follow "
-                "its stronger branch at the scene's wavelength only",
+                "the camera's view at the scene's wavelength only",
                 RegionWarning,
                 stacklevel=3,
             )

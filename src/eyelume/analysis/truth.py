@@ -12,10 +12,12 @@ the stop's centre, :func:`eyelume.estimators.camera.aim_chief`) leaves the lens 
   emission point.
 
 With optical elements in the scene, every such ray is followed through the elements it meets
-on its way (refracted by a window or lens, folded by a mirror: the stronger of the reflected
-and transmitted branches, :func:`_through_elements`), so the truth is what the camera sees
-through and in them. Each spectacle ghost (an LED's image by a chain of one or two specular
-reflections off element surfaces and the cornea) is listed under ``ghosts``
+on its way (refracted by a window or lens, folded by a mirror: the branch the camera's view
+takes, :func:`_through_elements` — the stronger of the reflected and transmitted ones, except
+where the view of the eye takes the other, a beamsplitter's fold with R ≤ T), so the truth is
+what the camera sees through and in them. Each spectacle ghost (an LED's image by a chain of
+one or two specular reflections off element surfaces and the cornea) is listed under
+``ghosts``
 (:mod:`eyelume.analysis.ghosts`: its chain, pixel and flux); a scene without elements has no
 ``ghosts`` key.
 
@@ -84,9 +86,9 @@ _ELEMENT_EVENTS = 16  # element surfaces a truth ray may cross or be folded by
 def _through_elements(cs: CompiledScene, p: np.ndarray, d: np.ndarray, target=None):
     """The ray (p, d) past the optical elements (:attr:`eyelume.scene.model.Scene.elements`)
     it meets before any other surface (and, given ``target``, before passing it): at each
-    element surface the stronger branch — refracted when T ≥ R (a window, a lens), reflected
-    when R > T (a mirror, a hot mirror) or on total internal reflection — the path an image
-    seen through or in the elements takes. A scene without elements: (p, d) unchanged."""
+    element surface the branch of the camera's view (:func:`_view_branch`) — the path an
+    image seen through or in the elements takes. A scene without elements: (p, d)
+    unchanged."""
     return _element_path(cs, p, d, target)[:2]
 
 
@@ -103,20 +105,29 @@ def _element_path(cs: CompiledScene, p: np.ndarray, d: np.ndarray, target=None):
         if target is not None and t > (target - p) @ d:
             break
         p = p + t * d
-        d, w = _stronger_branch(cs, s, p, d)
+        d, w = _view_branch(cs, s, p, d)
         share *= w
     return p, d, share
 
 
-def _stronger_branch(cs: CompiledScene, s: int, p: np.ndarray, d: np.ndarray):
-    """At point ``p`` of element surface ``s``: the direction of the stronger branch of ray
-    direction ``d`` (refracted when T ≥ R, else reflected, or on total internal reflection)
-    and that branch's share of the power (T or R)."""
+def view_reflects(cs: CompiledScene, s: int, reflectance: float, transmittance: float) -> bool:
+    """Whether the camera's view takes the reflected branch at element surface ``s`` (of
+    these R and T): as the compile found the view of the eye (``cs.view_branch``,
+    :func:`eyelume.compile._view_through_elements`: a beamsplitter's fold even where R ≤ T),
+    and off that branch the stronger part (R > T)."""
+    v = -1 if cs.view_branch is None else int(cs.view_branch[s])
+    return v == 1 or (v < 0 and reflectance > transmittance)
+
+
+def _view_branch(cs: CompiledScene, s: int, p: np.ndarray, d: np.ndarray):
+    """At point ``p`` of element surface ``s``: the direction of ray direction ``d`` along the
+    camera's view (:func:`view_reflects`; reflected on total internal reflection) and that
+    branch's share of the power (T or R)."""
     n = np.array(G.surface_normal(cs.sf, cs.si, s, *p))
     f = interface_at(cs.sf, cs.si, s, float(d @ n))
     ok, *dt = refract(*d, *n, f.n1 / f.n2)
     t = 1.0 - f.reflectance - f.absorptance
-    if ok and t >= f.reflectance:
+    if ok and not view_reflects(cs, s, f.reflectance, t):
         d, w = np.array(dt), t
     else:
         d, w = np.array(reflect(*d, *n)), (f.reflectance if ok else 1.0)
@@ -615,7 +626,7 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
     if cs.scene.elements and ghosts:
         from eyelume.analysis.ghosts import ghost_truth
 
-        out["ghosts"] = _near_glints(ghost_truth(v), glints)
+        out["ghosts"] = _near_glints(ghost_truth(v, glints), glints)
         out["ghosts_visible"] = sum(g["visible"] for g in out["ghosts"])
     return out
 

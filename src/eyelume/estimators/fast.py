@@ -1213,19 +1213,21 @@ def _light_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
 
 
 @njit(cache=True)
-def primary_surfaces(scene, cam, row0, labels, sides):
+def primary_surfaces(scene, cam, view, row0, labels, sides):
     """The surface each pixel sees in the ideal image: the chief ray from the pixel centre
     through the stop's centre, refracting at the eye's surfaces (never reflecting) and taking
-    an optical element's stronger branch (reflected where R > T, a mirror's fold; as
+    at an optical element the camera's view's branch (``view`` (n_surfaces,) int64, the
+    compile's ``view_branch``: 1 reflected, a mirror's or a beamsplitter's fold; 0 refracted;
+    −1 the stronger part, reflected where R > T; as
     :func:`eyelume.analysis.truth._through_elements`), to the first opaque surface (``labels``;
     −1: nothing, or no chief ray) and the side it meets (``sides``: 1 = side B, the side the
     surface's normal points to). ``labels`` and ``sides`` hold the band of picture rows from
     ``row0`` (so a large sensor is mapped band by band)."""
-    _primary_surfaces(scene.surfaces, scene.picture, cam, row0, labels, sides)
+    _primary_surfaces(scene.surfaces, scene.picture, cam, view, row0, labels, sides)
 
 
 @njit(cache=True, parallel=True)
-def _primary_surfaces(surfaces, picture, camera, row0, labels, sides):
+def _primary_surfaces(surfaces, picture, camera, view, row0, labels, sides):
     """:func:`primary_surfaces` with the scene's parts it reads (numba#10139)."""
     sf, si = surfaces
     rows, cols = labels.shape
@@ -1256,9 +1258,11 @@ def _primary_surfaces(surfaces, picture, camera, row0, labels, sides):
             f = interface_at(sf, si, s, dx * nx + dy * ny + dz * nz)
             ok, tx, ty, tz = refract(dx, dy, dz, nx, ny, nz, f.n1 / f.n2)
             if _is_element(camera, s) and (
-                not ok or f.reflectance > 1.0 - f.reflectance - f.absorptance
+                not ok
+                or view[s] == 1
+                or (view[s] < 0 and f.reflectance > 1.0 - f.reflectance - f.absorptance)
             ):
-                # an element's stronger branch (a mirror's fold), as the truth takes it
+                # the view's branch at an element (a mirror's fold), as the truth takes it
                 dx, dy, dz = reflect(dx, dy, dz, nx, ny, nz)
                 continue
             if not ok:

@@ -545,16 +545,20 @@ def estimate_median_rel_error(est: FastEstimate, pixels: np.ndarray | None = Non
 
 def primary_surface_map(cs: CompiledScene) -> tuple[np.ndarray, np.ndarray]:
     """(rows, cols) index of the surface each pixel sees in the ideal image (−1: none), and
-    the side it is seen from (1: side B, where the surface normal points). Mapped in bands of
+    the side it is seen from (1: side B, where the surface normal points), through the
+    optical elements along the camera's view (``cs.view_branch``). Mapped in bands of
     rows (about :data:`CHUNK_SAMPLES` × 4 pixels each), so Ctrl-C interrupts a large sensor's
     map between bands instead of minutes later."""
     shape = (cs.picture.rows, cs.picture.cols)
     labels = np.empty(shape, dtype=np.int64)
     sides = np.zeros(shape, dtype=np.int64)
     band = max(1, (4 * CHUNK_SAMPLES) // shape[1])
+    view = cs.view_branch
+    if view is None:
+        view = np.full(cs.sf.shape[0], -1, dtype=np.int64)
     for r0 in range(0, shape[0], band):
         band_labels, band_sides = labels[r0 : r0 + band], sides[r0 : r0 + band]
-        F.primary_surfaces(cs.tables, cs.camera, r0, band_labels, band_sides)
+        F.primary_surfaces(cs.tables, cs.camera, view, r0, band_labels, band_sides)
     return labels, sides
 
 
