@@ -1237,17 +1237,118 @@ def _closing(mask: np.ndarray, k: int) -> np.ndarray:
     borders), worked only on the mask's bounding box padded by k // 2 + 1: the same pixels as
     on the whole mask — the dilation reaches k // 2 past the box, so the pad's outer ring stays
     0 and every erosion window reaching past it holds a 0 of that ring — at a fraction of the
-    cost."""
+    cost. The element's rows are centred runs (:func:`_ellipse_half_widths`): the closing is
+    then worked row by row on runs of pixels for k ≥ 9 (:func:`_close_runs`, the same pixels
+    as ``cv2.morphologyEx``, whose cost grows with the element's ~k² points: 3 × faster at
+    k = 15)."""
     bx, by, bw, bh = cv2.boundingRect(mask)
     pad = k // 2 + 1
     x0, y0 = max(0, bx - pad), max(0, by - pad)
     x1, y1 = min(mask.shape[1], bx + bw + pad), min(mask.shape[0], by + bh + pad)
     out = np.zeros_like(mask)
+    half = _ellipse_half_widths(k) if k >= 9 else None  # smaller: OpenCV's is as fast
+    if half is not None:
+        out[y0:y1, x0:x1] = _close_runs(mask[y0:y1, x0:x1], half)
+        return out
     out[y0:y1, x0:x1] = cv2.morphologyEx(
         mask[y0:y1, x0:x1],
         cv2.MORPH_CLOSE,
         cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)),
     )
+    return out
+
+
+_HALF_WIDTHS: dict[int, np.ndarray | None] = {}
+
+
+def _ellipse_half_widths(k: int) -> np.ndarray | None:
+    """Each row's half-width (k,) int64 of OpenCV's k × k elliptical element, when every row is
+    one run centred on the anchor (as for odd k), else None."""
+    if k not in _HALF_WIDTHS:
+        el = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+        half = []
+        for row in el:
+            nz = np.flatnonzero(row)
+            centred = len(nz) and nz[0] + nz[-1] == 2 * (k // 2)
+            if not centred or len(nz) != nz[-1] - nz[0] + 1 or el.shape[0] % 2 == 0:
+                half = None
+                break
+            half.append((len(nz) - 1) // 2)
+        _HALF_WIDTHS[k] = None if half is None else np.array(half, np.int64)
+    return _HALF_WIDTHS[k]
+
+
+@njit(cache=True, nogil=True)
+def _row_runs(src, invert):
+    """The runs [start, end) of set pixels (≠ 0, or with ``invert`` = 0) of each row of ``src``
+    ((h, w) uint8): starts and ends (h, w // 2 + 1) and their count a row."""
+    h, w = src.shape
+    cap = w // 2 + 1
+    rs = np.empty((h, cap), np.int64)
+    re = np.empty((h, cap), np.int64)
+    nr = np.zeros(h, np.int64)
+    for y in range(h):
+        c = 0
+        x = 0
+        while x < w:
+            if (src[y, x] != 0) != invert:
+                s = x
+                while x < w and (src[y, x] != 0) != invert:
+                    x += 1
+                rs[y, c] = s
+                re[y, c] = x
+                c += 1
+            x += 1
+        nr[y] = c
+    return rs, re, nr
+
+
+@njit(cache=True, nogil=True)
+def _dilate_runs(src, half, invert):
+    """Dilation of the set pixels of ``src`` ((h, w) uint8: those ≠ 0, or with ``invert`` those
+    = 0) by the element whose row i (offset i − k // 2) is the run of half-width ``half[i]``
+    about the anchor, nothing outside the picture counting: (h, w) uint8 0/1. Each row's runs
+    found once; an output row adds its k source rows' runs, widened, in a difference array."""
+    h, w = src.shape
+    k = half.size
+    r = k // 2
+    rs, re, nr = _row_runs(src, invert)
+    out = np.zeros((h, w), np.uint8)
+    diff = np.zeros(w + 1, np.int64)
+    for y in range(h):
+        hit = False
+        for i in range(k):
+            yy = y + i - r
+            if yy < 0 or yy >= h:
+                continue
+            g = half[i]
+            for c in range(nr[yy]):
+                diff[max(0, rs[yy, c] - g)] += 1
+                diff[min(w, re[yy, c] + g)] -= 1
+                hit = True
+        if hit:
+            acc = 0
+            for x in range(w):
+                acc += diff[x]
+                diff[x] = 0
+                if acc > 0:
+                    out[y, x] = 1
+            diff[w] = 0
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _close_runs(src, half):
+    """:func:`_closing` of ``src`` (uint8, ≠ 0 set) by the element of row half-widths ``half``:
+    the dilation (:func:`_dilate_runs`, outside counting as 0) then the erosion — the dilation
+    of its zeros, outside counting as set (OpenCV's default borders) — as uint8 0/255."""
+    d = _dilate_runs(src, half, False)
+    z = _dilate_runs(d, half, True)
+    h, w = src.shape
+    out = np.empty((h, w), np.uint8)
+    for y in range(h):
+        for x in range(w):
+            out[y, x] = 0 if z[y, x] else 255
     return out
 
 
