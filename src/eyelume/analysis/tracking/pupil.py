@@ -70,6 +70,7 @@ angles in degrees from +x toward +y (down the picture, clockwise as displayed).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -866,7 +867,8 @@ def ladder(
     (:func:`_level_candidates`) are kept; a blob holding an earlier chain's seed continues that
     chain (blobs only grow up the ladder). Returns the chains (darkest level first), f and, for
     the refusals, (the (level, area in full-resolution px) of blobs too small to be a pupil,
-    :func:`_edge_dark`'s darkest pupil-sized region on the border or missing pixels).
+    a function giving :func:`_edge_dark`'s darkest pupil-sized region on the border or missing
+    pixels: :func:`_first_edge_dark`, worked only when a refusal asks).
 
     ``reduced``: :func:`_reduced`'s triple when already made. ``fine`` > 1: the ladder's dark
     end again, ``fine`` times finer (steps ≥ 1 level), over the first ``ladder_fine_span``
@@ -879,7 +881,7 @@ def ladder(
     chains: list[list[Candidate]] = []
     tiny: list[tuple[float, int]] = []
     areas: list[tuple[np.ndarray, np.ndarray]] = []
-    edge_dark: tuple[float, int] | tuple = ()
+    seen = []  # each level's labels for _edge_dark, looked at only when a refusal needs it
     n_levels = int((top - lo) / step + 1e-9)
     # 16-bit labels when they fit (a 8-connected picture has ≤ ¼ of its pixels + 1 blobs):
     # the same labels, labelled faster.
@@ -890,7 +892,7 @@ def ladder(
         _, lab, stats, cent = cv2.connectedComponentsWithStats(dark, connectivity=8, ltype=ltype)
         areas.append((lab, stats[:, cv2.CC_STAT_AREA]))
         touch = np.unique(lab[inv]) if inv is not None else None
-        edge_dark = edge_dark or _edge_dark(lab, stats, touch, (min_area, max_area), f, t)
+        seen.append((lab, stats, touch, t))
         for c in _level_candidates(lab, stats, cent, tiny_area, max_area, touch):
             c.level, c.index = t, li
             if c.area < min_area:
@@ -906,7 +908,7 @@ def ladder(
     for ch in chains:
         if ch[-1].index == len(areas) - 1:
             ch[-1].q = _growth(areas, ch[-1])
-    return chains, f, (tiny, edge_dark)
+    return chains, f, (tiny, functools.partial(_first_edge_dark, seen, (min_area, max_area), f))
 
 
 def _levels(small: np.ndarray, params, fine: int) -> tuple[float, float, float]:
@@ -946,6 +948,16 @@ def _edge_dark(lab, stats, touch, areas: tuple[int, float], f: int, level: float
         if x == 0 or y == 0 or x + w == cols or y + h == rows or k in touching:
             largest = max(largest, area)
     return (level, largest * f * f) if largest >= 0 else ()
+
+
+def _first_edge_dark(seen, areas: tuple[int, float], f: int) -> tuple:
+    """:func:`_edge_dark` of the first of the ladder's levels ``seen`` ((labels, stats,
+    touching labels, level) each, darkest first) that has such a region, or ()."""
+    for lab, stats, touch, level in seen:
+        found = _edge_dark(lab, stats, touch, areas, f, level)
+        if found:
+            return found
+    return ()
 
 
 def _reduced(wp: WorkPicture, params) -> tuple[np.ndarray, np.ndarray | None, int]:
@@ -1048,7 +1060,8 @@ def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, 
         deep = median(typical)
         deep -= params.pupil_min_contrast_sigma * wp.noise
         unstable = [level for level in unstable if level <= deep]
-    tiny, edge_dark = tiny
+    tiny, edge_dark_of = tiny
+    edge_dark = edge_dark_of() if tiny else ()
     if tiny and edge_dark and edge_dark[0] <= min(tiny)[0]:
         return Refusal(
             f"no pupil off the picture's border: the darkest region of a pupil's size "
@@ -1800,7 +1813,7 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit
             max_boundary_gap=1.0 - params.ladder_fine_support,
         )
         again, _, _ = ladder(wp, params, reduced, fine=params.ladder_fine)
-        picks2 = choose(again, f, ([], ()), wp, params)
+        picks2 = choose(again, f, ([], tuple), wp, params)
         fit2 = _fit_candidates(img, wp, picks2, f, bright, params, []) if picks2 else None
         if (
             fit2 is not None
@@ -1814,7 +1827,7 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit
         return fit
     if not picks:
         return PupilFit(None, reason=picks.reason)
-    edge_dark = tiny[1]
+    edge_dark = tiny[1]()
     if edge_dark and edge_dark[0] <= picks[0].level:
         return PupilFit(
             None,
