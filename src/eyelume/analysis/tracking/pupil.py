@@ -1553,14 +1553,16 @@ def support_of(e: Ellipse, x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     a ragged real edge leaves many short gaps."""
     s, q = e.local(x, y)
     anomaly = np.arctan2(q / e.b, s / e.a)
-    n_bins = int(np.clip(round(e.perimeter / 2.0), 12, 180))
+    n_bins = min(max(round(e.perimeter / 2.0), 12), 180)
     occ = np.zeros(n_bins, bool)
     occ[((anomaly + math.pi) / (2 * math.pi) * n_bins).astype(int) % n_bins] = True
-    if not occ.any():
-        return 0.0, 1.0
     filled = np.flatnonzero(occ)  # circular gaps between occupied bins
-    longest = int((np.diff(np.append(filled, filled[0] + n_bins)) - 1).max())
-    return float(occ.mean()), longest / n_bins
+    if not len(filled):
+        return 0.0, 1.0
+    # (scalars from here: the same numbers as the array operations on a few dozen bins)
+    wrap = int(filled[0]) + n_bins - int(filled[-1])
+    longest = max(wrap, int(np.diff(filled).max()) if len(filled) > 1 else 0) - 1
+    return len(filled) / n_bins, longest / n_bins
 
 
 def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, params) -> PupilFit:
