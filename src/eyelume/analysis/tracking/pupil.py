@@ -834,25 +834,44 @@ class Candidate:
 def _level_candidates(lab, stats, cent, min_area, max_area, touch):
     """Indices of compact, inner components of one level: within the area bounds, fill of their
     box ≥ 0.5 (a tilted 2:1 ellipse fills 0.63), box aspect ≤ 3, not touching the picture's border
-    or the invalid area (``touch``: labels that do)."""
+    or the invalid area (``touch``: labels that do), with their centroid (rounded half to even,
+    as ``np.rint``) on the blob (else not convex enough). The components' statistics are
+    looked at in one compiled pass (:func:`_compact_inner`), the Candidates made of the few
+    left."""
+    touch = _NO_LABELS if touch is None else np.asarray(touch, np.int64)
+    found = _compact_inner(lab, stats, cent, float(min_area), float(max_area), touch)
+    return [Candidate(0.0, a, (x, y, w, h), (cx, cy)) for x, y, w, h, a, cx, cy in found.tolist()]
+
+
+_NO_LABELS = np.empty(0, np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _compact_inner(lab, stats, cent, min_area, max_area, touch):
+    """:func:`_level_candidates`' tests on each component (label order): (m, 7) int64 rows (x,
+    y, w, h, area, cx, cy) of those passing."""
     rows, cols = lab.shape
-    a = stats[1:, cv2.CC_STAT_AREA]
-    idx = np.flatnonzero((a >= min_area) & (a <= max_area)) + 1
-    if touch is not None and len(idx):
-        idx = idx[~np.isin(idx, touch)]
-    # The few components left (a handful a level) one by one: cheaper than array operations.
-    out = []
-    for k in idx.tolist():
-        x, y, w, h, area = stats[k].tolist()
+    n = stats.shape[0]
+    touched = np.zeros(n, np.bool_)
+    for k in touch:
+        if 0 <= k < n:
+            touched[k] = True
+    out = np.empty((n, 7), np.int64)
+    m = 0
+    for k in range(1, n):
+        x, y, w, h, area = stats[k, 0], stats[k, 1], stats[k, 2], stats[k, 3], stats[k, 4]
+        if area < min_area or area > max_area or touched[k]:
+            continue
         if x <= 0 or y <= 0 or x + w >= cols or y + h >= rows:
             continue
         if area < 0.5 * w * h or max(w, h) > 3 * min(w, h):
             continue
-        # round half to even (as np.rint); a centroid outside its blob: not convex enough
-        cx, cy = round(float(cent[k, 0])), round(float(cent[k, 1]))
+        cx, cy = int(np.rint(cent[k, 0])), int(np.rint(cent[k, 1]))
         if lab[cy, cx] == k:
-            out.append(Candidate(0.0, area, (x, y, w, h), (cx, cy)))
-    return out
+            out[m, 0], out[m, 1], out[m, 2], out[m, 3] = x, y, w, h
+            out[m, 4], out[m, 5], out[m, 6] = area, cx, cy
+            m += 1
+    return out[:m]
 
 
 def ladder(
