@@ -524,16 +524,30 @@ def _fit_points(pts: np.ndarray, diam: float) -> Ellipse | None:
 
 def _sampson_many(fits: list[Ellipse], x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """:func:`sampson_distance` of the points to each ellipse of ``fits``: (len(fits), n), the
-    same numbers, in one pass of array operations."""
-    col = lambda v: np.array(v, np.float64)[:, None]  # noqa: E731
-    c, sn = col([math.cos(h.theta) for h in fits]), col([math.sin(h.theta) for h in fits])
-    a2, b2 = col([h.a**2 for h in fits]), col([h.b**2 for h in fits])
-    dx = np.asarray(x, float)[None, :] - col([h.cx for h in fits])
-    dy = np.asarray(y, float)[None, :] - col([h.cy for h in fits])
-    s, q = dx * c + dy * sn, -dx * sn + dy * c
-    f = s * s / a2 + q * q / b2 - 1.0
-    g = 2.0 * np.hypot(s / a2, q / b2)
-    return f / np.maximum(g, 1e-12)
+    same numbers, in one compiled pass (:func:`_sampson_rows`)."""
+    par = np.array(
+        [(h.cx, h.cy, math.cos(h.theta), math.sin(h.theta), h.a**2, h.b**2) for h in fits],
+        np.float64,
+    ).reshape(-1, 6)
+    return _sampson_rows(par, np.asarray(x, np.float64), np.asarray(y, np.float64))
+
+
+@njit(cache=True, nogil=True)
+def _sampson_rows(par, x, y):
+    """:func:`_sampson_1d` of the points (x, y) for each row (cx, cy, cos θ, sin θ, a², b²) of
+    ``par``: (rows, n) float64, the same arithmetic as the array operations it replaces."""
+    out = np.empty((par.shape[0], x.size))
+    for r in range(par.shape[0]):
+        cx, cy, c, sn, a2, b2 = par[r, 0], par[r, 1], par[r, 2], par[r, 3], par[r, 4], par[r, 5]
+        for i in range(x.size):
+            dx = x[i] - cx
+            dy = y[i] - cy
+            s = dx * c + dy * sn
+            q = -dx * sn + dy * c
+            f = s * s / a2 + q * q / b2 - 1.0
+            g = 2.0 * math.hypot(s / a2, q / b2)
+            out[r, i] = f / (g if (g >= 1e-12 or g != g) else 1e-12)
+    return out
 
 
 def _best_run(x, y, e: Ellipse, d: np.ndarray, diam: float, params):
