@@ -758,9 +758,11 @@ def _glint_warnings(glints, fit, led_azimuths_deg, params) -> list[str]:
         ]
     elif not glints:
         warnings.append("warning: no glints found")
-    if fit:
-        for i, g in enumerate(glints):
-            d = float(abs(sampson_distance(fit.ellipse, g.centre_px[0], g.centre_px[1])))
+    if fit and glints:
+        # All the glints' distances at once (sampson_distance's compiled pass for 1-D points).
+        xy = np.array([g.centre_px for g in glints], np.float64)
+        dist = np.abs(sampson_distance(fit.ellipse, xy[:, 0], xy[:, 1])).tolist()
+        for i, (g, d) in enumerate(zip(glints, dist, strict=True)):
             if d < math.sqrt(g.area_px / math.pi) + params.glint_edge_margin_px:
                 warnings.append(
                     f"warning: glint {i} on the pupil edge ({d:.1f} px from the fitted "
