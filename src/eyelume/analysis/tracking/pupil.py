@@ -1712,9 +1712,13 @@ def _implausible(e: Ellipse, params) -> str | None:
 def _group_medians(vals: np.ndarray, k: np.ndarray, n: int, min_count: int = 3) -> np.ndarray:
     """The median (as :func:`median`) of ``vals`` in each group ``k`` = 0 … n − 1, NaN for a
     group of fewer than ``min_count`` values: one sort by (group, value) for all the groups."""
-    if vals.dtype.kind in "iu" and vals.dtype.itemsize <= 2:
-        # Integers: one sort of (group, value) packed in an int64 (the same order as the
-        # lexsort below, ~3 × faster).
+    if vals.dtype.kind in "iu" and vals.dtype.itemsize <= 2 and len(vals):
+        # Integers: counted per group when their range is small (an 8-bit picture's), else one
+        # sort of (group, value) packed in an int64 (the same order as the lexsort below, ~3 ×
+        # faster): the same middle values either way.
+        lo, hi = int(vals.min()), int(vals.max())
+        if (hi - lo + 1) * n <= 1 << 16:
+            return _group_medians_counted(vals, np.asarray(k, np.int64), n, min_count, lo, hi)
         key = (k.astype(np.int64) << 32) + (vals.astype(np.int64) + 65536)
         sv = ((np.sort(key) & 0xFFFFFFFF) - 65536).astype(np.float64)
     else:
@@ -1726,6 +1730,37 @@ def _group_medians(vals: np.ndarray, k: np.ndarray, n: int, min_count: int = 3) 
     ok = counts >= min_count
     out = np.full(n, np.nan)
     out[ok] = 0.5 * (sv[lo[ok]] + sv[hi[ok]])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _group_medians_counted(vals, k, n, min_count, lo, hi):
+    """:func:`_group_medians` of integer ``vals`` in [lo, hi] by counting them per group: each
+    group's middle value (or the mean of the middle two, in float64), NaN for fewer than
+    ``min_count``."""
+    span = hi - lo + 1
+    counts = np.zeros((n, span), np.int64)
+    for i in range(vals.size):
+        counts[k[i], np.int64(vals[i]) - lo] += 1
+    out = np.full(n, np.nan)
+    for g in range(n):
+        c = 0
+        for b in range(span):
+            c += counts[g, b]
+        if c < min_count:
+            continue
+        r_hi = c // 2
+        r_lo = r_hi if c % 2 else r_hi - 1
+        v_lo = v_hi = -1
+        cum = 0
+        for b in range(span):
+            cum += counts[g, b]
+            if v_lo < 0 and cum > r_lo:
+                v_lo = b
+            if cum > r_hi:
+                v_hi = b
+                break
+        out[g] = 0.5 * (np.float64(v_lo + lo) + np.float64(v_hi + lo))
     return out
 
 
