@@ -813,12 +813,14 @@ def work_picture(
     src = img if native else img.astype(np.float32)
     u8 = cv2.convertScaleAbs(src, alpha=255.0 / (hi - lo), beta=-255.0 * lo / (hi - lo))
     glint_r = 0.0
-    if bright is not None and cv2.countNonZero(bright):
+    # (an empty mask's bounding box is empty: no glints)
+    bx, by, bw, bh = cv2.boundingRect(bright) if bright is not None else (0, 0, 0, 0)
+    if bw:
         # Only around the glints (their bounding box, padded by what the dilation and the
         # erosion reach): the same pixels as on the whole picture, a fraction of the work.
-        bx, by, bw, bh = cv2.boundingRect(bright)
-        glint_r = _largest_radius(bright[by : by + bh, bx : bx + bw])
-        big = math.ceil(max(glint_r, math.sqrt(cv2.countNonZero(bright) / math.pi)))
+        in_box = bright[by : by + bh, bx : bx + bw]
+        glint_r = _largest_radius(in_box)
+        big = math.ceil(max(glint_r, math.sqrt(cv2.countNonZero(in_box) / math.pi)))
         pad = int(big + 2 + math.ceil(max(params.glint_margin_px, big)) + 2) + 1
         x0, y0 = max(0, bx - pad), max(0, by - pad)
         x1, y1 = min(img.shape[1], bx + bw + pad), min(img.shape[0], by + bh + pad)
