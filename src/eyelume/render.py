@@ -38,7 +38,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from eyelume.analysis.ambient import signal_to_ambient
-from eyelume.analysis.regions import region_masks, region_stats, with_glints
+from eyelume.analysis.regions import glint_centres, region_masks, region_stats, with_glints
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.truth import eye_truth
 from eyelume.compile import (
@@ -710,7 +710,7 @@ def _render_leds(
             eye_image=blur.image(est.image),
             eye_image_variance=blur.variance(est.variance),
             eye_plane=plane,
-            regions=with_glints(regions, blur.glints(est.glint_images)),
+            regions=with_glints(regions, blur.glints(est.glint_images), glint_centres(cs)),
             interrupted=est.interrupted,
             samples_per_pixel=est.samples_per_pixel,
             light_paths=est.light_paths,
@@ -815,6 +815,7 @@ class _Groups:
         self.extents = {"picture_extent_mm": picture.extent_mm, "plane_extent_mm": plane.extent_mm}
         self.areas = picture.bin_area_mm2, plane.bin_area_mm2
         self.regions = region_masks(cs)
+        self.centres = glint_centres(cs)
         self.shape = (cs.picture.rows, cs.picture.cols)
         self.plane_shape = (cs.eye_plane.rows, cs.eye_plane.cols)
 
@@ -905,7 +906,7 @@ def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> Render
         eye_image=image,
         eye_image_variance=variance,
         eye_plane=plane,
-        regions=with_glints(groups.regions, glints),
+        regions=with_glints(groups.regions, glints, groups.centres),
         interrupted=ests[-1].interrupted,
         samples_per_pixel=min(e.samples_per_pixel for e in ests),
         light_paths=sum(e.light_paths for e in ests),

@@ -9,7 +9,9 @@ Lambertian face) from that LED reaches at least 5 % of that glint's peak; glint 
 no other region. With optical elements, the ``reflection`` region holds the pixels of every
 visible specular image an element causes (spectacle ghosts, :mod:`eyelume.analysis.ghosts`):
 a disc about each one's true centre, as wide as its defocus blur and the diffraction PSF's
-Airy disc (:func:`reflection_mask`); its pixels belong to no other region but a glint's.
+Airy disc (:func:`reflection_mask`); its pixels belong to no other region, and a glint's
+region is then only the lit part of its LED's image about the true corneal glint
+(:func:`with_glints`), never the LED's ghosts.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ __all__ = [
     "GLINT_FRACTION",
     "REFLECTION_MIN_RADIUS_PX",
     "RegionWarning",
+    "glint_centres",
     "reflection_mask",
     "region_masks",
     "region_stats",
@@ -164,20 +167,76 @@ def with_reflections(masks: dict[str, np.ndarray], reflection: np.ndarray) -> di
     return out
 
 
-def with_glints(masks: dict[str, np.ndarray], glint_images: np.ndarray) -> dict[str, np.ndarray]:
+def glint_centres(cs: CompiledScene) -> list[tuple[float, float] | None] | None:
+    """Each LED's true corneal glint pixel (x, y) (OpenCV convention; None where it has no
+    visible glint), in scene LED order, for a scene with optical elements; None without
+    elements (their glint images then hold the corneal glints alone). What
+    :func:`with_glints` keeps each glint region to."""
+    if not cs.scene.elements:
+        return None
+    from eyelume.analysis.truth import _glint_truth, _view
+
+    v = _view(cs, cs.camera)
+    ids = cs.led_indices
+    out: list[tuple[float, float] | None] = [None] * (max(ids, default=-1) + 1)
+    for row, (k, led) in enumerate(zip(ids, cs.led.points, strict=True)):
+        g = _glint_truth(v, k, led, row)
+        if g["visible"] and g["centre_px"] is not None:
+            out[k] = (float(g["centre_px"][0]), float(g["centre_px"][1]))
+    return out
+
+
+def with_glints(
+    masks: dict[str, np.ndarray],
+    glint_images: np.ndarray,
+    centres: list[tuple[float, float] | None] | None = None,
+) -> dict[str, np.ndarray]:
     """``masks`` plus ``glint k`` for each LED's glint image (n_leds, rows, cols); glint pixels
-    are removed from the other regions."""
+    are removed from the other regions.
+
+    A glint image holds every path of LED k that met no Lambertian face, so with optical
+    elements it also holds LED k's ghosts (LED → spectacle → camera), often far brighter than
+    its corneal glint. So the pixels of ``masks["reflection"]`` (the visible ghosts') are never
+    a glint's, and with ``centres`` (:func:`glint_centres`: LED k's true corneal glint pixel,
+    or None: no visible glint, no region) ``glint k`` is the 8-connected part of the image's
+    lit pixels (> 0, outside the reflections) that holds — or, none holding it, comes nearest
+    — that pixel, thresholded at :data:`GLINT_FRACTION` of its own peak. Without ``centres``:
+    the image's pixels ≥ :data:`GLINT_FRACTION` of its peak."""
     out = dict(masks)
     shape = glint_images.shape[1:]
+    reflection = masks.get("reflection")
     any_glint = np.zeros(shape, dtype=bool)
     for k, g in enumerate(glint_images):
-        peak = g.max()
-        m = g >= GLINT_FRACTION * peak if peak > 0 else np.zeros(shape, dtype=bool)
+        if reflection is not None:
+            g = np.where(reflection, 0.0, g)
+        if centres is not None:
+            m = _corneal_part(g, centres[k] if k < len(centres) else None)
+        else:
+            peak = g.max()
+            m = g >= GLINT_FRACTION * peak if peak > 0 else np.zeros(shape, dtype=bool)
         out[f"glint {k}"] = m
         any_glint |= m
     for name in masks:
         out[name] = masks[name] & ~any_glint
     return out
+
+
+def _corneal_part(g: np.ndarray, centre: tuple[float, float] | None) -> np.ndarray:
+    """(rows, cols) bool: the 8-connected component of ``g > 0`` holding (or nearest to)
+    pixel ``centre`` (x, y), at ≥ :data:`GLINT_FRACTION` of that component's peak."""
+    from scipy import ndimage
+
+    none = np.zeros(g.shape, dtype=bool)
+    lit = np.isfinite(g) & (g > 0)
+    if centre is None or not lit.any():
+        return none
+    labels, _ = ndimage.label(lit, structure=np.ones((3, 3), dtype=bool))
+    r, c = np.nonzero(lit)
+    x, y = centre
+    nearest = int(np.argmin((c - x) ** 2 + (r - y) ** 2))
+    part = labels == labels[r[nearest], c[nearest]]
+    peak = g[part].max()
+    return part & (g >= GLINT_FRACTION * peak)
 
 
 def region_stats(
