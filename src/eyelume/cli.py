@@ -563,6 +563,8 @@ def render(
     )
     if "ambient" in summary:
         err.print(_ambient_line(summary["ambient"]), highlight=False)
+    if result.ghost_warning:
+        err.print(f"warning: {result.ghost_warning}", highlight=False, soft_wrap=True)
     if result.interrupted:
         _exit_interrupted()
 

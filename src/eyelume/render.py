@@ -250,6 +250,8 @@ class RenderResult:
     psf_parts: list[tuple[PixelPsf, np.ndarray]] | None = None
     psf_skipped: bool = False  # the scene asks for a PSF but missing pixels left it unapplied
     ambient: AmbientRender | None = None  # ambient.sun: the sunlight's picture, apart
+    # with elements: one line naming the truth's visible ghosts the picture does not resolve
+    ghost_warning: str | None = None
 
     @property
     def psf(self) -> PixelPsf | None:
@@ -424,6 +426,7 @@ class RenderResult:
         if psf is not None:
             out["psf"] = psf
         out["regions"] = self.region_stats()
+        out.update({"ghost_warning": self.ghost_warning} if self.ghost_warning else {})
         if self.ambient is not None:
             out["ambient"] = self.ambient_summary()
         out["safety"] = eye_safety(self.scene)
@@ -596,6 +599,8 @@ def render(
     if sun is not None and cs.sun is None and cs.led_ids is None:
         band = sunlight_band(sc.sensor, sun, float(sc.wavelength_nm))
     result = _render_leds(cs, opt, progress=progress, status=status, advance=advance)
+    if sc.elements and not result.interrupted:
+        result.ghost_warning = unresolved_ghosts(cs, result)
     if band is None or result.interrupted:
         return result
     if status is not None:
@@ -628,6 +633,77 @@ def render(
         direction_world=tuple(float(x) for x in world),
     )
     return result
+
+
+#: A visible ghost is resolved when the power rendered about it is within 3 standard errors
+#: + 30 % of the truth's ``flux_w`` (:data:`GHOST_TOLERANCE`) and known to 50 % (its pixels'
+#: summed relative error, :data:`GHOST_REL_ERROR`: a ghost drawn by a single light path has
+#: ~100 %; vr-offaxis-glasses' at its README budget, forward 2e6 rays, ~37 %).
+GHOST_TOLERANCE = 0.3
+GHOST_REL_ERROR = 0.5
+
+
+def unresolved_ghosts(cs: CompiledScene, result: RenderResult) -> str | None:
+    """One line naming each visible ghost of the truth (:func:`eyelume.analysis.ghosts.
+    ghost_truth`) whose light the picture does not resolve, or None when all are.
+
+    About each visible ghost, the pixels within ρ + 1.5 px of its ``centre_px`` (ρ: its
+    ``reflection`` disc's radius, :func:`eyelume.analysis.regions.reflection_mask`), less
+    any glint region's, hold P = Σ (E − b) A (W): E the pixels' irradiance (W/mm²), b the
+    median of the ring 1.5–3.5 px outside them (the diffuse light under the ghost), A the
+    pixel area (mm²); its standard error σ = A √Σ var (pixels taken as independent: with a
+    PSF, an under-estimate). F is the truth's ``flux_w`` of the visible ghosts whose centres
+    lie in those pixels. The ghost is unresolved when |P − F| > 3σ + 0.3 F — e.g. drawn by
+    one light path (P a multiple of F) or by none (P ≈ 0) — or σ > 0.5 P
+    (:data:`GHOST_TOLERANCE`, :data:`GHOST_REL_ERROR`)."""
+    from eyelume.analysis.ghosts import ghost_truth
+    from eyelume.analysis.regions import REFLECTION_MIN_RADIUS_PX
+    from eyelume.analysis.truth import _view
+    from eyelume.detectors.psf import camera_psf
+
+    ghosts = [g for g in ghost_truth(_view(cs, cs.camera)) if g["visible"]]
+    if not ghosts:
+        return None
+    image, var = result.eye_image, result.eye_image_variance
+    area = result.pixel_area_mm2
+    psf = camera_psf(cs)
+    airy = 0.0 if psf is None else psf.airy_radius_mm / psf.pitch_mm[0]
+    glint = np.zeros(image.shape, dtype=bool)
+    for name, m in result.regions.items():
+        if name.startswith("glint "):
+            glint |= m
+    r, c = np.mgrid[0 : image.shape[0], 0 : image.shape[1]]
+    bad = []
+    for g in ghosts:
+        x, y = g["centre_px"]
+        rho = max(REFLECTION_MIN_RADIUS_PX, 0.5 * (g.get("blur_px") or 0.0) + airy) + 1.5
+        d2 = (c - x) ** 2 + (r - y) ** 2
+        near = (d2 <= rho * rho) & ~glint & np.isfinite(image)
+        ring = (d2 > rho * rho) & (d2 <= (rho + 2.0) ** 2) & ~glint & np.isfinite(image)
+        if not near.any():
+            continue
+        back = float(np.median(image[ring])) if ring.any() else 0.0
+        p = float((image[near] - back).sum() * area)
+        sigma = float(math.sqrt(max(float(var[near].sum()), 0.0)) * area)
+        f = sum(
+            h["flux_w"]
+            for h in ghosts
+            if near[
+                min(max(int(round(h["centre_px"][1])), 0), image.shape[0] - 1),
+                min(max(int(round(h["centre_px"][0])), 0), image.shape[1] - 1),
+            ]
+        )
+        f = f or g["flux_w"]
+        if abs(p - f) > 3 * sigma + GHOST_TOLERANCE * f or sigma > GHOST_REL_ERROR * abs(p):
+            chain = " → ".join(g["chain"])
+            bad.append(f"LED {g['led']} ({chain}) {p:.2g} ± {sigma:.1g} W vs {f:.2g} W")
+    if not bad:
+        return None
+    return (
+        f"{len(bad)} of {len(ghosts)} visible ghosts in truth.json not resolved in the picture "
+        f"(rendered about each vs the truth's flux): {'; '.join(bad)} — too few light paths "
+        "drew them: raise --samples (fast) or --rays (forward)"
+    )
 
 
 def _render_leds(
