@@ -1053,6 +1053,23 @@ def _parse_leds(leds: str | None) -> list[float] | None:
     return az
 
 
+def _track_led_layout(leds: str | None, scene: str | None, sets: list[str] | None):
+    """``track``'s LED layout: (picture azimuths in degrees or None, the glints' predicted
+    layout (k, 2) px or None, the scene's sensor or None) from ``--leds`` or from ``--scene``
+    (and ``--set``), which exclude each other."""
+    if scene is not None and leds is not None:
+        _fail("--leds and --scene: give one (--scene takes the LEDs' layout from the scene)")
+    if scene is None:
+        if sets:
+            _fail("--set needs --scene (it overrides a field of the scene)")
+        return _parse_leds(leds), None, None
+    from eyelume.analysis.tracking.evaluate import led_picture_azimuths, led_picture_pattern
+    from eyelume.compile import compile_scene
+
+    cs = compile_scene(_load(scene, sets))
+    return led_picture_azimuths(cs), led_picture_pattern(cs), cs.scene.sensor
+
+
 @app.command()
 def track(
     image: Annotated[
@@ -1066,17 +1083,30 @@ def track(
         Path | None,
         typer.Option(help="Optional mask picture: non-zero where the picture shows the eye."),
     ] = None,
+    scene: Annotated[
+        str | None,
+        typer.Option(
+            "--scene",
+            help="The scene (a preset or a TOML file) the picture was taken in: the LEDs' "
+            "layout in the picture comes from it (instead of --leds; a fold mirror's "
+            "left-right flip included).",
+        ),
+    ] = None,
+    set_: SetOpt = None,
 ) -> None:
     """The detection pipeline on any grey eye picture: pupil ellipse and centre, glints with
     sub-pixel centroids matched to LEDs; prints JSON, and one line per failure. Non-finite
     pixels of a float .npy are missing pixels; a colour picture is read as its luminance. A
     picture enlarged k× by nearest neighbour (``render``'s PNGs of a small sensor) is read at
     its own size: positions are then in its original pixels (``"enlargement": k``), as in
-    ``truth.json``."""
+    ``truth.json``. With ``--scene`` the LEDs' picture azimuths and glint layout are the
+    scene's (:func:`eyelume.analysis.tracking.evaluate.led_picture_azimuths`,
+    :func:`~eyelume.analysis.tracking.evaluate.led_picture_pattern`, as evaluate-tracking
+    uses them) and the picture must be the scene's sensor size."""
     from eyelume.analysis.tracking.detect import detect, detection_to_dict, enlargement_factor
     from eyelume.errors import InputFileError
 
-    azimuths = _parse_leds(leds)
+    azimuths, pattern, sensor = _track_led_layout(leds, scene, set_)
     data = _read_picture(image)
     mask = None
     if valid is not None:
@@ -1097,10 +1127,17 @@ def track(
             highlight=False,
             soft_wrap=True,
         )
+    if sensor is not None and data.shape != (sensor.rows, sensor.cols):
+        raise InputFileError(
+            f"the picture is {data.shape[1]} × {data.shape[0]} pixels, the scene's sensor "
+            f"{sensor.cols} × {sensor.rows} (--scene {scene}): the LEDs' layout in pixels "
+            "would not fit it",
+            file=image,
+        )
     if _detect_kernels_cached() is False:
         err.print("compiling detection kernels (first run only; about 15 s)…")
     try:
-        result = detect(data, led_azimuths_deg=azimuths, valid=mask)
+        result = detect(data, led_azimuths_deg=azimuths, valid=mask, led_pattern_px=pattern)
     except ValueError as exc:
         raise InputFileError(str(exc), file=image) from None
     from eyelume.json_files import dumps
