@@ -8,6 +8,8 @@ at the budget (share of people tracked, their gaze score).
     python benchmarks/population.py --frames 3           # 3 single frames: CPU-s a frame
     python benchmarks/population.py --samples 8          # the fixed 8 samples/pixel of before
     python benchmarks/population.py --workers 2          # people on 2 processes (run_tasks)
+    python benchmarks/population.py --frames 3 --people-set face.lashes.enabled=false
+                                                         # the same people without their lashes
 
 ``--frames K`` renders and analyses one frame (a test gaze, as evaluate_people renders it) of
 each of people 0 … K−1 and extrapolates from the CPU seconds a frame to 50 people × 15 frames on
@@ -21,7 +23,15 @@ fast-estimator render of the full picture; by default rendered to the sensor's o
 ``--samples K`` at K camera samples per pixel). In ``--frames`` mode the person's pilot is
 timed and counted once per person (a fifteenth of it per frame). The issue's
 target: 50 people in ≤ 5 min on the 2-core machine. The first frame (Numba compilation from the
-cache, the first compile) is timed apart and not counted.
+cache, the first compile) is timed apart and not counted. ``--people-set key=value`` applies
+to every sampled person's scene after sampling (e.g. ``face.lashes.enabled=false``: the
+people's lashes, which the population switches on, off).
+
+Measured (one thread, 24ba11f, 04:26–04:36 UTC, load 10–11; README "Designing for a
+population"): ``--frames 3`` 14.3–15.3 CPU-s a frame (6, 5, 4 samples per pixel at targets of
+1.73–1.84 %), ≈ 5 400–5 700 s for 50 people on two idle cores (≈ 18× the target); with
+``--people-set face.lashes.enabled=false``, interleaved, 5.9 CPU-s a frame at 2 samples per
+pixel (≈ 2 200 s): the lashes' shadows are what raise the samples, not the budget.
 """
 
 from __future__ import annotations
@@ -50,6 +60,8 @@ def _args():
     ap.add_argument("--workers", type=int, default=1, help="people on this many processes")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--set", dest="sets", action="append", default=[], help="key=value")
+    ap.add_argument("--people-set", dest="people_sets", action="append", default=[],
+                    help="key=value applied to each sampled person's scene")  # fmt: skip
     ap.add_argument("--frames", type=int, default=0, help="only this many single frames")
     a = ap.parse_args()
     if a.samples is not None and a.render_noise is not None:
@@ -77,22 +89,21 @@ def main() -> None:
     from eyelume.scene.population import sample_people
 
     a = _args()
-    overrides = {}
-    for s in a.sets:
-        k, v = s.split("=", 1)
-        overrides[k] = json.loads(v) if v[:1] in "[{0123456789-tf" else v
+    overrides = _parse_sets(a.sets)
+    info_people = _parse_sets(a.people_sets)
     scene = eyelume.load_scene(a.scene, overrides)
     info = {"machine": machine(), "command": command_line(), "load_start": loadavg()}
     print_header("evaluate-tracking over sampled people", info["machine"])
-    people = sample_people(scene, a.people, a.population_seed)
+    people = _with_sets(sample_people(scene, max(a.people, a.frames), a.population_seed),
+                        info_people)  # fmt: skip
     t0 = time.perf_counter()
     render_frame(scene, 0.0, 0.0, 2, a.seed)  # compile (or load) the kernels
     warm = time.perf_counter() - t0
     per = people_frame_count()
     if a.frames:
-        _frames_only(a, scene, people if len(people) >= a.frames else
-                     sample_people(scene, a.frames, a.population_seed), per, info)  # fmt: skip
+        _frames_only(a, scene, people, per, info)
         return
+    people = people[: a.people]
     done = [0]
 
     def progress(message: str) -> None:
@@ -121,6 +132,7 @@ def main() -> None:
     out = {
         "scene": scene.name,
         "overrides": overrides,
+        "people_overrides": info_people,
         "sensor": [scene.sensor.cols, scene.sensor.rows],
         "samples_per_pixel_asked": None if a.noise else a.samples,
         "render_noise": a.noise,
@@ -209,13 +221,34 @@ def _frames_only(a, scene, people, per: int, info: dict) -> None:
     with open(RESULTS, "a", encoding="utf-8") as fh:
         fh.write(json.dumps({"time_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
                              **info, "mode": "frames", "scene": scene.name,
-                             "overrides": {s.split("=", 1)[0]: s.split("=", 1)[1] for s in a.sets},
+                             "overrides": _parse_sets(a.sets),
+                             "people_overrides": _parse_sets(a.people_sets),
                              "sensor": [scene.sensor.cols, scene.sensor.rows],
                              "samples_per_pixel_asked": None if a.noise else a.samples,
                              "render_noise": a.noise, "frames": rows,
                              "cpu_s_per_frame": round(cpu, 2), "frames_per_person": per,
                              "ideal_50_people_s": round(ideal, 1), "target_s": TARGET_S})
                  + "\n")  # fmt: skip
+
+
+def _parse_sets(sets: list[str]) -> dict:
+    """``key=value`` options as scene overrides (a JSON value where it parses as one)."""
+    out = {}
+    for s in sets:
+        k, v = s.split("=", 1)
+        out[k] = json.loads(v) if v[:1] in "[{0123456789-tf" else v
+    return out
+
+
+def _with_sets(people: list, overrides: dict) -> list:
+    """The people with ``overrides`` applied to each one's scene (``--people-set``)."""
+    if not overrides:
+        return people
+    import dataclasses
+
+    from eyelume.scene.io import apply_overrides
+
+    return [dataclasses.replace(p, scene=apply_overrides(p.scene, overrides)) for p in people]
 
 
 def _used(frames) -> list[int] | None:
