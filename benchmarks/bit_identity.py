@@ -2,17 +2,18 @@
 
     python benchmarks/bit_identity.py
 
-Renders ``eyelume.render(load_scene("paper2005"), RenderOptions(seed=1))`` and compares the
-SHA-256 of its ``eye_image``, ``eye_image_variance`` and ``eye_plane`` (float64, C order) with
-``results/bit_identity.json``, recorded on this project's 2-vCPU machine by the commit that gave
-the specular connections an analytic Jacobian (a deliberate change of the samples at rounding
-level), before it by the commit that aimed light paths at the glints, before it by the commit
-that made the first vertex's continuation skip its free cone (a deliberate change of the
-samples), before it by the commit that made a later vertex's connection through the cornea
-draw one LED (a deliberate change of the samples), before it by the commit that made the fast
-camera paths continue in stratified directions and draw a later vertex's LED by its
-unshadowed irradiance (likewise), by the commit that added the iris root (issue 12) and at
-commit 3b58b61.
+Renders ``eyelume.render(load_scene("paper2005"), RenderOptions(seed=1))`` and compares the SHA-256
+of its ``eye_image``, ``eye_image_variance`` and ``eye_plane`` (float64, C order) with
+``results/bit_identity.json``, recorded on this project's 2-vCPU machine by the commit that made
+the camera samples' stop aim take Broyden-updated steps (a deliberate change of the samples at
+rounding level), before it by the commit that gave the specular connections an analytic Jacobian (a
+deliberate change of the samples at rounding level), before it by the commit that aimed light paths
+at the glints, before it by the commit that made the first vertex's continuation skip its free cone
+(a deliberate change of the samples), before it by the commit that made a later vertex's connection
+through the cornea draw one LED (a deliberate change of the samples), before it by the commit that
+made the fast camera paths continue in stratified directions and draw a later vertex's LED by its
+unshadowed irradiance (likewise), by the commit that added the iris root (issue 12) and at commit
+3b58b61.
 Prints MATCH or DIFFER per array and exits 1 on any difference. (The test suite's
 ``tests/test_bit_identity.py`` checks the same arrays to 1e-9 relative, portable across CPUs.)
 """

@@ -103,7 +103,7 @@ from eyelume.kernels.tables import (
     scene_parts,
 )
 
-from .camera import aim_at_stop, aim_chief, into_scene
+from .camera import aim_chief, aim_into_scene, into_scene
 from .cornea_nee import (
     Receiver,
     chain_row,
@@ -628,9 +628,9 @@ def camera_pass(seed, first_set, n_sets, scene, cam, grid, sums):
     grid × grid array of cells, paired with the stop's strata by a random odd stride.
 
     A sample is a uniform point of the pixel and a uniform point of the stop joined by the real
-    ray (:func:`aim_at_stop`); its value c = A_stop cos²θ / (d² |det J|) · L, L the radiance the
-    lens receives along that ray, is an unbiased estimate of the pixel's mean irradiance
-    (W/mm²); so is m, and the sets are independent, so their spread gives the variance.
+    ray (:func:`~.camera.aim_into_scene`); its value c = A_stop cos²θ / (d² |det J|) · L, L the
+    radiance the lens receives along that ray, is an unbiased estimate of the pixel's mean
+    irradiance (W/mm²); so is m, and the sets are independent, so their spread gives the variance.
     """
     _camera_pass(seed, first_set, n_sets, *scene_parts(scene), cam, grid, sums)
 
@@ -700,11 +700,8 @@ def _camera_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139
                 # stop point to first order
                 gx = chief.qx + shift * (xs - xc) + (a.a22 * tx - a.a12 * ty) / adet
                 gy = chief.qy + shift * (ys - yc) + (-a.a21 * tx + a.a11 * ty) / adet
-                aim = aim_at_stop(camera, xs, ys, tx, ty, gx, gy, a)
-                if not aim.found:
-                    continue
-                r = into_scene(camera, xs, ys, aim.qx, aim.qy)
-                if not r.passed:
+                aim, r = aim_into_scene(camera, xs, ys, tx, ty, gx, gy, a)
+                if not (aim.found and r.passed):
                     continue
                 state, radiance = _camera_radiance(
                     state, tables, camera, Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz), scratch

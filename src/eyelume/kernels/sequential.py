@@ -138,6 +138,45 @@ def trace_lens(lf, x, y, z, dx, dy, dz, path, n_path, record):
     return LENS_PASSED, x, y, z, dx, dy, dz, met, n_path
 
 
+@per_ray
+def trace_lens_part(lf, j0, j1, x, y, z, dx, dy, dz, clip):
+    """Trace a world ray (unit direction, dz > 0) through lens surfaces ``j0`` … ``j1`` − 1,
+    with :func:`trace_lens`'s arithmetic, so that tracing 0 … k − 1 and then k … n − 1 gives
+    the whole trace's numbers.
+
+    With ``clip`` a hit outside its semi-diameter stops the ray (LENS_VIGNETTED), as in
+    :func:`trace_lens`; without, the ray goes on (apertures open) and ``inside`` says whether
+    every hit lay within its semi-diameter. Returns (status, x, y, z, dx, dy, dz, inside):
+    status LENS_VIGNETTED also when a surface is missed, LENS_TIR on total internal
+    reflection.
+    """
+    inside = True
+    for j in range(j0, j1):
+        zv = lf[j, L_Z]
+        c = lf[j, L_CURV]
+        k = lf[j, L_CONIC]
+        t = conic_hit_sequential(c, k, x, y, z - zv, dx, dy, dz)
+        if math.isnan(t):
+            return LENS_VIGNETTED, x, y, z, dx, dy, dz, False
+        x += t * dx
+        y += t * dy
+        z += t * dz
+        if x * x + y * y > lf[j, L_SD] * lf[j, L_SD]:
+            inside = False
+            if clip:
+                return LENS_VIGNETTED, x, y, z, dx, dy, dz, False
+        if lf[j, L_POWER] != 0.0:
+            ok, dx, dy, dz = ideal_lens(lf[j], x, y, dx, dy, dz)
+            if not ok:
+                return LENS_VIGNETTED, x, y, z, dx, dy, dz, False
+            continue
+        nx, ny, nz = conic_normal(c, k, x, y, z - zv)
+        ok, dx, dy, dz = refract(dx, dy, dz, nx, ny, nz, lf[j, L_N0] / lf[j, L_N1])
+        if not ok:
+            return LENS_TIR, x, y, z, dx, dy, dz, False
+    return LENS_PASSED, x, y, z, dx, dy, dz, inside
+
+
 @njit(cache=True)
 def _stop_point(lf, stop, x0, y0, ax, ay, path):
     """Where the ray from (x0, y0, 0) toward (ax, ay, z₁) (z₁ the first vertex) meets the stop;
