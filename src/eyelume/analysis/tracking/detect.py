@@ -79,6 +79,7 @@ from dataclasses import asdict, dataclass, field
 
 import cv2
 import numpy as np
+from numba import njit
 
 from eyelume.analysis.tracking.glints import (
     default_max_angle,
@@ -441,23 +442,59 @@ def _mend_hot_pixels(img: np.ndarray, noise: float) -> int:
     hit = np.flatnonzero(cv2.reduce(above, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel())
     if not len(hit):
         return 0
-    # cv2.findNonZero on those rows: (x, row) in row order, as np.nonzero (6 × its speed).
-    found = cv2.findNonZero(above[hit]).reshape(-1, 2).astype(np.intp)
-    xs, ys = found[:, 0], hit[found[:, 1]]
-    inner = (ys > 0) & (xs > 0) & (ys < rows - 1) & (xs < cols - 1)
-    ys, xs = ys[inner], xs[inner]
-    if len(ys) == 0 or len(ys) > 0.01 * img.size:
+    # cv2.findNonZero on those rows: (x, row) in row order, as np.nonzero (6 × its speed). The
+    # rest — their 8 neighbours' range and median (float64, the median the mean of the middle
+    # two, cast back to the picture's type), all judged before any is mended — in one compiled
+    # pass (:func:`_mend_alone`; the NumPy gather and reductions it replaces cost ~0.1 ms).
+    found = cv2.findNonZero(above[hit]).reshape(-1, 2)
+    return _mend_alone(img, found, hit, 8.0 * noise, 0.01 * img.size)
+
+
+@njit(cache=True, nogil=True)
+def _alone_median(img, r, c, k_sigma, nb):
+    """The median of pixel (r, c)'s 8 neighbours (float64, into the buffer ``nb``) when it
+    stands ``k_sigma`` over all of them and their range is within ``k_sigma``, else NaN."""
+    k = 0
+    for dr in range(-1, 2):
+        for dc in range(-1, 2):
+            if dr or dc:
+                nb[k] = np.float64(img[r + dr, c + dc])
+                k += 1
+    top, bottom = nb.max(), nb.min()
+    if np.float64(img[r, c]) - top > k_sigma and top - bottom <= k_sigma:
+        srt = np.sort(nb)
+        return 0.5 * (srt[3] + srt[4])
+    return np.nan
+
+
+@njit(cache=True, nogil=True)
+def _mend_alone(img, found, hit, k_sigma, max_count):
+    """:func:`_mend_hot_pixels` on the pixels above the 99.9th percentile (``found`` (n, 2):
+    column and index into ``hit``, the rows holding any): the inner ones (none mended when
+    there are more than ``max_count``) that stand ``k_sigma`` over all 8 neighbours, whose range
+    is within ``k_sigma``, take the neighbours' median, in place; returns how many."""
+    rows, cols = img.shape
+    n = found.shape[0]
+    inner = np.zeros(n, np.bool_)
+    n_inner = 0
+    for i in range(n):
+        r, c = hit[found[i, 1]], found[i, 0]
+        if r > 0 and c > 0 and r < rows - 1 and c < cols - 1:
+            inner[i] = True
+            n_inner += 1
+    if n_inner == 0 or n_inner > max_count:
         return 0
-    # The 8 neighbours of each, in one gather from the flat picture.
-    offs = np.array([dy * cols + dx for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx])
-    nb = img.ravel()[(ys * cols + xs)[None, :] + offs[:, None]]
-    nb = nb.astype(np.float64)
-    k_sigma = 8.0 * noise
-    top, bottom = nb.max(axis=0), nb.min(axis=0)
-    alone = (img[ys, xs] - top > k_sigma) & (top - bottom <= k_sigma)
-    if alone.any():
-        img[ys[alone], xs[alone]] = np.median(nb[:, alone], axis=0).astype(img.dtype)
-    return int(alone.sum())
+    value = np.full(n, np.nan)
+    nb = np.empty(8)
+    for i in range(n):
+        if inner[i]:
+            value[i] = _alone_median(img, hit[found[i, 1]], found[i, 0], k_sigma, nb)
+    m = 0
+    for i in range(n):
+        if value[i] == value[i]:
+            img[hit[found[i, 1]], found[i, 0]] = value[i]
+            m += 1
+    return m
 
 
 def _prepare(image: np.ndarray, valid: np.ndarray | None):

@@ -995,13 +995,50 @@ def _first_edge_dark(seen, areas: tuple[int, float], f: int) -> tuple:
     return ()
 
 
+def _area_reduced(u8: np.ndarray, f: int) -> np.ndarray:
+    """``cv2.resize(u8, (cols // f, rows // f), interpolation=cv2.INTER_AREA)``: for an odd f ≥ 3
+    dividing both sides (a 640 × 400 headset frame, f = 5) each f × f block's mean rounded to
+    the nearest integer by one compiled pass (:func:`_block_means`) — OpenCV's integer-scale
+    area path rounds the same mean (sum × (1 / f²) in float32, then to nearest), and with f²
+    odd no mean is a tie nor within float32's error of one: the same bytes, in ~⅓ of the time;
+    other sizes by OpenCV."""
+    rows, cols = u8.shape
+    if f >= 3 and f % 2 and rows % f == 0 and cols % f == 0 and u8.dtype == np.uint8:
+        return _block_means(u8, f)
+    return cv2.resize(u8, (cols // f, rows // f), interpolation=cv2.INTER_AREA)
+
+
+@njit(cache=True, nogil=True)
+def _block_means(u8, f):
+    """Each f × f block's mean of ``u8`` (rows and cols multiples of f), rounded to nearest
+    (f odd: never a tie), uint8."""
+    rows, cols = u8.shape
+    ny, nx = rows // f, cols // f
+    colsum = np.empty(cols, np.int32)
+    out = np.empty((ny, nx), np.uint8)
+    area = f * f
+    for by in range(ny):
+        r0 = by * f
+        for c in range(cols):  # the block row's column sums (vectorised over the row)
+            colsum[c] = u8[r0, c]
+        for r in range(r0 + 1, r0 + f):
+            for c in range(cols):
+                colsum[c] += u8[r, c]
+        for bx in range(nx):
+            s = 0
+            for c in range(bx * f, bx * f + f):
+                s += colsum[c]
+            out[by, bx] = (2 * s + area) // (2 * area)  # ⌊mean + ½⌋, no ties
+    return out
+
+
 def _reduced(wp: WorkPicture, params) -> tuple[np.ndarray, np.ndarray | None, int]:
     """The ladder's picture: ``wp.u8`` reduced by f (area average) and smoothed (σ 1 px), its
     missing pixels (grown by 1, or None) and f."""
     rows, cols = wp.u8.shape
     f = max(1, int(round(min(rows, cols) / params.ladder_rows)))
     size = (cols // f, rows // f)
-    small = cv2.resize(wp.u8, size, interpolation=cv2.INTER_AREA) if f > 1 else wp.u8
+    small = _area_reduced(wp.u8, f) if f > 1 else wp.u8
     small = cv2.GaussianBlur(small, (5, 5), 1.0)
     inv = None
     if wp.invalid is not None and wp.invalid.any():
