@@ -114,7 +114,7 @@ def find_glints(img: np.ndarray, value_range, noise: float, params):
         u8 = cv2.convertScaleAbs(smooth, alpha=scale, beta=0.0 - lo * scale)
     else:
         u8 = cv2.normalize(img, None, 0, 255, cv2.NORM_MINMAX, dtype=cv2.CV_8U)
-    hist = cv2.calcHist([u8], [0], None, [256], [0, 256]).ravel()
+    hist = _histogram(u8)
     tg8 = glint_threshold(hist, params.glint_percentile, params.glint_min_contrast)
     min_rise = 0.0
     if tg8 is None:
@@ -127,6 +127,31 @@ def find_glints(img: np.ndarray, value_range, noise: float, params):
     floor = 1e-6 * (value_range[1] - value_range[0])
     blobs, bright = glint_blobs(u8, img, tg8, params, noise=max(noise, floor), min_rise=min_rise)
     return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
+
+
+def _histogram(u8: np.ndarray) -> np.ndarray:
+    """``cv2.calcHist([u8], [0], None, [256], [0, 256]).ravel()`` (the counts of each 8-bit
+    level, float32 — exact below 2²⁴ pixels, as calcHist's): counted by one compiled pass
+    into four interleaved tables (:func:`_counts4`), ~1.3 × faster than calcHist."""
+    if u8.size >= 1 << 24 or not u8.flags.c_contiguous:
+        return cv2.calcHist([u8], [0], None, [256], [0, 256]).ravel()
+    return _counts4(u8.ravel()).astype(np.float32)
+
+
+@njit(cache=True, nogil=True)
+def _counts4(v):
+    """Counts of each value 0–255 of ``v`` (1-D uint8), int64: four tables filled in turn (a
+    count does not wait on the one before it, which the same value often is), then summed."""
+    h = np.zeros((4, 256), np.int64)
+    n4 = v.size - v.size % 4
+    for i in range(0, n4, 4):
+        h[0, v[i]] += 1
+        h[1, v[i + 1]] += 1
+        h[2, v[i + 2]] += 1
+        h[3, v[i + 3]] += 1
+    for i in range(n4, v.size):
+        h[0, v[i]] += 1
+    return h[0] + h[1] + h[2] + h[3]
 
 
 def _gaussian_f32(img: np.ndarray, sigma: float) -> np.ndarray:
@@ -352,7 +377,21 @@ def _skirt(raw, own, d_own, d_oth, has_others, m):
 
 
 def default_max_angle(led_azimuths_deg: Sequence[float]) -> float:
-    """Half the smallest circular gap between distinct LED azimuths, degrees (180 for one)."""
+    """Half the smallest circular gap between distinct LED azimuths, degrees (180 for one);
+    remembered per azimuths (a tracker asks for the same LEDs every frame)."""
+    key = tuple(float(a) for a in led_azimuths_deg)
+    if key not in _MAX_ANGLE:
+        if len(_MAX_ANGLE) > 64:
+            _MAX_ANGLE.clear()
+        _MAX_ANGLE[key] = _max_angle(key)
+    return _MAX_ANGLE[key]
+
+
+_MAX_ANGLE: dict[tuple[float, ...], float] = {}
+
+
+def _max_angle(led_azimuths_deg: Sequence[float]) -> float:
+    """:func:`default_max_angle`, computed."""
     az = np.unique(np.mod(np.asarray(led_azimuths_deg, float), 360.0))
     if len(az) < 2:
         return 180.0
