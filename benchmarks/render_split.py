@@ -21,6 +21,9 @@ delivered picture. Prints one line per repeat and appends a JSON line per repeat
 Measured (vr-offaxis, one thread, load ~10, 5207e6e, before the glint aim): 11.65 CPU-s —
 camera pass 9.82 (84 %), light pass 1.30 (11 %: 640 000 paths, 160 000 of them the floor of
 dcd6f2b), pilot 0.15, eye plane 0.13, region map 0.07, PSF 0.11, statistics 0.04.
+At 24ba11f (load 8–11): 8.88 / 8.98 CPU-s, 3 samples/pixel + 480 000 light paths — camera pass
+7.23 (81 %), light pass 1.08; with the preset's continuation grid 5 (4 on the iris), interleaved:
+7.12 CPU-s (−20 %), 2 samples/pixel + 320 000 light paths — camera pass 6.01, light pass 0.63.
 """
 
 from __future__ import annotations

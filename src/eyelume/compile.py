@@ -2189,6 +2189,7 @@ def _camera_tables(  # noqa: PLR0913 - the compiled parts it is made of
         through,
         cornea,
         int(scene.run.continuation_grid),
+        int(scene.run.iris_continuation_grid or scene.run.continuation_grid),
         *_element_chains(scene, surfaces, names, led_points, cornea),
         _glint_aims(scene, frame, surfaces, cornea, led_points, (ep_z, ep_r)),
     )

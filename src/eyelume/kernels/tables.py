@@ -162,7 +162,9 @@ class CameraTables(NamedTuple):
     ``through_cornea`` (n_surfaces,) int64: 1 where next-event estimation goes through the
     cornea (the iris); ``cornea``: the surface index of the anterior cornea (``cornea + 1`` is
     the posterior one); ``split_grid``: a camera path continues from its first Lambertian
-    vertex in split_grid² stratified directions (``run.continuation_grid``).
+    vertex in split_grid² stratified directions (``run.continuation_grid``), in iris_grid²
+    on the surfaces lit through the cornea (``run.iris_continuation_grid``; at least 3 there,
+    :data:`eyelume.estimators.fast.IRIS_GRID`).
 
     Optical elements (issue 14): ``element_rows`` (m,) int64 the rows of their optical
     surfaces (increasing; elements come last in the surface table), each the start of a light
@@ -190,6 +192,7 @@ class CameraTables(NamedTuple):
     through_cornea: np.ndarray
     cornea: int
     split_grid: int
+    iris_grid: int
     element_rows: np.ndarray
     chains: np.ndarray
     glint_aim: np.ndarray

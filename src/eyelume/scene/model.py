@@ -1216,9 +1216,16 @@ class Run(_Model):
     see :mod:`eyelume.estimators.fast`). A fast camera path continues from its first Lambertian
     vertex in ``continuation_grid``² cosine-weighted directions, one per stratum, for the light
     the faces send each other (the noisy part of a skin pixel; at least 3² on the iris): 1
-    where aiming through a real prescription dominates a sample's cost (paper2005), 4 (16 rays)
-    for a thin-lens camera, whose samples are cheap (vr-offaxis: per-sample noise in the median
-    skin pixel 20.6 % → 3.6 % for about 2 × the cost; ``benchmarks/eye_image.py``).
+    where aiming through a real prescription dominates a sample's cost (paper2005), 4–5 (16–25
+    rays) for a thin-lens camera, whose samples are cheap (vr-offaxis: per-sample noise in the
+    median skin pixel 20.6 % → 3.6 % for about 2 × the cost at 4; 2.71 % → 2.20 % for 9.3 →
+    12.6 µs from 4 to 5, which lets a 1 % render stop at 2 samples per pixel instead of 3;
+    ``benchmarks/eye_image.py``, ``benchmarks/render_split.py``).
+    ``iris_continuation_grid``: the grid on the surfaces lit through the cornea (the iris, at
+    least 3 there), whose continuation rays cross the cornea twice and cost ~3 × a skin
+    vertex's (vr-offaxis: ~1.3 µs against ~0.4 µs; there they carry ~2.5 % of the median iris
+    pixel's camera-path light but all of its sample-to-sample noise); None:
+    ``continuation_grid``.
     """
 
     estimator: Literal["forward", "fast"] = "fast"
@@ -1226,6 +1233,7 @@ class Run(_Model):
     samples_per_pixel: int = Field(32, ge=1, le=1_000_000)
     light_paths_per_pixel: float = Field(16.0, ge=0.0, le=1e6)
     continuation_grid: int = Field(2, ge=1, le=8)
+    iris_continuation_grid: int | None = Field(None, ge=1, le=8)
     seed: int = Field(0, ge=0, lt=2**63)
     batch_size: int = Field(1 << 18, ge=1)
     max_events: int = Field(64, ge=2, le=10_000)
