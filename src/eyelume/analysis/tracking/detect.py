@@ -19,7 +19,9 @@ Conventions
   optional ``valid`` mask are missing: no dark region touching them is the pupil, no outline
   point next to them is used. So is a black border (:func:`_black_border`: a region at exactly
   the darkest value touching the picture's edge, ≥ 0.5 % of it; a warning says so). A picture
-  with none left is a ValueError.
+  with none left is a ValueError. Small enclosed holes of non-finite pixels (≤ ``HOLE_MAX_PX``,
+  not touching the edge: dead pixels) are filled from their surround instead (:func:`_fill_holes`,
+  a warning says so): one inside a pupil would otherwise cut it.
 
 Pipeline (each step's choices are explained in :mod:`.pupil` and :mod:`.glints`)
 ----------------------------------------------------------------------------------
@@ -393,6 +395,39 @@ def _missing(img: np.ndarray, valid: np.ndarray | None) -> np.ndarray | None:
     return invalid
 
 
+#: The largest hole of non-finite pixels (px, 8-connected, not touching the picture's edge) that
+#: :func:`_fill_holes` fills from its surround instead of leaving missing: a dead pixel or a
+#: small cluster. ASSUMPTION (a choice, not a datum): 16 px, under a tenth of the smallest
+#: pupil the detector answers (``min_pupil_px``); a larger hole may hide the pupil's edge.
+HOLE_MAX_PX = 16
+
+
+def _fill_holes(img: np.ndarray, nonfinite: np.ndarray) -> tuple[np.ndarray, int]:
+    """Fill the small enclosed holes of ``nonfinite`` (bool, the picture's NaN/inf pixels) in
+    ``img`` (float, modified) by OpenCV's inpainting (``cv2.inpaint``, Telea's fast marching,
+    radius 3 px) from the valid pixels around them. A hole is an 8-connected component of at
+    most :data:`HOLE_MAX_PX` pixels that does not touch the picture's edge: one dead pixel
+    inside a pupil otherwise made the pupil "touch missing pixels" and refused it (a pupil cut
+    by the frame). Returns (the pixels still missing, the number filled)."""
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(nonfinite.astype(np.uint8), connectivity=8)
+    if n <= 1:
+        return nonfinite, 0
+    rows, cols = img.shape
+    x, y = stats[:, cv2.CC_STAT_LEFT], stats[:, cv2.CC_STAT_TOP]
+    w, h = stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT]
+    small = (stats[:, cv2.CC_STAT_AREA] <= HOLE_MAX_PX) & (x > 0) & (y > 0)
+    small &= (x + w < cols) & (y + h < rows)
+    small[0] = False
+    if not small.any():
+        return nonfinite, 0
+    holes = small[lab]
+    work = img.astype(np.float32)
+    work[nonfinite] = 0.0
+    filled = cv2.inpaint(work, holes.astype(np.uint8), 3, cv2.INPAINT_TELEA)
+    img[holes] = filled[holes]
+    return nonfinite & ~holes, int(holes.sum())
+
+
 def _black_border(img: np.ndarray, min_frac: float = 0.005) -> np.ndarray | None:
     """Pixels of a black border (bool), or None: the 4-connected regions of pixels at exactly
     the picture's darkest value that touch its edge and hold ≥ ``min_frac`` (0.5 %) of it — a
@@ -499,9 +534,11 @@ def _mend_alone(img, found, hit, k_sigma, max_count):
 
 def _prepare(image: np.ndarray, valid: np.ndarray | None):
     """Step 1: the picture as a contiguous array (uint8/uint16/int16/float32 kept, other reals
-    converted), its invalid pixels (non-finite, or outside ``valid``; ``None`` when none) set to
-    the darkest valid value, its range (min, max) and its pixel noise. (The glints' 8-bit
-    picture is made by :func:`~.glints.find_glints`, from the smoothed picture when it smooths.)
+    converted), its small enclosed non-finite holes filled (:func:`_fill_holes`), its invalid
+    pixels (non-finite, or outside ``valid``; ``None`` when none) set to the darkest valid value,
+    its range (min, max), its pixel noise and the counts (hot pixels, black border, filled).
+    (The glints' 8-bit picture is made by :func:`~.glints.find_glints`, from the smoothed
+    picture when it smooths.)
     Raises ValueError for a picture that is not 2-D, empty, or has no valid pixel."""
     img = np.asarray(image)
     if img.ndim != 2:
@@ -510,8 +547,13 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None):
         raise ValueError(f"detect needs a non-empty picture, got shape {img.shape}")
     if img.dtype == bool or img.dtype not in (np.uint8, np.uint16, np.int16, np.float32):
         img = img.astype(np.float64 if img.dtype.kind == "f" else np.float32)
-    invalid = _missing(img, valid)
     img = np.array(img, order="C", copy=True)
+    n_filled = 0
+    if img.dtype.kind == "f":
+        nonfinite = ~np.isfinite(img)
+        if nonfinite.any() and not nonfinite.all():
+            n_filled = _fill_holes(img, nonfinite)[1]
+    invalid = _missing(img, valid)
     if invalid is not None:
         if invalid.all():
             raise ValueError("the picture has no valid pixel (all NaN/inf or masked out)")
@@ -524,7 +566,7 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None):
     noise = max(noise_sigma(img), 0.5 if img.dtype.kind in "iu" else 0.0)
     n_hot = _mend_hot_pixels(img, noise)
     lo, hi, _, _ = cv2.minMaxLoc(img)
-    return img, invalid, float(lo), float(hi), (n_hot, noise, n_black)
+    return img, invalid, float(lo), float(hi), (n_hot, noise, n_black, n_filled)
 
 
 def _pupil_result(fit, params) -> tuple[Pupil | None, list[str]]:
@@ -853,7 +895,7 @@ def detect(
             )
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    img, invalid, lo, hi, (n_hot, noise, n_black) = _prepare(image, valid)
+    img, invalid, lo, hi, (n_hot, noise, n_black, n_filled) = _prepare(image, valid)
     if hi <= lo:
         timings["total"] = 1e3 * (time.perf_counter() - t_start)
         return Detection(
@@ -886,6 +928,11 @@ def detect(
     warnings = lost_note + _glint_warnings(glints, fit, led_azimuths_deg, params)
     if n_hot:
         warnings.append(f"warning: {n_hot} isolated hot pixel(s) replaced by their neighbours")
+    if n_filled:
+        warnings.append(
+            f"warning: {n_filled} missing pixel(s) in small enclosed holes (≤ {HOLE_MAX_PX} px) "
+            "filled from their surround (cv2.inpaint)"
+        )
     if n_black:
         warnings.append(
             f"warning: a black border ({n_black} px at the picture's darkest value, touching its "
