@@ -379,14 +379,12 @@ class Detection:
     missing_leds: list[int] = field(default_factory=list)
 
 
-def _missing(img: np.ndarray, valid: np.ndarray | None) -> np.ndarray | None:
-    """The missing pixels (bool): non-finite ones of a float picture and those outside
-    ``valid``; None when there are none."""
-    invalid = None
-    if img.dtype.kind == "f":
-        bad = ~np.isfinite(img)
-        if bad.any():
-            invalid = bad
+def _missing(
+    img: np.ndarray, valid: np.ndarray | None, nonfinite: np.ndarray | None
+) -> np.ndarray | None:
+    """The missing pixels (bool): ``nonfinite`` (the float picture's non-finite pixels that
+    :func:`_fill_holes` left, or None) and those outside ``valid``; None when there are none."""
+    invalid = nonfinite if nonfinite is not None and nonfinite.any() else None
     if valid is not None:
         valid = np.asarray(valid, bool)
         if valid.shape != img.shape:
@@ -548,12 +546,12 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None):
     if img.dtype == bool or img.dtype not in (np.uint8, np.uint16, np.int16, np.float32):
         img = img.astype(np.float64 if img.dtype.kind == "f" else np.float32)
     img = np.array(img, order="C", copy=True)
-    n_filled = 0
+    nonfinite, n_filled = None, 0
     if img.dtype.kind == "f":
         nonfinite = ~np.isfinite(img)
         if nonfinite.any() and not nonfinite.all():
-            n_filled = _fill_holes(img, nonfinite)[1]
-    invalid = _missing(img, valid)
+            nonfinite, n_filled = _fill_holes(img, nonfinite)
+    invalid = _missing(img, valid, nonfinite)
     if invalid is not None:
         if invalid.all():
             raise ValueError("the picture has no valid pixel (all NaN/inf or masked out)")
