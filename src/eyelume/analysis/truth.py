@@ -23,8 +23,11 @@ one or two specular reflections off element surfaces and the cornea) is listed u
 
 Pixel coordinates follow OpenCV's convention on the upright picture: pixel (column c, row r) has
 its centre at (x, y) = (c, r), row 0 at the top. A point is *visible* when nothing (an eyelid,
-the lens mount) blocks its rays; a glint whose reflection point falls outside the cornea's cap
-does not exist.
+the lens mount) blocks its rays; a glint whose chief ray's reflection point falls outside the
+cornea's cap has no ``centre_px`` (``on_cornea`` False) — unless the rays through part of the
+camera's aperture still reflect off the cap: then a partial spot, cut by the cornea's rim, is in
+the picture, and the glint is marked ``at_rim`` (as is one on the cap whose aperture's rays
+partly fall past it), with where that spot's centroid lies (:func:`_rim_glint`).
 """
 
 from __future__ import annotations
@@ -46,7 +49,7 @@ from eyelume.compile import (
 )
 from eyelume.detectors.receivers import BinnedPlane
 from eyelume.errors import GeometryError
-from eyelume.estimators.camera import aim_chief, into_scene
+from eyelume.estimators.camera import aim_chief, aim_into_scene, into_scene
 from eyelume.kernels import geometry as G
 from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.sampling import orthonormal_basis, radiant_intensity
@@ -149,14 +152,41 @@ def _through_cornea(cs: CompiledScene, cornea: int, p: np.ndarray, d: np.ndarray
     return p, d
 
 
-def _off_cornea(cs: CompiledScene, cornea: int, p: np.ndarray, d: np.ndarray):
-    """The ray reflected by the anterior cornea, or None if it misses the cap."""
-    t = G.intersect_surface(cs.sf, cs.si, cornea, *p, *d, math.inf)
+def _off_cornea(cs: CompiledScene, cornea: int, p: np.ndarray, d: np.ndarray, sf=None):
+    """The ray reflected by the anterior cornea, or None if it misses the cap; ``sf``: another
+    surface table (:func:`_open_cap`'s, the cap extended past the limbus)."""
+    sf = cs.sf if sf is None else sf
+    t = G.intersect_surface(sf, cs.si, cornea, *p, *d, math.inf)
     if t < 0:
         return None
     p = p + t * d
-    n = np.array(G.surface_normal(cs.sf, cs.si, cornea, *p))
+    n = np.array(G.surface_normal(sf, cs.si, cornea, *p))
     return p, np.array(reflect(*d, *n))
+
+
+def _open_cap(cs: CompiledScene, cornea: int) -> np.ndarray:
+    """The surface table with the anterior cornea's surface extended past its cap (no radial or
+    depth limits: the same conicoid or quadric beyond the limbus), for the reflection points of
+    a glint cut by the cornea's rim (:func:`_rim_glint`)."""
+    sf = cs.sf.copy()
+    sf[cornea, G.RMAX2] = math.inf
+    sf[cornea, G.ZLO] = -math.inf
+    sf[cornea, G.ZHI] = math.inf
+    return sf
+
+
+def _stop_ray(cs: CompiledScene, cam: CameraTables, xs: float, ys: float, tx: float, ty: float):
+    """The ray from sensor point (xs, ys) through point (tx, ty) of the camera's stop (mm, the
+    stop's frame; (0, 0): the chief ray) in the scene, past the optical elements, or None."""
+    chief = aim_chief(cam, xs, ys)
+    if not chief.found:
+        return None
+    _, r = aim_into_scene(
+        cam, float(xs), float(ys), float(tx), float(ty), chief.qx, chief.qy, chief.jac
+    )
+    if not r.passed:
+        return None
+    return _through_elements(cs, np.array([r.x, r.y, r.z]), np.array([r.dx, r.dy, r.dz]))
 
 
 def _miss(ray, target: np.ndarray, normal: np.ndarray, e1: np.ndarray, e2: np.ndarray):
@@ -219,6 +249,7 @@ class _View:
     e1: np.ndarray
     e2: np.ndarray
     par_m: float  # paraxial guess scale
+    open_sf: np.ndarray | None = None  # the surface table with the cap extended (_open_cap)
 
     def turned(self, p: np.ndarray) -> np.ndarray:
         """A primary-gaze eye point (world mm), turned with the gaze and moved with the head,
@@ -255,14 +286,16 @@ def _view(cs: CompiledScene, cam: CameraTables) -> _View:
     # the optical axis, out of the eye (gaze, and a left eye's mirror)
     axis = cs.frame.vector(eye_direction(cs.scene, [0.0, 0.0, 1.0]))
     e1, e2 = _basis(axis)
+    cornea = cs.surface_names.index(eye.surfaces[0].name)
     return _View(
         cs=cs,
         cam=cam,
-        cornea=cs.surface_names.index(eye.surfaces[0].name),
+        cornea=cornea,
         axis=axis,
         e1=e1,
         e2=e2,
         par_m=-(cs.image_z - cam.entrance_pupil_z) / (cam.entrance_pupil_z),
+        open_sf=_open_cap(cs, cornea),
     )
 
 
@@ -428,7 +461,9 @@ def sclera_reflection(cs: CompiledScene, k: int) -> list[float] | None:
 def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
     """LED ``k``'s glint (row ``row`` of the compiled LED table): the pixel whose chief ray the
     cornea reflects to the LED, and whether the way in and out is clear and the LED sends light
-    that way (its profile I(α) > 0 toward the cornea)."""
+    that way (its profile I(α) > 0 toward the cornea); ``at_rim`` and ``rim``
+    (:func:`_rim_glint`) when the cornea's rim cuts the rays through part of the camera's
+    aperture, whether or not the chief ray's reflection lies on the cap."""
     cs, cam, cornea = v.cs, v.cam, v.cornea
     to_led = led - v.turned(np.array([0.0, 0.0, -cs.scene.eye.surfaces[0].radius_mm]))
     n = to_led / np.linalg.norm(to_led)
@@ -444,18 +479,50 @@ def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
     c_img = v.image_of(v.turned(np.array([0.0, 0.0, -3.9])))
     guess = (c_img if c_img is not None else np.zeros(2)) - 0.05 * abs(v.par_m) * led[:2]
     s = _solve(residual, guess)
-    entry: dict = {"led": k, "centre_px": None, "on_cornea": False, "visible": False, "reason": ""}
+    entry: dict = {
+        "led": k,
+        "centre_px": None,
+        "on_cornea": False,
+        "visible": False,
+        "reason": "",
+        "at_rim": False,
+        "rim": None,
+    }
+    rim = _rim_glint(v, k, row, led, (n, g1, g2), guess if s is None else s)
+    if rim is not None and 0.0 < rim["aperture_share"] < 1.0:
+        entry["at_rim"] = True
+        entry["rim"] = rim
     if s is None:
         entry["reason"] = "no reflection toward this LED on the cornea's cap (off the cornea)"
+        if entry["at_rim"]:
+            entry["reason"] = (
+                f"cut by the cornea's rim: the chief ray's mirror point lies "
+                f"{rim['beyond_rim_mm']:.3f} mm past the limbus, but rays through "
+                f"{100 * rim['aperture_share']:.0f} % of the camera's aperture reflect off the "
+                f"cap: a partial spot at {_fmt_px(rim['centre_px'])} px (see rim)"
+            )
         return entry
     entry["on_cornea"] = True
     entry["centre_px"] = list(sensor_to_pixel(cs, *s))
-    *ray, share_in = _chief_ray(cs, cam, *s, share=True)
-    hit = _off_cornea(cs, cornea, *ray)
+    chief = _chief_ray(cs, cam, *s, share=True)
+    entry["visible"], entry["reason"] = _glint_seen(v, k, row, led, *chief)
+    return entry
+
+
+def _fmt_px(c) -> str:
+    return "none" if c is None else f"({c[0]:.2f}, {c[1]:.2f})"
+
+
+def _glint_seen(v: _View, k: int, row: int, led: np.ndarray, p, d, share_in: float):
+    """(visible, reason) of LED ``k``'s glint along the camera ray (p, d) (past the elements,
+    carrying ``share_in`` of the power): the way in and out clear and the LED sending light
+    back along it (I(α) > 0)."""
+    cs, cornea = v.cs, v.cornea
+    hit = _off_cornea(cs, cornea, p, d)
     share_out = 1.0
     if hit is not None:
         *hit, share_out = _element_path(cs, *hit, led)
-    blocked_in = share_in <= 0.0 or not _clear(cs, ray[0], ray[1], cornea)
+    blocked_in = share_in <= 0.0 or not _clear(cs, p, d, cornea)
     blocked_out = share_out <= 0.0
     blocked_out = (
         blocked_out
@@ -467,15 +534,128 @@ def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
         )
     )
     dark = hit is not None and float(radiant_intensity(cs.led, row, *(-hit[1]))) <= 0.0
-    entry["visible"] = not (blocked_in or blocked_out or dark)
-    entry["reason"] = (
+    visible = not (blocked_in or blocked_out or dark)
+    reason = (
         ""
-        if entry["visible"]
+        if visible
         else "the LED sends no light this way (beyond its angular profile)"
         if dark and not (blocked_in or blocked_out)
         else "blocked (an eyelid or its lashes, the face or an opaque element)"
     )
-    return entry
+    return visible, reason
+
+
+def _rim_seen(v: _View, k: int, row: int, led: np.ndarray, s, t) -> bool:
+    """:func:`_glint_seen` along the ray from sensor point ``s`` through stop point ``t``."""
+    cs, cam = v.cs, v.cam
+    chief = aim_chief(cam, float(s[0]), float(s[1]))
+    if not chief.found:
+        return False
+    _, r = aim_into_scene(cam, float(s[0]), float(s[1]), *t, chief.qx, chief.qy, chief.jac)
+    if not r.passed:
+        return False
+    p, d, w = _element_path(cs, np.array([r.x, r.y, r.z]), np.array([r.dx, r.dy, r.dz]))
+    return _glint_seen(v, k, row, led, p, d, w)[0]
+
+
+#: Stop samples a side of the square grid over which :func:`_rim_glint` integrates its model
+#: (no tracing: the share is resolved to ~1 / (π/4 · 64²) of the aperture).
+_RIM_GRID = 64
+
+
+def _rim_glint(v: _View, k: int, row: int, led: np.ndarray, frame, guess) -> dict | None:
+    """LED ``k``'s glint against the cornea's rim, from the rays through the camera's whole
+    stop rather than its chief ray alone. None when it cannot be told (a solve fails).
+
+    A point LED's glint is not one ray: the camera collects the LED's light reflected by the
+    cornea through every point t of its stop (radius a, ``CameraTables.stop_radius``), and each
+    t has its own mirror point P(t) on the cornea and its own sensor point s(t) (the glint's
+    virtual image lies ~R/2 behind the corneal vertex, off the plane in focus: s(t) spans the
+    glint's blur disc). The spot is whole when every P(t) lies on the cap (local radius ≤
+    r_cap, the limbus); when the cap's edge crosses the set of P(t), only the rays through the
+    part of the stop whose P(t) lies on the cap form it — the spot is cut and its centroid
+    moves toward that part, and it exists even when the chief ray's P(0) lies just past the
+    limbus. (The pixel's footprint adds no reach: the rays of a point source to the sensor are
+    those through the stop; the pixel averages the picture without moving its centroid. The
+    renderer's LEDs are points, ``LedArray``.)
+
+    P(t) and s(t) are solved (Newton, as the chief ray's glint) on the anterior surface
+    extended past the limbus (:func:`_open_cap`) at t = 0 and the stop's edge t = (±a, 0),
+    (0, ±a), and modelled as f(t) = f₀ + c₁ t_x + c₂ t_x² + c₃ t_y + c₄ t_y² through those five
+    (the blur disc spans a few pixels; this is exact at the five and second-order between);
+    the model is integrated over a uniform grid of the stop (a point source fills the stop
+    evenly to first order: the cornea's reflectance and the lens's vignetting are taken as
+    constant across it). Returns ``aperture_share`` (the share of the stop whose rays reflect
+    off the cap: 1 a whole glint, 0 none), ``beyond_rim_mm`` (the chief ray's mirror point's
+    local radius minus r_cap: > 0 past the limbus), ``reach_mm`` (the largest distance of a
+    P(t) from P(0): how far past, or inside, the limbus the cut reaches), ``centre_px`` (the
+    centroid of the part formed: where a detector's centroid lies; None when none is),
+    ``full_centre_px`` (the whole spot's centroid on the extended surface), ``bias_px`` (their
+    distance) and ``visible`` (:func:`_glint_seen` along the ray through the formed part's
+    mean stop point)."""
+    cs, cam, cornea = v.cs, v.cam, v.cornea
+    r_cap = math.sqrt(cs.sf[cornea, G.RMAX2])
+    if not math.isfinite(r_cap) or cam.stop_radius <= 0.0:
+        return None
+    n, g1, g2 = frame
+    sf = v.open_sf
+
+    def mirror(t, start):
+        def residual(s):
+            ray = _stop_ray(cs, cam, s[0], s[1], *t)
+            ray = None if ray is None else _off_cornea(cs, cornea, *ray, sf=sf)
+            ray = None if ray is None else _through_elements(cs, *ray, led)
+            return _miss(ray, led, n, g1, g2)
+
+        s = _solve(residual, start)
+        ray = None if s is None else _stop_ray(cs, cam, *s, *t)
+        hit = None if ray is None else _off_cornea(cs, cornea, *ray, sf=sf)
+        if hit is None:
+            return None
+        return s, np.array(G.to_local(sf, cornea, *hit[0]))[:2]
+
+    a = cam.stop_radius
+    stops = [(0.0, 0.0), (a, 0.0), (-a, 0.0), (0.0, a), (0.0, -a)]
+    got = [mirror(stops[0], np.asarray(guess, float))]
+    if got[0] is None:
+        return None
+    for t in stops[1:]:
+        got.append(mirror(t, got[0][0]))
+        if got[-1] is None:
+            return None
+    u = (np.arange(_RIM_GRID) + 0.5) / _RIM_GRID * 2.0 - 1.0
+    tx, ty = np.meshgrid(u, u)
+    keep = tx * tx + ty * ty <= 1.0
+    tx, ty = tx[keep], ty[keep]
+
+    def model(f):  # f: the five samples' values (5, 2), at t = 0, +x, −x, +y, −y (unit stop)
+        f = np.asarray(f, float)
+        return (
+            f[0]
+            + np.outer(tx, (f[1] - f[2]) / 2)
+            + np.outer(tx * tx, (f[1] + f[2] - 2 * f[0]) / 2)
+            + np.outer(ty, (f[3] - f[4]) / 2)
+            + np.outer(ty * ty, (f[3] + f[4] - 2 * f[0]) / 2)
+        )
+
+    q = model([g[1] for g in got])
+    s = model([g[0] for g in got])
+    on = np.hypot(q[:, 0], q[:, 1]) <= r_cap
+    share = float(on.mean())
+    full = sensor_to_pixel(cs, *s.mean(axis=0))
+    part = sensor_to_pixel(cs, *s[on].mean(axis=0)) if on.any() else None
+    visible = on.any() and _rim_seen(
+        v, k, row, led, s[on].mean(axis=0), (a * float(tx[on].mean()), a * float(ty[on].mean()))
+    )
+    return {
+        "aperture_share": share,
+        "beyond_rim_mm": float(np.hypot(*got[0][1]) - r_cap),
+        "reach_mm": float(np.max(np.hypot(*(q - got[0][1]).T))),
+        "centre_px": None if part is None else list(part),
+        "full_centre_px": list(full),
+        "bias_px": None if part is None else math.dist(part, full),
+        "visible": bool(visible),
+    }
 
 
 def _led_in_view(v: _View, k: int, led: np.ndarray, row: int | None = None) -> dict | None:
@@ -576,8 +756,18 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
     them visible (not under a lid); ``iris``: its outline, the limbus (:func:`_iris_truth`:
     its centre (world mm), diameter, 72 edge points' pixels and the share not under a lid);
     per LED its glint's pixel position, whether its reflection lies on the cornea's cap
-    (``on_cornea``) and is seen (``visible``), or why there is none;
-    the counts ``glints_on_cornea`` and ``glints_visible``; ``leds_in_view``: each LED the
+    (``on_cornea``) and is seen (``visible``), or why there is none, and whether the cornea's
+    rim cuts it (``at_rim``: the rays through only part of the camera's aperture reflect off the
+    cap — the chief ray's reflection just inside the limbus, or just past it, where
+    ``on_cornea`` stays False and ``centre_px`` None although a partial spot is in the
+    picture); for such a glint ``rim`` (else None, :func:`_rim_glint`) gives
+    ``aperture_share`` (the share of the stop whose rays form it), ``beyond_rim_mm`` (the chief
+    ray's reflection point's distance past the limbus, < 0 inside), ``reach_mm``,
+    ``centre_px`` (the partial spot's centroid: where a detector finds it), ``full_centre_px``
+    (the whole spot's, on the cornea's surface extended past the limbus), ``bias_px`` (their
+    distance: how far the cut moves the centroid) and ``visible``;
+    the counts ``glints_on_cornea``, ``glints_visible`` (as before: a rim glint off the cap is
+    in neither) and ``glints_at_rim``; ``leds_in_view``: each LED the
     camera sees directly (a wide lens beside the ring), its pixel, whether it is seen and
     its radiant intensity toward the lens — a bright spot that is not a glint; with optical
     elements, ``ghosts``: each LED's specular images by the elements (chain, pixel, flux:
@@ -621,6 +811,7 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
         "glints": glints,
         "glints_on_cornea": sum(g["on_cornea"] for g in glints),
         "glints_visible": sum(g["visible"] for g in glints),
+        "glints_at_rim": sum(g["at_rim"] for g in glints),
         "leds_in_view": in_view,
     }
     if cs.scene.elements and ghosts:
@@ -671,6 +862,7 @@ def _truth_by_wavelength(cs: CompiledScene, with_ghosts: bool = True) -> dict:
     out["glints"] = [glints[k] for k in sorted(glints)]
     out["glints_on_cornea"] = sum(e["on_cornea"] for e in out["glints"])
     out["glints_visible"] = sum(e["visible"] for e in out["glints"])
+    out["glints_at_rim"] = sum(e["at_rim"] for e in out["glints"])
     out["leds_in_view"] = sorted(in_view, key=lambda e: e["led"])
     if cs.scene.elements and with_ghosts:
         out["ghosts"] = _near_glints(sorted(ghosts, key=lambda e: e["led"]), out["glints"])
