@@ -224,10 +224,13 @@ def _bright_mask(u8: np.ndarray, floor8: int, params):
     pixel of both with a 0 border (or the picture's edge) around them.
 
     Glint pixels are above ``floor8``, ~1 % of a picture (glints and the brightest skin): the
-    box mean, the comparison and the closing are worked only on the box of those pixels
-    padded by what each reaches (the box mean's half-width, the closing's k // 2 + 1, as
-    :func:`~.pupil._closing` argues) — the same bytes as on the whole picture, for a third
-    of the work on a headset frame."""
+    box mean and the comparison are worked only at those pixels (in the rows holding any, on
+    the box of them padded by the box mean's half-width), and the closing only on the box of
+    the glint pixels found (padded by k // 2 + 1, as :func:`~.pupil._closing` argues) — the
+    same bytes as on the whole picture. (Pixels above the floor are often spread over the
+    whole frame — single bright noise pixels, skin — while the glint pixels that pass the
+    local test are a few small blobs: closing and outlining the box of the former cost a
+    full-frame pass each.)"""
     rows, cols = u8.shape
     w = params.glint_window_px
     if w is None:
@@ -245,9 +248,15 @@ def _bright_mask(u8: np.ndarray, floor8: int, params):
     levels = np.arange(256, dtype=np.uint8).reshape(1, 256)
     lut = cv2.max(cv2.addWeighted(levels, 1.0 - lv, levels, 0.0, 255.0 * lv), float(floor8 + 1))
     above = np.zeros_like(u8)
-    bx, by, bw, bh = cv2.boundingRect(cv2.compare(u8, float(floor8), cv2.CMP_GT))
-    if bw == 0:
+    over = cv2.compare(u8, float(floor8), cv2.CMP_GT)
+    # The rows and the columns holding any pixel above the floor (their sums, 32-bit): their
+    # box, as cv2.boundingRect finds it, at half its cost; the rows, where the pixels are.
+    hit = np.flatnonzero(cv2.reduce(over, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel())
+    if not len(hit):
         return above, (above if k <= 1 else np.zeros_like(u8)), (0, 0, 0, 0)
+    hit_cols = np.flatnonzero(cv2.reduce(over, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel())
+    bx, by = int(hit_cols[0]), int(hit[0])
+    bw, bh = int(hit_cols[-1]) + 1 - bx, int(hit[-1]) + 1 - by
     r = w // 2
     wx0, wy0 = max(0, bx - r), max(0, by - r)
     wx1, wy1 = min(cols, bx + bw + r), min(rows, by + bh + r)
@@ -260,14 +269,21 @@ def _bright_mask(u8: np.ndarray, floor8: int, params):
         # same bytes as blur + LUT + compare on the whole window, without the full box filter.
         pad = cv2.copyMakeBorder(u8[wy0:wy1, wx0:wx1], r, r, r, r, cv2.BORDER_REFLECT_101)
         sums = cv2.integral(pad, sdepth=cv2.CV_32S)
-        _above_local(u8[inner], sums, (by - wy0, bx - wx0), w, lut.ravel(), floor8, above[inner])
+        found = _above_local(
+            u8[inner], sums, (by - wy0, bx - wx0), w, lut.ravel(), floor8, hit - by, above[inner]
+        )
+        ax, ay, aw, ah = (int(v) for v in found)
     else:
         local = cv2.LUT(cv2.blur(u8[wy0:wy1, wx0:wx1], (w, w)), lut)
         above[inner] = cv2.compare(
             u8[inner], local[by - wy0 : by - wy0 + bh, bx - wx0 : bx - wx0 + bw], cv2.CMP_GE
         )
+        ax, ay, aw, ah = cv2.boundingRect(above[inner])
+    if aw == 0:
+        return above, (above if k <= 1 else np.zeros_like(u8)), (0, 0, 0, 0)
+    ax, ay = ax + bx, ay + by
     pad = max(1, k // 2 + 1)
-    box = (max(0, bx - pad), max(0, by - pad), min(cols, bx + bw + pad), min(rows, by + bh + pad))
+    box = (max(0, ax - pad), max(0, ay - pad), min(cols, ax + aw + pad), min(rows, ay + ah + pad))
     if k <= 1:
         return above, above, box
     x0, y0, x1, y1 = box
@@ -278,16 +294,19 @@ def _bright_mask(u8: np.ndarray, floor8: int, params):
 
 
 @njit(cache=True, nogil=True)
-def _above_local(u8, sums, offset, w, lut, floor8, out):
+def _above_local(u8, sums, offset, w, lut, floor8, hit, out):
     """:func:`_bright_mask`'s comparison on ``u8`` (the inner box, uint8) in place into ``out``
     (its shape, 0 or 255): u8 ≥ lut[m] for the pixels above ``floor8`` (lut ≥ floor8 + 1, so no
-    other passes), m the w × w box mean (w odd) about the pixel, rounded to nearest, from the
-    integral ``sums`` (int32) of the window padded by w // 2 on each side; ``offset`` = (row,
-    col) of the inner box in the window."""
+    other passes) in the rows ``hit`` (ascending; the only ones holding any), m the w × w box
+    mean (w odd) about the pixel, rounded to nearest, from the integral ``sums`` (int32) of the
+    window padded by w // 2 on each side; ``offset`` = (row, col) of the inner box in the
+    window. Returns the box (x, y, w, h) of the pixels set (w = 0 when none), as
+    cv2.boundingRect."""
     h, wd = u8.shape
     oy, ox = offset
     area = w * w
-    for y in range(h):
+    xmin, ymin, xmax, ymax = wd, h, -1, -1
+    for y in hit:
         for x in range(wd):
             v = u8[y, x]
             if v <= floor8:
@@ -297,6 +316,11 @@ def _above_local(u8, sums, offset, w, lut, floor8, out):
             m = (2 * s + area) // (2 * area)
             if v >= lut[m]:
                 out[y, x] = 255
+                xmin, xmax = min(xmin, x), max(xmax, x)
+                ymin, ymax = min(ymin, y), max(ymax, y)
+    if xmax < 0:
+        return np.zeros(4, np.int64)
+    return np.array([xmin, ymin, xmax + 1 - xmin, ymax + 1 - ymin], np.int64)
 
 
 def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
