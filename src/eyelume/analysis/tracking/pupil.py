@@ -629,13 +629,18 @@ def _robust_fit(x: np.ndarray, y: np.ndarray, diam: float, params):
     hf = ds - 0.5 * (np.concatenate((ds[-1:], ds[:-1])) + np.concatenate((ds[1:], ds[:1])))
     sigma = 1.4826 * median(np.abs(hf)) / math.sqrt(1.5)
     tol = max(params.inlier_tol_px, 3.0 * sigma, params.inlier_tol_frac * diam)
-    if (d <= tol).mean() >= 0.95:
+    every = (d <= tol).mean() >= 0.95
+    if every:
         sigma = max(sigma, 1.4826 * median(d))
     else:
         e, d, sigma = _best_run(x, y, e, d, diam, params)
         tol = max(params.inlier_tol_px, 3.0 * sigma, params.inlier_tol_frac * diam)
     inl = d <= tol
-    for _ in range(params.fit_iterations):
+    # All points inliers of the fit to all of them: its refit on them would be the same fit
+    # (cv2.fitEllipse is deterministic) with the same inliers — the loop's first pass would
+    # stop there; skipped (most whole pupils).
+    loops = 0 if every and inl.all() else params.fit_iterations
+    for _ in range(loops):
         e_new = _fit(x[inl], y[inl], diam)
         if e_new is None:
             break
@@ -755,6 +760,21 @@ def _stride(n: int, keep: float = 2e4) -> int:
     return max(1, int(math.sqrt(n / keep)))
 
 
+_DISCS: dict[int, np.ndarray] = {}
+
+
+def disc(k: int) -> np.ndarray:
+    """OpenCV's k × k elliptical structuring element (``cv2.getStructuringElement(
+    cv2.MORPH_ELLIPSE, (k, k))``, uint8), made once per size and kept read-only: a frame asks
+    for the same few sizes a dozen times."""
+    el = _DISCS.get(k)
+    if el is None:
+        el = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+        el.flags.writeable = False
+        _DISCS[k] = el
+    return el
+
+
 def _fill_glints(roi: np.ndarray, bright: np.ndarray, params) -> None:
     """Each glint of ``bright`` (grown by its own radius r, ≥ ``glint_margin_px``, + 2 px) takes
     the darkest value of ``roi`` within r + 2 px, in place: each glint with its own reach, so a
@@ -765,7 +785,9 @@ def _fill_glints(roi: np.ndarray, bright: np.ndarray, params) -> None:
     erosion that box padded by the element's half-width (outside the roi nothing counts, as for
     the whole roi) — which gives the same pixels as a dilation and an erosion of the whole roi
     per size class, at a fraction of the cost when the glints are spread over the picture."""
-    n, lab, stats, _ = cv2.connectedComponentsWithStats(bright, connectivity=8)
+    # 16-bit labels when they fit (as in :func:`ladder`: the same labels, labelled faster).
+    ltype = cv2.CV_16U if bright.size < 4 * 65535 else cv2.CV_32S
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(bright, connectivity=8, ltype=ltype)
     if n < 2:
         return
     rows, cols = roi.shape
@@ -778,14 +800,12 @@ def _fill_glints(roi: np.ndarray, bright: np.ndarray, params) -> None:
         gx0, gy0 = max(0, x - g), max(0, y - g)
         gx1, gy1 = min(cols, x + w + g), min(rows, y + h + g)
         own = cv2.compare(lab[gy0:gy1, gx0:gx1], i, cv2.CMP_EQ)
-        grown = cv2.dilate(own, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2))
+        grown = cv2.dilate(own, disc(2 * g + 1))
         k = 2 * (rc + 2) + 1
         r = k // 2
         ex0, ey0 = max(0, gx0 - r), max(0, gy0 - r)
         ex1, ey1 = min(cols, gx1 + r), min(rows, gy1 + r)
-        eroded = cv2.erode(
-            src[ey0:ey1, ex0:ex1], cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-        )
+        eroded = cv2.erode(src[ey0:ey1, ex0:ex1], disc(k))
         eroded = eroded[gy0 - ey0 : gy1 - ey0, gx0 - ex0 : gx1 - ex0]
         sub = roi[gy0:gy1, gx0:gx1]
         np.copyto(sub, np.minimum(sub, eroded), where=grown > 0)
@@ -1338,7 +1358,7 @@ def _closing(mask: np.ndarray, k: int) -> np.ndarray:
     out[y0:y1, x0:x1] = cv2.morphologyEx(
         mask[y0:y1, x0:x1],
         cv2.MORPH_CLOSE,
-        cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)),
+        disc(k),
     )
     return out
 
@@ -1447,7 +1467,7 @@ def _grown_glints(bright: np.ndarray, params, extra: int = 0, radius: float | No
     if radius is None:
         radius = _largest_radius(bright)
     g = int(math.ceil(max(params.glint_margin_px, radius))) + extra
-    return cv2.dilate(bright, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2))
+    return cv2.dilate(bright, disc(2 * g + 1))
 
 
 def _grown_glints_box(bright: np.ndarray, params):
@@ -1615,8 +1635,7 @@ def _refine_smoothed(img, bright, e: Ellipse, x, y, pupil_level: float, reach: f
         sig = params.refine_smooth_px
         if glints.any():
             g = int(math.ceil(params.glint_margin_px))
-            disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * g + 1,) * 2)
-            w = (cv2.dilate(glints, disc) == 0).astype(np.float32)
+            w = (cv2.dilate(glints, disc(2 * g + 1)) == 0).astype(np.float32)
             num = cv2.GaussianBlur(sub * w, (0, 0), sig)
             den = cv2.GaussianBlur(w, (0, 0), sig)
             sub = np.where(den > 1e-3, num / np.maximum(den, 1e-3), sub)
