@@ -1261,9 +1261,17 @@ def evaluate_tracking_cmd(
             return "none (no model through the optical elements)"
         return f"{stats['mean_deg']:.3g}° mean" if stats.get("mean_deg") is not None else "none"
 
+    suspect = sum(s[k].get("ok_frames_with", 0) for k in ("rim_glints", "stray_glints"))
     err.print(
         f"detection {s['detection_rate']:.0%}"
         + (f" ({why})" if why else "")
+        + (
+            f", {s['clean_detection_rate']:.0%} with every matched glint whole (ok frames "
+            f"with a glint cut by the cornea's rim: {s['rim_glints']['ok_frames_with']}, "
+            f"with a stray: {s['stray_glints']['ok_frames_with']})"
+            if suspect
+            else ""
+        )
         + f"; pupil error {f'{pe:.3g} px' if pe is not None else 'none'}; "
         f"gaze PCCR {deg(gp)}, geometric {deg(gg)}; {meta['wall_time_s']} s; "
         f"wrote {len(written)} files to {out}" + (f" — partial: {partial}" if partial else ""),

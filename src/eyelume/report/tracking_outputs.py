@@ -218,7 +218,7 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
                 "gaze_h_deg", "gaze_v_deg", "detected", "failures", "pupil_error_px",
                 "glints_found", "glints_true", "pccr_h_deg", "pccr_v_deg", "geometric_h_deg",
                 "geometric_v_deg", "render_s", "detect_ms", "false_glints", "calibration_frame",
-                "geometric_calibration_frame",
+                "geometric_calibration_frame", "rim_glints", "stray_glints",
             ]
         )  # fmt: skip
         for fr in report.frames:
@@ -231,6 +231,7 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
                     fr.glints_found, fr.glints_true, f"{p[0]:.4f}", f"{p[1]:.4f}",
                     f"{g[0]:.4f}", f"{g[1]:.4f}", f"{fr.render_s:.3f}", f"{fr.detect_ms:.3f}",
                     fr.false_glints, int(fr.calibration), int(is_kappa_frame(fr)),
+                    fr.rim_glints, fr.stray_glints,
                 ]
             )  # fmt: skip
     summary = {"meta": meta, **report.summary}

@@ -22,6 +22,11 @@ the mean of the found glints, which moves toward them. Rendering the frames over
 With optical elements (spectacles, a hot mirror), a detected glint matched to an LED may be a
 spectacle ghost (:mod:`eyelume.analysis.ghosts`) taken for the corneal glint:
 :func:`false_glints` counts them per frame (``Frame.false_glints``) and the summary totals them.
+A matched glint may also be a real spot that is not a whole corneal glint — one cut by the
+cornea's rim (truth ``at_rim``: its centroid moved by ``rim.bias_px`` off where the gaze models
+put the glint), counted by :func:`rim_glints` — or have no spot of its LED's in the truth at
+all (off the cornea, hidden, not a ghost), counted by :func:`stray_glints`; the summary's
+``clean_detection_rate`` is the share of frames answered ``ok`` with none of the three.
 """
 
 from __future__ import annotations
@@ -51,6 +56,8 @@ __all__ = [
     "analyse_frames",
     "error_map_rows",
     "false_glints",
+    "rim_glints",
+    "stray_glints",
     "pinhole_camera",
     "led_picture_azimuths",
     "led_picture_pattern",
@@ -90,6 +97,8 @@ class Frame:
     saturated_share: float = 0.0  # of the frame's pixels at the full well or full scale
     glints_px: list | None = None
     false_glints: int = 0  # matched glints that are element ghosts (false_glints)
+    rim_glints: int = 0  # matched glints cut by the cornea's rim (rim_glints)
+    stray_glints: int = 0  # matched glints of an LED without a spot in the truth (stray_glints)
     ambient: dict | None = None  # ambient.sun: the frame's signal to ambient (ambient_ratios)
     samples_per_pixel: int = 0  # camera samples per pixel its render used (0: not recorded)
     #: the test frame is the calibration frame of its gaze (same scene, seed and budget: the
@@ -247,9 +256,44 @@ def analyse_frame(
         if g.led is not None:
             glints[g.led] = g.centre_px
     f.glints_px = glints
-    f.false_glints = len(false_glints(det.glints, truth))
+    ghosts = false_glints(det.glints, truth)
+    f.false_glints = len(ghosts)
+    f.rim_glints = len(rim_glints(det.glints, truth))
+    f.stray_glints = len(stray_glints(det.glints, truth, ghosts))
     _set_pg_vector(f, None)
     return f
+
+
+def rim_glints(glints, truth: dict) -> list[int]:
+    """Indices into ``glints`` (detected, matched ones only) of those matched to an LED whose
+    true glint the cornea's rim cuts (``truth["glints"][·]["at_rim"]``,
+    :func:`eyelume.analysis.truth._rim_glint`): a real but partial spot, its centroid
+    ``rim.bias_px`` off the whole glint's centre, which the gaze models take it for (one whose
+    spot is hidden is a :func:`stray_glints`)."""
+    cut = {g["led"] for g in truth["glints"] if g.get("at_rim")} & _spots(truth)
+    return [i for i, g in enumerate(glints) if g.led is not None and g.led in cut]
+
+
+def _spots(truth: dict) -> set[int]:
+    """The LEDs with a spot in the truth: a visible glint, or a visible partial one at the rim."""
+    return {
+        g["led"]
+        for g in truth["glints"]
+        if g["visible"] or (g.get("at_rim") and (g.get("rim") or {}).get("visible"))
+    }
+
+
+def stray_glints(glints, truth: dict, ghosts: Sequence[int] = ()) -> list[int]:
+    """Indices into ``glints`` of those matched to an LED that has no spot in the truth — its
+    glint neither visible on the cornea nor a visible partial spot at the rim (off the cornea,
+    hidden by a lid) — other than the element ghosts ``ghosts`` (:func:`false_glints`, counted
+    there): a speck or a stray reflection taken for that LED's glint."""
+    spot = _spots(truth)
+    return [
+        i
+        for i, g in enumerate(glints)
+        if g.led is not None and g.led not in spot and i not in set(ghosts)
+    ]
 
 
 def false_glints(glints, truth: dict, radius_px: float = FALSE_GLINT_PX) -> list[int]:
@@ -415,7 +459,10 @@ def _errors(frames: list[Frame], attr: str) -> np.ndarray:
 
 def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
     """Detection rate, pupil-centre error (px, mm), glints per frame, false glints (total,
-    frames with any, mean per frame: :func:`false_glints`), gaze errors (°). The PCCR error's
+    frames with any, mean per frame: :func:`false_glints`), glints cut by the cornea's rim
+    and stray glints (total, frames with any, ok frames with any: :func:`rim_glints`,
+    :func:`stray_glints`), ``clean_detection_rate`` (the share of frames answered ok with
+    none of those three), gaze errors (°). The PCCR error's
     statistics leave out the test frames that are calibration frames (``Frame.calibration``:
     their error is the fit's in-sample residual), the geometric error's leave out the kappa
     calibration frame (:func:`is_kappa_frame`: error 0 by construction), each saying how many
@@ -454,6 +501,21 @@ def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
             "frames_with": int(sum(f.false_glints > 0 for f in frames)),
             "per_frame_mean": float(np.mean([f.false_glints for f in frames])) if frames else 0.0,
         },
+        "rim_glints": {
+            "total": int(sum(f.rim_glints for f in frames)),
+            "frames_with": int(sum(f.rim_glints > 0 for f in frames)),
+            "ok_frames_with": int(sum(f.rim_glints > 0 for f in ok)),
+        },
+        "stray_glints": {
+            "total": int(sum(f.stray_glints for f in frames)),
+            "frames_with": int(sum(f.stray_glints > 0 for f in frames)),
+            "ok_frames_with": int(sum(f.stray_glints > 0 for f in ok)),
+        },
+        "clean_detection_rate": (
+            sum(f.false_glints + f.rim_glints + f.stray_glints == 0 for f in ok) / len(frames)
+            if frames
+            else 0.0
+        ),
         "gaze_pccr": (
             {
                 **stats(_errors(frames, "pccr")),
@@ -590,7 +652,8 @@ def _finite(x: float | None) -> float | None:
 def error_map_rows(frames: Sequence[Frame]) -> list[dict]:
     """One plain row per frame for the error maps over the gaze grid: ``gaze`` (h, v °),
     ``pupil_error_px`` (None where detection failed), ``glints_found``, ``false_glints``
-    (:func:`false_glints`), ``pccr_error_deg`` and
+    (:func:`false_glints`), ``rim_glints``, ``stray_glints`` (:func:`rim_glints`,
+    :func:`stray_glints`), ``pccr_error_deg`` and
     ``geometric_error_deg`` (None without an estimate), ``calibration`` (the frame is a
     calibration frame: its PCCR error is the fit's in-sample residual, ``Frame.calibration``),
     ``geometric_calibration`` (the frame is the geometric model's kappa calibration frame:
@@ -602,6 +665,8 @@ def error_map_rows(frames: Sequence[Frame]) -> list[dict]:
             "pupil_error_px": _finite(f.pupil_error_px) if f.detection.ok else None,
             "glints_found": int(f.glints_found),
             "false_glints": int(f.false_glints),
+            "rim_glints": int(f.rim_glints),
+            "stray_glints": int(f.stray_glints),
             "pccr_error_deg": _finite(_err(f.pccr, f.gaze)),
             "geometric_error_deg": _finite(_err(f.geometric, f.gaze)),
             "calibration": bool(f.calibration),
