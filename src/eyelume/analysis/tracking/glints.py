@@ -155,16 +155,19 @@ def _counts4(v):
 
 
 def _gaussian_f32(img: np.ndarray, sigma: float) -> np.ndarray:
-    """``cv2.GaussianBlur(img.astype(np.float32), (0, 0), sigma)``. An 8-bit picture goes
-    through ``cv2.sepFilter2D`` with the kernel GaussianBlur makes for a float picture
-    (``getGaussianKernel`` of size round(8 σ + 1) | 1, float32; its default border), reading
-    the bytes directly — the same floats (checked on 4 dtypes and 5 picture sizes; with
-    kernels of 9 taps or more: shorter ones take another path inside OpenCV) in 0.7 × the
-    time, with no float copy (for 16 bits that path is 3 × slower: not taken)."""
+    """``cv2.GaussianBlur(img.astype(np.float32), (0, 0), sigma)``. With kernels of 9 taps or
+    more (shorter ones take another path inside OpenCV) through ``cv2.sepFilter2D`` with the
+    kernel GaussianBlur makes for a float picture (``getGaussianKernel`` of size round(8 σ + 1)
+    | 1, float32; its default border): the same floats (checked on 4 dtypes and 5 picture
+    sizes, and on 400 random pictures of 9–700 px a side, uint16, int16, float32 and float64)
+    in ~0.85 × GaussianBlur's time. An 8-bit picture is read directly (0.7 × the time, no float
+    copy); a float32 one needs no copy; others are converted to float32 first (16 bits read
+    directly is 3 × slower: not taken)."""
     ksize = int(np.rint(8.0 * sigma + 1.0)) | 1
-    if img.dtype == np.uint8 and ksize >= 9:
+    if ksize >= 9:
         k = cv2.getGaussianKernel(ksize, sigma, cv2.CV_32F)
-        return cv2.sepFilter2D(img, cv2.CV_32F, k, k, borderType=cv2.BORDER_REFLECT_101)
+        src = img if img.dtype in (np.uint8, np.float32) else img.astype(np.float32)
+        return cv2.sepFilter2D(src, cv2.CV_32F, k, k, borderType=cv2.BORDER_REFLECT_101)
     return cv2.GaussianBlur(img.astype(np.float32), (0, 0), sigma)
 
 
