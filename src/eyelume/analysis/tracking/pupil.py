@@ -763,7 +763,7 @@ def _stride(n: int, keep: float = 2e4) -> int:
 _DISCS: dict[int, np.ndarray] = {}
 
 
-def disc(k: int) -> np.ndarray:
+def _disc(k: int) -> np.ndarray:
     """OpenCV's k × k elliptical structuring element (``cv2.getStructuringElement(
     cv2.MORPH_ELLIPSE, (k, k))``, uint8), made once per size and kept read-only: a frame asks
     for the same few sizes a dozen times."""
@@ -800,12 +800,12 @@ def _fill_glints(roi: np.ndarray, bright: np.ndarray, params) -> None:
         gx0, gy0 = max(0, x - g), max(0, y - g)
         gx1, gy1 = min(cols, x + w + g), min(rows, y + h + g)
         own = cv2.compare(lab[gy0:gy1, gx0:gx1], i, cv2.CMP_EQ)
-        grown = cv2.dilate(own, disc(2 * g + 1))
+        grown = cv2.dilate(own, _disc(2 * g + 1))
         k = 2 * (rc + 2) + 1
         r = k // 2
         ex0, ey0 = max(0, gx0 - r), max(0, gy0 - r)
         ex1, ey1 = min(cols, gx1 + r), min(rows, gy1 + r)
-        eroded = cv2.erode(src[ey0:ey1, ex0:ex1], disc(k))
+        eroded = cv2.erode(src[ey0:ey1, ex0:ex1], _disc(k))
         eroded = eroded[gy0 - ey0 : gy1 - ey0, gx0 - ex0 : gx1 - ex0]
         sub = roi[gy0:gy1, gx0:gx1]
         np.copyto(sub, np.minimum(sub, eroded), where=grown > 0)
@@ -1358,7 +1358,7 @@ def _closing(mask: np.ndarray, k: int) -> np.ndarray:
     out[y0:y1, x0:x1] = cv2.morphologyEx(
         mask[y0:y1, x0:x1],
         cv2.MORPH_CLOSE,
-        disc(k),
+        _disc(k),
     )
     return out
 
@@ -1467,7 +1467,7 @@ def _grown_glints(bright: np.ndarray, params, extra: int = 0, radius: float | No
     if radius is None:
         radius = _largest_radius(bright)
     g = int(math.ceil(max(params.glint_margin_px, radius))) + extra
-    return cv2.dilate(bright, disc(2 * g + 1))
+    return cv2.dilate(bright, _disc(2 * g + 1))
 
 
 def _grown_glints_box(bright: np.ndarray, params):
@@ -1635,7 +1635,7 @@ def _refine_smoothed(img, bright, e: Ellipse, x, y, pupil_level: float, reach: f
         sig = params.refine_smooth_px
         if glints.any():
             g = int(math.ceil(params.glint_margin_px))
-            w = (cv2.dilate(glints, disc(2 * g + 1)) == 0).astype(np.float32)
+            w = (cv2.dilate(glints, _disc(2 * g + 1)) == 0).astype(np.float32)
             num = cv2.GaussianBlur(sub * w, (0, 0), sig)
             den = cv2.GaussianBlur(w, (0, 0), sig)
             sub = np.where(den > 1e-3, num / np.maximum(den, 1e-3), sub)
