@@ -944,7 +944,7 @@ def ladder(
     for li in range(n_levels + 1):
         t = lo + (li + 1) * step
         _, dark = cv2.threshold(small, t, 255, cv2.THRESH_BINARY_INV)
-        _, lab, stats, cent = cv2.connectedComponentsWithStats(dark, connectivity=8, ltype=ltype)
+        lab, stats, cent = _labelled(dark, ltype)
         areas.append((lab, stats[:, cv2.CC_STAT_AREA]))
         touch = np.unique(lab[inv]) if inv is not None else None
         seen.append((lab, stats, touch, t))
@@ -964,6 +964,34 @@ def ladder(
         if ch[-1].index == len(areas) - 1:
             ch[-1].q = _growth(areas, ch[-1])
     return chains, f, (tiny, functools.partial(_first_edge_dark, seen, (min_area, max_area), f))
+
+
+def _labelled(dark: np.ndarray, ltype: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``cv2.connectedComponentsWithStats(dark, connectivity=8, ltype=ltype)``'s labels, stats
+    and centroids, labelled only on the box of the set pixels when it is under half the
+    picture (a ladder's dark levels: the pupil's core and a few specks) — its origin rounded
+    down to even coordinates, so that OpenCV's 2 × 2-block scan meets the pixels in the same
+    order and numbers the components alike — and put back in the picture's frame. The same
+    labels and stats (the background's row 0 aside: the ladder never reads it) and centroids
+    within float rounding of the whole picture's, whose nearest pixel (all the ladder takes of
+    them) is the same: a centroid Σx / A with A ≤ the picture's pixels is a half-integer
+    exactly or ≥ 1 / (2 A) from one (checked: labels, stats and rounded centroids equal on
+    24 000 random masks, one and two threads)."""
+    bx, by, bw, bh = cv2.boundingRect(dark)
+    if bw == 0 or 2 * bw * bh > dark.size:
+        _, lab, stats, cent = cv2.connectedComponentsWithStats(dark, connectivity=8, ltype=ltype)
+        return lab, stats, cent
+    x0, y0 = bx - bx % 2, by - by % 2
+    _, sub, stats, cent = cv2.connectedComponentsWithStats(
+        dark[y0 : by + bh, x0 : bx + bw], connectivity=8, ltype=ltype
+    )
+    lab = np.zeros(dark.shape, sub.dtype)
+    lab[y0 : by + bh, x0 : bx + bw] = sub
+    stats[1:, cv2.CC_STAT_LEFT] += x0
+    stats[1:, cv2.CC_STAT_TOP] += y0
+    cent[1:, 0] += x0
+    cent[1:, 1] += y0
+    return lab, stats, cent
 
 
 def _levels(small: np.ndarray, params, fine: int) -> tuple[float, float, float]:
