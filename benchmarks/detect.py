@@ -37,12 +37,12 @@ Prints the figures and how they were run, and appends a JSON line to
 ``benchmarks/results/detect.jsonl``.
 
 On a shared machine compare two trees by interleaving, not by runs at different times: session
-13's cuts (77c21a9, c483419, 76c9b61) against 87de5c5, two worker processes alternating batches
-of 20 ``detect()`` calls per frame for 30 rounds, one thread, load 3–4, median CPU per call new /
-old (these frames, LEDs given for the synthetic ones): synthetic 640 × 400 0.94 (4.59 vs 4.89
-ms), 640 × 480 0.94, openeds 000160 0.98 (5.32 vs 5.43 ms; the slowest frame: a lid-cut pupil
-whose robust fit tries 26 run hypotheses), 000170 0.94, 000180 0.98 — ratios under load, not
-quiet-machine figures.
+13's cuts (77c21a9, c483419, 76c9b61, 0d1d8da) against 87de5c5, two worker processes alternating
+batches of 20 ``detect()`` calls per frame for 30 rounds, one thread, load 8–10, median CPU per
+call new / old (these frames, LEDs given for the synthetic ones): synthetic 640 × 400 0.93 (4.39
+vs 4.71 ms), 640 × 480 0.94, openeds 000160 0.98 (5.16 vs 5.27 ms; the slowest frame: a lid-cut
+pupil whose robust fit tries 26 run hypotheses), 000170 0.96, 000180 0.98 — ratios under load,
+not quiet-machine figures.
 """
 
 from __future__ import annotations
