@@ -1144,7 +1144,7 @@ def track(
 
     out_stream.write(dumps({**detection_to_dict(result), "enlargement": k}) + "\n")
     for reason in result.failures:
-        err.print(f"[yellow]{escape(reason)}[/]", highlight=False)
+        err.print(f"[yellow]{escape(reason)}[/]", highlight=False, soft_wrap=True)
     if image.name == "eye_image.png" and not result.ok:
         err.print(
             f"note: {image.name} is render's display picture of the irradiance (clipped at its "

@@ -464,3 +464,42 @@ def test_a_dead_pixel_inside_a_small_pupil_is_filled_not_a_cut(where):
     d = detect(edge)
     assert_pupil(d)
     assert not any("enclosed holes" in m for m in d.failures)
+
+
+def _too_few_valid():
+    """Pictures whose valid pixels all fall within one pixel of a missing one on the ladder's
+    reduced picture (its missing pixels are grown by one): they crashed ``detect`` with NumPy's
+    "zero-size array to reduction operation minimum" (issue 13, seen on mostly-NaN or mostly
+    black renders)."""
+    tiny = np.zeros((4, 4), np.uint8)  # the smallest: 2 × 2 valid pixels in a black border
+    tiny[1:3, 1:3] = [[1, 2], [3, 4]]
+    holey = np.full((768, 1024), np.nan, np.float32)  # reduced 10×: a 20 px patch is 2 px
+    holey[300:320, 400:420] = closeup()[70:90, 70:90]
+    strip = np.zeros((65, 87), np.float32)  # a 87 × 65 render's size, black but 2 columns
+    strip[:, 40:42] = np.arange(1.0, 66.0)[:, None]
+    return {"4x4": (tiny, None), "nan": (holey, None), "strip": (strip, None)} | {
+        "mask": (closeup(), np.pad(np.ones((SIZE, 2), bool), ((0, 0), (79, 79))))
+    }
+
+
+@pytest.mark.parametrize("kind", ["4x4", "nan", "strip", "mask"])
+def test_too_few_valid_pixels_is_a_named_refusal(kind):
+    img, valid = _too_few_valid()[kind]
+    d = detect(img, valid=valid, led_azimuths_deg=[0, 90, 180, 270])
+    assert not d.ok and d.pupil is None, d
+    assert d.failures[0].startswith("no pupil: too few valid pixels"), d.failures
+
+
+def test_track_too_few_valid_pixels_is_a_refusal_not_a_traceback(tmp_path):
+    """Through the CLI a refused picture is its JSON (``ok`` false) and the refusal on stderr,
+    exit 0 (README: a frame where the pupil is not found "is reported as such"); it was exit 2
+    with NumPy's message."""
+    import json
+
+    np.save(tmp_path / "nan.npy", _too_few_valid()["nan"][0])
+    res = _track(tmp_path / "nan.npy")
+    assert res.exit_code == 0, res.output
+    assert "Traceback" not in res.output
+    assert json.loads(res.stdout)["failures"][0].startswith("no pupil: too few valid pixels")
+    first = res.stderr.splitlines()[0]
+    assert first.startswith("no pupil: too few valid pixels") and first.endswith("grown by one")

@@ -1972,6 +1972,16 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit
     if not wp:
         return PupilFit(None, reason=wp.reason)
     reduced = _reduced(wp, params)
+    if reduced[1] is not None and reduced[1].all():
+        # Nothing valid is left on the ladder's picture (reduced f×, its missing pixels grown
+        # by 1): a few valid pixels, or a strip of them thinner than ~3 f px.
+        n = wp.u8.size - int(np.count_nonzero(wp.invalid))
+        return PupilFit(
+            None,
+            reason=f"no pupil: too few valid pixels ({n} of {wp.u8.size}; the rest NaN, masked "
+            f"out or a black border) — none is left once the picture is reduced {reduced[2]}× "
+            "and the missing pixels are grown by one",
+        )
     chains, f, tiny = ladder(wp, params, reduced)
     picks = choose(chains, f, tiny, wp, params)
     reasons: list[str] = []
