@@ -2124,6 +2124,17 @@ def _element_chains(
     return np.asarray(element_rows, dtype=np.int64), table
 
 
+def _iris_grid(run) -> int:
+    """The continuation grid on the surfaces lit through the cornea (the iris):
+    ``run.iris_continuation_grid`` if given, else ``run.continuation_grid`` but at least
+    :data:`eyelume.estimators.fast.IRIS_GRID` (3)."""
+    from eyelume.estimators.fast import IRIS_GRID
+
+    if run.iris_continuation_grid is not None:
+        return int(run.iris_continuation_grid)
+    return max(int(run.continuation_grid), IRIS_GRID)
+
+
 def _camera_tables(  # noqa: PLR0913 - the compiled parts it is made of
     scene: Scene,
     surfaces: SurfaceTable,
@@ -2189,7 +2200,7 @@ def _camera_tables(  # noqa: PLR0913 - the compiled parts it is made of
         through,
         cornea,
         int(scene.run.continuation_grid),
-        int(scene.run.iris_continuation_grid or scene.run.continuation_grid),
+        _iris_grid(scene.run),
         *_element_chains(scene, surfaces, names, led_points, cornea),
         _glint_aims(scene, frame, surfaces, cornea, led_points, (ep_z, ep_r)),
     )

@@ -19,8 +19,8 @@ Every light path runs LED → … → camera. We split path space by how the pat
    then continues by cosine sampling: the first vertex always, with weight ρ, in g²
    directions, one in each of g × g strata of the cosine-weighted hemisphere (the light faces
    send each other is most of what varies between samples; g = ``run.continuation_grid``, on
-   the iris ``run.iris_continuation_grid`` and at least 3; in one direction for the part the
-   cornea reflects, a ~2 % share),
+   the iris ``run.iris_continuation_grid``, by default at least 3; in one direction for the
+   part the cornea reflects, a ~2 % share),
    the strata spread only over the directions outside the vertex's free cone
    (:func:`~eyelume.kernels.geometry.free_cone`: the cone about the normal whose rays meet
    nothing that can send light back, so carry exactly 0 — on vr-offaxis about half the
@@ -542,13 +542,16 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch, c
     return CameraPath(state, radiance, has_branch, branch, vertex)
 
 
-#: The least continuation grid on the surfaces lit through the cornea (the iris, whose light is
+#: The continuation grid on the surfaces lit through the cornea (the iris, whose light is
 #: mostly the face's, reflected: it is shadowed by the cornea, the skin around it is not; 8
-#: unstratified rays before the grid; its own grid there is ``run.iris_continuation_grid``,
-#: which defaults to the others'; on vr-offaxis the light through the cornea is most of it and
-#: the continuation ~2.5 % of the median iris pixel's camera-path light, yet all of its
-#: sample-to-sample noise and ~57 % of its cost, 16 rays of ~1.3 µs out through the cornea, at
-#: 24ba11f). On the other faces the grid is ``run.continuation_grid``:
+#: unstratified rays before the grid) when the scene does not give one: the camera path's own
+#: grid there is ``run.iris_continuation_grid``, by default the others' but at least this
+#: (:func:`eyelume.compile` sets ``cam.iris_grid``), and the branches followed in one direction
+#: (the cornea's reflection, an element's weaker part) take this one on the iris. On
+#: vr-offaxis the light through the cornea is most of an iris pixel's and the continuation
+#: ~2.5 % of the median iris pixel's camera-path light, yet all of its sample-to-sample noise
+#: and ~57 % of its cost with 16 rays of ~1.3 µs out through the cornea (24ba11f): the preset
+#: takes 2 (4 rays; README, issue 11). On the other faces the grid is ``run.continuation_grid``:
 #: a skin pixel's direct light (NEE to every LED) hardly varies between samples, the light the
 #: faces send each other (~8 % of a vr-offaxis skin pixel) does, and it is cheap to sample again
 #: from the same vertex: on vr-offaxis (100 × 100 of 12 µm pixels, 8 sets of 2 × 2 samples) one
@@ -561,13 +564,13 @@ IRIS_GRID = 3
 @per_ray
 def _path_radiance(state, scene, cam, ray, beta, split, grid, iris_grid, scratch):  # noqa: PLR0913
     """A camera path with its first Lambertian vertex's continuation(s) in ``grid``² strata,
-    ``iris_grid``² on the surfaces lit through the cornea (at least IRIS_GRID² there); see
-    _camera_branch. Returns (state, radiance, has_branch, branch)."""
+    ``iris_grid``² on the surfaces lit through the cornea; see _camera_branch. Returns (state,
+    radiance, has_branch, branch)."""
     out = _camera_branch(state, scene, cam, ray, beta, split, True, scratch, -3.0)
     state, radiance = out.state, out.radiance
     v = out.vertex
     if v.s >= 0:
-        g = max(iris_grid, IRIS_GRID) if cam.through_cornea[v.s] else grid
+        g = iris_grid if cam.through_cornea[v.s] else grid
         k = g * g
         # the directions within θ₀ of the normal meet nothing that sends light (free_cone):
         # sample only sin²θ ∈ [s0, 1] (cosine-weighted there), × its share 1 − s0
@@ -606,7 +609,7 @@ def _camera_radiance(state, scene, cam, ray, scratch):
     if has_branch and branch.beta > 0.0:
         # the reflected branch (beta = R, ~2 %) continues in one direction, not g²
         state, more, _, _ = _path_radiance(
-            state, scene, cam, branch.ray, branch.beta, False, 1, 1, scratch
+            state, scene, cam, branch.ray, branch.beta, False, 1, IRIS_GRID, scratch
         )
         radiance += more
     # the elements' weaker parts (none without elements: the same stream as before), in one
@@ -614,7 +617,9 @@ def _camera_radiance(state, scene, cam, ray, scratch):
     for b in range(scratch.count[0]):
         row = scratch.rays[b]
         weak = Ray(row[0], row[1], row[2], row[3], row[4], row[5])
-        state, more, _, _ = _path_radiance(state, scene, cam, weak, row[6], False, 1, 1, scratch)
+        state, more, _, _ = _path_radiance(
+            state, scene, cam, weak, row[6], False, 1, IRIS_GRID, scratch
+        )
         radiance += more
     return state, radiance
 

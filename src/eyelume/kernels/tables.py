@@ -163,8 +163,8 @@ class CameraTables(NamedTuple):
     cornea (the iris); ``cornea``: the surface index of the anterior cornea (``cornea + 1`` is
     the posterior one); ``split_grid``: a camera path continues from its first Lambertian
     vertex in split_grid² stratified directions (``run.continuation_grid``), in iris_grid²
-    on the surfaces lit through the cornea (``run.iris_continuation_grid``; at least 3 there,
-    :data:`eyelume.estimators.fast.IRIS_GRID`).
+    on the surfaces lit through the cornea (``run.iris_continuation_grid``; by default
+    ``run.continuation_grid`` but at least :data:`eyelume.estimators.fast.IRIS_GRID`, 3).
 
     Optical elements (issue 14): ``element_rows`` (m,) int64 the rows of their optical
     surfaces (increasing; elements come last in the surface table), each the start of a light

@@ -1215,17 +1215,17 @@ class Run(_Model):
     ``light_paths_per_pixel`` × pixels × samples_per_pixel / 16 light paths aimed at the cornea;
     see :mod:`eyelume.estimators.fast`). A fast camera path continues from its first Lambertian
     vertex in ``continuation_grid``² cosine-weighted directions, one per stratum, for the light
-    the faces send each other (the noisy part of a skin pixel; at least 3² on the iris): 1
+    the faces send each other (the noisy part of a skin pixel; at least 3² on the iris unless
+    ``iris_continuation_grid`` says otherwise): 1
     where aiming through a real prescription dominates a sample's cost (paper2005), 4–5 (16–25
     rays) for a thin-lens camera, whose samples are cheap (vr-offaxis: per-sample noise in the
     median skin pixel 20.6 % → 3.6 % for about 2 × the cost at 4; 2.71 % → 2.20 % for 9.3 →
     12.6 µs from 4 to 5, which lets a 1 % render stop at 2 samples per pixel instead of 3;
     ``benchmarks/eye_image.py``, ``benchmarks/render_split.py``).
-    ``iris_continuation_grid``: the grid on the surfaces lit through the cornea (the iris, at
-    least 3 there), whose continuation rays cross the cornea twice and cost ~3 × a skin
-    vertex's (vr-offaxis: ~1.3 µs against ~0.4 µs; there they carry ~2.5 % of the median iris
-    pixel's camera-path light but all of its sample-to-sample noise); None:
-    ``continuation_grid``.
+    ``iris_continuation_grid``: the grid on the surfaces lit through the cornea (the iris),
+    whose continuation rays cross the cornea twice and cost ~3 × a skin vertex's (vr-offaxis:
+    ~1.3 µs against ~0.4 µs; there they carry ~2.5 % of the median iris pixel's camera-path
+    light but all of its sample-to-sample noise); None: ``continuation_grid``, but at least 3.
     """
 
     estimator: Literal["forward", "fast"] = "fast"
