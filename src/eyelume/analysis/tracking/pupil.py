@@ -247,6 +247,9 @@ class PupilFit:
     dropped: dict | None = None
     reason: str = ""
     threshold: float = math.nan
+    #: the edge points (x, y) px the ellipse was fitted to (its inliers), for the checks of
+    #: :func:`~.detect._pupil_result`
+    inliers: tuple[np.ndarray, np.ndarray] | None = None
 
     def __bool__(self) -> bool:
         return self.ellipse is not None
@@ -1771,6 +1774,7 @@ def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, p
         n_points=int(inl.sum()),
         dropped=dropped,
         threshold=wp.to_input(blob.level),
+        inliers=(xr[inl], yr[inl]),
     )
 
 
