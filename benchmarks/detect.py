@@ -43,6 +43,34 @@ call new / old (these frames, LEDs given for the synthetic ones): synthetic 640 
 vs 4.71 ms), 640 × 480 0.94, openeds 000160 0.98 (5.16 vs 5.27 ms; the slowest frame: a lid-cut
 pupil whose robust fit tries 26 run hypotheses), 000170 0.96, 000180 0.98 — ratios under load,
 not quiet-machine figures.
+
+History (figures once in the README's speed row). Session 12, quiet machine (load 1.3–1.4,
+41dd02c, 05:22 UTC): synthetic 640 × 400 4.98 ms CPU per call (median of 20; best 4.49; normalise
+0.35, glints 1.36, pupil 2.95, match 0.26), 640 × 480 7.20 ms (a disturbed median), openeds 3.98
+ms median over its 3 frames (the slowest 5.12), itmo 200 × 200 2.53 ms; at 24ba11f (03:48 UTC)
+synthetic 4.91 ms, openeds 4.52 (slowest 5.65). Session 12's cuts (e09aad6: the glints' box mean
+from an integral image only where it is compared, the ladder's 5 × 5 area reduction as block
+means, the hot-pixel test compiled; 8562ede: the glints' 8-bit histogram, the LEDs' matching
+angle remembered), ``detect()``'s answers identical on 280 pictures: interleaved A/B against
+24ba11f, load 7–11, best call synthetic ×0.9, openeds ×0.93–0.97. A Numba port of
+``cv2.fitEllipse`` (3× faster a fit) was reverted (179299a): outside the physics a library beats
+our own copy of it. Session 13's cuts above (answers identical on 589 (picture, LEDs) pairs: the
+255 realdata pictures, 144 renders 87 × 65 to 1024 × 768, 23 synthetic): the glints' closing and
+outlines only on the box of the glint pixels found, no refit of the very points a fit was made
+to, 16-bit labels for the glint fill, the 16-bit picture's glint smoothing by
+``cv2.sepFilter2D``, the ladder's dark levels labelled on the box of their dark pixels.
+
+Tried and not kept (session 13, det13b): scoring the robust fit's run hypotheses
+(``pupil._best_run``) with fits on every 2nd or 3rd point of each run, refitting on all points
+those within 5 % of the outline's points of the best. ``cv2.fitEllipse`` costs ~8 µs a call plus
+~0.2 µs a point (19 µs at 47 points, 24 at 79), so a thinned fit saves ~10 µs and the refits and
+second scoring take it back: interleaved A/B (two processes alternating batches of 20 calls, 20
+rounds, one thread, load 6–7), median CPU per call new / old on openeds 000160 1.05 (every 2nd
+point; faster in 4 rounds of 20) and 1.02 (every 3rd; in 1 of 20). And the answers change: a
+run's spread about its own fit sets the edge noise σ (the smallest over the runs) and with it
+the inlier tolerance, so every hypothesis' fit counts, not only the winner's — 6 of 279 answers
+changed (the 255 realdata pictures, 24 synthetic), one itmo picture from ``ok`` to "pupil cut or
+hidden".
 """
 
 from __future__ import annotations
