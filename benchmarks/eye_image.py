@@ -61,6 +61,76 @@ memory          peak RSS (``ru_maxrss``) of one render per fresh process: fast a
                 Target: ≤ 1024 MiB each.
 curve           error against wall time at 87 × 65: fast at 32…256 samples/pixel, forward at
                 2.5 M…40 M rays; skin and iris median pixel errors.
+
+History (the README's speed rows as they stood before session 13, verbatim)
+---------------------------------------------------------------------------
+87 × 65: **Session 12, quiet (load 1.1–1.7, 41dd02c, 05:19 UTC, stored): rel-error call 0.671 s best
+of 3 (median 0.702), default call 0.619 s (median 0.631); 32 samples/pixel, 0.802 %** — against
+0.760 / 0.841 s at 24ba11f, quiet, 03:45 UTC (the results line of that run was lost). Issue 11's
+0.65 s: met by the default call, 3 % over by the rel-error call's best. Before: at load ≤ 1 (start
+of session 6), `benchmarks/eye_image.py --only target_87x65` of each commit run by turns, twice:
+29353eb (after issue 10) rel-error call 0.774 / 0.801 s, default 0.735 / 0.944 s; c7cc679 (before
+issue 10) 0.795 / 1.108 s and 0.815 / 0.952 s; 0.89 % (0.907 % before) at 32 samples/pixel for both.
+Timed as a user calls it, interleaved with c7cc679 (`benchmarks/paper_render_calls.py`, end of
+session 5): rel-error 0.83–0.86 s against 0.98–1.23 s, default 0.73 s against 0.82–0.87 s. The
+session-4 regression was mostly Numba's reference counting in the per-ray kernels
+(`kernels/jit.py`). Session 12 (e021dcf: the camera sample's stop aim takes Broyden-updated steps,
+3.7 → 3.0 stop traces a sample, and reuses its own trace up to the stop, so 5 of the lens's 11
+surfaces are traced again instead of 11; the same samples to 1e-7): one thread, `render(cs,
+RenderOptions(estimator="fast", rel_error=0.01, seed=1))` after a warm-up, CPU best of 3–5, each
+tree on `PYTHONPATH` in turn with 24ba11f, 9 pairs at load 2.5–12: median 1.34 CPU-s against 1.62
+(−17 %; the pairs from −34 % to +3 %: a loaded machine), 32 samples/pixel and 0.802 % for both;
+`render_split.py --scene paper2005 --repeats 2` by turns (load 3–5) did not resolve it (camera pass
+1.06–1.07 CPU-s against 0.98–1.18). From the work it removes (~25 % of the aim's surface traces, the
+aim ~0.5 of ~1.4 CPU-s) expect ≈ −9 %. Where the time went at 24ba11f (`render_split.py --scene
+paper2005 --repeats 3`, load 5): 1.35–1.73 CPU-s — camera pass 0.94–1.15 (its aim through the Double
+Gauss ~0.5: chief ray, stop aim, Jacobian, trace out), light pass 0.35–0.49, eye plane 0.04–0.07,
+region map 0.02, statistics, PSF and Python ~0 (cProfile: ~1 600 calls a render): the fixed per-
+render costs are small at this size. The 2-thread wall figure was not re-taken: the machine was
+loaded (`eye_image.py --only target_87x65` at cpu_util 0.22–0.25: 3.08 s at 24ba11f, 3.42 s at
+e021dcf, both DISTURBED) | `python benchmarks/eye_image.py --only target_87x65` (the c7cc679 runs:
+that commit's own script in a worktree of it; its JSON lines in
+`benchmarks/results/eye_image_c7cc679.jsonl`); `benchmarks/paper_render_calls.py`
+
+vr-offaxis 400 × 400: **not met (≤ 3 s): 3.15 s** best of 3 (median 3.42, spread 20 %) at 41dd02c,
+quiet (load 1.1–1.7, 05:19 UTC, stored; 2 samples/pixel + 320 000 light paths, 0.912 %), against
+3.77 s (median 3.90; 3 + 480 000, 0.861 %) for 24ba11f quiet at 03:45 UTC; before that 4.27 s (best
+of 3; median 5.09, spread 31 %) on the quiet machine at a038467 [session 13: the preset's iris
+continuation grid 2 (4 rays, was 16; the iris is 12 % of the pixels and was a third of the camera
+pass): one thread, interleaved with 87de5c5 (load 3–5), `python benchmarks/render_split.py` **4.89 /
+4.88 / 4.81 CPU-s against 5.76 / 5.56 / 5.46** (−12 to −15 %; camera pass 4.0 against 4.6–4.9), the
+same 2 samples/pixel + 320 000 light paths and skin 0.912 %; the delivered iris's median error 1.27
+→ 1.58 %, against its shot and read noise of 5.9 % (~300 e⁻ at the preset's sensor and exposure):
+its total noise √(5.9² + 1.6²) rises by ~1 %, where the skin's render noise at the target is half
+its 1.8 % (sclera 1.38 %, pupil 3.3 %, unchanged); the 2-thread wall figure not re-taken] [session
+12: the preset's continuation grid 5 on the skin (25 rays; per camera sample 12.6 µs at 2.20 %
+against 9.3 µs at 2.71 % with 4) and 4 on the iris (`run.iris_continuation_grid`, new) lets the run
+stop at 2 samples/pixel + 320 000 light paths instead of 3 + 480 000: one thread, interleaved with
+24ba11f (load 8–11), `python benchmarks/render_split.py` **7.12 CPU-s against 8.88** (−20 %; both at
+load ~11; a second pair under changing load gave 5.52 against 8.98 and 9.78); camera pass 6.01
+against 7.23, light pass 0.63 against 1.08; delivered noise skin 0.91 % (0.86), iris 1.27 % (0.90),
+sclera 1.38 % (1.38), pupil 3.3 % (2.3) — fewer samples for the regions the stopping rule does not
+look at. Quiet, the wall figure fell 3.77 → 3.15 s (above)] (load 0.4–1.5, 02:28 UTC,
+`benchmarks/eye_image.py --only target_vr_offaxis,target_87x65`, stored), 3 samples/pixel + 480 000
+light paths, 0.861 % (iris 0.90 %, sclera 1.38 %, pupil 2.27 %); paper2005 87 × 65 0.758 s in the
+same run (0.82 s at 5a1e238, 00:38 UTC). The machine's speed drifts: the same benchmark at 5a1e238
+gave 7.36 s at 00:38 UTC (load 1.2), and 5.07 s for that code in session 10; the interleaved one-
+thread A/B below is the fair measure of this session's change. One thread, interleaved with 5a1e238
+(this session's start; load 5–6): **7.74 / 8.05 CPU-s against 10.22 / 9.40** (−20 %; same samples to
+rounding, same noise per region); the quiet-machine wall figure at 5a1e238 was 7.36 s, so ≈ 5.9 s to
+expect quiet — about 2× off. The 2-thread run at 2c00045 gave 16.7 s wall at CPU utilisation 0.25
+(load 5.7–6, DISTURBED: not a figure). Per camera sample (one thread, `camera_cost.py`): skin ~9–10
+µs (≈ 4 µs camera ray, hit, free cone and 8 shadow rays; the rest the 16 continuation rays, ~74 % of
+them meeting nothing, ~0.19 µs a nearest-hit search), iris ~41–43 µs (the Newton connections to the
+8 LEDs ~11, the 16 continuation rays out through the cornea ~30), sclera ~9 µs. Split
+(`render_split.py`, one thread, load 6): 8.91 CPU-s — camera pass 7.50 (84 %), light pass 0.89 (10
+%), eye plane 0.16, PSF, region map and pilot 0.10 each. History: 5.07 s quiet at d054df4 (session
+10), 7.36 s for the same code at session 11's start (the machine slower); session 11 cut the iris
+sample by 25 % (the Newton connection's analytic Jacobian, 88db55a) and the skin's by ~5–10 %
+(continuation and shadow rays skip the surfaces out of reach, c092768, 2c00045: the same samples bit
+for bit) | `python benchmarks/eye_image.py --only target_vr_offaxis` (wall, 2 threads), `python
+benchmarks/render_split.py` (one thread, CPU split), `python benchmarks/camera_cost.py` (µs per
+camera sample per region)
 """
 
 from __future__ import annotations
