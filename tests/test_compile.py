@@ -147,6 +147,18 @@ def test_a_sensor_larger_than_the_prescription_covers_is_refused(overrides, word
     assert words in msg and "\n" not in msg
 
 
+def test_a_sensor_field_far_past_the_lens_names_the_sensor():
+    """A 460 × 343 mm picture on paper2005's Double Gauss (10× its 46 × 34.3 mm): most rim
+    rays miss a surface or are totally reflected; the one line names the sensor's fields and
+    values (a new user's finding: it named only the prescription)."""
+    with pytest.raises(SceneError) as e:
+        compile_scene(
+            load_scene("paper2005", {"sensor.width_mm": 460.0, "sensor.height_mm": 343.0})
+        )
+    msg = str(e.value)
+    assert "sensor.width_mm × sensor.height_mm = 460 × 343 mm" in msg and "\n" not in msg
+
+
 def test_a_vignetting_aperture_warns():
     """An aperture that blocks the chief ray of part of the field while other rays pass: the
     scene renders (vignetting is a lens property), with a warning saying how much is vignetted."""

@@ -597,9 +597,11 @@ def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame)
     for i, c in enumerate(centres):
         rb = radii[i]
         if c[2] - rb <= plane_z:
+            where = "lies behind" if c[2] + rb <= plane_z else "crosses"
             raise SceneError(
-                f"leds: LED {i} body (centre z = {c[2]:.2f} mm, radius {rb}) crosses the "
-                f"eye plane z = {plane_z:g}"
+                f"leds: LED {i} body (centre z = {c[2]:.2f} mm, radius {rb}) {where} the "
+                f"eye plane z = {plane_z + 0.0:g} (the eye's side): the LEDs must sit in front "
+                "of the eye"
             )
         for j in range(i):
             if np.linalg.norm(c - centres[j]) < rb + radii[j]:
@@ -997,9 +999,12 @@ def _compile_lens(
     lf, image_z = _lens_table(scene, idx, semi)
     _check_lens_geometry(lf)
     if rim_fraction < 0.9:
+        sw, sh = scene.sensor.field_mm
         raise SceneError(
             f"lens: only {rim_fraction:.0%} of the rim rays of the eye-plane field pass the lens "
-            "(total internal reflection or a surface missed): check the prescription"
+            "(total internal reflection or a surface missed): the picture (sensor.width_mm × "
+            f"sensor.height_mm = {sw:g} × {sh:g} mm) is larger than the lens covers, or check "
+            "the prescription"
         )
     _check_coverage(scene, par, stop, stop_sd, lf)
     best = real_best_focus(lf)
