@@ -2132,8 +2132,8 @@ def _element_chains(
 def _iris_grid(run) -> int:
     """The continuation grid on the surfaces lit through the cornea (the iris):
     ``run.iris_continuation_grid`` if given, else ``run.continuation_grid`` but at least
-    :data:`eyelume.estimators.fast.IRIS_GRID` (3)."""
-    from eyelume.estimators.fast import IRIS_GRID
+    :data:`eyelume.kernels.tables.IRIS_GRID` (3)."""
+    from eyelume.kernels.tables import IRIS_GRID
 
     if run.iris_continuation_grid is not None:
         return int(run.iris_continuation_grid)

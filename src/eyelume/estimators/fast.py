@@ -96,6 +96,7 @@ from eyelume.kernels.tables import (
     G_AZ,
     G_COS,
     G_P,
+    IRIS_GRID,
     REFLECT,
     TRANSMIT_A,
     Facet,
@@ -542,23 +543,23 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch, c
     return CameraPath(state, radiance, has_branch, branch, vertex)
 
 
-#: The continuation grid on the surfaces lit through the cornea (the iris, whose light is
-#: mostly the face's, reflected: it is shadowed by the cornea, the skin around it is not; 8
-#: unstratified rays before the grid) when the scene does not give one: the camera path's own
-#: grid there is ``run.iris_continuation_grid``, by default the others' but at least this
-#: (:func:`eyelume.compile` sets ``cam.iris_grid``), and the branches followed in one direction
-#: (the cornea's reflection, an element's weaker part) take this one on the iris. On
-#: vr-offaxis the light through the cornea is most of an iris pixel's and the continuation
-#: ~2.5 % of the median iris pixel's camera-path light, yet all of its sample-to-sample noise
-#: and ~57 % of its cost with 16 rays of ~1.3 µs out through the cornea (24ba11f): the preset
-#: takes 2 (4 rays; README, issue 11). On the other faces the grid is ``run.continuation_grid``:
-#: a skin pixel's direct light (NEE to every LED) hardly varies between samples, the light the
-#: faces send each other (~8 % of a vr-offaxis skin pixel) does, and it is cheap to sample again
-#: from the same vertex: on vr-offaxis (100 × 100 of 12 µm pixels, 8 sets of 2 × 2 samples) one
-#: continuation ray (and a uniformly drawn LED at later vertices) gave a per-sample relative
-#: standard deviation of 20.6 % in the median skin pixel at 102 k samples per CPU-second, 16
-#: stratified ones (and :func:`sampled_irradiance`) 3.6 % at 49 k: 15 × the efficiency.
-IRIS_GRID = 3
+# IRIS_GRID (kernels/tables.py, so that compile reads it without importing an estimator):
+# the continuation grid on the surfaces lit through the cornea (the iris, whose light is
+# mostly the face's, reflected: it is shadowed by the cornea, the skin around it is not; 8
+# unstratified rays before the grid) when the scene does not give one: the camera path's own
+# grid there is ``run.iris_continuation_grid``, by default the others' but at least this
+# (:func:`eyelume.compile` sets ``cam.iris_grid``), and the branches followed in one direction
+# (the cornea's reflection, an element's weaker part) take this one on the iris. On
+# vr-offaxis the light through the cornea is most of an iris pixel's and the continuation
+# ~2.5 % of the median iris pixel's camera-path light, yet all of its sample-to-sample noise
+# and ~57 % of its cost with 16 rays of ~1.3 µs out through the cornea (24ba11f): the preset
+# takes 2 (4 rays; README, issue 11). On the other faces the grid is ``run.continuation_grid``:
+# a skin pixel's direct light (NEE to every LED) hardly varies between samples, the light the
+# faces send each other (~8 % of a vr-offaxis skin pixel) does, and it is cheap to sample again
+# from the same vertex: on vr-offaxis (100 × 100 of 12 µm pixels, 8 sets of 2 × 2 samples) one
+# continuation ray (and a uniformly drawn LED at later vertices) gave a per-sample relative
+# standard deviation of 20.6 % in the median skin pixel at 102 k samples per CPU-second, 16
+# stratified ones (and :func:`sampled_irradiance`) 3.6 % at 49 k: 15 × the efficiency.
 
 
 @per_ray

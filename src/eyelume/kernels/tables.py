@@ -82,6 +82,14 @@ CHAIN_STEPS = 4
 CHAIN_COLS = 2 + 2 * CHAIN_STEPS
 
 
+#: The least continuation grid on the surfaces lit through the cornea (the iris) when the scene
+#: gives none (``run.iris_continuation_grid`` None): :mod:`eyelume.compile` sets
+#: ``CameraTables.iris_grid`` to max(``run.continuation_grid``, this), and the fast estimator's
+#: branches followed in one direction take it on the iris (why 3: the comment above
+#: ``_path_radiance`` in :mod:`eyelume.estimators.fast`).
+IRIS_GRID = 3
+
+
 class Ray(NamedTuple):
     """A ray: origin (x, y, z) and unit direction (dx, dy, dz), world mm."""
 
@@ -164,7 +172,7 @@ class CameraTables(NamedTuple):
     the posterior one); ``split_grid``: a camera path continues from its first Lambertian
     vertex in split_grid² stratified directions (``run.continuation_grid``), in iris_grid²
     on the surfaces lit through the cornea (``run.iris_continuation_grid``; by default
-    ``run.continuation_grid`` but at least :data:`eyelume.estimators.fast.IRIS_GRID`, 3).
+    ``run.continuation_grid`` but at least :data:`IRIS_GRID`, 3).
 
     Optical elements (issue 14): ``element_rows`` (m,) int64 the rows of their optical
     surfaces (increasing; elements come last in the surface table), each the start of a light
