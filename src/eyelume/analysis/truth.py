@@ -175,9 +175,12 @@ def _open_cap(cs: CompiledScene, cornea: int) -> np.ndarray:
     return sf
 
 
-def _stop_ray(cs: CompiledScene, cam: CameraTables, xs: float, ys: float, tx: float, ty: float):
+def _stop_ray(
+    cs: CompiledScene, cam: CameraTables, xs: float, ys: float, tx: float, ty: float, share=False
+):
     """The ray from sensor point (xs, ys) through point (tx, ty) of the camera's stop (mm, the
-    stop's frame; (0, 0): the chief ray) in the scene, past the optical elements, or None."""
+    stop's frame; (0, 0): the chief ray) in the scene, past the optical elements, or None; with
+    ``share`` also the power share its element branches pass (:func:`_element_path`)."""
     chief = aim_chief(cam, xs, ys)
     if not chief.found:
         return None
@@ -186,7 +189,8 @@ def _stop_ray(cs: CompiledScene, cam: CameraTables, xs: float, ys: float, tx: fl
     )
     if not r.passed:
         return None
-    return _through_elements(cs, np.array([r.x, r.y, r.z]), np.array([r.dx, r.dy, r.dz]))
+    p, d, w = _element_path(cs, np.array([r.x, r.y, r.z]), np.array([r.dx, r.dy, r.dz]))
+    return (p, d, w) if share else (p, d)
 
 
 def _miss(ray, target: np.ndarray, normal: np.ndarray, e1: np.ndarray, e2: np.ndarray):
@@ -547,15 +551,8 @@ def _glint_seen(v: _View, k: int, row: int, led: np.ndarray, p, d, share_in: flo
 
 def _rim_seen(v: _View, k: int, row: int, led: np.ndarray, s, t) -> bool:
     """:func:`_glint_seen` along the ray from sensor point ``s`` through stop point ``t``."""
-    cs, cam = v.cs, v.cam
-    chief = aim_chief(cam, float(s[0]), float(s[1]))
-    if not chief.found:
-        return False
-    _, r = aim_into_scene(cam, float(s[0]), float(s[1]), *t, chief.qx, chief.qy, chief.jac)
-    if not r.passed:
-        return False
-    p, d, w = _element_path(cs, np.array([r.x, r.y, r.z]), np.array([r.dx, r.dy, r.dz]))
-    return _glint_seen(v, k, row, led, p, d, w)[0]
+    ray = _stop_ray(v.cs, v.cam, float(s[0]), float(s[1]), *t, share=True)
+    return ray is not None and _glint_seen(v, k, row, led, *ray)[0]
 
 
 #: Stop samples a side of the square grid over which :func:`_rim_glint` integrates its model
