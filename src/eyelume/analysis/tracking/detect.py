@@ -90,6 +90,7 @@ from numba import njit
 from eyelume.analysis.tracking.glints import (
     default_max_angle,
     find_glints,
+    glints_near,
     match_leds,
     match_pattern,
 )
@@ -146,6 +147,10 @@ class DetectParams:
         finer level can pick a lid-cut pupil's darkest core, whose outline passes the usual
         0.45 with the centre over a pixel off: paper2005 at (−30°, −20°)). (1 = off.)
     max_candidates : stable blobs fitted in turn, darkest first, before giving up (3).
+    small_pupil_axes : when the reduced ladder (f > 1) gives no whole pupil, the ladder again at
+        full resolution for a pupil under this × f px across (4: the reduced ladder resolves
+        ≥ ~3 f px; eyetrackvr's ~9 px pupil at f = 3 merged there with its iris), whole fits
+        only (:func:`~.pupil._small_pupil`); 0 = off.
     core_quantile, core_max_fraction, core_min_sigma : a fitted pupil whose interior (inside
         0.9 × its ellipse, off glints and missing pixels) has a darker core — its
         ``core_quantile`` (5th percentile) within ``core_max_fraction`` (¼) of the way from
@@ -192,6 +197,12 @@ class DetectParams:
         (points near glints are dropped anyway); a closing's cost grows with the element.
     border_margin_px : outline points this close to the picture's edge are not pupil edge.
     glint_margin_px : outline points within this of a bright (glint) pixel are dropped.
+    glint_max_pupil_frac : a bright blob is a glint on a dark blob (joined to it, its outline
+        points dropped) only when its area is ≤ this (¼) × the blob's: a corneal glint is
+        far smaller than the pupil it sits on (an LED's virtual image in the cornea is a
+        fraction of a millimetre, the pupil 2–8 mm); saturated skin beside a small pupil is
+        not a glint on it (eyetrackvr: lit brow and lid, 38–125 px, within 15 px of a 60 px
+        pupil, hid its whole outline).
     edge_fraction : the sub-pixel edge is where the image crosses this fraction of the way from
         the pupil's level to the iris's (¼; :mod:`.pupil` step 5 for why not ½).
     refine_reach_px, refine_reach_frac : the sub-pixel edge search runs ± max(3 px, 0.1 ×
@@ -291,6 +302,7 @@ class DetectParams:
     core_max_fraction: float = 0.25
     core_min_sigma: float = 8.0
     max_candidates: int = 3
+    small_pupil_axes: float = 4.0
     pupil_min_area_px: int = 30
     pupil_tiny_area_px: int = 6
     pupil_max_area_frac: float = 0.10
@@ -306,6 +318,7 @@ class DetectParams:
     closing_kernel_frac: float = 0.15
     border_margin_px: float = 1.5
     glint_margin_px: float = 1.5
+    glint_max_pupil_frac: float = 0.25
     edge_fraction: float = 0.25
     refine_reach_px: float = 3.0
     refine_reach_frac: float = 0.10
@@ -794,6 +807,55 @@ def _flat_windows(phi, uv, d, span, max_gap, min_points):
     return on
 
 
+def _blobs_near_pupil(img, value_range, noise, found, pupil, floor, params) -> list[dict]:
+    """Step 5 (start): the bright blobs that can be the cornea's glints on this pupil, from
+    ``found`` = (blobs, bright mask) of step 2 — within ``glint_search_radius`` × its major
+    axis of its centre, no larger than ``glint_max_pupil_frac`` × its area (saturated skin
+    beside a small pupil is no glint) and with a peak ``glint_level`` of the way from the
+    blob's own background to the picture's top — and, when step 2 worked on a smoothed
+    picture, those the smoothing lost there (:func:`~.glints.glints_near`: glints under a
+    pixel across) whose centre is off step 2's mask.
+
+    The peak test is the pixel test of step 2 against the blob's background (the median
+    around it, :func:`~.glints.glint_blobs`) instead of the box mean, which next to a dark
+    iris mixes it with the lit lid and lets the lid's texture through (eyetrackvr: 1–5 px
+    specks 15 DN over a lid at 185 DN, 10 px from the pupil, against the glints' 230 DN
+    over the iris)."""
+    blobs, bright = found
+    cx, cy = pupil.centre_px
+    top = value_range[1]
+    r_max = params.glint_search_radius * pupil.axes_px[0]
+    cap = params.glint_max_pupil_frac * math.pi / 4.0 * pupil.axes_px[0] * pupil.axes_px[1]
+
+    def corneal(b: dict) -> bool:
+        x, y = b["centre_px"]
+        return (
+            math.hypot(x - cx, y - cy) <= r_max
+            and b["area_px"] <= cap
+            and b["peak"] - b["base"] >= params.glint_level * (top - b["base"])
+        )
+
+    near = [b for b in blobs if corneal(b)]
+    sig = params.glint_smooth_px
+    if sig is None:
+        sig = min(img.shape) / 480.0
+    if sig < 0.5 or floor is None:
+        return near
+    rows, cols = bright.shape
+    # A glint the smoothing lost holds its LED's light in a pixel or two, at the top of the
+    # scale: within ``glint_min_contrast`` of it (the band over-exposed glints are sought in,
+    # glints.saturated_floor). A pixel at the skin's level standing out of a box mean that
+    # mixes the dark iris in is the lid's texture or noise (vr-offaxis at (0°, −20°): 793 DN
+    # over lit skin at ~770, 14 px from LED 2's glint, which the lid hides, was matched to it).
+    least = value_range[1] - params.glint_min_contrast * (value_range[1] - value_range[0])
+    for b in glints_near(img, value_range, noise, (cx, cy), r_max, floor, params):
+        x, y = b["centre_px"]
+        c, r = min(cols - 1, max(0, round(x))), min(rows - 1, max(0, round(y)))
+        if b["peak"] >= least and corneal(b) and not bright[r, c]:
+            near.append(b)
+    return near
+
+
 def _split_specks(blobs: list[dict], params) -> tuple[list[Glint], list[Glint]]:
     """Step 5a: the glints, and the specks — blobs with less than ``glint_min_flux_frac`` of the
     brightest glint's light (above its background), which no LED's corneal reflection is.
@@ -1102,11 +1164,7 @@ def detect(
     t3 = time.perf_counter()
     timings["pupil"] = 1e3 * (t3 - t2)
     if pupil is not None:
-        cx, cy = pupil.centre_px
-        r_max = params.glint_search_radius * pupil.axes_px[0]
-        blobs = [
-            b for b in blobs if math.hypot(b["centre_px"][0] - cx, b["centre_px"][1] - cy) <= r_max
-        ]
+        blobs = _blobs_near_pupil(img, (lo, hi), noise, (blobs, bright), pupil, tg_value, params)
     glints, specks = _split_specks(blobs, params)
     missing_leds: list[int] = []
     lost_note: list[str] = []

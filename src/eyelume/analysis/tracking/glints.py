@@ -38,6 +38,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -48,6 +49,7 @@ from scipy.optimize import linear_sum_assignment
 
 __all__ = [
     "find_glints",
+    "glints_near",
     "glint_blobs",
     "glint_threshold",
     "saturated_floor",
@@ -127,6 +129,46 @@ def find_glints(img: np.ndarray, value_range, noise: float, params):
     floor = 1e-6 * (value_range[1] - value_range[0])
     blobs, bright = glint_blobs(u8, img, tg8, params, noise=max(noise, floor), min_rise=min_rise)
     return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
+
+
+def glints_near(img: np.ndarray, value_range, noise: float, centre, radius: float, floor, params):
+    """Glint blobs (dicts, as :func:`glint_blobs`) within ``radius`` px of ``centre`` (x, y) px —
+    the pupil's, where corneal glints are — found on the *unsmoothed* picture: after
+    :func:`find_glints` smoothed it (``glint_smooth_px`` ≥ 0.5), a glint under a pixel across
+    (a wide-angle lens on a small sensor: eyetrackvr's 130° at 240 × 240, each glint one
+    saturated pixel with its four neighbours lit by the optics' spread) is at ~0.6 of its peak
+    there, below the picture's brightest skin (its 99th percentile, ``floor`` in the input's
+    units) and is lost. Here a glint pixel is above that floor and ``glint_level`` of the way
+    from its ``glint_window_px`` box mean to the top, as in :func:`find_glints`, on the picture
+    scaled by ``value_range`` (min, max), and a blob may be one pixel: isolated hot pixels
+    (flat neighbours) were mended before (``detect._mend_hot_pixels``) and a blob's peak must
+    still stand ``glint_min_snr`` × ``noise`` above its background."""
+    rows, cols = img.shape
+    lo, hi = value_range
+    if not hi > lo or floor is None:
+        return []
+    w = params.glint_window_px
+    if w is None:  # the whole picture's box, not the window's
+        w = max(5, int(round(min(rows, cols) / 16.0)))
+        w = w if w % 2 else w + 1
+    m = int(math.ceil(radius)) + w
+    cx, cy = centre
+    x0, y0 = max(0, int(cx) - m), max(0, int(cy) - m)
+    x1, y1 = min(cols, int(cx) + m + 2), min(rows, int(cy) + m + 2)
+    if x1 - x0 < 3 or y1 - y0 < 3:
+        return []
+    sub = np.ascontiguousarray(img[y0:y1, x0:x1])
+    scale = 255.0 / (hi - lo)
+    u8 = cv2.convertScaleAbs(sub, alpha=scale, beta=-lo * scale)
+    floor8 = int(math.floor((floor - lo) * scale))
+    one = dataclasses.replace(params, glint_window_px=w, glint_close_px=1, glint_min_area_px=1)
+    blobs, _ = glint_blobs(u8, sub, floor8, one, noise=noise)
+    out = []
+    for b in blobs:
+        x, y = b["centre_px"][0] + x0, b["centre_px"][1] + y0
+        if math.hypot(x - cx, y - cy) <= radius:
+            out.append({**b, "centre_px": (x, y)})
+    return out
 
 
 def _histogram(u8: np.ndarray) -> np.ndarray:
@@ -361,7 +403,7 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     xs = np.arange(x0, x1, dtype=np.float64)
     ys = np.arange(y0, y1, dtype=np.float64)
     centre = (float((wgt.sum(axis=0) * xs).sum() / tot), float((wgt.sum(axis=1) * ys).sum() / tot))
-    return {"centre_px": centre, "area_px": float(area), "peak": peak, "flux": tot}
+    return {"centre_px": centre, "area_px": float(area), "peak": peak, "flux": tot, "base": base}
 
 
 @njit(cache=True, nogil=True)

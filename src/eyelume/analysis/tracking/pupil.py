@@ -20,7 +20,9 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    et al. 2002). The ladder stops once the darkest chain has settled. When the fits of step
    4–7 give no whole pupil, the ladder's first three levels are walked again four times finer:
    a pupil near the black level, with bright skin setting the levels' spacing (an off-axis
-   view), is otherwise crossed into the iris in one or two levels.
+   view), is otherwise crossed into the iris in one or two levels. Still none: the ladder at
+   full resolution for a pupil under 4 f px across, too small for the reduced picture
+   (:func:`_small_pupil`).
 3. **Choice** (:func:`choose`): chains darkest first; a chain's blob is its first level with
    q ≤ 1 walked on to the local minimum of q — the pupil's area holds while the threshold
    crosses its edge band, then jumps when it merges with the iris. Refusals: "no pupil (merged
@@ -1279,7 +1281,9 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
         lab_seed = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
         raw = np.where(lab == lab_seed, 255, 0).astype(np.uint8)
     comp = raw.copy()
-    near_glint, (gx0, gy0, gx1, gy1) = _grown_glints_box(bright[y0:y1, x0:x1], params)
+    near_glint, (gx0, gy0, gx1, gy1) = _grown_glints_box(
+        _glints_beside(bright[y0:y1, x0:x1], cv2.countNonZero(raw), params), params
+    )
     if gx1 > gx0:
         # Glints touching the blob (with their skirts) join it: no notch however small the
         # closing. Worked on the grown glints' box (nothing joins outside it); the blob's
@@ -1317,6 +1321,24 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
         )
     diam = math.sqrt(4.0 * area / math.pi)
     return Blob(x0, y0, closed, raw, near_glint, contour, area, diam, cand.level)
+
+
+def _glints_beside(bright: np.ndarray, pupil_area: int, params) -> np.ndarray:
+    """The glint mask ``bright`` (0/255) of a dark blob's window without the bright blobs larger
+    than ``glint_max_pupil_frac`` × the blob's area ``pupil_area`` (px): a corneal glint is far
+    smaller than the pupil it sits on, while saturated skin beside a small pupil is not (the
+    eyetrackvr preset: 38–125 px patches of lit brow and lid within 15 px of a 60 px pupil),
+    and joined to the blob or grown by its radius it would take the pupil's outline with it.
+    ``bright`` itself when nothing is dropped."""
+    lim = params.glint_max_pupil_frac * pupil_area
+    if not cv2.countNonZero(bright):
+        return bright
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(bright, connectivity=8)
+    big = stats[:, cv2.CC_STAT_AREA] > lim
+    big[0] = False
+    if not big.any():
+        return bright
+    return np.where(big[lab], 0, bright).astype(np.uint8)
 
 
 def _closed_solidity(comp: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, float]:
@@ -1961,6 +1983,69 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     return ""
 
 
+def _finer(img: np.ndarray, wp: WorkPicture, reduced, f: int, bright: np.ndarray, params):
+    """:func:`find_pupil`'s second pass, the ladder's dark end again ``ladder_fine`` × finer:
+    its fit when whole by the stricter ``ladder_fine_support`` with no darker core, else None."""
+    if params.ladder_fine <= 1:
+        return None
+    # Held to a stricter support than the first pass (``ladder_fine_support``): a finer
+    # level can pick a lid-cut pupil's darkest core, whose outline passes the usual
+    # support with the centre over a pixel off (paper2005 at (−30°, −20°)).
+    strict = dataclasses.replace(
+        params,
+        min_boundary_support=params.ladder_fine_support,
+        max_boundary_gap=1.0 - params.ladder_fine_support,
+    )
+    again, _, _ = ladder(wp, params, reduced, fine=params.ladder_fine)
+    picks2 = choose(again, f, ([], tuple), wp, params)
+    fit2 = _fit_candidates(img, wp, picks2, f, bright, params, []) if picks2 else None
+    if (
+        fit2 is not None
+        and _whole(fit2, strict)
+        and not darker_core(img, wp, fit2.ellipse, bright, params)
+    ):
+        return fit2
+    return None
+
+
+def _small_pupil(img: np.ndarray, invalid, bright: np.ndarray, f: int, params) -> PupilFit | None:
+    """A pupil too small for the ladder's reduced picture, or None: the ladder again at full
+    resolution, when it was reduced (f > 1), keeping only a whole fit (``_whole``, no darker
+    core) under ``small_pupil_axes`` × f px across. The reduced ladder resolves a pupil of ≥ ~3 f
+    px (3 reduced px, smoothed by σ 1 px); a smaller one (eyetrackvr's 4 mm pupil seen by a
+    130° lens at 240 × 240: ~9 px, f = 3) merges there with the iris around it, whose fit then
+    has it as a darker core, or with a dark fold. Only bright blobs that could be glints on
+    such a pupil (≤ ``glint_max_pupil_frac`` of its largest area) are filled in its working
+    picture: a patch of saturated skin beside it, filled with the dark around it, would join
+    it. Larger pupils are left to the reduced ladder (a full-resolution ladder on real
+    close-ups, whose pupils are 30–80 px, answered wrong)."""
+    if f <= 1 or params.small_pupil_axes <= 0:
+        return None
+    largest = math.pi / 4.0 * (params.small_pupil_axes * f) ** 2
+    glints = _glints_beside(bright, largest, params)
+    wp = work_picture(img, invalid, glints, params)
+    if not wp:
+        return None
+    full = dataclasses.replace(params, ladder_rows=float(min(img.shape)))
+    reduced = _reduced(wp, full)
+    if reduced[1] is not None and reduced[1].all():
+        return None
+    chains, _, _ = ladder(wp, full, reduced)
+    picks = choose(chains, 1, ([], tuple), wp, full)
+    if not picks:
+        return None
+    picks = [c for c in picks if c.area <= largest]
+    fit = _fit_candidates(img, wp, picks, 1, glints, full, []) if picks else None
+    if (
+        fit is None
+        or not _whole(fit, params)
+        or 2 * max(fit.ellipse.a, fit.ellipse.b) > params.small_pupil_axes * f
+        or darker_core(img, wp, fit.ellipse, glints, params)
+    ):
+        return None
+    return fit
+
+
 def _whole(fit: PupilFit, params) -> bool:
     """Whether a fit's outline is backed enough to be trusted (``detect``'s support check)."""
     return fit.support >= params.min_boundary_support and fit.gap <= params.max_boundary_gap
@@ -2000,27 +2085,14 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit
     # whole. The first pass misses a pupil near the black level whose step to the iris it
     # crosses in one or two levels (an off-axis view, where bright skin sets the levels'
     # spacing): its chain's stable blob is then the iris, or the pupil is unstable at the first
-    # level, joined at the next to the iris or to a dark fold. (The ladder again at full
-    # resolution, for a pupil a few px across once reduced, gave wrong answers on real
-    # close-ups: not done.)
-    if params.ladder_fine > 1:
-        # Held to a stricter support than the first pass (``ladder_fine_support``): a finer
-        # level can pick a lid-cut pupil's darkest core, whose outline passes the usual
-        # support with the centre over a pixel off (paper2005 at (−30°, −20°)).
-        strict = dataclasses.replace(
-            params,
-            min_boundary_support=params.ladder_fine_support,
-            max_boundary_gap=1.0 - params.ladder_fine_support,
-        )
-        again, _, _ = ladder(wp, params, reduced, fine=params.ladder_fine)
-        picks2 = choose(again, f, ([], tuple), wp, params)
-        fit2 = _fit_candidates(img, wp, picks2, f, bright, params, []) if picks2 else None
-        if (
-            fit2 is not None
-            and _whole(fit2, strict)
-            and not darker_core(img, wp, fit2.ellipse, bright, params)
-        ):
-            return fit2
+    # level, joined at the next to the iris or to a dark fold. Then, for a pupil a few px
+    # across once reduced, the ladder at full resolution (:func:`_small_pupil`; only for pupils
+    # under ``small_pupil_axes`` × f px: for any pupil it gave wrong answers on real close-ups).
+    again = _finer(img, wp, reduced, f, bright, params) or _small_pupil(
+        img, invalid, bright, f, params
+    )
+    if again is not None:
+        return again
     if core:
         return PupilFit(None, reason=core)
     if fit is not None:
