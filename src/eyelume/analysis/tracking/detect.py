@@ -807,6 +807,35 @@ def _flat_windows(phi, uv, d, span, max_gap, min_points):
     return on
 
 
+def _sharp_glints(img, value_range, noise, floor, params):
+    """For :func:`~.pupil.find_pupil`'s small-pupil pass when step 2 smoothed the picture (else
+    None): a function giving the mask of the glints of the unsmoothed picture
+    (:func:`~.glints.glints_near` over all of it) — each one pixel on a small sensor, lost to
+    the smoothing, and beside a pupil of a few px enough to notch its blob."""
+    sig = params.glint_smooth_px
+    if sig is None:
+        sig = min(img.shape) / 480.0
+    if sig < 0.5 or floor is None:
+        return None
+    rows, cols = img.shape
+
+    def sharp() -> np.ndarray:
+        mask = np.zeros((rows, cols), np.uint8)
+        glints_near(
+            img,
+            value_range,
+            noise,
+            (cols / 2, rows / 2),
+            math.hypot(rows, cols),
+            floor,
+            params,
+            mask,
+        )
+        return mask
+
+    return sharp
+
+
 def _blobs_near_pupil(img, value_range, noise, found, pupil, floor, params) -> list[dict]:
     """Step 5 (start): the bright blobs that can be the cornea's glints on this pupil, from
     ``found`` = (blobs, bright mask) of step 2 — within ``glint_search_radius`` × its major
@@ -1157,7 +1186,9 @@ def detect(
     blobs, bright, tg_value = find_glints(img, (lo, hi), noise, params)
     t2 = time.perf_counter()
     timings["glints"] = 1e3 * (t2 - t1)
-    fit = find_pupil(img, invalid, bright, params)
+    fit = find_pupil(
+        img, invalid, bright, params, _sharp_glints(img, (lo, hi), noise, tg_value, params)
+    )
     pupil, errors, fit = _pupil_result(fit, params)
     pupil_notes = [m for m in errors if m.startswith("warning: ")]
     errors = [m for m in errors if not m.startswith("warning: ")]

@@ -131,7 +131,9 @@ def find_glints(img: np.ndarray, value_range, noise: float, params):
     return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
 
 
-def glints_near(img: np.ndarray, value_range, noise: float, centre, radius: float, floor, params):
+def glints_near(
+    img: np.ndarray, value_range, noise: float, centre, radius: float, floor, params, mask=None
+):
     """Glint blobs (dicts, as :func:`glint_blobs`) within ``radius`` px of ``centre`` (x, y) px —
     the pupil's, where corneal glints are — found on the *unsmoothed* picture: after
     :func:`find_glints` smoothed it (``glint_smooth_px`` ≥ 0.5), a glint under a pixel across
@@ -142,7 +144,8 @@ def glints_near(img: np.ndarray, value_range, noise: float, centre, radius: floa
     from its ``glint_window_px`` box mean to the top, as in :func:`find_glints`, on the picture
     scaled by ``value_range`` (min, max), and a blob may be one pixel: isolated hot pixels
     (flat neighbours) were mended before (``detect._mend_hot_pixels``) and a blob's peak must
-    still stand ``glint_min_snr`` × ``noise`` above its background."""
+    still stand ``glint_min_snr`` × ``noise`` above its background. ``mask`` (uint8, the
+    picture's shape): the blobs kept are drawn into it (255)."""
     rows, cols = img.shape
     lo, hi = value_range
     if not hi > lo or floor is None:
@@ -162,7 +165,10 @@ def glints_near(img: np.ndarray, value_range, noise: float, centre, radius: floa
     u8 = cv2.convertScaleAbs(sub, alpha=scale, beta=-lo * scale)
     floor8 = int(math.floor((floor - lo) * scale))
     one = dataclasses.replace(params, glint_window_px=w, glint_close_px=1, glint_min_area_px=1)
-    blobs, _ = glint_blobs(u8, sub, floor8, one, noise=noise)
+    # (min_rise > 0 but below the noise's rise: the mask returned holds the blobs kept only)
+    blobs, kept = glint_blobs(u8, sub, floor8, one, noise=noise, min_rise=1e-300)
+    if mask is not None:
+        cv2.bitwise_or(mask[y0:y1, x0:x1], kept, dst=mask[y0:y1, x0:x1])
     out = []
     for b in blobs:
         x, y = b["centre_px"][0] + x0, b["centre_px"][1] + y0

@@ -2051,12 +2051,15 @@ def _whole(fit: PupilFit, params) -> bool:
     return fit.support >= params.min_boundary_support and fit.gap <= params.max_boundary_gap
 
 
-def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit:
+def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params, sharp=None) -> PupilFit:
     """Find and fit the pupil (module doc, steps 1–7). ``img`` (rows, cols) float32/float64 or
     integer, the input's own units, with invalid pixels (``invalid``, bool or None) holding any
     finite value; ``bright`` the glint mask (uint8, 0/255). The first of the chosen candidates
     (darkest first, at most ``max_candidates``) whose fit succeeds is returned; otherwise a
-    :class:`PupilFit` with ``ellipse`` None and the first candidate's refusal."""
+    :class:`PupilFit` with ``ellipse`` None and the first candidate's refusal. ``sharp``: an
+    optional function giving more glints (uint8 0/255) for :func:`_small_pupil` — those of
+    the unsmoothed picture, one pixel each on a small sensor, which would notch a small
+    pupil's blob."""
     wp = work_picture(img, invalid, bright, params)
     if not wp:
         return PupilFit(None, reason=wp.reason)
@@ -2088,8 +2091,10 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params) -> PupilFit
     # level, joined at the next to the iris or to a dark fold. Then, for a pupil a few px
     # across once reduced, the ladder at full resolution (:func:`_small_pupil`; only for pupils
     # under ``small_pupil_axes`` × f px: for any pupil it gave wrong answers on real close-ups).
-    again = _finer(img, wp, reduced, f, bright, params) or _small_pupil(
-        img, invalid, bright, f, params
+    again = (
+        _finer(img, wp, reduced, f, bright, params)
+        or _small_pupil(img, invalid, bright, f, params)
+        or (sharp and _small_pupil(img, invalid, cv2.bitwise_or(bright, sharp()), f, params))
     )
     if again is not None:
         return again
