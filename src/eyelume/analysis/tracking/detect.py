@@ -28,9 +28,11 @@ Pipeline (each step's choices are explained in :mod:`.pupil` and :mod:`.glints`)
 1. :func:`_prepare`: the array, its missing pixels, its range and pixel noise.
 2. Glints (:func:`~.glints.find_glints`): pixels above the 99th percentile and halfway from
    their neighbourhood's mean to the maximum; bright blobs; a blob must stand above its local
-   background by ``glint_min_snr`` × the pixel noise; intensity-weighted centroids. In an
-   over-exposed picture (the 99th percentile on the saturated plateau) the pixels near full
-   scale, each blob standing ``glint_min_contrast`` of the range above its own surround.
+   background by ``glint_min_snr`` × the pixel noise; intensity-weighted centroids, the
+   background under a glint on an uneven surround (the limbus) interpolated from it. In a
+   bright picture (the 99th percentile within ``glint_min_contrast`` of the top) the pixels
+   near full scale, each blob standing ``glint_min_contrast`` of the range above its own
+   surround.
 3. Pupil (:func:`~.pupil.find_pupil`): threshold ladder → the darkest compact blob stable over
    neighbouring levels → closing → contrast against its own surround and the pixel noise →
    outline off glints and border → sub-pixel edge → robust ellipse fit → support. The old
@@ -245,10 +247,9 @@ class DetectParams:
     glint_percentile, glint_level, glint_window_px, glint_min_contrast : a glint pixel is
         brighter than the ``glint_percentile`` (99th) of the 8-bit picture and ≥ m + level
         (255 − m), m the mean of the ``glint_window_px`` box around it (``None`` = odd ≈
-        min(rows, cols) / 16, ≥ 5); when max − P99 < min_contrast × 255 (15 %): no glints,
-        unless > 5 % of the picture is within that of the max (over-exposed): then glint
-        pixels are within it of the max and a glint's peak stands min_contrast of the range
-        above its surround (saturated skin does not).
+        min(rows, cols) / 16, ≥ 5); when max − P99 < min_contrast × 255 (15 %: skin near
+        full scale), glint pixels are within it of the max and a glint's peak stands
+        min_contrast of the range above its surround (bright skin does not).
     glint_close_px : closing of the bright mask (``None`` = odd ≈ min(rows, cols) / 160).
     glint_min_area_px, glint_max_area_frac : blob area bounds (px; fraction of the picture):
         ≥ 2 px, as the optics spread a glint over several pixels while a hot pixel or a noise

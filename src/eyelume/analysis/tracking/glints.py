@@ -7,12 +7,13 @@
   box around it (default odd ≈ min(rows, cols) / 16, ≥ 5: a few glints across). Over bright
   skin that is halfway from the skin to the maximum; over the dark pupil, where glints sit,
   half the maximum, so a glint the eye turned dimmer keeps its shoulders. When the maximum is
-  not ``glint_min_contrast`` of the range above the 99th percentile and under 5 % of the
-  picture is within that of its top, nothing stands out and there are no glints (a glint-free
-  picture). When more is (light skin or sclera at full scale: the percentile sits on the
-  saturated plateau), the floor is ``glint_min_contrast`` below the top and a glint is a blob
-  whose peak stands that contrast above its own surround (:func:`saturated_floor`): saturated
-  skin, whose surround is saturated too, is not one.
+  not ``glint_min_contrast`` of the range above the 99th percentile (light skin or sclera near
+  full scale: the percentile sits close to the top, or on a saturated plateau), the floor is
+  ``glint_min_contrast`` below the top and a glint is a blob whose peak stands that contrast
+  above its own surround (:func:`saturated_floor`): skin, whose surround is as bright, is not
+  one, and a glint-free picture has none. (Until session 14 this applied only when over 5 % of
+  the picture lay within that contrast of the top; a well-exposed face with 1–5 % there —
+  glasses-frame at its own chip — had its glints not looked for at all.)
 * **Blobs**: the bright mask is closed with a small elliptical element (``glint_close_px``; by
   default odd ≈ min(rows, cols) / 160, i.e. none below 240 px, 3 px at 480 rows) so that a glint
   broken up by noise or a saturated speckle is one blob, then split into blobs (outer outlines,
@@ -21,7 +22,11 @@
 * **Centroid**: intensity-weighted over the blob and a skirt around it, weights max(I − B, 0)
   with B the local background (:func:`glint_blobs`). Weighting only what is above the threshold
   would weigh a saturated spot as a nearly hard-edged disc, whose centroid jumps with the pixel
-  grid (0.1 px in the tests); with the skirt down to the background it is smooth.
+  grid (0.1 px in the tests); with the skirt down to the background it is smooth. B is the
+  surround's median when the surround is flat; when it is not (its 10–90 % spread over 8 σ of
+  the noise: a glint at the limbus, half on iris and half on sclera) B(x, y) is interpolated
+  under the spot from its surround (``cv2.inpaint``, Telea), else the bright side's skirt
+  pulls the centroid toward it (:func:`_uneven_surround`).
 * **Matching** (:func:`match_leds`): LED k at azimuth φ_k (0° = picture +x, 90° = picture up, i.e.
   −row) makes a glint displaced from the glints' centroid toward φ_k; each glint's direction from
   that centroid is matched to the LED azimuths by the Hungarian algorithm
@@ -78,17 +83,16 @@ def glint_threshold(hist: np.ndarray, percentile: float, min_contrast: float) ->
 
 
 def saturated_floor(hist: np.ndarray, min_contrast: float) -> int | None:
-    """8-bit floor of glint pixels in an over-exposed picture (``None`` if it is not one): when
-    more than 5 % of the picture lies at its top level or within ``min_contrast`` × 255 of it
-    (skin and sclera at full scale) the percentile floor sits on that plateau, and glints —
-    saturated too — are the pixels within ``min_contrast`` × 255 of the top; they are told
-    from the plateau by their surround (:func:`glint_blobs` with ``min_rise``), not by a
-    global level."""
+    """8-bit floor of glint pixels in a picture whose 99th percentile is within
+    ``min_contrast`` × 255 of its top (:func:`glint_threshold` gave ``None``: skin and sclera
+    near or at full scale): glints — saturated too — are the pixels within ``min_contrast`` ×
+    255 of the top; they are told from the skin by their surround (:func:`glint_blobs` with
+    ``min_rise``), not by a global level. ``None`` when the picture is flat (the floor ≤ 0)."""
     if not hist.any():
         return None
     top = int(np.nonzero(hist)[0][-1])
     floor = top - int(math.ceil(min_contrast * 255.0))
-    if floor <= 0 or hist[floor + 1 :].sum() <= 0.05 * hist.sum():
+    if floor <= 0 or not hist[floor + 1 :].any():
         return None
     return floor
 
@@ -260,7 +264,7 @@ def glint_blobs(
     for c in tops:
         approx_area = cv2.contourArea(c) + 0.5 * len(c) + 1.0
         if params.glint_min_area_px <= approx_area <= 1.5 * max_area + 4:
-            b = _blob(c, approx_area, above, bright, img, (max_area, rise), params)
+            b = _blob(c, approx_area, above, bright, img, (max_area, rise, noise), params)
             if b is not None:
                 blobs.append(b)
                 kept.append(c)
@@ -383,7 +387,7 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     ``glint_min_snr`` × the noise, or more in an over-exposed picture) above its local
     background (a noise speck, or saturated skin)."""
     rows, cols = img.shape
-    max_area, rise = limits
+    max_area, rise, noise = limits
     m = max(2, int(math.ceil(math.sqrt(approx_area / math.pi))))
     bx, by, bw, bh = cv2.boundingRect(c)
     x0, y0 = max(0, bx - m - 2), max(0, by - m - 2)
@@ -403,6 +407,8 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     base, peak, wgt = _skirt(raw, own, d_own, d_oth, has_others, float(m))
     if peak - base < rise:
         return None  # a noise speck (or, over-exposed, saturated skin), not a glint
+    if noise > 0:
+        wgt = _uneven_surround(raw, wgt, d_own, d_oth, has_others, float(m), noise)
     tot = float(wgt.sum())
     if tot <= 0:
         return None
@@ -410,6 +416,36 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     ys = np.arange(y0, y1, dtype=np.float64)
     centre = (float((wgt.sum(axis=0) * xs).sum() / tot), float((wgt.sum(axis=1) * ys).sum() / tot))
     return {"centre_px": centre, "area_px": float(area), "peak": peak, "flux": tot, "base": base}
+
+
+_UNEVEN_SPREAD = 8.0  # × the noise σ: a flat surround's 10–90 % spread is 2.56 σ
+
+
+def _uneven_surround(raw, wgt, d_own, d_oth, has_others, m, noise):
+    """:func:`_skirt`'s weights again when the glint's surround is not flat — its 10–90 %
+    spread over ``_UNEVEN_SPREAD`` × the pixel noise ``noise`` (input units): a glint at the
+    limbus, half on the dark iris and half on the bright sclera, or on the edge of the skin.
+    A single background level (the surround's median) then leaves the bright side's skirt
+    pixels weighted and pulls the centroid toward it (2.5 px on glasses-frame's glint at the
+    limbus); here the background under the spot is interpolated from its surround
+    (``cv2.inpaint``, Telea's method, over the pixels within ``m`` of the blob) and the weights
+    are max(I − B(x, y), 0) on the same region. ``wgt`` unchanged on a flat surround."""
+    ring = d_own > m
+    if has_others:
+        ring &= d_oth > m
+    vals = raw[ring]
+    if vals.size < 8:
+        return wgt
+    lo, hi = np.percentile(vals, (10.0, 90.0))
+    if hi - lo <= _UNEVEN_SPREAD * noise:
+        return wgt
+    region = (d_own <= m).astype(np.uint8)
+    back = cv2.inpaint(raw.astype(np.float32), region, max(1.0, m), cv2.INPAINT_TELEA)
+    weighed = d_own <= m
+    if has_others:
+        weighed &= d_own <= d_oth
+    out = np.where(weighed, np.maximum(raw - back.astype(np.float64), 0.0), 0.0)
+    return out if out.sum() > 0 else wgt
 
 
 @njit(cache=True, nogil=True)
