@@ -85,3 +85,32 @@ def test_vr_offaxis_glints_matched_to_their_leds():
             near += 1
             assert g.led == truth[i][0], (g, truth[i])
     assert near >= 6, d.glints
+
+
+def _found(centres, extra):
+    from eyelume.analysis.tracking.detect import Glint
+
+    return [Glint(tuple(c), 5.0, 1000.0) for c in centres] + [Glint(tuple(extra), 185.0, 800.0)]
+
+
+def test_a_highlight_far_from_every_lost_glint_does_not_make_the_match_uncertain():
+    """7 of 8 glints found where the pattern puts them (LED 5 lost), and a highlight (a lit lid
+    margin) far from where LED 5's glint would be: the 7 are used, the highlight matches no
+    LED (was refused: "which glints are the LEDs' is uncertain", vr-offaxis at (0°, −20°)).
+    The same highlight 7 px from LED 5's predicted glint (beyond the matcher's gate, within
+    twice its tolerance, here 2 × 4.9 px) could be that glint, displaced: still refused."""
+    from eyelume.analysis.tracking.detect import DetectParams, _match_glints
+
+    pattern = _offaxis_pattern()
+    keep = [k for k in range(8) if k != 5]
+    at = 1.1 * pattern + (210.0, 140.0)
+    params = DetectParams()
+    glints = _found(at[keep], (210.0 + 1.1 * pattern[5, 0], 140.0 + 1.1 * pattern[5, 1] - 40.0))
+    msgs, missing = _match_glints(glints, AZ, params, pattern)
+    assert missing == [5]
+    assert not [m for m in msgs if not m.startswith("warning: ")], msgs
+    assert [g.led for g in glints] == [*keep, None]
+    near = _found(at[keep], (at[5, 0], at[5, 1] + 7.0))
+    msgs, _ = _match_glints(near, AZ, params, pattern)
+    assert [g.led for g in near] == [*keep, None]
+    assert any("uncertain" in m for m in msgs), msgs

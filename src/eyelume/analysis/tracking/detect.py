@@ -946,12 +946,7 @@ def _pattern_misfit(glints: list[Glint], led_azimuths_deg, pattern, max_ang: flo
         p_all = np.asarray(pattern, float)
     g = np.array([c for c, _ in pairs], float)
     p = p_all[[k for _, k in pairs]]
-    a = np.zeros((2 * len(pairs), 3))
-    a[0::2, 0] = 1.0
-    a[1::2, 1] = 1.0
-    a[0::2, 2] = p[:, 0]
-    a[1::2, 2] = p[:, 1]
-    sol = np.linalg.lstsq(a, g.reshape(-1), rcond=None)[0]
+    sol = _pattern_fit(g, p)
     s = float(sol[2])
     if not (s > 0 and math.isfinite(s)):
         return "the matched glints lie in the reverse order of their LEDs'"
@@ -969,6 +964,53 @@ def _pattern_misfit(glints: list[Glint], led_azimuths_deg, pattern, max_ang: flo
             f"glints put it (tolerance {tol[worst]:.1f} px)"
         )
     return ""
+
+
+def _pattern_fit(g: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Least-squares (t_x, t_y, s) of glints ``g`` (n × 2, px) = t + s ``p`` (their pattern
+    points, n × 2)."""
+    a = np.zeros((2 * len(g), 3))
+    a[0::2, 0] = 1.0
+    a[1::2, 1] = 1.0
+    a[0::2, 2] = p[:, 0]
+    a[1::2, 2] = p[:, 1]
+    return np.linalg.lstsq(a, g.reshape(-1), rcond=None)[0]
+
+
+def _uncertain_strays(glints: list[Glint], missing, pattern, max_ang: float) -> list[Glint]:
+    """The unmatched glints that could be a missing LED's glint: all of them, unless the
+    predicted layout ``pattern`` shows none can be (:func:`_strays_off_pattern`; those are
+    then only warned of as matching no LED)."""
+    strays = [g for g in glints if g.led is None]
+    if strays and pattern is not None and _strays_off_pattern(glints, missing, pattern, max_ang):
+        return []
+    return strays
+
+
+def _strays_off_pattern(glints: list[Glint], missing, pattern, max_ang: float) -> bool:
+    """With the predicted layout ``pattern``: True when every unmatched glint lies farther than
+    twice the matching tolerance s |p_k| sin(max_ang / 2) (:func:`_pattern_misfit`'s) from
+    where the matched glints' fit t + s p_k puts each missing LED k's glint — none of them can
+    be a missing LED's glint, even one displaced by a lid or the cornea's rim cutting it, so
+    they do not make the matching uncertain (a lit lid margin or a skin highlight: vr-offaxis
+    at (0°, −20°), a 185 px blob at 818 DN 33 px from where LED 2's glint, hidden by the lid,
+    would be)."""
+    p_all = np.asarray(pattern, float)
+    pairs = [(g.centre_px, g.led) for g in glints if g.led is not None]
+    sol = _pattern_fit(np.array([c for c, _ in pairs], float), p_all[[k for _, k in pairs]])
+    s = float(sol[2])
+    if not (s > 0 and math.isfinite(s)):
+        return False
+    sin_half = math.sin(math.radians(0.5 * max_ang))
+    for g in glints:
+        if g.led is not None:
+            continue
+        for k in missing:
+            where = sol[:2] + s * p_all[k]
+            tol = 2.0 * s * math.hypot(*p_all[k]) * sin_half
+            if math.hypot(g.centre_px[0] - where[0], g.centre_px[1] - where[1]) <= tol:
+                return False
+    return True
 
 
 def _direction_off(centres: np.ndarray, leds, ref, led_azimuths_deg) -> np.ndarray:
@@ -1087,7 +1129,7 @@ def _match_glints(
             f"missing {params.min_glints_when_missing} are needed to tell which LEDs the glints "
             "are (two fit a shifted copy of the pattern: reflections in spectacles, strays)"
         ], missing
-    strays = [g for g in glints if g.led is None]
+    strays = _uncertain_strays(glints, missing, pattern, max_ang)
     if strays:
         x, y = strays[0].centre_px
         return [
