@@ -140,14 +140,18 @@ class DetectParams:
     ladder_max_growth : largest MSER stability q = (A₊ − A₋) / A of the pupil's blob over the
         neighbouring levels (1: at 32 levels the pupil's blurred edge band is crossed in one or
         two steps; a merge with the iris multiplies the area).
-    ladder_fine, ladder_fine_span : when the first ladder gives no whole pupil, its first
-        ``ladder_fine_span`` (3) levels again ``ladder_fine`` (4) times finer (steps ≥ 1): a
-        pupil near the black level whose step to the iris the ladder crosses in one or two
-        levels (an off-axis view, where bright skin sets the levels' spacing) is then
-        resolved. The finer fit replaces the first only when whole, by a stricter measure:
-        ``ladder_fine_support`` (0.75) of its outline backed, no unbacked arc over 0.25 (a
-        finer level can pick a lid-cut pupil's darkest core, whose outline passes the usual
-        0.45 with the centre over a pixel off: paper2005 at (−30°, −20°)). (1 = off.)
+    ladder_fine, ladder_fine_span : when the first ladder gives no whole pupil, or a pupil
+        at the black level whose fit leaves an arc over 1 − ``ladder_fine_support`` of its
+        outline unbacked (maybe merged with a dark iris: :func:`~.pupil.find_pupil`;
+        paper2005's 8-bit PNG at (30°, 20°) was answered 1.27 px off, 43 % unbacked), its
+        first ``ladder_fine_span`` (3) levels again ``ladder_fine`` (4) times finer (steps ≥
+        1): a pupil near the black level whose step to the iris the ladder crosses in one or
+        two levels (an off-axis view, where bright skin sets the levels' spacing) is then
+        resolved. The finer fit replaces the first only when whole,
+        by a stricter measure: ``ladder_fine_support`` (0.75) of its outline backed, no
+        unbacked arc over 0.25 (a finer level can pick a lid-cut pupil's darkest core, whose
+        outline passes the usual 0.45 with the centre over a pixel off: paper2005 at (−30°,
+        −20°)). (1 = off.)
     max_candidates : stable blobs fitted in turn, darkest first, before giving up (3).
     small_pupil_axes : when the reduced ladder (f > 1) gives no whole pupil, the ladder again at
         full resolution for a pupil under this × f px across (4: the reduced ladder resolves
