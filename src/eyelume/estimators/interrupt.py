@@ -39,9 +39,17 @@ def run_unit(fn, *args, **kwargs):
     """``fn(*args, **kwargs)`` as one unit of work that Ctrl-C or SIGTERM cancels whole:
     KeyboardInterrupt if a signal arrived while it ran — also one that a render inside took as
     a request to stop early (:func:`interrupt_between_batches`), whose result is then partial
-    and must not be used as a whole unit's."""
+    and must not be used as a whole unit's. An error raised by the unit after such a signal is
+    that partial result's consequence (``evaluate-tracking`` stopped by SIGTERM mid-render: the
+    sensor refused the irradiance's unfinished NaN pixels with a ValueError and a traceback)
+    and is KeyboardInterrupt too."""
     mark = _count[0]
-    value = fn(*args, **kwargs)
+    try:
+        value = fn(*args, **kwargs)
+    except Exception:
+        if _count[0] != mark:
+            raise KeyboardInterrupt from None
+        raise
     if _count[0] != mark:
         raise KeyboardInterrupt
     return value
