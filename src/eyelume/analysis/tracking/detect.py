@@ -848,7 +848,8 @@ def _blobs_near_pupil(img, value_range, noise, found, pupil, floor, params) -> l
     beside a small pupil is no glint) and with a peak ``glint_level`` of the way from the
     blob's own background to the picture's top — and, when step 2 worked on a smoothed
     picture, those the smoothing lost there (:func:`~.glints.glints_near`: glints under a
-    pixel across) whose centre is off step 2's mask.
+    pixel across) — ≤ 2 px, their peak within 2 % of the picture's top — whose centre is off
+    step 2's mask.
 
     The peak test is the pixel test of step 2 against the blob's background (the median
     around it, :func:`~.glints.glint_blobs`) instead of the box mean, which next to a dark
@@ -876,16 +877,20 @@ def _blobs_near_pupil(img, value_range, noise, found, pupil, floor, params) -> l
     if sig < 0.5 or floor is None:
         return near
     rows, cols = bright.shape
-    # A glint the smoothing lost holds its LED's light in a pixel or two, at the top of the
-    # scale: within ``glint_min_contrast`` of it (the band over-exposed glints are sought in,
-    # glints.saturated_floor). A pixel at the skin's level standing out of a box mean that
-    # mixes the dark iris in is the lid's texture or noise (vr-offaxis at (0°, −20°): 793 DN
-    # over lit skin at ~770, 14 px from LED 2's glint, which the lid hides, was matched to it).
-    least = value_range[1] - params.glint_min_contrast * (value_range[1] - value_range[0])
+    # A glint the smoothing lost holds its LED's light in a pixel or two (≤ 2 px: a larger
+    # saturated blob keeps its smoothed peak, and one step 2 did not find was left out for a
+    # reason — glasses-frame at (0°, −20°): pieces of a saturated lid highlight 150 px above
+    # the pupil), the brightest thing per pixel, at the top of the scale (within 2 % of it, as
+    # _split_specks takes the brightest glints). A pixel at the skin's level standing out of a
+    # box mean that mixes the dark iris in is the lid's texture or noise (vr-offaxis at
+    # (0°, −20°): 793 DN over lit skin at ~770, 14 px from LED 2's glint, which the lid hides,
+    # was matched to it; glasses-frame at (−10°, 0°): two specks at 867 of 1017 DN, 104 px
+    # from the pupil).
+    least = value_range[1] - 0.02 * (value_range[1] - value_range[0])
     for b in glints_near(img, value_range, noise, (cx, cy), r_max, floor, params):
         x, y = b["centre_px"]
         c, r = min(cols - 1, max(0, round(x))), min(rows - 1, max(0, round(y)))
-        if b["peak"] >= least and corneal(b) and not bright[r, c]:
+        if b["area_px"] <= 2 and b["peak"] >= least and corneal(b) and not bright[r, c]:
             near.append(b)
     return near
 
