@@ -404,11 +404,11 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     d_own = cv2.distanceTransform(not_own, cv2.DIST_L2, 3)
     has_others = cv2.countNonZero(others) > 0
     d_oth = cv2.distanceTransform(cv2.bitwise_not(others), cv2.DIST_L2, 3) if has_others else d_own
-    base, peak, wgt = _skirt(raw, own, d_own, d_oth, has_others, float(m))
+    base, peak, wgt, spread = _skirt(raw, own, d_own, d_oth, has_others, float(m))
     if peak - base < rise:
         return None  # a noise speck (or, over-exposed, saturated skin), not a glint
-    if noise > 0:
-        wgt = _uneven_surround(raw, wgt, d_own, d_oth, has_others, float(m), noise)
+    if spread > _UNEVEN_SPREAD * noise and spread > _UNEVEN_SHARE * (peak - base):
+        wgt = _uneven_surround(raw, wgt, d_own, d_oth, has_others, float(m))
     tot = float(wgt.sum())
     if tot <= 0:
         return None
@@ -422,31 +422,18 @@ _UNEVEN_SPREAD = 8.0  # × the noise σ: a flat surround's 10–90 % spread is 2
 _UNEVEN_SHARE = 0.25  # × the glint's largest weight: a step that pulls its centroid
 
 
-def _uneven_surround(raw, wgt, d_own, d_oth, has_others, m, noise):
-    """:func:`_skirt`'s weights again when the glint's surround is not flat — its 10–90 %
-    spread (order statistics) over ``_UNEVEN_SPREAD`` × the pixel noise ``noise`` (input
-    units) and over ``_UNEVEN_SHARE`` of the glint's largest weight (its peak above the
-    median background): a glint at the limbus, half on the dark iris and half on the bright
-    sclera, or on the edge of the skin. A single background level (the surround's median)
-    then leaves the bright side's skirt pixels weighted and pulls the centroid toward it
-    (2.5 px on glasses-frame's glint at the limbus); here the background under the spot is
-    interpolated from its surround (``cv2.inpaint``, Telea's method, over the pixels within
-    ``m`` of the blob) and the weights are max(I − B(x, y), 0) on the same region. ``wgt``
-    unchanged otherwise: the texture of an iris under a real glint (4 % of the glints of the
-    real pictures pass both tests) moves its centroid by a small share of a pixel, not
-    worth an interpolation per glint."""
-    ring = d_own > m
-    if has_others:
-        ring &= d_oth > m
-    vals = raw[ring]
-    n = vals.size
-    if n < 8:
-        return wgt
-    i10, i90 = (n - 1) // 10, (9 * (n - 1)) // 10
-    part = np.partition(vals, (i10, i90))
-    spread = float(part[i90]) - float(part[i10])
-    if spread <= _UNEVEN_SPREAD * noise or spread <= _UNEVEN_SHARE * float(wgt.max()):
-        return wgt
+def _uneven_surround(raw, wgt, d_own, d_oth, has_others, m):
+    """:func:`_skirt`'s weights again for a glint whose surround is not flat — :func:`_blob`
+    calls it when the surround's 10–90 % spread (order statistics, from :func:`_skirt`) is over
+    ``_UNEVEN_SPREAD`` × the pixel noise and over ``_UNEVEN_SHARE`` of the glint's peak above
+    the median background: a glint at the limbus, half on the dark iris and half on the bright
+    sclera, or on the edge of the skin. A single background level (the surround's median) then
+    leaves the bright side's skirt pixels weighted and pulls the centroid toward it (2.5 px on
+    glasses-frame's glint at the limbus); here the background under the spot is interpolated
+    from its surround (``cv2.inpaint``, Telea's method, over the pixels within ``m`` of the
+    blob) and the weights are max(I − B(x, y), 0) on the same region. Not for the texture of
+    an iris under a real glint (4 % of the glints of the real pictures pass both tests): it
+    moves a centroid by a small share of a pixel, not worth an interpolation per glint."""
     region = (d_own <= m).astype(np.uint8)
     back = cv2.inpaint(raw.astype(np.float32), region, max(1.0, m), cv2.INPAINT_TELEA)
     weighed = d_own <= m
@@ -457,15 +444,33 @@ def _uneven_surround(raw, wgt, d_own, d_oth, has_others, m, noise):
 
 
 @njit(cache=True, nogil=True)
+def _median_spread(vals, low):
+    """:func:`_skirt`'s background median and 10–90 % spread of ``vals`` (``low`` and 0 when
+    empty; spread 0 with fewer than 8)."""
+    n = vals.size
+    if n == 0:
+        return low, 0.0
+    s = np.sort(vals)
+    k = n // 2
+    base = np.float64(s[k]) if n % 2 else 0.5 * (np.float64(s[k - 1]) + np.float64(s[k]))
+    spread = 0.0
+    if n >= 8:
+        spread = np.float64(s[(9 * (n - 1)) // 10]) - np.float64(s[(n - 1) // 10])
+    return base, spread
+
+
+@njit(cache=True, nogil=True)
 def _skirt(raw, own, d_own, d_oth, has_others, m):
     """:func:`_blob`'s background, peak and weights in one compiled pass: the region is the
     pixels within ``m`` px of the blob (``d_own``, float32) and, with other blobs near
     (``has_others``), nearer to it than to them (``d_oth``); the background the pixels farther
-    than ``m`` from all. Returns (base, peak, weights): base the background's median (as
+    than ``m`` from all. Returns (base, peak, weights, spread): base the background's median (as
     :func:`~.pupil.median`: the middle value, or the mean of the middle two; the window's
     minimum when it has none), peak the largest value on the blob (``own`` ≠ 0), weights
     max(raw − base, 0) on the region, 0 elsewhere (float64) — the same numbers as the array
-    operations they replace."""
+    operations they replace — and spread the background's 10–90 % spread (its sorted values'
+    ⌊(n − 1) / 10⌋-th and ⌊9 (n − 1) / 10⌋-th; 0 with fewer than 8) for
+    :func:`_uneven_surround`."""
     h, w = raw.shape
     vals = np.empty(h * w, raw.dtype)
     n = 0
@@ -482,19 +487,14 @@ def _skirt(raw, own, d_own, d_oth, has_others, m):
                 n += 1
     if peak == -np.inf:
         peak = 0.0
-    if n:
-        s = np.sort(vals[:n])
-        k = n // 2
-        base = np.float64(s[k]) if n % 2 else 0.5 * (np.float64(s[k - 1]) + np.float64(s[k]))
-    else:
-        base = low
+    base, spread = _median_spread(vals[:n], low)
     wgt = np.zeros((h, w))
     for i in range(h):
         for j in range(w):
             if d_own[i, j] <= m and (not has_others or d_own[i, j] <= d_oth[i, j]):
                 v = np.float64(raw[i, j]) - base
                 wgt[i, j] = v if v >= 0.0 else 0.0
-    return base, peak, wgt
+    return base, peak, wgt, spread
 
 
 def default_max_angle(led_azimuths_deg: Sequence[float]) -> float:
