@@ -588,7 +588,10 @@ def failure_causes(frames: list[Frame]) -> dict[str, int]:
         kinds = {x.split(":")[0] for x in f.detection.failures if not x.startswith("warning")}
         for k in kinds or {"no detection"}:
             counts[k] = counts.get(k, 0) + 1
-    return dict(sorted(counts.items(), key=lambda kv: -kv[1]))
+    # Most frequent first, ties by name: the same frames give the same order whatever the
+    # process's string hashing (a set's order; 'mostly …' named LED 2's cause in one run and
+    # LED 0's in the next on identical frames).
+    return dict(sorted(counts.items(), key=lambda kv: (-kv[1], kv[0])))
 
 
 #: A share of saturated pixels above which saturation is named as the cause of lost frames: a
