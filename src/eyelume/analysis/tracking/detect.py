@@ -647,7 +647,8 @@ def _straight_arc(fit, params) -> tuple | None:
     """The fit without an eyelid's edge, or None when its outline holds none: a window of its
     inlier edge points,
     contiguous (no gap over ``lid_arc_max_gap_deg``) over ``lid_arc_deg`` (90°) of the ellipse's
-    eccentric anomaly and holding ≥ ``lid_arc_min_points``, that a straight line fits better
+    eccentric anomaly and holding ≥ ``lid_arc_min_points`` (run forward and backward in
+    anomaly from each point), that a straight line fits better
     (smaller RMS perpendicular distance, total least squares) than the fitted ellipse does, and
     significantly straighter than the ellipse's own arc there (:func:`_flat_windows`: the
     squared line misfit 3 standard deviations below σ² + A², σ the edge points' noise, A²
@@ -683,14 +684,18 @@ def _straight_arc(fit, params) -> tuple | None:
     s_, q_ = s_[order], q_[order]
     r = np.hypot(s_ / e.a, q_ / e.b)
     r[r == 0] = 1.0
-    on = _flat_windows(
-        phi[order],
-        np.column_stack((s_, q_, s_ / r, q_ / r)),
-        d,
-        float(params.lid_arc_deg),
-        float(params.lid_arc_max_gap_deg),
-        int(params.lid_arc_min_points),
-    )
+    # the windows run from each point forward in anomaly and, the outline reversed, backward:
+    # a lid's straight edge ends at a corner where the pupil's own edge goes on, and the window
+    # of ``lid_arc_deg`` that starts at one end of it runs past the other into that curve
+    # (paper2005 at (−20°, −20°), seed 1: the lower lid's 12 points, 78° of the ellipse that
+    # bent to them; every forward window from them ran past the far corner, and only the
+    # backward one from that corner holds the lid alone. Answered 1.37 px off the truth)
+    uv = np.column_stack((s_, q_, s_ / r, q_ / r))
+    args = (float(params.lid_arc_deg), float(params.lid_arc_max_gap_deg))
+    on = _flat_windows(phi[order], uv, d, *args, int(params.lid_arc_min_points))
+    on |= _flat_windows(
+        360.0 - phi[order][::-1], uv[::-1], d[::-1], *args, int(params.lid_arc_min_points)
+    )[::-1]
     if not on.any():
         return None
     xs, ys = x[order][~on], y[order][~on]
@@ -779,7 +784,8 @@ def _flat_windows(phi, uv, d, span, max_gap, min_points):
     and A² the same line misfit of the ellipse's own arc
     there: the pupil's arc gives L² ≈ σ² + A², with a variance 2 σ⁴ / (m − 2) + 4 σ² A² / m
     (the noise's χ² of m − 2 degrees of freedom, and its projection on the arc's bow).
-    Returns the mask of points in any such window."""
+    Returns the mask of points in any such window. The windows run forward only:
+    :func:`_straight_arc` runs it on the reversed outline too."""
     n = phi.size
     on = np.zeros(n, np.bool_)
     c, noise = _window_sums(uv, d)
