@@ -107,7 +107,11 @@ def test_eye_aperture_beyond_its_conicoid_is_refused(overrides, words):
             "inside the eye",
         ),
         ({"sensor.pixel_pitch_um": 80.0}, "more than the ideal lens covers"),
-        ({"camera.position_mm": [0.0, 0.0, -5.0]}, "camera: the lens 0 (world centre"),
+        ({"camera.position_mm": [0.0, 0.0, -5.0]}, "camera.position_mm = [0.0, 0.0, -5.0] (the"),
+        (
+            {"camera.position_mm": [0.0, 0.0, -30.0]},
+            "camera.position_mm = [0.0, 0.0, -30.0] lies behind the eye plane z = 0 mm",
+        ),
         (
             {"camera.position_mm": [21.0, -6.0, -4.0], "camera.ideal.focus_distance_mm": 22.0},
             "inside the face: face.tissues 'nose'",

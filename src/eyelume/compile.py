@@ -633,15 +633,15 @@ def _check_leds_in_head(
     for i, c in enumerate(centres):
         rb = radii[i]
         where = _in_head(scene, c, rb)
+        at = np.round(c, 2).tolist()
+        if what == "camera":  # one lens: the field that placed it
+            label, size = f"camera.position_mm = {at} (the lens)", ""
+        else:
+            label, size = f"{what} {i} (world centre {at} mm", f", radius {rb})"
         if where == "the eye":
-            raise SceneError(
-                f"{what} {i} (world centre {np.round(c, 2).tolist()} mm, radius {rb}) is "
-                "inside the eye"
-            )
+            raise SceneError(f"{label}{size} is inside the eye")
         if where is not None:
-            raise SceneError(
-                f"{what} {i} (world centre {np.round(c, 2).tolist()} mm) is inside {where}"
-            )
+            raise SceneError(f"{label}{')' if size else ''} is inside {where}")
 
 
 def _in_head(scene: Scene, c: np.ndarray, rb: float) -> str | None:
@@ -742,7 +742,16 @@ def _check_view(
     p = frame.point(eye_point(scene, np.zeros(3)))
     ep = first.entrance_pupil_z
     pos, view, _ = camera_pose(scene)
-    _check_leds_in_head(scene, np.array([pos], dtype=float), rb=0.0, what="camera: the lens")
+    _check_leds_in_head(scene, np.array([pos], dtype=float), rb=0.0, what="camera")
+    plane_z = float(eye_plane_origin(scene)[2])
+    if pos[2] <= plane_z:
+        # Behind the eye, in the head: the eyeball and the face hide the cornea (a camera at
+        # z = -30 mm on the eye's axis rendered a black picture without a word).
+        raise SceneError(
+            f"camera.position_mm = {np.round(np.asarray(pos, float), 2).tolist()} lies behind "
+            f"the eye plane z = {plane_z + 0.0:g} mm (the eye's side, in the head): the camera "
+            "sees no eye; it must sit in front of the eye"
+        )
     if not straight:
         return
     unit = np.asarray(view, dtype=float) / np.linalg.norm(view)
