@@ -606,7 +606,10 @@ def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame)
         for j in range(i):
             if np.linalg.norm(c - centres[j]) < rb + radii[j]:
                 raise SceneError(
-                    f"leds: LED {i} and LED {j} bodies overlap (centres {c}, {centres[j]})"
+                    f"leds: LED {i} and LED {j} bodies overlap (centres "
+                    f"{np.round(c, 3).tolist()} and {np.round(centres[j], 3).tolist()} mm, "
+                    f"{np.linalg.norm(c - centres[j]):.3g} mm apart, radii {rb:g} and "
+                    f"{radii[j]:g} mm)"
                 )
         # the body against the lens's first surface, within its clear aperture (camera frame)
         cc = frame.point(c)

@@ -110,3 +110,16 @@ def test_bad_led_placements_are_one_line_errors(overrides, words):
     with pytest.raises(SceneError) as e:
         apply_overrides(load_scene("paper2005"), overrides)
     assert words in str(e.value) and "\n" not in str(e.value)
+
+
+def test_leds_one_by_one_without_count_are_as_many_as_their_positions():
+    """A scene file placing six LEDs by positions_mm and no count has six LEDs (the ring's
+    default count of 4 refused it: "positions_mm has 6 entries but count is 4", a new user's
+    finding); a count that disagrees is still refused."""
+    from eyelume.scene.model import LedArray
+
+    ring = [[20.0 * np.cos(a), 20.0 * np.sin(a), 12.0] for a in np.radians(np.arange(6) * 60.0)]
+    leds = LedArray(positions_mm=ring, aim_at_mm=[0.0, 0.0, 0.0])
+    assert leds.count == 6
+    with pytest.raises(ValueError, match="positions_mm has 6 entries but count is 5"):
+        LedArray(positions_mm=ring, aim_at_mm=[0.0, 0.0, 0.0], count=5)

@@ -342,6 +342,17 @@ class LedArray(_Model):
                 )
         return self
 
+    @model_validator(mode="before")
+    @classmethod
+    def _count_from_positions(cls, data):
+        """LEDs placed one by one without ``count``: as many as ``positions_mm`` holds (the
+        ring's default of 4 made a file of six positions fail with "count is 4")."""
+        if isinstance(data, dict) and "count" not in data:
+            pos = data.get("positions_mm")
+            if isinstance(pos, list | tuple) and pos:
+                data = {**data, "count": len(pos)}
+        return data
+
     @model_validator(mode="after")
     def _no_ring_beside_positions(self) -> LedArray:
         if self.positions_mm is None:
