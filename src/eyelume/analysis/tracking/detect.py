@@ -92,6 +92,7 @@ from numba import njit
 from eyelume.analysis.tracking.glints import (
     default_max_angle,
     find_glints,
+    glint_smoothing,
     glints_near,
     match_leds,
     match_pattern,
@@ -823,10 +824,7 @@ def _sharp_glints(img, value_range, noise, floor, params):
     None): a function giving the mask of the glints of the unsmoothed picture
     (:func:`~.glints.glints_near` over all of it) — each one pixel on a small sensor, lost to
     the smoothing, and beside a pupil of a few px enough to notch its blob."""
-    sig = params.glint_smooth_px
-    if sig is None:
-        sig = min(img.shape) / 480.0
-    if sig < 0.5 or floor is None:
+    if glint_smoothing(img.shape, params) < 0.5 or floor is None:
         return None
     rows, cols = img.shape
 
@@ -877,10 +875,7 @@ def _blobs_near_pupil(img, value_range, noise, found, pupil, floor, params) -> l
         )
 
     near = [b for b in blobs if corneal(b)]
-    sig = params.glint_smooth_px
-    if sig is None:
-        sig = min(img.shape) / 480.0
-    if sig < 0.5 or floor is None:
+    if glint_smoothing(img.shape, params) < 0.5 or floor is None:
         return near
     rows, cols = bright.shape
     # A glint the smoothing lost holds its LED's light in a pixel or two (≤ 2 px: a larger

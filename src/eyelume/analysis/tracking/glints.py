@@ -54,6 +54,7 @@ from scipy.optimize import linear_sum_assignment
 
 __all__ = [
     "find_glints",
+    "glint_smoothing",
     "glints_near",
     "glint_blobs",
     "glint_threshold",
@@ -97,6 +98,14 @@ def saturated_floor(hist: np.ndarray, min_contrast: float) -> int | None:
     return floor
 
 
+def glint_smoothing(shape: tuple[int, int], params) -> float:
+    """σ (px) of the Gaussian :func:`find_glints` smooths a picture of ``shape`` (rows, cols)
+    by before its bright mask: ``glint_smooth_px``, or min(rows, cols) / 480 when ``None``;
+    below 0.5 px it does not smooth."""
+    sig = params.glint_smooth_px
+    return min(shape) / 480.0 if sig is None else sig
+
+
 def find_glints(img: np.ndarray, value_range, noise: float, params):
     """Step 2 of :func:`~eyelume.analysis.tracking.detect.detect`: the glint blobs (dicts), the
     bright mask (uint8 0/255) and the glint floor in the input's units (``None`` when nothing
@@ -104,9 +113,7 @@ def find_glints(img: np.ndarray, value_range, noise: float, params):
     ``noise`` its pixel noise σ (input units). The bright mask is taken from the picture
     scaled by its own range to 8 bits, u8 = 255 (I − min) / (max − min), after smoothing by
     ``glint_smooth_px`` (when ≥ 0.5 px)."""
-    sig = params.glint_smooth_px
-    if sig is None:
-        sig = min(img.shape) / 480.0
+    sig = glint_smoothing(img.shape, params)
     lo, hi = value_range
     if sig >= 0.5:
         # Sparse bright samples (a Monte Carlo render's glint, shot noise) make one blob per
