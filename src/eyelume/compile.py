@@ -88,7 +88,17 @@ from eyelume.scene.model import Coating, Element, LedProfile, Scene
 from eyelume.scene.optics import ParaxialSystem, curvature, sag
 from eyelume.scene.pose import MIRROR_X as _MIRROR_X
 from eyelume.scene.pose import Frame, as_world, camera_frame, led_world_poses
-from eyelume.scene.sources import cos_power_exponent, relative_intensity
+from eyelume.scene.sources import (
+    LedBody,
+    bodies_overlap,
+    body_points,
+    body_sample_step,
+    body_support,
+    cos_power_exponent,
+    inside_body,
+    led_bodies,
+    relative_intensity,
+)
 
 __all__ = [
     "CompiledScene",
@@ -590,57 +600,90 @@ def real_best_focus(lf: np.ndarray) -> tuple[float, float] | None:
     return s_b, rms
 
 
-def _check_leds(scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame) -> None:
-    """LED bodies (world ``centres``) in front of the eye, apart, and clear of the lens."""
-    radii = scene.leds.body_radii_mm()
+def _check_leds(
+    scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame, axes: np.ndarray
+) -> None:
+    """LED bodies (world ``centres``, unit ``axes``) in front of the eye, apart, and clear of
+    the lens. A body's reach toward the eye plane is exact (:func:`body_support`); a cylinder
+    against the lens and another cylinder is tested on its sampled surface."""
+    bodies = led_bodies(scene.leds, centres, axes)
     plane_z = float(eye_plane_origin(scene)[2])
-    for i, c in enumerate(centres):
-        rb = radii[i]
-        if c[2] - rb <= plane_z:
-            where = "lies behind" if c[2] + rb <= plane_z else "crosses"
+    down = np.array([0.0, 0.0, -1.0])
+    for i, (c, body) in enumerate(zip(centres, bodies, strict=True)):
+        rb = body.radius
+        reach = body_support(body.shape, body.axis, rb, body.length, down)
+        if c[2] - reach <= plane_z:
+            where = "lies behind" if c[2] + reach <= plane_z else "crosses"
             raise SceneError(
-                f"leds: LED {i} body (centre z = {c[2]:.2f} mm, radius {rb}) {where} the "
+                f"leds: LED {i} body (centre z = {c[2]:.2f} mm, {body.words()}) {where} the "
                 f"eye plane z = {plane_z + 0.0:g} (the eye's side): the LEDs must sit in front "
                 "of the eye"
             )
         for j in range(i):
-            if np.linalg.norm(c - centres[j]) < rb + radii[j]:
+            if bodies_overlap(body, bodies[j]):
+                sizes = (
+                    f"radii {rb:g} and {bodies[j].radius:g} mm"
+                    if body.shape == bodies[j].shape == "sphere"
+                    else f"{body.words()} and {bodies[j].words()}"
+                )
                 raise SceneError(
                     f"leds: LED {i} and LED {j} bodies overlap (centres "
                     f"{np.round(c, 3).tolist()} and {np.round(centres[j], 3).tolist()} mm, "
-                    f"{np.linalg.norm(c - centres[j]):.3g} mm apart, radii {rb:g} and "
-                    f"{radii[j]:g} mm)"
+                    f"{np.linalg.norm(c - centres[j]):.3g} mm apart, {sizes})"
                 )
         # the body against the lens's first surface, within its clear aperture (camera frame)
         cc = frame.point(c)
         r_c = math.hypot(cc[0], cc[1])
-        if r_c - rb >= lf[0, Q.L_SD]:
-            continue  # wholly outside the lens's clear aperture
-        for r in np.linspace(max(0.0, r_c - rb), min(r_c + rb, lf[0, Q.L_SD]), 32):
-            half = math.sqrt(max(0.0, rb * rb - (r - r_c) ** 2))
-            if half > 0 and cc[2] + half > _lens_surface_z(lf, 0, r):
-                raise SceneError(
-                    f"leds: LED {i} body (world centre {np.round(c, 1).tolist()} mm, "
-                    f"{r_c:.1f} mm from the camera's axis) overlaps the imaging lens's first "
-                    f"surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
-                )
+        if body.shape == "sphere":
+            if r_c - rb >= lf[0, Q.L_SD]:
+                continue  # wholly outside the lens's clear aperture
+            cuts = False
+            for r in np.linspace(max(0.0, r_c - rb), min(r_c + rb, lf[0, Q.L_SD]), 32):
+                half = math.sqrt(max(0.0, rb * rb - (r - r_c) ** 2))
+                if half > 0 and cc[2] + half > _lens_surface_z(lf, 0, r):
+                    cuts = True
+                    break
+        else:
+            pts = frame.point(body.points())
+            r = np.hypot(pts[:, 0], pts[:, 1])
+            near = r < lf[0, Q.L_SD]
+            cuts = bool(np.any(pts[near, 2] > _lens_surface_z(lf, 0, r[near])))
+        if cuts:
+            raise SceneError(
+                f"leds: LED {i} body (world centre {np.round(c, 1).tolist()} mm, "
+                f"{r_c:.1f} mm from the camera's axis) overlaps the imaging lens's first "
+                f"surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
+            )
 
 
 def _check_leds_in_head(
-    scene: Scene, centres: np.ndarray, rb: float | None = None, what: str = "leds: LED"
+    scene: Scene,
+    centres: np.ndarray,
+    rb: float | None = None,
+    what: str = "leds: LED",
+    axes: np.ndarray | None = None,
 ) -> None:
-    """No LED body (or, with ``what``, the camera's lens: radius ``rb``) inside the eyeball
-    (with the cornea's bulge) or inside a face tissue's solid (a sphere or cylinder within its
-    clip ranges, or behind a disk within its ring)."""
-    radii = scene.leds.body_radii_mm() if rb is None else [rb] * len(centres)
-    for i, c in enumerate(centres):
-        rb = radii[i]
-        where = _in_head(scene, c, rb)
+    """No LED body (world ``centres``, unit ``axes``; or, with ``what``, the camera's lens:
+    radius ``rb``) inside the eyeball (with the cornea's bulge) or inside a face tissue's solid
+    (a sphere or cylinder within its clip ranges, or behind a disk within its ring): a sphere
+    by its centre's distance, a cylinder by its sampled surface
+    (:func:`~eyelume.scene.sources.body_points`)."""
+    if rb is None:
+        assert axes is not None
+        bodies = led_bodies(scene.leds, centres, axes)
+    else:
+        bodies = [LedBody("sphere", c, np.array([0.0, 0.0, 1.0]), rb, 2 * rb) for c in centres]
+    for i, (c, body) in enumerate(zip(centres, bodies, strict=True)):
+        rb = body.radius
+        if body.shape == "sphere":
+            where = _in_head(scene, c, rb)
+        else:
+            where = _in_head(scene, body.points(), 0.0)
         at = np.round(c, 2).tolist()
         if what == "camera":  # one lens: the field that placed it
             label, size = f"camera.position_mm = {at} (the lens)", ""
         else:
-            label, size = f"{what} {i} (world centre {at} mm", f", radius {rb})"
+            label, size = f"{what} {i} (world centre {at} mm", f", {body.words()})"
         if where == "the eye":
             raise SceneError(f"{label}{size} is inside the eye")
         if where is not None:
@@ -648,39 +691,44 @@ def _check_leds_in_head(
 
 
 def _in_head(scene: Scene, c: np.ndarray, rb: float) -> str | None:
-    """What of the head a sphere of radius ``rb`` about the world point ``c`` reaches into:
-    ``"the eye"`` (the eyeball, with the cornea's bulge), ``"the face: face.tissues 'name'"``
-    (a tissue's solid: a sphere or cylinder within its clip ranges, or behind a disk within its
-    ring), or None."""
+    """What of the head a sphere of radius ``rb`` about the world point ``c`` (3,) — or about
+    any of the points ``c`` (M, 3) — reaches into: ``"the eye"`` (the eyeball, with the
+    cornea's bulge), ``"the face: face.tissues 'name'"`` (a tissue's solid: a sphere or
+    cylinder within its clip ranges, or behind a disk within its ring), or None."""
     eye = scene.eye
     _, _, z_c = limbus_geometry(eye)
     eyeball = eye_point(scene, [0.0, 0.0, -z_c])
     vertex = eye_point(scene, np.zeros(3))
     axis = eye_direction(scene, [0.0, 0.0, 1.0])
-    d = c - eyeball
+    pts = np.asarray(c, dtype=float).reshape(-1, 3)
+    d = pts - eyeball
+    along = d @ axis
     # the eyeball sphere, and the cornea standing proud of it up to the vertex
-    if np.linalg.norm(d) < eye.sclera_radius_mm + rb or (
-        (c - vertex) @ axis < rb
-        and np.linalg.norm(d - (d @ axis) * axis) < eye.surfaces[0].semi_diameter_mm + rb
-        and d @ axis > 0
-    ):
+    in_eye = (np.linalg.norm(d, axis=1) < eye.sclera_radius_mm + rb) | (
+        ((pts - vertex) @ axis < rb)
+        & (
+            np.linalg.norm(d - along[:, None] * axis, axis=1)
+            < eye.surfaces[0].semi_diameter_mm + rb
+        )
+        & (along > 0)
+    )
+    if in_eye.any():
         return "the eye"
     if not scene.face.enabled:
         return None
     for tis in scene.face.tissues:
         o = eye_point(scene, tis.center_mm, share_vertical=0.0, share_horizontal=0.0)
-        local = _frame(as_world(scene, tis.axis)) @ (c - o)
-        r = math.hypot(local[0], local[1])
-        in_clip = tis.clip_z_mm[0] <= local[2] <= tis.clip_z_mm[1] and (
-            tis.clip_r_mm[0] <= r <= tis.clip_r_mm[1]
-        )
+        local = (pts - o) @ _frame(as_world(scene, tis.axis)).T
+        r = np.hypot(local[:, 0], local[:, 1])
+        in_ring = (tis.clip_r_mm[0] <= r) & (r <= tis.clip_r_mm[1])
+        in_clip = (tis.clip_z_mm[0] <= local[:, 2]) & (local[:, 2] <= tis.clip_z_mm[1]) & in_ring
         if tis.shape == "sphere":
-            inside = in_clip and np.linalg.norm(c - o) < tis.radius_mm + rb
+            inside = in_clip & (np.linalg.norm(pts - o, axis=1) < tis.radius_mm + rb)
         elif tis.shape == "cylinder":
-            inside = in_clip and r < tis.radius_mm + rb
+            inside = in_clip & (r < tis.radius_mm + rb)
         else:
-            inside = tis.clip_r_mm[0] <= r <= tis.clip_r_mm[1] and local[2] < rb
-        if inside:
+            inside = in_ring & (local[:, 2] < rb)
+        if inside.any():
             return f"the face: face.tissues '{tis.name}'"
     return None
 
@@ -709,7 +757,7 @@ def _check_leds_light_the_eye(
     radius = max(
         eye.sclera_radius_mm, float(np.linalg.norm(eye_point(scene, np.zeros(3)) - eyeball))
     )
-    emit = centres + axes * np.asarray(scene.leds.body_radii_mm())[:, None]
+    emit = centres + axes * np.asarray(scene.leds.emission_offsets_mm())[:, None]
     step = led.alpha_grid[1] - led.alpha_grid[0]
     misses = []
     for k in range(len(emit)):
@@ -1412,18 +1460,36 @@ def _add_lashes(t: _Table, scene: Scene) -> None:
 
 
 def _add_led_bodies(t: _Table, scene: Scene, centres: np.ndarray, axes: np.ndarray) -> None:
-    """Each LED's body: an absorbing sphere of its own radius (the ledger's "LED bodies")."""
-    for i, (c, rb) in enumerate(zip(centres, scene.leds.body_radii_mm(), strict=True)):
-        t.add(
-            f"LED {i} body",
-            G.SHAPE_SPHERE,
-            c,
-            _frame(axes[i]),
-            (c, rb * 1.000001),
-            radius=rb,
-            tally_a="LED bodies",
-            tally_b="LED bodies",
-        )
+    """Each LED's body (the ledger's "LED bodies"), absorbing: a sphere of its own radius
+    about its centre (one row, ``LED k body``), or a closed cylinder coaxial with its axis
+    built from the camera body's shapes (:func:`_add_camera_body`): the front disk at
+    centre + (L/2)·axis (``LED k body``, the face the light leaves from) and the side
+    (``LED k body (side)``). The back disk is left out, and that is exact: a line meets a
+    convex solid's surface where it enters and where it leaves, never twice in the plane of
+    the back face, so every ray that would meet the back disk from outside meets the side or
+    the front disk from inside next — with nothing between (no surface may lie inside an LED's
+    body), so it ends in the same black body, one row fewer to test on every ray."""
+    common = {"tally_a": "LED bodies", "tally_b": "LED bodies"}
+    for i, b in enumerate(led_bodies(scene.leds, centres, axes)):
+        rot, rb = _frame(b.axis), b.radius
+        if b.shape == "sphere":
+            t.add(f"LED {i} body", G.SHAPE_SPHERE, b.centre, rot, (b.centre, rb * 1.000001),
+                  radius=rb, **common)  # fmt: skip
+            continue
+        half = b.length / 2
+        front, back = b.centre + half * b.axis, b.centre - half * b.axis
+        t.add(f"LED {i} body", G.SHAPE_CONIC, front, rot, (front, rb * 1.000001),
+              clip_r=(0.0, rb), **common)  # fmt: skip
+        t.add(f"LED {i} body (side)", G.SHAPE_CYLINDER, back, rot,
+              (b.centre, math.hypot(rb, half) * 1.000001), radius=rb,
+              clip_z=(0.0, b.length), **common)  # fmt: skip
+
+
+def led_body_rows(names: list[str], k: int) -> list[int]:
+    """The rows of the surface table (``names``, :attr:`CompiledScene.surface_names`) that
+    make LED ``k``'s body (:func:`_add_led_bodies`: one for a sphere, two for a cylinder)."""
+    own = f"LED {k} body"
+    return [s for s, name in enumerate(names) if name == own or name.startswith(own + " (")]
 
 
 def _profile_grids(profile: LedProfile) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -1446,11 +1512,12 @@ def _profile_grids(profile: LedProfile) -> tuple[np.ndarray, np.ndarray, np.ndar
 def _led_table(
     scene: Scene, centres: np.ndarray, axes: np.ndarray, emitting: tuple[int, ...] | None = None
 ) -> tuple[LedTable, np.ndarray]:
-    """The LEDs as point sources on the front of their bodies, each with its own I₀ and its
-    profile's sampling and evaluation tables (every profile on the same α grid); and Ω_eff (N,)
-    (sr) of every LED. ``emitting``: only these LEDs (their indices, in order; default all).
-    Raises SceneError for a profile that cannot be used."""
-    rb = np.asarray(scene.leds.body_radii_mm())[:, None]
+    """The LEDs as point sources on the front of their bodies (a sphere's apex, a cylinder's
+    front face's centre, :meth:`~eyelume.scene.model.LedArray.emission_offsets_mm`), each
+    with its own I₀ and its profile's sampling and evaluation tables (every profile on the
+    same α grid); and Ω_eff (N,) (sr) of every LED. ``emitting``: only these LEDs (their
+    indices, in order; default all). Raises SceneError for a profile that cannot be used."""
+    rb = np.asarray(scene.leds.emission_offsets_mm())[:, None]  # a sphere's radius
     emit = centres + axes * rb * (1.0 + 1e-9)
     profiles = scene.leds.profiles()
     i0 = np.array(scene.leds.intensities_w_sr(), dtype=float)
@@ -1640,16 +1707,17 @@ def _check_element_names(scene: Scene) -> None:
         seen[name] = k
 
 
-def _check_elements(scene: Scene, led_centres: np.ndarray) -> None:
+def _check_elements(scene: Scene, led_centres: np.ndarray, led_axes: np.ndarray) -> None:
     """No element cuts the eye or the face (its sampled boundary, :func:`outline_points`),
     reaches behind the eye plane (into the head, where no tissue is modelled: the eye plane
     z through the eye's nominal corneal vertex, :func:`eye_plane_origin`, as the LEDs'
-    bodies, :func:`_check_leds`), cuts an LED's body (world ``led_centres``) or another
+    bodies, :func:`_check_leds`), cuts an LED's body (world ``led_centres``, ``led_axes``; a
+    cylinder by its sampled surface, within the sampling step) or another
     element; no two share a name (:func:`_check_element_names`). Raises SceneError naming
     the element."""
     _check_element_names(scene)
     shapes = []
-    radii = scene.leds.body_radii_mm()
+    bodies = led_bodies(scene.leds, led_centres, led_axes)
     plane_z = float(eye_plane_origin(scene)[2])
     for k, el in enumerate(scene.elements):
         origin, rot = element_pose(scene, el)
@@ -1670,8 +1738,13 @@ def _check_elements(scene: Scene, led_centres: np.ndarray) -> None:
                 f"world {np.round(back, 2).tolist()} mm), into the head: elements go in front "
                 "of the eye, as the LEDs do"
             )
-        for i, c in enumerate(led_centres):
-            if near_element(el, (rot @ (c - origin))[None], radii[i])[0]:
+        for i, (c, b) in enumerate(zip(led_centres, bodies, strict=True)):
+            if b.shape == "sphere":
+                near = near_element(el, (rot @ (c - origin))[None], b.radius)[0]
+            else:
+                step = body_sample_step(b.radius, b.length)
+                near = near_element(el, (b.points() - origin) @ rot.T, step).any()
+            if near:
                 raise SceneError(
                     f"elements.{k} ({el.name or el.kind}) overlaps LED {i}'s body (world centre "
                     f"{np.round(c, 2).tolist()} mm)"
@@ -1726,24 +1799,38 @@ def _check_elements_clear_of_camera(scene: Scene, lf: np.ndarray, frame: Frame) 
 
 
 def _check_leds_outside_camera_body(
-    scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame
+    scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame, axes: np.ndarray
 ) -> None:
-    """No LED body (a sphere about its world centre) reaches into the camera's body (a solid
-    cylinder, :func:`_add_camera_body`): the distance from its centre to the solid must be at
-    least its radius. Raises SceneError naming the LED and the body."""
+    """No LED body (world ``centres``, unit ``axes``) reaches into the camera's body (a solid
+    cylinder, :func:`_add_camera_body`): a sphere's centre must lie at least its radius from
+    the solid; a cylinder must have no sampled point of its surface inside the solid and the
+    solid none of its own inside the cylinder (:func:`~eyelume.scene.sources.body_points`).
+    Raises SceneError naming the LED and the body."""
     body = scene.camera.body_used
     if body is None:
         return
-    radii, rc = scene.leds.body_radii_mm(), body.diameter_mm / 2
+    rc = body.diameter_mm / 2
     z0 = float(lf[0, Q.L_Z])
-    for i, c in enumerate(centres):
-        rb = radii[i]
-        p = frame.point(c)
-        dz = max(0.0, z0 - p[2], p[2] - (z0 + body.length_mm))
-        dr = max(0.0, math.hypot(p[0], p[1]) - rc)
-        if math.hypot(dz, dr) < rb:
+    # the camera body in the world: its centre and axis (camera frame +z, behind the lens)
+    cam_c = frame.world_point(np.array([0.0, 0.0, z0 + body.length_mm / 2]))
+    cam_a = frame.world_vector(np.array([0.0, 0.0, 1.0]))
+    cam_points = None
+    for i, (c, b) in enumerate(zip(centres, led_bodies(scene.leds, centres, axes), strict=True)):
+        if b.shape == "sphere":
+            p = frame.point(c)
+            dz = max(0.0, z0 - p[2], p[2] - (z0 + body.length_mm))
+            dr = max(0.0, math.hypot(p[0], p[1]) - rc)
+            inside = math.hypot(dz, dr) < b.radius
+        else:
+            if cam_points is None:
+                cam_points = body_points("cylinder", cam_c, cam_a, rc, body.length_mm)
+            inside = bool(
+                inside_body(b.points(), "cylinder", cam_c, cam_a, rc, body.length_mm).any()
+                or b.inside(cam_points).any()
+            )
+        if inside:
             raise SceneError(
-                f"leds: LED {i} body (world centre {np.round(c, 2).tolist()} mm, radius {rb}) "
+                f"leds: LED {i} body (world centre {np.round(c, 2).tolist()} mm, {b.words()}) "
                 f"is inside the camera body (camera.body: {body.diameter_mm} mm across, "
                 f"{body.length_mm} mm deep behind the lens)"
             )
@@ -2388,9 +2475,9 @@ def compile_scene(
     _add_face(t, scene)
     _add_lashes(t, scene)
     centres, axes = led_world_poses(scene)
-    _check_leds(scene, centres, lens.lf, frame)
-    _check_leds_in_head(scene, centres)
-    _check_leds_outside_camera_body(scene, centres, lens.lf, frame)
+    _check_leds(scene, centres, lens.lf, frame, axes)
+    _check_leds_in_head(scene, centres, axes=axes)
+    _check_leds_outside_camera_body(scene, centres, lens.lf, frame, axes)
     _add_led_bodies(t, scene, centres, axes)
     world = centres, axes
     if not frame.is_identity:
@@ -2404,7 +2491,7 @@ def compile_scene(
     _add_lens_entrance(t, lens.lf)
     _add_camera_body(t, scene, lens.lf)
     if scene.elements:
-        _check_elements(scene, world[0])
+        _check_elements(scene, *world)
         _check_elements_clear_of_camera(scene, lens.lf, frame)
         _add_elements(t, scene)
     surfaces = SurfaceTable(

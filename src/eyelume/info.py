@@ -284,17 +284,23 @@ def _led_info(scene: Scene, cs: CompiledScene) -> dict:
             "radiant_intensity_w_sr": i0,
             "profile": _profile_info(profile),
             "wavelength_nm": lam,
+            "body_shape": shape,
             "body_diameter_mm": 2 * body,
+            "body_length_mm": length,
+            "emission_point_mm": (centres[k] + offset * axes[k]).tolist(),
             "emitter_diameter_mm": emitter,
             "effective_solid_angle_sr": float(cs.omega_eff[k]),
             "power_w": float(cs.led_powers_w[k]),
         }
-        for k, (i0, profile, lam, body, emitter) in enumerate(
+        for k, (i0, profile, lam, body, shape, length, offset, emitter) in enumerate(
             zip(
                 led.intensities_w_sr(),
                 led.profiles(),
                 led.wavelengths_nm(scene.wavelength_nm),
                 led.body_radii_mm(),
+                led.body_shapes(),
+                led.body_lengths_mm(),
+                led.emission_offsets_mm(),
                 led.emitter_diameters_mm(),
                 strict=True,
             )

@@ -223,10 +223,13 @@ def _camera_sections(cs: CompiledScene, cut: int, vertical: int) -> list[Section
     return out
 
 
-def _body_outline(pieces: list[np.ndarray]) -> list[Section]:
-    """The camera body's section as one closed outline: the convex hull of its faces' cut
-    pieces (the body is a cylinder, convex, so its section is too; the front ring alone cuts
-    to two parallel strokes). Pieces that span no area are drawn as they are."""
+def _body_outline(
+    pieces: list[np.ndarray], name: str = "camera body", category: str = "camera"
+) -> list[Section]:
+    """A closed body's section (the camera's body, an LED's cylinder) as one closed outline:
+    the convex hull of its faces' cut pieces (the body is a cylinder, convex, so its section
+    is too; the front ring alone cuts to two parallel strokes). Pieces that span no area are
+    drawn as they are."""
     if not pieces:
         return []
     from scipy.spatial import ConvexHull, QhullError
@@ -235,9 +238,9 @@ def _body_outline(pieces: list[np.ndarray]) -> list[Section]:
     try:
         hull = pts[ConvexHull(pts).vertices]
     except (QhullError, ValueError):
-        return [Section("camera body", "camera", p[:, 0], p[:, 1]) for p in pieces]
+        return [Section(name, category, p[:, 0], p[:, 1]) for p in pieces]
     ring = np.vstack([hull, hull[:1]])
-    return [Section("camera body", "camera", ring[:, 0], ring[:, 1])]
+    return [Section(name, category, ring[:, 0], ring[:, 1])]
 
 
 #: Tissues drawn only in front of the periorbital skin: behind it they are inside the head.
@@ -258,6 +261,17 @@ def _skin_front(cs: CompiledScene, sf: np.ndarray, emit: np.ndarray) -> tuple[fl
     return z0, side
 
 
+def _closed_body(name: str, category: str, names: list[str]) -> str | None:
+    """The closed body a surface is a face of, drawn as one outline: ``"camera body"`` for
+    the camera's, ``"LED k body"`` for the three faces of LED k's cylinder; None otherwise."""
+    if category == "camera":
+        return "camera body"
+    own = name.split(" (")[0]  # "LED 3 body (side)" → "LED 3 body"
+    if category == "led" and (own != name or f"{own} (side)" in names):
+        return own
+    return None
+
+
 def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -> list[Section]:
     """Every part of the system in one view (module docstring), world mm: the eye and face
     surfaces and LED bodies cut by the view's plane, the LEDs' axes (10 mm), the camera, its
@@ -270,7 +284,8 @@ def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -
         sf[:, G.OX + cut] -= plane_o[cut]
         sf[:, G.BX + cut] -= plane_o[cut]
     out: list[Section] = []
-    body: list[np.ndarray] = []  # the camera body's cut pieces (z, vertical): one outline
+    # the cut pieces (z, vertical) of each closed body (the camera's, an LED's cylinder)
+    closed: dict[tuple[str, str], list[np.ndarray]] = {}
     emit = cs.frame.world_point(cs.led.points)
     front = _skin_front(cs, sf, emit)
     for s, name in enumerate(cs.surface_names):
@@ -286,11 +301,13 @@ def system_sections(cs: CompiledScene, extent: float = 60.0, view: str = "yz") -
             keep &= side * (pts[:, 2] - z0) >= -1e-9
         for run in _runs(pts, keep):
             category = _category(name, int(cs.si[s, G.ACTION]))
-            if category == "camera":
-                body.append(run[:, [2, vertical]])
+            whole = _closed_body(name, category, cs.surface_names)
+            if whole is not None:
+                closed.setdefault((whole, category), []).append(run[:, [2, vertical]])
                 continue
             out.append(Section(name, category, run[:, 2], run[:, vertical]))
-    out.extend(_body_outline(body))
+    for (whole, category), pieces in closed.items():
+        out.extend(_body_outline(pieces, whole, category))
     axes = cs.frame.world_vector(cs.led.axes)
     for k, (p, a) in enumerate(zip(emit, axes, strict=True)):
         line = np.stack([p, p + 10.0 * a])

@@ -55,6 +55,7 @@ from eyelume.analysis.truth import (
     sensor_to_pixel,
     view_reflects,
 )
+from eyelume.compile import led_body_rows
 from eyelume.detectors.receivers import BinnedPlane
 from eyelume.estimators.camera import aim_chief, into_scene
 from eyelume.kernels import geometry as G
@@ -259,7 +260,8 @@ def _emission(v: _View, s: np.ndarray, chain_cam: list[int], led: np.ndarray):
     p, d = got[0], got[1]
     if clear:  # nothing between the last surface and the LED but its own body
         h, th = G.nearest_hit(cs.sf, cs.si, *p, *d)
-        k_body = [i for i, nm in enumerate(cs.surface_names) if nm.endswith(" body")]
+        n_led = cs.scene.leds.count
+        k_body = [i for k in range(n_led) for i in led_body_rows(cs.surface_names, k)]
         clear = h < 0 or h in k_body or th >= (led - p) @ d - 1e-4
     return -d, clear, got[3]
 

@@ -111,7 +111,7 @@ def eye_safety(scene: Scene) -> dict:
     ``burn_hazard_weight`` at the top is the worst LED's."""
     leds = scene.leds
     centres, axes = led_world_poses(scene)
-    emit = centres + axes * np.asarray(leds.body_radii_mm())[:, None]
+    emit = centres + axes * np.asarray(leds.emission_offsets_mm())[:, None]
     # the corneal vertex of primary gaze: the eye's pose and the head offset (world)
     eye = as_world(
         scene, np.add(scene.eye_pose.vertex_mm, np.asarray(scene.head_offset_mm, dtype=float))

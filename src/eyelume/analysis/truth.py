@@ -44,6 +44,7 @@ from eyelume.compile import (
     eye_direction,
     eye_point,
     gaze_rotation,
+    led_body_rows,
     single_wavelength,
     wavelength_groups,
 )
@@ -532,10 +533,7 @@ def _glint_seen(v: _View, k: int, row: int, led: np.ndarray, p, d, share_in: flo
         blocked_out
         or hit is None
         or G.nearest_hit(cs.sf, cs.si, *hit[0], *hit[1])[0]
-        not in (
-            cs.surface_names.index(f"LED {k} body"),
-            -1,
-        )
+        not in (*led_body_rows(cs.surface_names, k), -1)
     )
     dark = hit is not None and float(radiant_intensity(cs.led, row, *(-hit[1]))) <= 0.0
     visible = not (blocked_in or blocked_out or dark)

@@ -41,7 +41,16 @@ from numba import njit, prange
 from eyelume.errors import GeometryError
 from eyelume.kernels.bins import eye_plane_grid, from_grid
 from eyelume.scene.model import EyePlane, LedArray, LedProfile, Scene
-from eyelume.scene.sources import cos_power_exponent, led_poses, read_profile_table, ring_poses
+from eyelume.scene.sources import (
+    bodies_overlap,
+    body_support,
+    cos_power_exponent,
+    led_bodies,
+    led_poses,
+    read_profile_table,
+    ring_basis,
+    ring_poses,
+)
 
 __all__ = [
     "AUTO_RTOL",
@@ -98,7 +107,13 @@ def geometry_problems(
     eye plane (Z − r_body > 0), two bodies must not overlap (centres ≥ 2 r_body apart), and the
     pitch must lie in the scene model's range (−90°, 90°). The full scene also rejects a body
     inside the imaging lens; the free-space system has no lens, so that is left to compile.
+    LEDs with a cylindrical body (``body_shape``) are placed at each configuration
+    (:func:`~eyelume.scene.sources.ring_poses`) and tested as compile tests them: each body's
+    reach toward the eye plane along −n̂ (:func:`~eyelume.scene.sources.body_support`) and
+    each pair (:func:`~eyelume.scene.sources.bodies_overlap`).
     """
+    if "cylinder" in leds.body_shapes():
+        return _body_problems(leds, heights, distances, pitches)
     rb = max(leds.body_radii_mm())  # the largest body: a bound for unlike bodies
     phi = np.radians(np.asarray(leds.azimuths(), dtype=float))
     chord = math.inf  # the smallest distance between two LED centres at Y = 1 mm
@@ -128,6 +143,54 @@ def geometry_problems(
     return out
 
 
+def _placement_problem(y: float, z: float, t: float) -> str | None:
+    """Why (Y, Z, θ) is no placement at all (not finite, Y < 0, θ outside (−90°, 90°))."""
+    if not (math.isfinite(y) and math.isfinite(z) and math.isfinite(t)):
+        return f"(Y, Z, θ) = ({y}, {z}, {t}) is not finite"
+    if y < 0:
+        return f"height Y = {y} mm is negative"
+    if not -90 < t < 90:
+        return f"pitch θ = {t} deg is outside (−90, 90)"
+    return None
+
+
+def _bodies_problem(leds: LedArray, y: float, z: float, t: float) -> str | None:
+    """Why the bodies of ``leds`` at (Y, Z, θ) cannot be (module :func:`geometry_problems`)."""
+    ring_c, _, _, n_hat = ring_basis(leds)
+    if leds.positions_mm is None:
+        centres, axes = ring_poses(leds, [y], [z], [t])
+        centres, axes = centres[0], axes[0]
+    else:
+        centres, axes = led_poses(leds)
+    bodies = led_bodies(leds, centres, axes)
+    for k, b in enumerate(bodies):
+        zc = float((b.centre - ring_c) @ n_hat)  # the ring's Z of this LED's centre
+        if zc - body_support(b.shape, b.axis, b.radius, b.length, -n_hat) <= 0:
+            return f"LED {k} body (centre Z = {zc:g} mm, {b.words()}) crosses the eye plane z = 0"
+    for i in range(len(bodies)):
+        for j in range(i):
+            if bodies_overlap(bodies[i], bodies[j]):
+                return (
+                    f"LED bodies overlap at height Y = {y} mm (LED {i} and LED {j}: "
+                    f"{bodies[i].words()} and {bodies[j].words()})"
+                )
+    return None
+
+
+def _body_problems(
+    leds: LedArray,
+    heights: Sequence[float],
+    distances: Sequence[float],
+    pitches: Sequence[float],
+) -> list[str | None]:
+    """:func:`geometry_problems` for LEDs of which one at least is a cylinder."""
+    out: list[str | None] = []
+    for y, z, t in zip(heights, distances, pitches, strict=True):
+        y, z, t = float(y), float(z), float(t)
+        out.append(_placement_problem(y, z, t) or _bodies_problem(leds, y, z, t))
+    return out
+
+
 def geometry_problem(
     leds: LedArray, height_mm: float, distance_mm: float, pitch_deg: float
 ) -> str | None:
@@ -146,10 +209,11 @@ def led_emitters(
     """Emission points and unit axes, (n, N, 3) each, of ``leds`` at n configurations (Y, Z, θ).
 
     The placement of :func:`eyelume.scene.sources.ring_poses` (the LEDs one by one: their
-    fixed positions at every configuration); the emission point is the apex of the body,
-    centre + axis · body_diameter/2, as in :mod:`eyelume.compile`.
+    fixed positions at every configuration); the emission point is the front of the body,
+    centre + axis · offset (a sphere's radius, half a cylinder's length:
+    :meth:`~eyelume.scene.model.LedArray.emission_offsets_mm`), as in :mod:`eyelume.compile`.
     """
-    rb = np.asarray(leds.body_radii_mm())[:, None]  # (N, 1): each LED's own body
+    rb = np.asarray(leds.emission_offsets_mm())[:, None]  # (N, 1): each LED's own body
     if leds.positions_mm is not None:  # one by one: nothing to vary
         centres, axes = led_poses(leds)
         n = np.asarray(heights).size

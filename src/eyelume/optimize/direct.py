@@ -137,7 +137,7 @@ def _check_leds_alike(scene: Scene, vary_spread: bool) -> None:
     needs one I₀, one profile and one wavelength for every LED. Raises SceneError naming a
     per-LED list (or a table profile whose spread cannot vary)."""
     leds = scene.leds
-    for name in (*PER_LED_NUMBERS, "profile"):
+    for name in (*PER_LED_NUMBERS, "profile", "body_shape"):
         value = getattr(leds, name)
         if isinstance(value, list):
             raise SceneError(

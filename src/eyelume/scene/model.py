@@ -43,6 +43,7 @@ __all__ = [
     "Lashes",
     "LedArray",
     "LedProfile",
+    "LED_BODY_SHAPES",
     "LensSurface",
     "PER_LED_NUMBERS",
     "QE_CURVES",
@@ -98,8 +99,12 @@ PER_LED_NUMBERS = (
     "radiant_intensity_w_sr",
     "wavelength_nm",
     "body_diameter_mm",
+    "body_length_mm",
     "emitter_diameter_mm",
 )
+
+#: The LED body shapes :class:`LedArray` knows (``body_shape``).
+LED_BODY_SHAPES = ("sphere", "cylinder")
 
 
 def _check_wavelengths(value) -> None:
@@ -213,11 +218,25 @@ class LedArray(_Model):
     ring's fields (``height_mm``,
     ``distance_mm``, ``pitch_deg``, ``azimuths_deg``, ``ring_centre_mm``, ``ring_axis``) given
     beside ``positions_mm`` are refused (they would place nothing).
-    Light leaves from the apex of the spherical body (a point source at centre + r·axis, r each
-    LED's own body radius; the body absorbs what comes back to it, whichever LEDs emit).
+    The body (one value for every LED or a list of ``count``, as the numbers above), a closed
+    absorber about the LED's centre (``positions_mm`` or the ring's point: the body's centre):
+    ``body_shape = "sphere"`` (the default; a 3 or 5 mm dome LED) is a sphere of diameter
+    ``body_diameter_mm``, light leaving from its apex, centre + (D/2)·axis;
+    ``body_shape = "cylinder"`` (a flat SMD package, top emitter, e.g. a 1.7 × 0.8 × 0.65 mm
+    CHIPLED as a cylinder of its footprint's area) is a closed cylinder coaxial with the LED's
+    axis, ``body_diameter_mm`` across and ``body_length_mm`` long (along the axis), centred on
+    the LED's centre, light leaving from the centre of its front face, centre + (L/2)·axis
+    (:meth:`emission_offsets_mm`). ``body_length_mm`` (mm) is needed when an LED is a cylinder;
+    a sphere's length is its diameter (in a list, a sphere's item must equal its
+    ``body_diameter_mm``). The body absorbs what comes back to it, whichever LEDs emit (the
+    ledger's "LED bodies"): it shadows the eye and the face from other LEDs and hides the
+    skin behind it from the camera; the checks that refuse an LED inside the eye, the face,
+    the lens, the camera body, an element or another LED, or behind the eye plane, take its
+    shape (:mod:`eyelume.scene.sources`, :func:`~eyelume.scene.sources.body_points`).
     ``emitter_diameter_mm`` is the apparent size of each LED's emitting area (the die as the dome
     lens shows it), used only for the retinal thermal hazard (its radiance and angular
-    subtense): the tracers emit from a point at the body's apex.
+    subtense): the tracers emit from a point at the emission point above; it must fit within
+    the body's diameter.
     """
 
     part: str = "American Bright BIR-BO07J4Q-1"
@@ -227,6 +246,8 @@ class LedArray(_Model):
     distance_mm: Positive = 70.0
     pitch_deg: float = Field(20.0, gt=-90, lt=90)
     body_diameter_mm: Positive | list[Positive] = 5.0
+    body_shape: Literal["sphere", "cylinder"] | list[Literal["sphere", "cylinder"]] = "sphere"
+    body_length_mm: Positive | list[Positive] | None = None
     emitter_diameter_mm: Positive | list[Positive] = 1.0
     radiant_intensity_w_sr: Positive | list[Positive] = 0.015
     profile: LedProfile | list[LedProfile] = LedProfile()
@@ -254,6 +275,51 @@ class LedArray(_Model):
                 if v <= 0:
                     raise ValueError(f"{info.field_name}[{k}] = {v!r}: must be > 0")
         return value
+
+    @field_validator("body_shape", mode="before")
+    @classmethod
+    def _shapes_one_by_one(cls, value):
+        """Each body shape one of :data:`LED_BODY_SHAPES`, a bad item named by its index."""
+        items = list(enumerate(value)) if isinstance(value, list | tuple) else [(None, value)]
+        if not items:
+            raise ValueError("body_shape = []: give one shape or one per LED")
+        for k, v in items:
+            if v not in LED_BODY_SHAPES:
+                name = "" if k is None else f"body_shape[{k}] = {v!r}: "
+                raise ValueError(f"{name}must be one of {', '.join(LED_BODY_SHAPES)}")
+        return value
+
+    @model_validator(mode="after")
+    def _cylinders_have_a_length(self) -> LedArray:
+        """A cylinder needs ``body_length_mm``; a length beside spheres only is refused (it
+        would size nothing), and a list's item for a sphere must be its diameter."""
+        shapes = self.body_shapes()
+        if len(shapes) != self.count:
+            return self  # _per_led_lengths names the list's count
+        v = self.body_length_mm
+        if v is None:
+            if "cylinder" in shapes:
+                k = shapes.index("cylinder")
+                raise ValueError(
+                    f"body_length_mm is needed: LED {k}'s body_shape is 'cylinder' (give the "
+                    "package's length along the LED's axis, mm)"
+                )
+            return self
+        if "cylinder" not in shapes:
+            raise ValueError(
+                f"body_length_mm = {v!r} given but every LED's body_shape is 'sphere' (whose "
+                "length is its diameter): remove it or set body_shape = 'cylinder'"
+            )
+        if isinstance(v, list) and len(v) == self.count:
+            diameters = self.body_diameter_mm
+            for k, (shape, length) in enumerate(zip(shapes, v, strict=True)):
+                d = diameters[k] if isinstance(diameters, list) else diameters
+                if shape == "sphere" and length != d:
+                    raise ValueError(
+                        f"body_length_mm[{k}] = {length:g}: LED {k}'s body is a sphere, whose "
+                        f"length is its diameter (body_diameter_mm = {d:g}); give {d:g}"
+                    )
+        return self
 
     @field_validator("spectral_width_nm", mode="before")
     @classmethod
@@ -333,7 +399,7 @@ class LedArray(_Model):
 
     @model_validator(mode="after")
     def _per_led_lengths(self) -> LedArray:
-        for name in (*PER_LED_NUMBERS, "profile"):
+        for name in (*PER_LED_NUMBERS, "profile", "body_shape"):
             v = getattr(self, name)
             if isinstance(v, list) and len(v) != self.count:
                 raise ValueError(
@@ -434,9 +500,48 @@ class LedArray(_Model):
         return [float(x) for x in v] if isinstance(v, list) else [float(v)] * self.count
 
     def body_radii_mm(self) -> list[float]:
-        """The radius of every LED's spherical body (mm), ``count`` values."""
+        """The radius of every LED's body (mm), ``count`` values: half its
+        ``body_diameter_mm`` (a sphere's radius, a cylinder's across its axis)."""
         v = self.body_diameter_mm
         return [x / 2 for x in v] if isinstance(v, list) else [v / 2] * self.count
+
+    def body_shapes(self) -> list[str]:
+        """Every LED's body shape (``"sphere"`` or ``"cylinder"``), ``count`` values."""
+        v = self.body_shape
+        return list(v) if isinstance(v, list) else [v] * self.count
+
+    def body_lengths_mm(self) -> list[float]:
+        """Every LED body's length along its axis (mm), ``count`` values: a cylinder's
+        ``body_length_mm``, a sphere's diameter."""
+        v = self.body_length_mm
+        lengths = [float(x) for x in v] if isinstance(v, list) else [v] * self.count
+        return [
+            2 * r if shape == "sphere" else float(length)
+            for shape, r, length in zip(
+                self.body_shapes(), self.body_radii_mm(), lengths, strict=True
+            )
+        ]
+
+    def emission_offsets_mm(self) -> list[float]:
+        """Every LED's emission point's distance from its body's centre along its axis (mm),
+        ``count`` values: the light leaves from centre + offset · axis, a sphere's apex (its
+        radius) or the centre of a cylinder's front face (half its length)."""
+        return [
+            r if shape == "sphere" else length / 2
+            for shape, r, length in zip(
+                self.body_shapes(), self.body_radii_mm(), self.body_lengths_mm(), strict=True
+            )
+        ]
+
+    def bounding_radii_mm(self) -> list[float]:
+        """Every LED body's bounding sphere's radius about its centre (mm): a sphere's radius,
+        a cylinder's √(r² + (L/2)²)."""
+        return [
+            r if shape == "sphere" else math.hypot(r, length / 2)
+            for shape, r, length in zip(
+                self.body_shapes(), self.body_radii_mm(), self.body_lengths_mm(), strict=True
+            )
+        ]
 
     def emitter_diameters_mm(self) -> list[float]:
         """The apparent diameter of every LED's emitting area (mm), ``count`` values."""

@@ -1,10 +1,18 @@
-"""LED emitters: angular profiles and placement (paper Fig. 8)."""
+"""LED emitters: angular profiles, placement (paper Fig. 8) and bodies.
+
+An LED's body (:class:`eyelume.scene.model.LedArray`, ``body_shape``) is a sphere or a closed
+cylinder coaxial with the LED's axis, about the LED's centre; here are the geometry the scene
+checks use on it (world mm): :func:`body_support` (how far the body reaches along a
+direction), :func:`cylinder_distance` (from points to a solid cylinder), :func:`inside_body`
+and :func:`body_points` (its surface sampled, for tests against solids without a closed
+form)."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -14,6 +22,14 @@ from eyelume.scene.textfile import read_csv_table
 
 __all__ = [
     "TABLE_END_FRACTION",
+    "LedBody",
+    "bodies_overlap",
+    "led_bodies",
+    "body_points",
+    "body_sample_step",
+    "body_support",
+    "cylinder_distance",
+    "inside_body",
     "cos_power_exponent",
     "led_poses",
     "ring_basis",
@@ -181,3 +197,144 @@ def led_poses(leds: LedArray) -> tuple[np.ndarray, np.ndarray]:
     else:
         d = np.asarray(leds.aim_at_mm, dtype=float) - centres
     return centres, d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def body_support(shape: str, axis, radius: float, length: float, direction) -> float:
+    """How far an LED body reaches from its centre along the unit ``direction`` (mm): the
+    largest (p − c)·u over the body, r for a sphere of radius r; (L/2)|a·u| + r √(1 − (a·u)²)
+    for a cylinder of radius r and length L along the unit axis a."""
+    if shape == "sphere":
+        return float(radius)
+    cos = float(np.clip(np.dot(axis, direction), -1.0, 1.0))
+    return length / 2 * abs(cos) + radius * math.sqrt(max(0.0, 1.0 - cos * cos))
+
+
+def cylinder_distance(points, centre, axis, radius: float, length: float) -> np.ndarray:
+    """Distance (mm) from each of ``points`` (M, 3) to the solid cylinder of ``radius`` and
+    ``length`` about ``centre`` along the unit ``axis`` (0 inside): the hypotenuse of how far
+    the point lies outside its radius and outside its two faces."""
+    d = np.asarray(points, dtype=float).reshape(-1, 3) - np.asarray(centre, dtype=float)
+    h = d @ np.asarray(axis, dtype=float)
+    rho = np.linalg.norm(d - np.outer(h, axis), axis=1)
+    return np.hypot(np.maximum(0.0, rho - radius), np.maximum(0.0, np.abs(h) - length / 2))
+
+
+def inside_body(points, shape: str, centre, axis, radius: float, length: float) -> np.ndarray:
+    """Whether each of ``points`` (M, 3) lies strictly inside the body (M,) bool."""
+    d = np.asarray(points, dtype=float).reshape(-1, 3) - np.asarray(centre, dtype=float)
+    if shape == "sphere":
+        return np.linalg.norm(d, axis=1) < radius
+    h = d @ np.asarray(axis, dtype=float)
+    rho = np.linalg.norm(d - np.outer(h, axis), axis=1)
+    return (rho < radius) & (np.abs(h) < length / 2)
+
+
+#: Largest spacing (mm) of :func:`body_points` between neighbouring samples.
+BODY_SAMPLE_MM = 0.1
+
+
+def body_sample_step(radius: float, length: float) -> float:
+    """The spacing s (mm) of :func:`body_points` for a body of ``radius`` and ``length``."""
+    return min(BODY_SAMPLE_MM, max(2 * radius, length) / 32)
+
+
+def body_points(shape: str, centre, axis, radius: float, length: float) -> np.ndarray:
+    """Points on an LED body's surface (M, 3), world mm, no two neighbours farther apart than
+    s = min(:data:`BODY_SAMPLE_MM`, size/32) (size the larger of its diameter and length):
+    for a cylinder, rings on its side every ≤ s along the axis and concentric rings on its two
+    faces; for a sphere, a Fibonacci lattice of ≈ 4πr²/s² points. Two closed convex solids
+    overlap exactly when a point of one's surface lies inside the other (or one holds the
+    other), so a test on these points misses only overlaps shallower than about s."""
+    c = np.asarray(centre, dtype=float)
+    a = np.asarray(axis, dtype=float)
+    a = a / np.linalg.norm(a)
+    step = body_sample_step(radius, length)
+    if shape == "sphere":
+        n = max(16, math.ceil(4 * math.pi * radius * radius / (step * step)))
+        i = np.arange(n) + 0.5
+        z = 1.0 - 2.0 * i / n
+        phi = math.pi * (3.0 - math.sqrt(5.0)) * i
+        rho = np.sqrt(1.0 - z * z)
+        return c + radius * np.stack([rho * np.cos(phi), rho * np.sin(phi), z], 1)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = helper - (helper @ a) * a
+    u /= np.linalg.norm(u)
+    v = np.cross(a, u)
+
+    def ring(r: float) -> np.ndarray:
+        n = max(1, math.ceil(2 * math.pi * r / step)) if r > 0 else 1
+        ang = 2 * math.pi * np.arange(n) / n
+        return r * (np.outer(np.cos(ang), u) + np.outer(np.sin(ang), v))
+
+    side = ring(radius)
+    hs = np.linspace(-length / 2, length / 2, max(2, math.ceil(length / step) + 1))
+    pts = [side + h * a for h in hs]
+    disk = np.concatenate(
+        [ring(r) for r in np.linspace(0.0, radius, max(2, math.ceil(radius / step) + 1))]
+    )
+    pts += [disk + length / 2 * a, disk - length / 2 * a]
+    return c + np.concatenate(pts)
+
+
+class LedBody(NamedTuple):
+    """One LED's body (:class:`eyelume.scene.model.LedArray`), world mm: its shape
+    (``"sphere"`` or ``"cylinder"``), centre, unit axis, radius (across the axis) and length
+    (along it; a sphere's diameter)."""
+
+    shape: str
+    centre: np.ndarray
+    axis: np.ndarray
+    radius: float
+    length: float
+
+    @property
+    def bound(self) -> float:
+        """The radius of its bounding sphere about its centre (mm)."""
+        return self.radius if self.shape == "sphere" else math.hypot(self.radius, self.length / 2)
+
+    def words(self) -> str:
+        """Its size for a message: ``radius 0.8`` (a sphere) or ``a cylinder 1.3 mm across,
+        0.65 mm long``."""
+        if self.shape == "sphere":
+            return f"radius {self.radius}"
+        return f"a cylinder {2 * self.radius:g} mm across, {self.length:g} mm long"
+
+    def points(self) -> np.ndarray:
+        """Its surface sampled (:func:`body_points`), (M, 3) world mm."""
+        return body_points(self.shape, self.centre, self.axis, self.radius, self.length)
+
+    def inside(self, points: np.ndarray) -> np.ndarray:
+        """Which of ``points`` (M, 3) lie strictly inside it (M,) bool."""
+        return inside_body(points, self.shape, self.centre, self.axis, self.radius, self.length)
+
+
+def led_bodies(leds: LedArray, centres: np.ndarray, axes: np.ndarray) -> list[LedBody]:
+    """Every LED's :class:`LedBody` at ``centres`` and unit ``axes`` (N, 3) (world mm)."""
+    return [
+        LedBody(shape, np.asarray(c, dtype=float), np.asarray(a, dtype=float), r, length)
+        for shape, c, a, r, length in zip(
+            leds.body_shapes(),
+            centres,
+            axes,
+            leds.body_radii_mm(),
+            leds.body_lengths_mm(),
+            strict=True,
+        )
+    ]
+
+
+def bodies_overlap(a: LedBody, b: LedBody) -> bool:
+    """Whether two LED bodies overlap: two spheres, their centres nearer than the sum of their
+    radii; a sphere and a cylinder, the sphere's centre nearer the solid cylinder than its
+    radius (:func:`cylinder_distance`), exact; two cylinders, a sampled point of one's surface
+    inside the other (:func:`body_points`)."""
+    if a.shape == "sphere" and b.shape == "sphere":
+        return bool(np.linalg.norm(a.centre - b.centre) < a.radius + b.radius)
+    if np.linalg.norm(a.centre - b.centre) >= a.bound + b.bound:
+        return False  # their bounding spheres are apart
+    if b.shape == "sphere":
+        a, b = b, a
+    if a.shape == "sphere":
+        gap = cylinder_distance(a.centre, b.centre, b.axis, b.radius, b.length)[0]
+        return bool(gap < a.radius)
+    return bool(b.inside(a.points()).any() or a.inside(b.points()).any())
