@@ -87,6 +87,10 @@ def test_the_geometric_kappa_frame_is_left_out_of_the_geometric_statistics(tmp_p
     with open(tmp_path / "frames.csv", encoding="utf-8") as f:
         rows = list(csv.DictReader(f))
     assert [r["geometric_calibration_frame"] for r in rows] == ["1", "0"]
+    # why the geometric model refused a frame detected ok: empty where it answered
+    assert [r["geometric_refused"] == "" for r in rows] == [
+        f.geometric is not None or not f.detection.ok for f in rep.frames
+    ]
     assert [r["geometric_calibration"] for r in error_map_rows(rep.frames)] == [True, False]
 
 

@@ -207,7 +207,9 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
 
     ``frames.csv``'s ``calibration_frame`` (1: a PCCR calibration gaze, left out of
     ``gaze_pccr``) and ``geometric_calibration_frame`` (1: the geometric model's own one-point
-    kappa frame, left out of ``gaze_geometric``) let its rows reproduce the summary's means."""
+    kappa frame, left out of ``gaze_geometric``) let its rows reproduce the summary's means;
+    ``geometric_refused`` says why the geometric model gave no estimate on a frame detected
+    ``ok`` (e.g. too few glints within its spherical cornea's validity zone), empty otherwise."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = [out / "frames.csv", out / "summary.json", out / "error_maps.png"]
@@ -219,6 +221,7 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
                 "glints_found", "glints_true", "pccr_h_deg", "pccr_v_deg", "geometric_h_deg",
                 "geometric_v_deg", "render_s", "detect_ms", "false_glints", "calibration_frame",
                 "geometric_calibration_frame", "rim_glints", "stray_glints",
+                "geometric_refused",
             ]
         )  # fmt: skip
         for fr in report.frames:
@@ -231,7 +234,7 @@ def write_tracking_outputs(report, meta: dict, out) -> list[Path]:
                     fr.glints_found, fr.glints_true, f"{p[0]:.4f}", f"{p[1]:.4f}",
                     f"{g[0]:.4f}", f"{g[1]:.4f}", f"{fr.render_s:.3f}", f"{fr.detect_ms:.3f}",
                     fr.false_glints, int(fr.calibration), int(is_kappa_frame(fr)),
-                    fr.rim_glints, fr.stray_glints,
+                    fr.rim_glints, fr.stray_glints, fr.geometric_refused,
                 ]
             )  # fmt: skip
     summary = {"meta": meta, **report.summary}

@@ -40,6 +40,7 @@ import numpy as np
 from eyelume.analysis.safety import eye_safety
 from eyelume.analysis.tracking.detect import Detection, detect
 from eyelume.analysis.tracking.gaze import (
+    SPHERE_ZONE_DEG,
     GeometricGaze,
     PccrModel,
     PinholeCamera,
@@ -92,6 +93,9 @@ class Frame:
     pg_vector: tuple[float, float] | None = None
     pccr: tuple[float, float] | None = None
     geometric: tuple[float, float] | None = None
+    #: why the geometric model gave no estimate on a frame detected ``ok`` ("" otherwise):
+    #: e.g. too few glints within its spherical cornea's validity zone
+    geometric_refused: str = ""
     render_s: float = 0.0
     detect_ms: float = 0.0
     saturated_share: float = 0.0  # of the frame's pixels at the full well or full scale
@@ -359,6 +363,7 @@ def _geometric(model: GeometricGaze, frame: Frame, n_leds: int) -> tuple[float, 
         if g.led is not None:
             glints[g.led] = g.centre_px
     est = model.estimate(det.pupil.centre_px, glints)
+    frame.geometric_refused = "" if est.ok else est.reason
     return (est.h_deg, est.v_deg) if est.ok else None
 
 
@@ -421,8 +426,10 @@ def analyse_frames(
     camera = pinhole_camera(scene)
     # the geometric model's camera is a pinhole looking straight at the eye: through optical
     # elements (an eyepiece and fold, glasses) its glints' rays are not the camera's, and its
-    # answer would be wrong, not approximate (108° mean on paper2005-integrated): none then
-    geometric = None if scene.elements else GeometricGaze(camera, leds_mm)
+    # answer would be wrong, not approximate (108° mean on paper2005-integrated): none then.
+    # Its cornea is a sphere: glints reflected farther than SPHERE_ZONE_DEG from the apex of
+    # the real, aspheric cornea are left out (a frame with < 2 inside is refused)
+    geometric = None if scene.elements else GeometricGaze(camera, leds_mm, zone_deg=SPHERE_ZONE_DEG)
     left = scene.eye_pose.which == "left"
     kappa = None if geometric is None else kappa_offset(geometric, calibration, len(leds_mm), left)
     for f in frames:
@@ -527,6 +534,10 @@ def summarise(report: TrackingReport, pccr_calibrated: bool) -> dict:
         "gaze_geometric": {
             **stats(_errors(frames, "geometric")),
             "calibration_frames_excluded": sum(is_kappa_frame(f) for f in frames),
+            # frames detected ok that the model refused, e.g. with < 2 glints within its
+            # spherical cornea's validity zone (GeometricGaze.zone_deg)
+            "refused": sum(bool(f.geometric_refused) for f in ok),
+            "refused_outside_zone": sum("validity zone" in f.geometric_refused for f in ok),
         },
         "render_s_per_frame": float(np.mean([f.render_s for f in frames])),
         "detect_ms_per_frame": float(np.nanmean([f.detect_ms for f in frames])),

@@ -45,6 +45,7 @@ __all__ = [
     "ModelEye",
     "PccrModel",
     "PinholeCamera",
+    "SPHERE_ZONE_DEG",
     "axis_from_angles",
     "angles_from_axis",
     "glint_offsets",
@@ -366,12 +367,30 @@ class GazeEstimate:
     reason: str = ""
     optical_axis: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
     glints_used: int = 0
+    #: matched glints left out as lying outside the spherical cornea's validity zone
+    #: (``GeometricGaze(zone_deg=…)``); 0 without a zone
+    glints_outside_zone: int = 0
 
 
-def _failed(reason: str, n_glints: int = 0, c: np.ndarray | None = None) -> GazeEstimate:
+def _failed(
+    reason: str, n_glints: int = 0, c: np.ndarray | None = None, outside: int = 0
+) -> GazeEstimate:
     nan3 = np.full(3, np.nan)
     c = nan3 if c is None else c
-    return GazeEstimate(math.nan, math.nan, c, nan3, False, reason, nan3, n_glints)
+    return GazeEstimate(math.nan, math.nan, c, nan3, False, reason, nan3, n_glints, outside)
+
+
+#: The spherical cornea's validity zone (degrees) that ``evaluate-tracking`` gives the
+#: geometric model (``GeometricGaze(zone_deg=…)``). A real anterior cornea is a prolate
+#: conicoid, flatter away from its apex: the presets' Arizona cornea (R 7.8 mm, Q −0.25) has at
+#: a point whose normal makes the angle θ with its axis the local radii
+#: R_sagittal = R (1 + Q sin²θ)^(−1/2) and R_tangential = R (1 + Q sin²θ)^(−3/2), 3.3 % and
+#: 10.2 % above R at θ = 30°, 6.9 % and 22 % at 45°. A sphere of radius R fitted to glints
+#: reflected there puts the centre of curvature up to 1.4 mm off (vr-offaxis, whose camera
+#: 50° off the eye's axis sees glints 5–48° from the apex): on the renderer's exact glints and
+#: pupil the model read (−30°, 0°) as −39.6° after its kappa (README, "Tracking on the
+#: presets"). 30° is where R_tangential reaches 1.10 R.
+SPHERE_ZONE_DEG = 30.0
 
 
 @dataclass(frozen=True)
@@ -421,6 +440,14 @@ class GeometricGaze:
         Offsets (h, v) added to the optical axis's angles to give the visual axis (from a
         one-point calibration, :meth:`calibrate_kappa`). An additive angle offset is a small-angle
         stand-in for kappa, which is really a fixed rotation in the eye's frame.
+    zone_deg : float, optional
+        The spherical cornea's validity zone, degrees (None: every matched glint is used, the
+        model as published; ``evaluate-tracking`` uses :data:`SPHERE_ZONE_DEG`). A glint whose
+        reflection point on the fitted sphere lies farther than ``zone_deg`` from the estimated
+        optical axis (the angle at **c** between **q**ᵢ − **c** and ω) is left out and the
+        fit repeated on the others (step (v) below); a frame with fewer than 2 glints inside
+        is refused, saying so. A real cornea is aspheric (:data:`SPHERE_ZONE_DEG`): glints far
+        from its apex bias **c**, and through it the gaze, by degrees.
 
     Notes
     -----
@@ -448,6 +475,10 @@ class GeometricGaze:
 
     (iv) Visual axis: (h, v) + ``kappa_deg``.
 
+    (v) With ``zone_deg``: each found glint's camera ray is met with the fitted sphere (**c**,
+    R) at **q**ᵢ (a ray that misses it is outside); the glints within ``zone_deg`` of ω are
+    kept and (i)–(iii) repeated on them, up to 5 times, until the kept set stops changing.
+
     The estimate needs no per-user calibration beyond R, K, n (and kappa), and it follows the
     eye when the head moves — the geometric model's advantage over :class:`PccrModel`.
     """
@@ -460,13 +491,17 @@ class GeometricGaze:
         K: float = ModelEye.K,
         n: float = ModelEye.n,
         kappa_deg: tuple[float, float] = (0.0, 0.0),
+        zone_deg: float | None = None,
     ) -> None:
         self.camera = camera
         self.leds = np.asarray(leds_mm, dtype=float).reshape(-1, 3)
         if not 0 < K < R:
             raise ValueError(f"need 0 < K < R, got K = {K}, R = {R}")
+        if zone_deg is not None and not 0 < zone_deg <= 90:
+            raise ValueError(f"zone_deg must lie in (0, 90], got {zone_deg}")
         self.R, self.K, self.n = float(R), float(K), float(n)
         self.kappa_deg = (float(kappa_deg[0]), float(kappa_deg[1]))
+        self.zone_deg = None if zone_deg is None else float(zone_deg)
 
     # (i)
     def cornea_centre(self, glints_px: Sequence) -> tuple[np.ndarray | None, str]:
@@ -526,6 +561,60 @@ class GeometricGaze:
         ``glints_px`` lists one entry per LED, in the order of ``leds_mm``: its glint (col, row)
         or None (or NaN) when missing. At least two are needed.
         """
+        if len(glints_px) != len(self.leds):
+            raise ValueError(f"{len(glints_px)} glint entries for {len(self.leds)} LEDs")
+        found = [g is not None and bool(np.all(np.isfinite(g))) for g in glints_px]
+        est = self._estimate(pupil_px, glints_px)
+        if self.zone_deg is None or not est.ok:
+            return est
+        kept = found
+        for _ in range(5):
+            inside = self._inside_zone(glints_px, est.cornea_centre_mm, est.optical_axis)
+            if inside == kept:
+                break
+            kept = inside
+            n_in, n_out = sum(kept), sum(found) - sum(kept)
+            if n_in < 2:
+                return _failed(
+                    f"{n_in} of {sum(found)} glints within the spherical cornea's validity "
+                    f"zone ({self.zone_deg:g} deg of the optical axis); needs >= 2",
+                    n_in,
+                    est.cornea_centre_mm,
+                    n_out,
+                )
+            est = self._estimate(
+                pupil_px, [g if k else None for g, k in zip(glints_px, kept, strict=True)]
+            )
+            if not est.ok:
+                return _failed(est.reason, n_in, est.cornea_centre_mm, n_out)
+        return GazeEstimate(
+            est.h_deg,
+            est.v_deg,
+            est.cornea_centre_mm,
+            est.pupil_centre_mm,
+            True,
+            est.reason,
+            est.optical_axis,
+            sum(kept),
+            sum(found) - sum(kept),
+        )
+
+    def _inside_zone(self, glints_px: Sequence, c: np.ndarray, omega: np.ndarray) -> list[bool]:
+        """Per LED: its glint is found and its camera ray meets the sphere (c, R) within
+        ``zone_deg`` of the optical axis ω (camera frame)."""
+        o, cos_zone = self.camera.node, math.cos(math.radians(self.zone_deg))
+        out = []
+        for g in glints_px:
+            if g is None or not np.all(np.isfinite(g)):
+                out.append(False)
+                continue
+            u = self.camera.ray(np.asarray(g, dtype=float))
+            s = _sphere_hit(o, u, c, self.R)
+            out.append(s is not None and float((o + s * u - c) @ omega) >= self.R * cos_zone)
+        return out
+
+    def _estimate(self, pupil_px: np.ndarray, glints_px: Sequence) -> GazeEstimate:
+        """Steps (i)–(iv) on the glints given (module :class:`GeometricGaze` notes)."""
         n_found = sum(g is not None and bool(np.all(np.isfinite(g))) for g in glints_px)
         c, why = self.cornea_centre(glints_px)
         if c is None:
@@ -558,7 +647,9 @@ class GeometricGaze:
 
     def with_kappa(self, kappa_deg: tuple[float, float]) -> GeometricGaze:
         """A copy with other kappa offsets (h, v), degrees."""
-        return GeometricGaze(self.camera, self.leds, self.R, self.K, self.n, kappa_deg)
+        return GeometricGaze(
+            self.camera, self.leds, self.R, self.K, self.n, kappa_deg, self.zone_deg
+        )
 
 
 # --- forward model ----------------------------------------------------------------------------
