@@ -12,7 +12,8 @@ rel_error=…, seed=…))`` after a warm-up render, each call's process CPU time
 (``time.process_time``) split by wrapping the fast estimator's kernels and the render's steps:
 the camera pass (``fast.camera_pass`` outside the pilot), the pilot (``fast_run._pilot``), the
 light pass (``fast.light_pass``), the eye plane (``direct_eye_plane``), the region map
-(``region_masks``), the PSF's convolutions (``convolve_irradiance``/``convolve_variance``)
+(``region_masks``), the PSF's convolutions (``convolve_irradiance``/``convolve_variance``/
+``convolve_with_points``)
 and the statistics (``_Run.estimate``); "other" is the rest of the call. Also the samples per
 pixel and light paths the run chose and the median pixel's relative error per region of the
 delivered picture. Prints one line per repeat and appends a JSON line per repeat to
@@ -91,6 +92,8 @@ class Split:
         self.wrap(R, "region_masks", "region map")
         self.wrap(R, "convolve_irradiance", "PSF")
         self.wrap(R, "convolve_variance", "PSF")
+        if hasattr(R, "convolve_with_points"):  # glints spread from their place (session 15)
+            self.wrap(R, "convolve_with_points", "PSF")
         self.wrap(FR._Run, "estimate", "statistics")
 
 

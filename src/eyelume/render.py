@@ -57,6 +57,7 @@ from eyelume.detectors.psf import (
     camera_psf,
     convolve_irradiance,
     convolve_variance,
+    convolve_with_points,
     region_mean_variance,
 )
 from eyelume.detectors.receivers import BinnedPlane
@@ -447,8 +448,10 @@ def warm_up_forward(cs: CompiledScene) -> float | None:
         return 0.0
     t0 = time.perf_counter()
     z = np.zeros
-    kernel(0, 0, 0, cs.tables, z((1, 1, 1), np.int64), z((1, 1, 1), np.int64),
-           z((1, len(cs.tallies)), np.int64), z(1, np.int64))  # fmt: skip
+    empty = forward.Counts(z((1, 1, 1), np.int64), z((1, 1, 1), np.int64),
+                           z((1, len(cs.tallies)), np.int64), z((1, 1, 1), np.int64),
+                           z((1, 2, 1, 1), np.int64))  # fmt: skip
+    kernel(0, 0, 0, cs.tables, empty, z(1, np.int64))
     return time.perf_counter() - t0
 
 
@@ -774,7 +777,7 @@ def _render_leds(
             control=_run_control(cs, advance, opt),
         )
         plane = direct_eye_plane(cs, seed)
-        blur = _Blur(cs, est.image)
+        blur = _Blur(cs, est.image, est.glint_images.sum(axis=0), est.glint_offsets)
         wall = time.perf_counter() - t0
         return RenderResult(
             scene=sc,
@@ -806,7 +809,7 @@ def _render_leds(
     fc = trace_forward(cs, rays, seed, opt.batch_size, progress)
     w = cs.emitted_w / fc.rays
     image, variance = fc.image * (w / px_area), fc.image * (w / px_area) ** 2
-    blur = _Blur(cs, image)
+    blur = _Blur(cs, image, fc.glint * (w / px_area), fc.glint_offsets)
     wall = time.perf_counter() - t0
     pl_area = eye_plane.bin_area_mm2
     return RenderResult(
@@ -835,7 +838,10 @@ def _render_leds(
 def _run_control(cs: CompiledScene, advance, opt: RenderOptions) -> RunControl:
     """The fast run's control: progress, the sample cap, and — for a ``rel_error`` run — the
     camera's PSF as the map from the traced picture to the delivered one, so the run stops
-    when the picture the result holds (and whose error it reports) meets the target."""
+    when the picture the result holds (and whose error it reports) meets the target. (The
+    map takes all light as uniform over its pixel; the result spreads glint light from its
+    place in the pixel — the same power, moved within a few pixels of the glints, which the
+    target's skin pixels do not hold.)"""
     psf = camera_psf(cs)
     if psf is None or opt.rel_error is None:
         return RunControl(advance, opt.max_samples_per_pixel)
@@ -850,25 +856,40 @@ def _run_control(cs: CompiledScene, advance, opt: RenderOptions) -> RunControl:
 class _Blur:
     """The camera's PSF (:func:`eyelume.detectors.psf.camera_psf`, at the compiled scene's
     wavelength: a wavelength group's own) applied to a render's traced picture — the one place
-    both estimators' pictures pass through before the sensor. Skipped (``psf_skipped``) when
-    the picture has missing pixels (a cut first round)."""
+    both estimators' pictures pass through before the sensor. ``points`` (rows, cols; the
+    traced picture's units) is its part that met no Lambertian face (glints: point images) and
+    ``offsets`` (2, rows, cols) that light's centroid in each pixel: spread from there, the rest
+    as uniform over its pixel (:func:`eyelume.detectors.psf.convolve_with_points`). Skipped
+    (``psf_skipped``) when the picture has missing pixels (a cut first round)."""
 
-    def __init__(self, cs: CompiledScene, image: np.ndarray) -> None:
+    def __init__(
+        self,
+        cs: CompiledScene,
+        image: np.ndarray,
+        points: np.ndarray | None = None,
+        offsets: np.ndarray | None = None,
+    ) -> None:
         psf = camera_psf(cs)
         self.skipped = psf is not None and not bool(np.all(np.isfinite(image)))
         self.psf = None if self.skipped else psf
+        self.points, self.offsets = points, offsets
 
-    def image(self, irradiance: np.ndarray) -> np.ndarray:
-        return convolve_irradiance(irradiance, self.psf)
+    def image(self, irradiance: np.ndarray, points: np.ndarray | None = None) -> np.ndarray:
+        """The delivered picture of ``irradiance`` whose point part is ``points`` (default:
+        the one given at construction, in the same units)."""
+        points = self.points if points is None else points
+        if self.psf is None or points is None or self.offsets is None:
+            return convolve_irradiance(irradiance, self.psf)
+        return convolve_with_points(irradiance, points, self.offsets, self.psf)
 
     def variance(self, variance: np.ndarray) -> np.ndarray:
         return convolve_variance(variance, self.psf)
 
     def glints(self, glint_images: np.ndarray) -> np.ndarray:
-        """Each LED's glint image (n, rows, cols) convolved alike (for the glint regions)."""
+        """Each LED's glint image (n, rows, cols) spread alike (for the glint regions)."""
         if self.psf is None or not len(glint_images):
             return glint_images
-        return np.stack([self.image(g) for g in glint_images])
+        return np.stack([self.image(g, g) for g in glint_images])
 
     @staticmethod
     def facts(blurs: list[_Blur], variances: list[np.ndarray]) -> dict:
@@ -953,7 +974,8 @@ def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> Render
         est = trace_fast(cg, spp, light, sg, opt.rel_error, said, skin, control)
         groups.check_whole(g, est.interrupted)
         plane += direct_eye_plane(cg, sg)
-        blur = _Blur(cg, est.image)  # the group's own wavelength
+        # the group's own wavelength
+        blur = _Blur(cg, est.image, est.glint_images.sum(axis=0), est.glint_offsets)
         blurs.append(blur)
         glints[list(g.leds)] = blur.glints(est.glint_images)
         rays = est.samples_per_pixel * pixels + est.light_paths
@@ -1030,10 +1052,11 @@ def _groups_forward(groups: _Groups, opt: RenderOptions, progress) -> RenderResu
         interrupted = fc.interrupted
         w = cg.emitted_w / fc.rays
         traced_var = fc.image * (w / px_area) ** 2
-        blur = _Blur(cg, fc.image)  # the group's own wavelength
+        blur = _Blur(cg, fc.image, offsets=fc.glint_offsets)  # the group's own wavelength
         blurs.append(blur)
         traced_vars.append(traced_var)
-        part, part_var = blur.image(fc.image * (w / px_area)), blur.variance(traced_var)
+        part = blur.image(fc.image * (w / px_area), fc.glint * (w / px_area))
+        part_var = blur.variance(traced_var)
         image += part
         variance += part_var
         plane += fc.plane * (w / pl_area)

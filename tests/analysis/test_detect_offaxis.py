@@ -105,8 +105,29 @@ def test_vr_offaxis_pupil_at_the_evaluation_size():
 def test_vr_offaxis_pupil_over_gazes(h, v):
     """Failed before, each; at (−30°, 10°) the upper lid hides a quarter of the pupil (refused
     from the diffraction PSF (issue 11) until this session's detector and scene changes, when
-    its strict xfail mark turned into a failure: answered within the check's tolerance again)."""
-    _pupil_check("vr-offaxis", VR_200, h, v)
+    its strict xfail mark turned into a failure: answered within the check's tolerance again).
+
+    Over ten noise draws of the sensor (digitize seeds 0–9) of one render: every answer
+    right, and at least 8 answered. The detector refuses some draws of these frames: at
+    (20°, −20°) it took a dark strip by the lid fold for the pupil's blob (then refused it) in
+    1 of 20 draws, before and after session 15's renderer change moved the glints within
+    their pixels (which, through the sensor's Poisson draws, re-drew every pixel's noise:
+    seed 0, answered before, was that one draw after). With p = 0.05 a draw, 3 or more
+    refusals in 10 has probability 1.2 %."""
+    sc = eyelume.load_scene(
+        "vr-offaxis", {"eye.gaze_horizontal_deg": h, "eye.gaze_vertical_deg": v, **VR_200}
+    )
+    cs = compile_scene(sc)
+    r = render(cs, RenderOptions(estimator="fast", samples_per_pixel=4, seed=0))
+    truth, azimuths = eye_truth(cs), led_picture_azimuths(cs)
+    answered = 0
+    for seed in range(10):
+        counts = digitize(r.eye_image, sc.sensor, sc.wavelength_nm, seed=seed).counts
+        d = detect(counts, led_azimuths_deg=azimuths)
+        if d.pupil is not None:
+            _assert_pupil_right(d, truth)
+            answered += 1
+    assert answered >= 8, answered
 
 
 @pytest.mark.slow

@@ -26,6 +26,7 @@ from eyelume.detectors.psf import (
     convolve_irradiance,
     convolve_variance,
     diffraction_kernel,
+    point_kernels,
     region_mean_variance,
 )
 from eyelume.errors import SceneError
@@ -212,13 +213,15 @@ def _airy_kernel_by_monte_carlo(rng, n: int, radius: float, k: int) -> np.ndarra
 def test_a_rendered_glint_on_vr_offaxis_is_the_airy_pattern_over_pixels(rng):
     """vr-offaxis (its 3 µm pixels and optics; the chip cut to its central 120 × 120 pixels,
     which hold the pupil and the glints), rendered with and without the PSF at the same seed:
-    around the brightest glint out of the edges' reach, the PSF render equals the geometric
+    away from the glints (no pixel of the geometric picture within the kernel's reach brighter
+    than 5 × the median: light uniform over its pixel), the PSF render equals the geometric
     render convolved with a Monte Carlo Airy kernel drawn from the closed-form EE at N_w
     computed here from the preset's numbers, within 5 σ of that Monte Carlo plus the module's
-    quadrature error (1e-3, test_pixel_kernel_against_adaptive_quadrature). The glint, mostly
-    one pixel in the geometric picture (74 % of its power in its peak pixel at this seed; its
-    light paths aimed at it, it is no longer one lucky path's pixel), keeps under 60 % there
-    with the PSF."""
+    quadrature error (1e-3, test_pixel_kernel_against_adaptive_quadrature). About the brightest
+    glint (spread from where its light fell in the pixel, tests/detectors/test_psf_points.py)
+    the window keeps the geometric power within the same 5 σ + 1e-3, and the glint, mostly one
+    pixel in the geometric picture (74 % of its power in its peak pixel at this seed), keeps
+    under 60 % there with the PSF."""
     cut = {"sensor.cols": 120, "sensor.rows": 120}
     sc = apply_overrides(load_scene("vr-offaxis"), cut)
     opts = eyelume.RenderOptions(estimator="fast", samples_per_pixel=4, seed=2)
@@ -232,16 +235,32 @@ def test_a_rendered_glint_on_vr_offaxis_is_the_airy_pattern_over_pixels(rng):
     predicted = ndimage.convolve(geo, p, mode="constant")
     # the MC's error: Var = Σᵢ Eᵢ² P(1 − P) / n over the pixels sending light to j
     sigma = np.sqrt(ndimage.convolve(geo**2, p * (1 - p), mode="constant") / n)
+    # plus the MC kernel's undrawn tail: a pixel whose share is ≲ 3 / n often gets no draw
+    allowed = 5 * sigma + 1e-3 * predicted + 3 * geo.max() / n
+    bright = geo > 5 * np.median(geo)
+    near = ndimage.binary_dilation(bright, np.ones((2 * k + 3, 2 * k + 3), bool))
+    inner = np.zeros(geo.shape, bool)
+    inner[k + 1 : -k - 1, k + 1 : -k - 1] = True  # out of the edges' reach
+    far = inner & ~near
+    assert far.sum() > 500
+    diff = np.abs(blurred.eye_image - predicted)
+    assert np.all(diff[far] <= allowed[far]), np.max(diff[far] / allowed[far])
     # the brightest glint whose window is out of the edges' reach
-    inner = np.full(geo.shape, -np.inf)
-    reach = slice(k + 5, 120 - k - 5)
-    inner[reach, reach] = geo[reach, reach]
-    peak = np.unravel_index(np.argmax(inner), geo.shape)
+    peak_in = np.where(inner, geo, -np.inf)
+    peak = np.unravel_index(np.argmax(peak_in), geo.shape)
     assert geo[peak] > 20 * np.median(geo)  # a glint
-    win = tuple(slice(c - 4, c + 5) for c in peak)
-    diff = np.abs(blurred.eye_image[win] - predicted[win])
-    allowed = 5 * sigma[win] + 1e-3 * predicted[win]
-    assert np.all(diff <= allowed), np.max(diff / allowed)
+    win = tuple(slice(c - 6, c + 7) for c in peak)
+    got, want = blurred.eye_image[win].sum(), predicted[win].sum()
+    # a point's light crossing the window's edge differs from a uniform pixel's by at most
+    # max_s |Σ_window (P(·; s) − K)| (the point kernels' table)
+    table = point_kernels(LAM_NM, NW, PITCH, PITCH)
+    c = table.shape[2] // 2
+    moved = np.abs(
+        table[:, :, c - 6 : c + 7, c - 6 : c + 7].sum(axis=(2, 3))
+        - blurred.psf.kernel[k - 6 : k + 7, k - 6 : k + 7].sum()
+    ).max()
+    slack = 5 * math.sqrt(np.sum(sigma[win] ** 2)) + (1e-3 + moved) * want
+    assert abs(got - want) <= slack, (got, want, slack)
     # the geometric glint is (nearly) one pixel; the diffraction-limited one is not
     g = geo[win] - np.median(geo)
     b = blurred.eye_image[win] - np.median(blurred.eye_image)

@@ -43,6 +43,25 @@ it is dark within twice the kernel's reach of them), and each traced pixel enter
 once, so the variance below is exact. (Mirroring the picture at its edge would conserve the
 power there too, but uses an edge pixel twice in one sum, correlating its noise with itself.)
 
+**Glints: light at its own position.** A glint is the image of a point LED in the cornea (or
+in an element): geometrically a spot far smaller than a 3 µm pixel, so "uniform over the
+pixel" throws away where in the pixel it fell, and the convolved spot would be symmetric about
+the pixel's centre whatever the truth (up to 0.38 px off on vr-offaxis). The light that met no
+Lambertian face (the estimators keep it apart, with its first moments inside each pixel) is
+therefore taken as a point at its centroid s = (s_x, s_y) (pixels, from the pixel's centre) and
+spread by the PSF integrated over the receiving pixels only,
+
+    P(d; s) = ∫ PSF(u) B(u + s p − d p) d²u,   B the pixel's aperture (a box),
+
+whose mean over s uniform in the pixel is K(d) (B ⊗ B = Λ), so a glint spread over many pixels
+gets the same picture either way. P is tabulated at s = −½ + a / :data:`POINT_OFFSETS` in each
+axis (the same midpoint cells, each cell's exact overlap with the shifted pixel) and
+interpolated bilinearly in s (:func:`point_kernels`, :func:`spread_points`); each P(·; s) is
+renormalised to sum 1, so the glint keeps its power. Approximations (stated): all of a pixel's
+glint light sits at its centroid (its spread inside the pixel, a defocused glint's, is lost);
+the variance keeps K² (:func:`convolve_variance`: the glint light's own second moments are not
+kept apart).
+
 **Variance.** The operator is linear; for independent pixel estimates Var(E′ⱼ) = Σᵢ K(j − i)²
 Var(Eᵢ) (:func:`convolve_variance`). The fast estimator's pixels are independent up to its
 light paths' multinomial split between pixels (a negative covariance of order 1 / paths,
@@ -73,8 +92,12 @@ __all__ = [
     "airy_radius_for_energy",
     "camera_psf",
     "convolve_irradiance",
+    "POINT_OFFSETS",
     "convolve_variance",
+    "convolve_with_points",
     "diffraction_kernel",
+    "point_kernels",
+    "spread_points",
     "region_mean_variance",
 ]
 
@@ -82,6 +105,8 @@ __all__ = [
 ENCIRCLED_ENERGY = 0.99
 #: Midpoint-rule cells per λ N_w (the Airy core's scale: first dark ring at 1.22 λ N_w).
 CELLS_PER_LAMBDA_N = 24
+#: Sub-pixel steps per pixel of the glint (point) kernels' table, :func:`point_kernels`.
+POINT_OFFSETS = 16
 
 
 def airy_psf(r_mm, wavelength_mm: float, working_f_number: float):
@@ -171,7 +196,8 @@ class PixelPsf:
                 "Airy pattern truncated where its encircled energy reaches "
                 f"{ENCIRCLED_ENERGY:.0%} and renormalised; integrated over the pixels; one kernel "
                 "for the whole field (on-axis, shift-invariant); at the picture's edges the "
-                "kernel's weights over existing pixels, renormalised"
+                "kernel's weights over existing pixels, renormalised; the light that met no "
+                "Lambertian face (glints) spread from its centroid inside its pixel"
             ),
         }
 
@@ -215,18 +241,11 @@ def diffraction_kernel(
         raise ValueError(f"encircled_energy = {encircled_energy!r}: must lie in (0, 1)")
     lam = wavelength_nm * 1e-6
     ln = lam * working_f_number
-    radius = airy_radius_for_energy(encircled_energy, lam, working_f_number)
-    weights = []
-    for pitch in (pitch_x_mm, pitch_y_mm):
-        per_pixel = max(1, math.ceil(pitch / (ln / cells_per_lambda_n)))
-        h = pitch / per_pixel
-        m = math.ceil(radius / h)
-        centres = (np.arange(-m, m) + 0.5) * h
-        k = math.ceil(radius / pitch)
-        weights.append((centres, h, _tri_weights(centres, pitch, k)))
-    (cx, hx, wx), (cy, hy, wy) = weights
-    r = np.hypot(cy[:, None], cx[None, :])
-    cells = np.where(r <= radius, airy_psf(r, lam, working_f_number), 0.0) * (hx * hy)
+    (cx, hx), (cy, hy), cells, radius = _airy_cells(
+        lam, working_f_number, pitch_x_mm, pitch_y_mm, encircled_energy, cells_per_lambda_n
+    )
+    wx = _tri_weights(cx, pitch_x_mm, math.ceil(radius / pitch_x_mm))
+    wy = _tri_weights(cy, pitch_y_mm, math.ceil(radius / pitch_y_mm))
     kernel = wy @ cells @ wx.T
     raw = float(kernel.sum())
     kernel = kernel / raw
@@ -241,6 +260,147 @@ def diffraction_kernel(
         truncation_radius_mm=radius,
         raw_sum=raw,
     )
+
+
+@lru_cache(maxsize=4)
+def _airy_cells(lam_mm, working_f_number, pitch_x_mm, pitch_y_mm, encircled_energy, per_ln):
+    """The Airy pattern's power in midpoint cells over the disc where EE(R) = ``encircled_energy``:
+    ((x centres, hx), (y centres, hy), cells (ny, nx) — PSF × cell area, 0 beyond R —, R), the
+    cells of side h ≤ λ N_w / ``per_ln`` aligned so that every pixel centre is a cell corner.
+    Cached (the pixel kernel and the point kernels share them); read-only."""
+    ln = lam_mm * working_f_number
+    radius = airy_radius_for_energy(encircled_energy, lam_mm, working_f_number)
+    axes = []
+    for pitch in (pitch_x_mm, pitch_y_mm):
+        per_pixel = max(1, math.ceil(pitch / (ln / per_ln)))
+        h = pitch / per_pixel
+        m = math.ceil(radius / h)
+        axes.append(((np.arange(-m, m) + 0.5) * h, h))
+    (cx, hx), (cy, hy) = axes
+    r = np.hypot(cy[:, None], cx[None, :])
+    cells = np.where(r <= radius, airy_psf(r, lam_mm, working_f_number), 0.0) * (hx * hy)
+    for a in (cx, cy, cells):
+        a.setflags(write=False)
+    return (cx, hx), (cy, hy), cells, radius
+
+
+def _pixel_sums(cells: np.ndarray, m: int, h: float, pitch: float, k: int, steps) -> np.ndarray:
+    """Σ over cells of their power inside each receiving pixel along axis 0, for a point moved
+    by s pixels: out[a, d + k] = Σ_u cells[u] · |[u − h/2, u + h/2] + s_a p ∩ [d p ± p/2]| / h
+    for d = −k … k, each s_a of ``steps``; shape (len(steps), 2k + 1, *cells.shape[1:]). By the
+    cumulative sum of the cells, interpolated linearly inside a cell (exact: each cell's power
+    is uniform over it in the midpoint rule); the cells span [−m h, m h]."""
+    cum = np.concatenate([np.zeros((1, *cells.shape[1:])), np.cumsum(cells, axis=0)])
+    d = np.arange(-k, k + 1, dtype=np.float64)
+    out = []
+    for s in steps:
+        ends = []
+        for edge in (d - s - 0.5, d - s + 0.5):
+            t = np.clip(edge * pitch / h + m, 0.0, 2 * m)
+            i = np.minimum(t.astype(np.int64), 2 * m - 1)
+            frac = (t - i).reshape(-1, *([1] * (cells.ndim - 1)))
+            ends.append(cum[i] + frac * (cum[i + 1] - cum[i]))
+        out.append(ends[1] - ends[0])
+    return np.stack(out)
+
+
+@lru_cache(maxsize=16)
+def point_kernels(
+    wavelength_nm: float,
+    working_f_number: float,
+    pitch_x_mm: float,
+    pitch_y_mm: float,
+    encircled_energy: float = ENCIRCLED_ENERGY,
+    cells_per_lambda_n: int = CELLS_PER_LAMBDA_N,
+    offsets: int = POINT_OFFSETS,
+) -> np.ndarray:
+    """The table of a point's kernels P(d; s) (module docstring, "Glints"): shape
+    (M + 1, M + 1, 2k + 3, 2k + 3), M = ``offsets``, item [b, a] the kernel of a point at
+    s = (−½ + a / M, −½ + b / M) pixels from its pixel's centre (x: columns, y: rows), its
+    row index dy + k + 1 and column dx + k + 1 (k = ⌈R / p⌉, as :func:`diffraction_kernel`;
+    one pixel more for the shift). Each kernel sums to 1. The Airy cells are
+    :func:`diffraction_kernel`'s; each one's exact overlap with the shifted receiving pixel
+    weighs it (by cumulative sums, :func:`_pixel_sums`). Cached; read-only.
+
+    Raises
+    ------
+    ValueError
+        As :func:`diffraction_kernel`; ``offsets`` < 1.
+    """
+    diffraction_kernel(wavelength_nm, working_f_number, pitch_x_mm, pitch_y_mm, encircled_energy)
+    if offsets < 1:
+        raise ValueError(f"offsets = {offsets!r}: must be ≥ 1")
+    lam = wavelength_nm * 1e-6
+    (cx, hx), (cy, hy), cells, radius = _airy_cells(
+        lam, working_f_number, pitch_x_mm, pitch_y_mm, encircled_energy, cells_per_lambda_n
+    )
+    kx, ky = math.ceil(radius / pitch_x_mm) + 1, math.ceil(radius / pitch_y_mm) + 1
+    steps = -0.5 + np.arange(offsets + 1) / offsets
+    # along x for every x offset: (M + 1, 2kx + 1, ny cells); then along y for every y offset
+    by_x = _pixel_sums(cells.T, cx.size // 2, hx, pitch_x_mm, kx, steps)
+    table = _pixel_sums(by_x.transpose(2, 0, 1), cy.size // 2, hy, pitch_y_mm, ky, steps)
+    table = table.transpose(0, 2, 1, 3)  # [b, a, dy, dx]
+    table = np.ascontiguousarray(table / table.sum(axis=(2, 3), keepdims=True))
+    table.setflags(write=False)
+    return table
+
+
+#: Points spread per pass of :func:`spread_points` (bounds its memory: n × kernel size).
+_SPREAD_BATCH = 1024
+
+
+def spread_points(values: np.ndarray, offsets: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """Σᵢ P(j − i; sᵢ) vᵢ: each pixel's ``values`` (rows, cols; W/mm²) taken as a point at its
+    centroid sᵢ = ``offsets``[:, i] ((2, rows, cols): columns, rows; pixels from the pixel's
+    centre, within ±½) and spread by the point kernel there, bilinear between the ``table``'s
+    (:func:`point_kernels`) nearest offsets. Zero outside the picture (what falls beyond its
+    edge is lost, as in :func:`convolve_irradiance` before its normalisation); (rows, cols)."""
+    rows, cols = values.shape
+    out_shape = (rows + table.shape[2] - 1, cols + table.shape[3] - 1)
+    ky, kx = table.shape[2] // 2, table.shape[3] // 2
+    m = table.shape[0] - 1
+    flat = table.reshape(m + 1, m + 1, -1)
+    idx = np.flatnonzero(values)
+    out = np.zeros(out_shape[0] * out_shape[1])
+    dy, dx = np.divmod(np.arange(flat.shape[2]), table.shape[3])
+    window = dy * out_shape[1] + dx  # the kernel's pixels in the padded picture, from its corner
+    for a0 in range(0, idx.size, _SPREAD_BATCH):
+        i = idx[a0 : a0 + _SPREAD_BATCH]
+        r, c = np.divmod(i, cols)
+        v = values.reshape(-1)[i]
+        fx = (np.clip(offsets[0].reshape(-1)[i], -0.5, 0.5) + 0.5) * m
+        fy = (np.clip(offsets[1].reshape(-1)[i], -0.5, 0.5) + 0.5) * m
+        ax, ay = np.minimum(fx.astype(np.int64), m - 1), np.minimum(fy.astype(np.int64), m - 1)
+        tx, ty = (fx - ax)[:, None], (fy - ay)[:, None]
+        kern = (1 - ty) * ((1 - tx) * flat[ay, ax] + tx * flat[ay, ax + 1]) + ty * (
+            (1 - tx) * flat[ay + 1, ax] + tx * flat[ay + 1, ax + 1]
+        )
+        corner = r * out_shape[1] + c  # the kernel's corner sits ky, kx before the pixel
+        out += np.bincount(
+            (corner[:, None] + window[None, :]).reshape(-1),
+            weights=(kern * v[:, None]).reshape(-1),
+            minlength=out.size,
+        )
+    return out.reshape(out_shape)[ky : ky + rows, kx : kx + cols]
+
+
+def convolve_with_points(
+    irradiance: np.ndarray, points: np.ndarray, offsets: np.ndarray, psf: PixelPsf | None
+) -> np.ndarray:
+    """The delivered picture of a traced one whose part ``points`` (rows, cols; W/mm², ≤
+    ``irradiance``) is light at its pixels' centroids ``offsets`` (2, rows, cols; pixels): the
+    rest convolved with K (:func:`convolve_irradiance`), ``points`` spread by P(·; s)
+    (:func:`spread_points`), the sum normalised at the edges alike (module docstring). None
+    ``psf``: ``irradiance`` unchanged. Raises ValueError on a non-finite pixel."""
+    if psf is None:
+        return irradiance
+    if not np.all(np.isfinite(irradiance)):
+        raise ValueError("the PSF needs every pixel: the picture has missing (NaN) pixels")
+    e = np.asarray(irradiance, dtype=np.float64)
+    g = np.minimum(np.asarray(points, dtype=np.float64), e)
+    table = point_kernels(psf.wavelength_nm, psf.working_f_number, *psf.pitch_mm)
+    rest = _zero_padded(e - g, psf.kernel) if (e - g).any() else np.zeros(e.shape)
+    return (rest + spread_points(g, offsets, table)) / _weights(e.shape, psf.kernel)
 
 
 def camera_psf(cs: CompiledScene) -> PixelPsf | None:

@@ -72,7 +72,7 @@ import numpy as np
 from numba import njit, prange
 
 from eyelume.kernels import geometry as G
-from eyelume.kernels.bins import bin_of, from_grid, plane_point
+from eyelume.kernels.bins import from_grid, plane_point, to_grid
 from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.jit import per_ray
 from eyelume.kernels.rng import mix64, next_uniform, side_uniform, stream_start
@@ -755,12 +755,15 @@ class CameraSums(NamedTuple):
 
 class Tally(NamedTuple):
     """Where light paths deposit: fixed-point Σc, Σc² (units q, q2 of W/mm² per unit path) per
-    pixel and the glint part per LED (n_leds, rows, cols); :func:`light_pass` takes one with a
-    leading chunk axis on the arrays."""
+    pixel, the glint part per LED (n_leds, rows, cols) and the glint part's first moments
+    inside its pixel, Σc·s (2, rows, cols; s the point's offset from the pixel's centre in
+    pixels, columns then rows; units q); :func:`light_pass` takes one with a leading chunk axis
+    on the arrays."""
 
     img: np.ndarray
     img2: np.ndarray
     led: np.ndarray
+    moment: np.ndarray
     q: float
     q2: float
 
@@ -831,14 +834,18 @@ def _follow(state, w, ray, scene, cam, tally, glint, chain, track):  # noqa: PLR
             x += t * dx
             y += t * dy
             pic = scene.picture
-            col, row, inside = bin_of(pic, x, y)
-            if inside:
+            u, v = to_grid(pic, x, y)
+            col, row = int(math.floor(u)), int(math.floor(v))
+            if 0 <= col < pic.cols and 0 <= row < pic.rows:
                 # W per unit path → W/mm² in the pixel
                 c = w * pic.cols * pic.rows / (pic.width_mm * pic.height_mm)
                 tally.img[row, col] += np.int64(c / tally.q + 0.5)
                 tally.img2[row, col] += np.int64(c * c / tally.q2 + 0.5)
-                if glint >= 0:
+                if glint >= 0:  # a point's image: where in the pixel it fell (the PSF's)
                     tally.led[glint, row, col] += np.int64(c / tally.q + 0.5)
+                    cq = c / tally.q
+                    tally.moment[0, row, col] += np.int64(math.floor(cq * (u - col - 0.5) + 0.5))
+                    tally.moment[1, row, col] += np.int64(math.floor(cq * (v - row - 0.5) + 0.5))
             return state
         x += t * dx
         y += t * dy
@@ -1184,8 +1191,8 @@ def _ghost_path(i, seed, scene, cam, tally, row, port):
 @njit(cache=True)
 def light_pass(seed, first, count, scene, cam, sums):
     """Trace light paths ``first`` … ``first + count − 1``; chunk c adds to ``sums``' (a
-    :class:`Tally` of (chunks, …) arrays) img[c], img2[c], led[c] (fixed-point Σc and Σc² in
-    units q and q2 of W/mm² per unit path)."""
+    :class:`Tally` of (chunks, …) arrays) img[c], img2[c], led[c], moment[c] (fixed-point Σc,
+    Σc² and Σc·s in units q, q2 and q of W/mm² per unit path)."""
     _light_pass(seed, first, count, *scene_parts(scene), cam, sums)
 
 
@@ -1194,7 +1201,7 @@ def _light_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
     seed, first, count, surfaces, lens, leds, picture, eye_plane, max_events, camera, sums
 ):
     """:func:`light_pass` with the scene's parts (:func:`scene_parts`, numba#10139)."""
-    img, img2, led_img, q, q2 = sums
+    img, img2, led_img, moment, q, q2 = sums
     n_chunks = img.shape[0]
     lseed = mix64(np.uint64(seed) ^ np.uint64(_LIGHT_TAG))
     dseed = mix64(np.uint64(seed) ^ np.uint64(_DIRECT_TAG))
@@ -1206,7 +1213,7 @@ def _light_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
         tables = SceneTables(surfaces, lens, leds, picture, eye_plane, max_events)
         lo = first + (count * c) // n_chunks
         hi = first + (count * (c + 1)) // n_chunks
-        tally = Tally(img[c], img2[c], led_img[c], q, q2)
+        tally = Tally(img[c], img2[c], led_img[c], moment[c], q, q2)
         for i in range(lo, hi):
             _light_path(i, lseed, tables, camera, tally, port)
             if port >= 0:

@@ -58,6 +58,9 @@ class FastEstimate:
     target_reached: bool | None = None  # rel_error runs: whether the target was reached
     rel_error_achieved: float | None = None  # rel_error runs: the median error reached
     covered_pixels: int | None = None  # first round interrupted: pixels finished (else None)
+    #: (2, rows, cols): the glint light's centroid in each pixel, pixels from its centre
+    #: (columns, rows; 0 where it has none): where the PSF spreads it from (detectors.psf)
+    glint_offsets: np.ndarray | None = None
 
 
 #: Work between two looks at the Ctrl-C flag: camera samples (pixels × sets × grid²) and light
@@ -88,6 +91,7 @@ class _Run:
         self.light = np.zeros((chunks, rows, cols), dtype=np.int64)
         self.light_sq = np.zeros((chunks, rows, cols), dtype=np.int64)
         self.led = np.zeros((chunks, nled, rows, cols), dtype=np.int64)
+        self.moment = np.zeros((chunks, 2, rows, cols), dtype=np.int64)
         self.sets = 0
         self.paths = 0
         self.covered = 0  # first round stopped: pixels (flat, row-major) it finished
@@ -116,7 +120,7 @@ class _Run:
 
     def tally(self) -> F.Tally:
         """The light paths' sums as :func:`~eyelume.estimators.fast.light_pass` takes them."""
-        return F.Tally(self.light, self.light_sq, self.led, self.q, self.q2)
+        return F.Tally(self.light, self.light_sq, self.led, self.moment, self.q, self.q2)
 
     @property
     def samples_per_pixel(self) -> int:
@@ -205,10 +209,14 @@ class _Run:
             mean_l = total.astype(float) * (self.q / m)
             s2 = total_sq.astype(float) * self.q2
             var_l = np.maximum(s2 - m * mean_l**2, 0.0) / (m * max(m - 1, 1))
-            glints = self.led.sum(axis=0).astype(float) * (self.q / m)
+            led = self.led.sum(axis=0)
+            glints = led.astype(float) * (self.q / m)
+            total_g = led.sum(axis=0).astype(float)
+            offsets = self.moment.sum(axis=0) / np.where(total_g > 0, total_g, 1.0)
         else:
             mean_l = var_l = np.zeros_like(mean_c)
             glints = np.zeros(self.led.shape[1:])
+            offsets = np.zeros((2, *mean_c.shape))
         return FastEstimate(
             mean_c + mean_l,
             var_c + var_l,
@@ -218,6 +226,7 @@ class _Run:
             interrupted,
             n - 1,
             covered_pixels=None if self.sets else self.covered,
+            glint_offsets=offsets,
         )
 
 
@@ -280,11 +289,11 @@ def planned_sets(samples_per_pixel: int) -> tuple[int, int]:
 def array_bytes(cs: CompiledScene) -> int:
     """Bytes of the fast estimator's per-pixel arrays for ``cs``: Σm and Σm² of the camera sets
     (and their undo copies for a round stopped by Ctrl-C), and each Numba thread's fixed-point
-    light and per-LED glint sums — what grows with the picture (a 4096 × 4096 picture, 4 LEDs,
-    2 threads: 2.4 GB)."""
+    light and per-LED glint sums and the glints' two moments — what grows with the picture (a
+    4096 × 4096 picture, 4 LEDs, 2 threads: 2.7 GB)."""
     pixels = cs.picture.cols * cs.picture.rows
     chunks = numba.get_num_threads()
-    return 8 * pixels * (4 + chunks * (2 + int(cs.led.points.shape[0])))
+    return 8 * pixels * (4 + chunks * (4 + int(cs.led.points.shape[0])))
 
 
 def pilot_rates(

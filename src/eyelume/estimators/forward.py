@@ -35,7 +35,7 @@ from eyelume.compile import (
 from eyelume.errors import BudgetError
 from eyelume.estimators.interrupt import interrupt_between_batches
 from eyelume.kernels import geometry as G
-from eyelume.kernels.bins import bin_of, plane_coordinates
+from eyelume.kernels.bins import bin_of, plane_coordinates, to_grid
 from eyelume.kernels.interact import interface_at, reflect, refract
 from eyelume.kernels.jit import per_ray
 from eyelume.kernels.rng import next_uniform, stream_start
@@ -78,13 +78,22 @@ class Traced(NamedTuple):
     npath: int
 
 
+#: Fixed-point unit of the glint rays' offsets inside their pixel (pixels): exact integer sums,
+#: whatever the order the chunks add them in.
+MOMENT_UNIT = 2.0**-20
+
+
 class Counts(NamedTuple):
     """Where a forward trace counts: rays per picture pixel, eye-plane crossings per bin, rays
-    per ledger entry (int64 arrays)."""
+    per ledger entry; of the rays per pixel, those that met no Lambertian face (``glint``) and
+    their offsets from the pixel's centre summed (``moment`` (2, rows, cols): columns, rows; in
+    :data:`MOMENT_UNIT` pixels) (int64 arrays)."""
 
     image: np.ndarray
     plane: np.ndarray
     tallies: np.ndarray
+    glint: np.ndarray
+    moment: np.ndarray
 
 
 @per_ray
@@ -115,6 +124,7 @@ def trace_ray(i, seed, scene, counts, path, record):
     state, x, y, z, dx, dy, dz = emit_ray(i, seed, scene.leds)
     npath = _record(path, 0, x, y, z, record)
     interactions = 0
+    specular = True  # no Lambertian face met yet: a point's image (a glint) on the sensor
     for _ in range(scene.max_events):
         s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
         ep = scene.eye_plane
@@ -160,9 +170,15 @@ def trace_ray(i, seed, scene, counts, path, record):
             npath = _record(path, npath, x, y, z, record)
             # the picture is the sensor image turned by 180°, as a camera's readout shows it:
             # world +y at the top (row 0), world +x to the right (as seen from the camera)
-            col, row, inside = bin_of(scene.picture, x, y)
-            if inside:
+            u, v = to_grid(scene.picture, x, y)
+            col, row = int(math.floor(u)), int(math.floor(v))
+            if 0 <= col < scene.picture.cols and 0 <= row < scene.picture.rows:
                 counts.image[row, col] += 1
+                if specular:
+                    counts.glint[row, col] += 1
+                    su, sv = (u - col - 0.5) / MOMENT_UNIT, (v - row - 0.5) / MOMENT_UNIT
+                    counts.moment[0, row, col] += np.int64(math.floor(su + 0.5))
+                    counts.moment[1, row, col] += np.int64(math.floor(sv + 0.5))
                 tallies[TALLY_SENSOR] += 1
                 return Traced(TALLY_SENSOR, interactions, npath)
             tallies[TALLY_OFF_SENSOR] += 1
@@ -185,6 +201,7 @@ def trace_ray(i, seed, scene, counts, path, record):
                 return Traced(entry, interactions, npath)
             if not from_b:
                 nx, ny, nz = -nx, -ny, -nz
+            specular = False
             state, u1 = next_uniform(state)
             state, u2 = next_uniform(state)
             lx, ly, lz = cosine_hemisphere(u1, u2)
@@ -212,11 +229,10 @@ def trace_ray(i, seed, scene, counts, path, record):
 
 
 @njit(cache=True)
-def _trace_batch(start, count, seed, scene, img_counts, plane_counts, tallies, interactions):
-    """Trace rays ``start`` … ``start + count − 1`` in chunks, one per leading index of the count
-    arrays: chunk c adds to ``img_counts[c]``, ``plane_counts[c]``, ``tallies[c]`` and
+def _trace_batch(start, count, seed, scene, chunked, interactions):
+    """Trace rays ``start`` … ``start + count − 1`` in chunks, one per leading index of the
+    arrays of ``chunked`` (:class:`Counts`): chunk c adds to each one's item c and to
     ``interactions[c]``."""
-    chunked = Counts(img_counts, plane_counts, tallies)
     _trace_chunks(start, count, seed, *scene_parts(scene), chunked, interactions)
 
 
@@ -231,7 +247,10 @@ def _trace_chunks(  # noqa: PLR0913 - the scene's parts as arguments (numba#1013
         lo = start + (count * c) // n_chunks
         hi = start + (count * (c + 1)) // n_chunks
         path = np.zeros((1, 3))
-        counts = Counts(chunked.image[c], chunked.plane[c], chunked.tallies[c])
+        counts = Counts(
+            chunked.image[c], chunked.plane[c], chunked.tallies[c], chunked.glint[c],
+            chunked.moment[c],
+        )  # fmt: skip
         inter = 0
         for i in range(lo, hi):
             inter += trace_ray(i, seed, tables, counts, path, False).interactions
@@ -252,6 +271,10 @@ class ForwardCounts:
     interactions: int
     rays: int
     interrupted: bool = False
+    glint: np.ndarray | None = None  # (rows, cols) of image: rays that met no Lambertian face
+    #: (2, rows, cols) those rays' mean offset from their pixel's centre (pixels; columns,
+    #: rows; 0 where there are none): where the PSF spreads them from (detectors.psf)
+    glint_offsets: np.ndarray | None = None
 
 
 def trace_forward(
@@ -273,23 +296,27 @@ def trace_forward(
     n_chunks = 4 * numba.get_num_threads()
     rows, cols = cs.picture.rows, cs.picture.cols
     prow, pcol = cs.eye_plane.rows, cs.eye_plane.cols
-    img = np.zeros((n_chunks, rows, cols), dtype=np.int64)
-    pl = np.zeros((n_chunks, prow, pcol), dtype=np.int64)
-    tal = np.zeros((n_chunks, len(cs.tallies)), dtype=np.int64)
+    chunked = Counts(
+        np.zeros((n_chunks, rows, cols), dtype=np.int64),
+        np.zeros((n_chunks, prow, pcol), dtype=np.int64),
+        np.zeros((n_chunks, len(cs.tallies)), dtype=np.int64),
+        np.zeros((n_chunks, rows, cols), dtype=np.int64),
+        np.zeros((n_chunks, 2, rows, cols), dtype=np.int64),
+    )
     inter = np.zeros(n_chunks, dtype=np.int64)
     done = 0
     with interrupt_between_batches() as stop:
         while done < rays and not stop.requested:
             n = min(batch, rays - done)
-            _trace_batch(done, n, seed, cs.tables, img, pl, tal, inter)
+            _trace_batch(done, n, seed, cs.tables, chunked, inter)
             done += n
             if progress is not None:
                 progress(done, rays)
     if done == 0:
         raise KeyboardInterrupt
-    return ForwardCounts(
-        img.sum(axis=0), pl.sum(axis=0), tal.sum(axis=0), int(inter.sum()), done, done < rays
-    )
+    image, plane, tallies, glint, moment = (a.sum(axis=0) for a in chunked)
+    offsets = moment * MOMENT_UNIT / np.where(glint > 0, glint, 1)
+    return ForwardCounts(image, plane, tallies, int(inter.sum()), done, done < rays, glint, offsets)
 
 
 class PathSearch(NamedTuple):
@@ -315,6 +342,8 @@ def _trace_paths(start, n, seed, scene, n_tallies, want):
         np.zeros((pic.rows, pic.cols), dtype=np.int64),
         np.zeros((pl.rows, pl.cols), dtype=np.int64),
         np.zeros(n_tallies, dtype=np.int64),
+        np.zeros((pic.rows, pic.cols), dtype=np.int64),
+        np.zeros((2, pic.rows, pic.cols), dtype=np.int64),
     )
     path = np.zeros((want.out.shape[1], 3))
     got_d = 0
