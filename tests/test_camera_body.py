@@ -54,6 +54,8 @@ def _scene(body_enabled=True):
             "leds.positions_mm": [LED.tolist()],
             "leds.directions": [[0.0, 0.0, -1.0]],
             "leds.body_diameter_mm": 2 * RB,
+            "leds.body_shape": "sphere",  # the sphere of radius RB (the preset's a cylinder)
+            "leds.body_length_mm": None,
             "leds.radiant_intensity_w_sr": I0,
             "leds.profile.half_intensity_angle_deg": HALF,
         },

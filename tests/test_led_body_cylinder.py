@@ -49,11 +49,11 @@ B_POSES = {"facing": ((0.0, 0.0, 1.0), I0), "turned": ((0.6, 0.0, -0.8), 1e-9 * 
 
 def _scene(b_shape="cylinder", pose="facing", b_centre=B_CENTRE):
     axis, i_b = B_POSES[pose]
-    length = {"leds.body_length_mm": [2 * RB_A, B_L]} if b_shape == "cylinder" else {}
+    length = [2 * RB_A, B_L] if b_shape == "cylinder" else None
     return apply_overrides(
         load_scene("vr-offaxis"),
         {
-            **length,
+            "leds.body_length_mm": length,
             "face.enabled": False,
             "camera.position_mm": [15.0, 0.0, 30.0],
             "camera.look_at_mm": [0.0, 0.0, 0.0],

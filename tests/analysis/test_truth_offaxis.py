@@ -66,7 +66,9 @@ def test_glints_of_an_off_axis_camera_and_a_turned_eye(k1, model):
     lens = np.array(scene.camera.position_mm)  # the ideal lens: its centre is the chief ray's
     r = _rot(scene.eye.gaze_horizontal_deg, scene.eye.gaze_vertical_deg)
     centres, axes = led_poses(scene.leds)
-    emit = centres + axes * scene.leds.body_diameter_mm / 2
+    # light leaves a cylinder's front face's centre (a sphere's apex): half its length on
+    emit = centres + axes * scene.leds.body_length_mm / 2
+    assert scene.leds.body_shape == "cylinder"
     checked = 0
     for k, led in enumerate(emit):
         g = truth["glints"][k]

@@ -177,9 +177,16 @@ def test_psf_none_reproduces_the_render_before_the_psf():
     +1 %: at this budget, 51 200 light paths, drawn over the whole cornea no glint got a
     single path; aimed, all eight are there) and the specular connections' analytic Jacobian
     (fast arrays only: 1734 of 6400 pixels moved, median 8e-9, at most 0.11 standard errors).
-    The continuation grid is pinned to the reference's 4 (the preset's is 5 since de84d1d)."""
+    The continuation grid is pinned to the reference's 4 (the preset's is 5 since de84d1d), and
+    the LED bodies to the reference's 1.6 mm spheres (the preset's are 1.3 × 0.65 mm cylinders
+    since leds.body_shape)."""
     ref = np.load(REF)
-    sc = apply_overrides(load_scene("vr-offaxis"), {**SMALL, "camera.psf": "none"})
+    spheres = {
+        "leds.body_shape": "sphere",
+        "leds.body_diameter_mm": 1.6,
+        "leds.body_length_mm": None,
+    }
+    sc = apply_overrides(load_scene("vr-offaxis"), {**SMALL, **spheres, "camera.psf": "none"})
     f = eyelume.render(sc, eyelume.RenderOptions(estimator="fast", samples_per_pixel=4, seed=3))
     w = eyelume.render(sc, eyelume.RenderOptions(estimator="forward", rays=300_000, seed=3))
     assert f.psf is None and w.psf is None

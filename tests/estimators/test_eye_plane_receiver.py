@@ -56,6 +56,8 @@ def rig():
             "leds.positions_mm": [LED_CENTRE.tolist()],
             "leds.directions": [aim.tolist()],
             "leds.body_diameter_mm": 2 * RB,
+            "leds.body_shape": "sphere",  # the sphere of radius RB (the preset's a cylinder)
+            "leds.body_length_mm": None,
             "leds.radiant_intensity_w_sr": I0,
             "leds.profile.kind": "cos_power",
             "leds.profile.half_intensity_angle_deg": HALF_ANGLE,
