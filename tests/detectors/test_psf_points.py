@@ -28,21 +28,7 @@ from eyelume.detectors.psf import (
     spread_points,
 )
 from eyelume.scene.io import apply_overrides, load_scene
-
-LAM_NM = 850.0
-LAM = LAM_NM * 1e-6
-PITCH = 0.003
-
-
-def _vr_working_f_number() -> float:
-    """vr-offaxis's N_w from its preset's numbers, written here: N (1 + v / s), v the thin
-    lens's image distance 1 / (1/f − 1/s)."""
-    f, n, s = 1.646, 2.88, 33.25
-    v = 1.0 / (1.0 / f - 1.0 / s)
-    return n * (1.0 + v / s)
-
-
-NW = _vr_working_f_number()
+from tests.detectors.test_psf import LAM, LAM_NM, NW, PITCH
 
 
 def _table(offsets: int = 16, cells: int = 24) -> np.ndarray:

@@ -399,7 +399,7 @@ def convolve_with_points(
     e = np.asarray(irradiance, dtype=np.float64)
     g = np.minimum(np.asarray(points, dtype=np.float64), e)
     table = point_kernels(psf.wavelength_nm, psf.working_f_number, *psf.pitch_mm)
-    rest = _zero_padded(e - g, psf.kernel) if (e - g).any() else np.zeros(e.shape)
+    rest = _zero_padded(e - g, psf.kernel)  # all zeros when no light is left
     return (rest + spread_points(g, offsets, table)) / _weights(e.shape, psf.kernel)
 
 
