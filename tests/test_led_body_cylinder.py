@@ -356,3 +356,28 @@ def test_the_layout_draws_each_cylinder_as_one_closed_outline():
     area = 0.5 * abs(np.dot(z[:-1], y[1:]) - np.dot(z[1:], y[:-1]))
     assert area == pytest.approx(2 * B_R * B_L, rel=0.01)
     assert z.min() == pytest.approx(25.0 - B_L / 2) and y.max() == pytest.approx(3.0 + B_R)
+
+
+def test_a_command_line_sphere_drops_the_scenes_cylinder_length_with_a_note():
+    """vr-offaxis's LEDs are 1.3 × 0.65 mm cylinders: ``--set leds.body_shape=sphere`` gives
+    1.3 mm spheres (light from the apex, 0.65 mm from the centre); the preset's length, a
+    cylinder's, is dropped with one warning line naming it. Both set on the command line: the
+    length is refused beside spheres, as in a file."""
+    res = CliRunner().invoke(
+        app, ["info", "--scene", "vr-offaxis", "--set", "leds.body_shape=sphere", "--json"]
+    )
+    assert res.exit_code == 0, res.output
+    notes = [x for x in res.stderr.splitlines() if x.strip()]
+    assert len(notes) == 1 and "body_length_mm = 0.65" in notes[0], res.stderr
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        leds = load_scene("vr-offaxis", {"leds.body_shape": "sphere"}).leds
+    assert len(seen) == 1 and "dropped" in str(seen[0].message)
+    assert leds.body_shapes() == ["sphere"] * 8 and leds.body_length_mm is None
+    assert leds.emission_offsets_mm() == pytest.approx([1.3 / 2] * 8)
+    both = ["--set", "leds.body_shape=sphere", "--set", "leds.body_length_mm=0.65"]
+    res = CliRunner().invoke(app, ["info", "--scene", "vr-offaxis", *both])
+    assert res.exit_code == 2, res.output
+    lines = [x for x in res.output.splitlines() if x.strip()]
+    assert len(lines) == 1 and "body_length_mm = 0.65" in lines[0], res.output
+

@@ -9,6 +9,7 @@ from __future__ import annotations
 import copy
 import math
 import tomllib
+import warnings
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -16,9 +17,9 @@ from typing import Any
 import tomli_w
 from pydantic import ValidationError
 
-from eyelume.errors import GeometryError, SceneError
+from eyelume.errors import EyelumeWarning, GeometryError, SceneError
 from eyelume.scene.eye import check_eye_geometry
-from eyelume.scene.model import QE_CURVES, RING_FIELDS, Scene
+from eyelume.scene.model import QE_CURVES, RING_FIELDS, LedArray, Scene
 from eyelume.scene.textfile import decode_text
 
 __all__ = [
@@ -282,6 +283,34 @@ def _drop_ring_for_positions(data: dict[str, Any], overrides: dict[str, Any]) ->
             leds.pop(name, None)
 
 
+def _drop_length_for_spheres(data: dict[str, Any], overrides: dict[str, Any]) -> None:
+    """An override that makes every LED's body a sphere (``leds.body_shape = "sphere"``) drops
+    the scene's ``body_length_mm``, a cylinder's length that a sphere has no use for (its
+    length is its diameter), with a one-line :class:`~eyelume.errors.EyelumeWarning` naming
+    the value dropped — unless ``leds.body_length_mm`` is overridden too (then it is refused
+    beside spheres, as in a file, where both are written by the same hand)."""
+    leds = data.get("leds")
+    if (
+        "leds.body_shape" not in overrides
+        or "leds.body_length_mm" in overrides
+        or not isinstance(leds, dict)
+        or leds.get("body_length_mm") is None
+    ):
+        return
+    shape = _parse_value(overrides["leds.body_shape"])
+    shapes = shape if isinstance(shape, list) else [shape]
+    if shapes and all(s == "sphere" for s in shapes):
+        length = leds.pop("body_length_mm")
+        warnings.warn(
+            f"leds.body_shape = 'sphere' set: the scene's leds.body_length_mm = {length!r} (a "
+            "cylinder's length) is dropped; a sphere is body_diameter_mm = "
+            f"{leds.get('body_diameter_mm', LedArray.model_fields['body_diameter_mm'].default)!r}"
+            " across",
+            EyelumeWarning,
+            stacklevel=4,
+        )
+
+
 #: The eye's fields a library eye model supplies (:class:`~eyelume.scene.model.Eye`).
 _EYE_MODEL_FIELDS = ("surfaces", "iris_surface", "dispersion", "reference_wavelength_nm")
 
@@ -309,6 +338,7 @@ def _override_data(data: dict[str, Any], overrides: dict[str, Any]) -> dict[str,
     data = copy.deepcopy(data)
     _drop_ring_for_positions(data, overrides)
     _drop_eye_for_model(data, overrides)
+    _drop_length_for_spheres(data, overrides)
     for key, raw in overrides.items():
         parts = key.split(".")
         if not key or any(p == "" for p in parts):
