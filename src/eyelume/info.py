@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from eyelume.compile import (
     CompiledScene,
     WavelengthGroup,
@@ -41,7 +43,9 @@ def camera_info(cs: CompiledScene) -> dict:
     the distortion ``dist``), for a prescription |m| times the entrance pupil's distance from
     the object plane (paraxial); cx, cy the picture's centre, pixel centres at integers.
     ``R``, ``t``: a world point p (mm) has OpenCV camera coordinates R p + t, origin at the
-    entrance pupil (:func:`eyelume.scene.pose.opencv_extrinsics`)."""
+    entrance pupil (:func:`eyelume.scene.pose.opencv_extrinsics`). ``position_mm`` and
+    ``view_direction`` (a unit vector, whether the file gives a direction or a look-at point)
+    are in the world frame, a left eye's mirrored."""
     scene, fo = cs.scene, cs.first_order
     width, _ = scene.sensor.field_mm
     pitch = width / scene.sensor.cols
@@ -52,7 +56,7 @@ def camera_info(cs: CompiledScene) -> dict:
     return {
         "optics": scene.camera.optics,
         "position_mm": pos.tolist(),
-        "view_direction": view.tolist(),
+        "view_direction": (view / np.linalg.norm(view)).tolist(),
         "roll_deg": roll,
         "object_distance_mm": fo.object_distance,
         "opencv": {

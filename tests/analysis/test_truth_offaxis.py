@@ -180,3 +180,17 @@ def test_leds_a_wide_lens_sees_directly_are_in_the_truth_and_the_picture():
         peak = (max(c0 - 3, 0) + cc, max(r0 - 3, 0) + rr)
         assert math.hypot(peak[0] - c, peak[1] - r) < 1.5, (e, peak)
         assert win.max() > 20 * np.median(img)  # a bright spot, not skin
+
+
+@pytest.mark.parametrize("which", ["right", "left"])
+def test_info_gives_the_cameras_view_direction_as_a_unit_vector(which):
+    """vr-offaxis gives a look-at point: ``view_direction`` is the unit vector from the
+    camera's position toward it (the file's 20.785, −12, 20 mm → 0, 0, −3 mm, mirrored in x for
+    a left eye), and OpenCV's camera z axis (R's third row) is that same vector."""
+    scene = load_scene("vr-offaxis", {"eye_pose.which": which})
+    cam = camera_info(compile_scene(scene))
+    way = np.subtract(scene.camera.look_at_mm, scene.camera.position_mm)
+    if which == "left":
+        way[0] = -way[0]
+    np.testing.assert_allclose(cam["view_direction"], way / np.linalg.norm(way), atol=1e-12)
+    np.testing.assert_allclose(cam["opencv"]["R"][2], cam["view_direction"], atol=1e-12)
