@@ -381,3 +381,28 @@ def test_a_command_line_sphere_drops_the_scenes_cylinder_length_with_a_note():
     lines = [x for x in res.output.splitlines() if x.strip()]
     assert len(lines) == 1 and "body_length_mm = 0.65" in lines[0], res.output
 
+
+def test_the_layout_legend_names_each_body_shape_as_drawn(tmp_path):
+    """A layout of cylinder LEDs labels their body a cylinder, drawn as a rectangle (its
+    section), not a sphere's circle; spheres and cylinders together get one entry each."""
+    from eyelume.report.plots import SectionCurve, observe_figures, save_layout
+
+    z, y = np.array([0.0, 1, 1, 0, 0]), np.array([0.0, 0, 2, 2, 0])
+    led = SectionCurve("LED 0 body", "led", z, y)
+    seen = []
+
+    def keep(fig, _name):
+        legend = fig.axes[0].get_legend()
+        seen.append(
+            [
+                (h.get_marker(), t.get_text())
+                for h, t in zip(legend.legend_handles, legend.texts, strict=True)
+            ]
+        )
+
+    with observe_figures(keep):
+        for bodies in (["cylinder"] * 8, ["sphere"] * 4, ["cylinder", "sphere"]):
+            save_layout([led], [], tmp_path / "l.png", title="t", led_bodies=bodies)
+    assert seen[0] == [("s", "LED: cylinder body ▭, axis —, its id")]
+    assert seen[1] == [("o", "LED: sphere body ○, axis —, its id")]
+    assert seen[2] == [("o", "LED: sphere body ○"), ("s", "LED: cylinder body ▭, axis —, its id")]

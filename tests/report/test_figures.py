@@ -422,3 +422,37 @@ def test_error_map_cells_write_degrees_with_one_decimal(tmp_path):
     assert seen["geometric gaze error (°)"] == ["2.0", "12.3"]
     assert seen["glints found and matched (count)"] == ["4", "4"]
     assert seen["pupil-centre error (px)"] == ["0.12", "0.25"]
+
+
+def test_the_render_layouts_legend_names_the_scenes_led_bodies(tmp_path):
+    """paper2005's LEDs made flat cylinders: both layouts' legends call them cylinders (their
+    section a rectangle), not the sphere's circle."""
+    from eyelume.compile import compile_scene
+    from eyelume.render import RenderOptions, render, render_extras
+    from eyelume.report.outputs import write_render_outputs
+    from eyelume.scene.io import load_scene
+
+    scene = load_scene(
+        "paper2005",
+        {
+            "run.estimator": "forward",
+            "sensor.cols": "24",
+            "sensor.rows": "18",
+            "leds.body_shape": "cylinder",
+            "leds.body_length_mm": "2.0",
+        },
+    )
+    result = render(scene, RenderOptions(rays=5_000, seed=1))
+    legends = {}
+
+    def keep(fig, name):
+        legend = fig.axes[0].get_legend()
+        if name.startswith("layout") and legend is not None:
+            legends[name] = [t.get_text() for t in legend.texts if t.get_text().startswith("LED")]
+
+    with observe_figures(keep):
+        write_render_outputs(result, render_extras(compile_scene(scene), result.seed), tmp_path)
+    assert legends == {
+        "layout.png": ["LED: cylinder body ▭, axis —, its id"],
+        "layout_xz.png": ["LED: cylinder body ▭, axis —, its id"],
+    }

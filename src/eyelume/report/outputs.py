@@ -165,5 +165,6 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
             ray_legend=[
                 (RAY_COLORS[k], f"{RAY_LABELS[k]} ({count[k]})") for k in RAY_COLORS if count[k]
             ],  # fmt: skip
+            led_bodies=sc.leds.body_shapes(),
         )
     return written

@@ -659,6 +659,7 @@ def save_layout(
     ray_colors: Sequence[str] | None = None,
     vertical: str = "y",
     ray_legend: Sequence[tuple[str, str]] = (),
+    led_bodies: Sequence[str] = ("sphere",),
 ) -> None:
     """Write a y–z (or x–z) cross-section of the optical system, surfaces and rays, as a
     layout plot (``vertical``: ``"y"`` or ``"x"``, the world axis drawn upward; the rays are
@@ -688,8 +689,13 @@ def save_layout(
         sensor"), ("tab:orange", "other rays")]``; rays of every colour but the last entry's are
         drawn stronger and on top (the few that reach the sensor among many that do not).
 
-    LEDs (category ``"led"``) appear in the legend as drawn: a circle (a body cut by the plane,
-    or an emitter point) and a line (its axis); their ``tag`` (the LED's id) is written beside
+    led_bodies : sequence of str, optional
+        The LEDs' body shapes (``"sphere"``, ``"cylinder"``: :class:`eyelume.scene.model.LedArray`'s
+        ``body_shape``), for the legend; default a sphere.
+
+    LEDs (category ``"led"``) appear in the legend as drawn: their body's section — a circle
+    for a sphere, a rectangle for a cylinder (a flat SMD package cut along its axis), both when
+    both are present — and a line (its axis); their ``tag`` (the LED's id) is written beside
     each axis's start.
 
     Raises
@@ -758,7 +764,7 @@ def save_layout(
     ax.set_aspect("equal", adjustable="datalim" if z1 - z0 >= v1 - v0 else "box")
     _write_tags(ax, tags)
 
-    handles = _layout_handles(present, ray_legend)
+    handles = _layout_handles(present, ray_legend, led_bodies)
     if handles:
         ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
                   borderaxespad=0.0, fontsize="small", framealpha=0.85)  # fmt: skip
@@ -769,25 +775,41 @@ def save_layout(
     _save_figure(fig, path)
 
 
-def _layout_handles(present: list[str], ray_legend: Sequence[tuple[str, str]]) -> list[Line2D]:
-    """Legend entries of a layout: each category present, drawn as on the plot (an LED as a
-    circle on its axis line), then the rays' colours."""
+#: An LED body shape's legend: (marker, symbol) as its section is drawn.
+_LED_BODY_MARKS = {"sphere": ("o", "○"), "cylinder": ("s", "▭")}
+
+
+def _layout_handles(
+    present: list[str], ray_legend: Sequence[tuple[str, str]], led_bodies: Sequence[str] = ()
+) -> list[Line2D]:
+    """Legend entries of a layout: each category present, drawn as on the plot (an LED as its
+    body's section, a circle for a sphere or a rectangle for a cylinder, on its axis line;
+    one entry per body shape in ``led_bodies``), then the rays' colours."""
     handles = []
+    shapes = [b for b in _LED_BODY_MARKS if b in led_bodies] or ["sphere"]
     for c in (c for c in CATEGORY_COLORS if c in present):
-        led = c == "led"
-        handles.append(
-            Line2D(
-                [],
-                [],
-                color=CATEGORY_COLORS[c],
-                linestyle=_CATEGORY_STYLES.get(c, "-"),
-                linewidth=1.3,
-                marker="o" if led else None,
-                markersize=5,
-                markerfacecolor="none",
-                label="LED: body ○, axis —, its id" if led else c,
-            )
+        entries = (
+            [(_LED_BODY_MARKS[b][0], f"LED: {b} body {_LED_BODY_MARKS[b][1]}") for b in shapes]
+            if c == "led"
+            else [(None, c)]
         )
+        if c == "led":
+            marker, label = entries[-1]
+            entries[-1] = (marker, f"{label}, axis —, its id")
+        for marker, label in entries:
+            handles.append(
+                Line2D(
+                    [],
+                    [],
+                    color=CATEGORY_COLORS[c],
+                    linestyle=_CATEGORY_STYLES.get(c, "-"),
+                    linewidth=1.3,
+                    marker=marker,
+                    markersize=5,
+                    markerfacecolor="none",
+                    label=label,
+                )
+            )
     for color, label in ray_legend:
         handles.append(Line2D([], [], color=color, linewidth=1.3, label=label))
     return handles
