@@ -26,7 +26,11 @@
   surround's median when the surround is flat; when it is not (its 10–90 % spread over 8 σ of
   the noise: a glint at the limbus, half on iris and half on sclera) B(x, y) is interpolated
   under the spot from its surround (``cv2.inpaint``, Telea), else the bright side's skirt
-  pulls the centroid toward it (:func:`_uneven_surround`).
+  pulls the centroid toward it (:func:`_uneven_surround`). Where skirts of neighbouring blobs
+  meet, a pixel goes to the nearer blob — but a fragment under ``glint_min_area_px`` is no
+  blob: the unclosed mask of a small picture breaks a noisy glint into a blob and one-pixel
+  fragments of the same spot, whose light is the glint's skirt, not another glint's (until
+  session 16 they cut the skirt: paper2005's glints 1.03 and 1.09 px off, answered ``ok``).
 * **Matching** (:func:`match_leds`): LED k at azimuth φ_k (0° = picture +x, 90° = picture up, i.e.
   −row) makes a glint displaced from the glints' centroid toward φ_k; each glint's direction from
   that centroid is matched to the LED azimuths by the Hungarian algorithm
@@ -244,7 +248,9 @@ def glint_blobs(
 
     The centroid is weighted by max(I − B, 0) over the blob and a skirt ``m`` = max(2, ⌈r⌉) px
     around it (r its equivalent radius), B the median of the window around it outside every
-    blob's skirt; where skirts of neighbouring blobs meet, a pixel goes to the nearer blob. The
+    blob's skirt; where skirts of neighbouring blobs meet, a pixel goes to the nearer blob
+    (fragments of the mask under ``glint_min_area_px`` are no blob: they are a glint's own
+    light, weighed when within its skirt). The
     spot's whole profile, down to its background, then weighs in: a saturated (flat-topped)
     spot's centroid is as smooth in its position as an unsaturated one's.
 
@@ -268,10 +274,17 @@ def glint_blobs(
     rise = max(params.glint_min_snr * noise, min_rise)
     blobs = []
     kept = []
-    for c in tops:
-        approx_area = cv2.contourArea(c) + 0.5 * len(c) + 1.0
+    areas = [cv2.contourArea(c) + 0.5 * len(c) + 1.0 for c in tops]
+    # Fragments too small to be a glint (one pixel) are not other blobs sharing out a skirt:
+    # they are a noisy glint's own light, broken off by the threshold (module doc, Centroid).
+    fragments = [c for c, a in zip(tops, areas, strict=True) if a < params.glint_min_area_px]
+    others = bright
+    if fragments:
+        others = bright.copy()
+        cv2.drawContours(others, fragments, -1, 0, thickness=-1)
+    for c, approx_area in zip(tops, areas, strict=True):
         if params.glint_min_area_px <= approx_area <= 1.5 * max_area + 4:
-            b = _blob(c, approx_area, above, bright, img, (max_area, rise, noise), params)
+            b = _blob(c, approx_area, above, others, img, (max_area, rise, noise), params)
             if b is not None:
                 blobs.append(b)
                 kept.append(c)
