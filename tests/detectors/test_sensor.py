@@ -10,7 +10,7 @@ import pytest
 from PIL import Image
 
 from eyelume.compile import compile_scene
-from eyelume.detectors.sensor import digitize, electrons_per_w_mm2
+from eyelume.detectors.sensor import camera_summary, digitize, electrons_per_w_mm2
 from eyelume.render import RenderOptions, render, render_extras
 from eyelume.report.outputs import write_render_outputs
 from eyelume.scene.io import SceneError, load_scene
@@ -178,3 +178,22 @@ def test_glints_saturate_and_skin_does_not_in_the_default_render():
     assert dig.saturated.sum() <= any_glint.sum()
     full = 2**scene.sensor.adc_bits - 1
     assert 0.2 * full < np.median(dig.counts[result.regions["skin"]]) < 0.8 * full
+
+
+@pytest.mark.parametrize(("bits", "clip_e"), [(16, 6000.0), (8, (255 - 16 + 0.5) * 6.0)])
+def test_saturation_beyond_the_estimates_noise(bits, clip_e):
+    """Three kinds of pixel, the clipping level N_c the well (6000 e⁻) or, at 8 bits, the
+    ADC's full scale (255 − 16 + ½ DN × 6 e⁻/DN = 1437 e⁻): 1.5 N_c ± 0.6 N_c (a forward
+    pixel of ~6 rays: N̄ − 2σ = 0.3 N_c, saturated but not beyond the noise), 3 N_c ± 0.3 N_c
+    (beyond: 2.4 N_c) and 0.5 N_c ± 0 (below). 40 % of the pixels are of the second kind."""
+    sensor = Sensor(full_well_e=6000, read_noise_e=0.0, gain_e_per_dn=6.0,
+                    black_level_dn=16.0, adc_bits=bits)  # fmt: skip
+    per = electrons_per_w_mm2(sensor, 850.0)
+    kind = np.tile(np.array([0, 1, 1, 2, 2, 0, 1, 1, 0, 0]), (30, 4))  # 0, 1, 2: 40, 40, 20 %
+    electrons = np.choose(kind, [1.5 * clip_e, 3.0 * clip_e, 0.5 * clip_e])
+    sigma = np.choose(kind, [0.6 * clip_e, 0.3 * clip_e, 0.0])
+    digital = digitize(electrons / per, sensor, 850.0, seed=3)
+    cam = camera_summary(sensor, 850.0, digital, estimate_std_w_mm2=sigma / per)
+    assert cam["saturated_share_beyond_noise"] == pytest.approx(0.4)
+    assert 0.79 < cam["saturated_share"] <= 0.8  # Poisson draws about 1.5 N_c: all but a few
+    assert "saturated_share_beyond_noise" not in camera_summary(sensor, 850.0, digital)

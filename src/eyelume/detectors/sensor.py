@@ -48,6 +48,7 @@ from eyelume.scene.textfile import read_csv_table
 __all__ = [
     "DigitalImage",
     "SunlightBand",
+    "SATURATION_SIGMAS",
     "SPECTRUM_HALF_WIDTH_SIGMA",
     "camera_summary",
     "count_weights",
@@ -580,8 +581,41 @@ def digitize(
     )
 
 
-def camera_summary(sensor: Sensor, wavelength_nm: float, digital: DigitalImage) -> dict:
-    """The camera's settings and the digital picture's facts as JSON-ready data (summary.json)."""
+#: Standard errors of the estimate by which a pixel's expected electrons must pass the clipping
+#: level to count as saturated beyond the estimate's noise (:func:`camera_summary`).
+SATURATION_SIGMAS = 2.0
+
+
+def camera_summary(
+    sensor: Sensor,
+    wavelength_nm: float,
+    digital: DigitalImage,
+    estimate_std_w_mm2: np.ndarray | None = None,
+) -> dict:
+    """The camera's settings and the digital picture's facts as JSON-ready data (summary.json).
+
+    ``saturated_share``: the share of the picture's pixels clipped (:func:`digitize`). With
+    ``estimate_std_w_mm2`` (the standard error of each pixel's rendered irradiance, W/mm²,
+    (rows, cols), the Monte Carlo estimate's — not the sensor's shot noise), also
+    ``saturated_share_beyond_noise``: the share whose expected electrons N̄ pass the clipping
+    level N_c = min(full well, (2^bits − 1 − black level + ½) · gain) by more than
+    :data:`SATURATION_SIGMAS` standard errors, N̄ − 2 σ ≥ N_c. A pixel of the forward estimator
+    reached by n rays of w electrons each has N̄ = n w and σ = √n w; with w a large part of the
+    well (few rays per pixel) a pixel may saturate by noise alone: the render cannot tell, and
+    the exposure is not yet to blame.
+    """
+    extra = {}
+    if estimate_std_w_mm2 is not None:
+        per = electrons_per_w_mm2(sensor, wavelength_nm)
+        sigma = np.nan_to_num(np.asarray(estimate_std_w_mm2, dtype=np.float64)) * per
+        clip = min(
+            float(sensor.full_well_e),
+            (digital.full_scale_dn - sensor.black_level_dn + 0.5) * sensor.gain_e_per_dn,
+        )
+        beyond = digital.mean_electrons - SATURATION_SIGMAS * sigma >= clip
+        extra["saturated_share_beyond_noise"] = int(np.count_nonzero(beyond)) / max(
+            digital.counts.size, 1
+        )
     return {
         "pixel_pitch_um": sensor.pixel_pitch_um,
         "exposure_ms": sensor.exposure_ms,
@@ -608,6 +642,7 @@ def camera_summary(sensor: Sensor, wavelength_nm: float, digital: DigitalImage) 
         "electrons_per_w_mm2": electrons_per_w_mm2(sensor, wavelength_nm),
         "saturated_pixels": digital.saturated_pixels,
         "saturated_share": digital.saturated_pixels / max(digital.counts.size, 1),
+        **extra,
         "median_dn": float(np.median(digital.counts)) if digital.counts.size else 0.0,
         "units": {"counts": "DN", "electrons_per_w_mm2": "e-/(W/mm^2)", "exposure": "ms"},
     }

@@ -95,7 +95,15 @@ def write_render_outputs(result: RenderResult, extras: RenderExtras, out: str | 
     digital.counts[missing] = 0
     # the run's numbers first: a figure that fails below cannot lose them
     summary = result.summary()
-    summary["camera"] = camera_summary(sc.sensor, sc.wavelength_nm, digital)
+    # the estimate's standard error of the counted picture: the rendered picture's relative
+    # one (the same picture but for the wavelength groups' weights; sunlight's own noise left
+    # out, which can only make a pixel look saturated beyond noise sooner)
+    std = np.sqrt(result.eye_image_variance)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        relative = np.where(shown > 0, std / shown, 0.0)
+    summary["camera"] = camera_summary(
+        sc.sensor, sc.wavelength_nm, digital, estimate_std_w_mm2=counted * relative
+    )
     write_json(path("summary.json"), summary)
     truth = extras.truth
     if "ambient" in summary:  # where the sun's brightest pixel is, and the ratios
