@@ -906,7 +906,9 @@ def _blobs_near_pupil(
     least = value_range[1] - 0.02 * (value_range[1] - value_range[0])
     if not smoothed and not any(b["peak"] >= least for b in near):
         return near
-    for b in glints_near(img, value_range, noise, (cx, cy), r_max, floor, params):
+    # (Only blobs of ≤ 2 px at the top can be taken: the others are not worked out.)
+    wanted = (2.0, least)
+    for b in glints_near(img, value_range, noise, (cx, cy), r_max, floor, params, wanted=wanted):
         x, y = b["centre_px"]
         c, r = min(cols - 1, max(0, round(x))), min(rows - 1, max(0, round(y)))
         new = not bright[r, c] if smoothed else all(math.dist(t, (x, y)) > 1.5 for t in taken)

@@ -146,8 +146,16 @@ def find_glints(img: np.ndarray, value_range, noise: float, params):
     return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
 
 
-def glints_near(
-    img: np.ndarray, value_range, noise: float, centre, radius: float, floor, params, mask=None
+def glints_near(  # noqa: PLR0913 - the picture, its scale, the place, what to return
+    img: np.ndarray,
+    value_range,
+    noise: float,
+    centre,
+    radius: float,
+    floor,
+    params,
+    mask=None,
+    wanted: tuple[float, float] | None = None,
 ):
     """Glint blobs (dicts, as :func:`glint_blobs`) within ``radius`` px of ``centre`` (x, y) px —
     the pupil's, where corneal glints are — found on the *unsmoothed* picture: after
@@ -160,7 +168,10 @@ def glints_near(
     scaled by ``value_range`` (min, max), and a blob may be one pixel: isolated hot pixels
     (flat neighbours) were mended before (``detect._mend_hot_pixels``) and a blob's peak must
     still stand ``glint_min_snr`` × ``noise`` above its background. ``mask`` (uint8, the
-    picture's shape): the blobs kept are drawn into it (255)."""
+    picture's shape): the blobs kept are drawn into it (255). ``wanted`` = (max area px, least
+    peak, input units): only the blobs no larger and with a peak no lower are returned — the
+    others are dropped before their background and centroid are worked out (a caller that
+    keeps only those; the same blobs as filtering the whole list)."""
     rows, cols = img.shape
     lo, hi = value_range
     if not hi > lo or floor is None:
@@ -181,7 +192,7 @@ def glints_near(
     floor8 = int(math.floor((floor - lo) * scale))
     one = dataclasses.replace(params, glint_window_px=w, glint_close_px=1, glint_min_area_px=1)
     # (min_rise > 0 but below the noise's rise: the mask returned holds the blobs kept only)
-    blobs, kept = glint_blobs(u8, sub, floor8, one, noise=noise, min_rise=1e-300)
+    blobs, kept = glint_blobs(u8, sub, floor8, one, noise=noise, min_rise=1e-300, wanted=wanted)
     if mask is not None:
         cv2.bitwise_or(mask[y0:y1, x0:x1], kept, dst=mask[y0:y1, x0:x1])
     out = []
@@ -243,6 +254,7 @@ def glint_blobs(
     params,
     noise: float = 0.0,
     min_rise: float = 0.0,
+    wanted: tuple[float, float] | None = None,
 ) -> tuple[list[dict], np.ndarray]:
     """Bright blobs as dicts (centre_px, area_px, peak) and the (closed) bright mask (0/255).
 
@@ -258,6 +270,9 @@ def glint_blobs(
     also stand ``min_rise`` (input units) above its local background — a saturated fragment of
     skin or sclera, whose surround is saturated too, is not a glint — and the bright mask
     returned holds only the glints found (not the saturated skin).
+
+    ``wanted`` = (max area px, least peak, input units): blobs larger or with a lower peak are
+    left out before their skirt is worked out (:func:`glints_near`'s callers keep no others).
     """
     rows, cols = u8.shape
     above, bright, (x0, y0, x1, y1) = _bright_mask(u8, floor8, params)
@@ -284,7 +299,7 @@ def glint_blobs(
         cv2.drawContours(others, fragments, -1, 0, thickness=-1)
     for c, approx_area in zip(tops, areas, strict=True):
         if params.glint_min_area_px <= approx_area <= 1.5 * max_area + 4:
-            b = _blob(c, approx_area, above, others, img, (max_area, rise, noise), params)
+            b = _blob(c, approx_area, above, others, img, (max_area, rise, noise, wanted), params)
             if b is not None:
                 blobs.append(b)
                 kept.append(c)
@@ -402,12 +417,13 @@ def _above_local(u8, sums, offset, w, lut, floor8, hit, out):
 
 def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     """One glint from its outline ``c``: area, peak and skirt-weighted centroid (module doc), or
-    None when its area is out of bounds (``limits`` = (max_area, rise)) or its
+    None when its area is out of bounds (``limits`` = (max_area, rise, noise, wanted), wanted as
+    :func:`glint_blobs`'s) or its
     peak does not stand ``rise`` (input units:
     ``glint_min_snr`` × the noise, or more in an over-exposed picture) above its local
     background (a noise speck, or saturated skin)."""
     rows, cols = img.shape
-    max_area, rise, noise = limits
+    max_area, rise, noise, wanted = limits
     m = max(2, int(math.ceil(math.sqrt(approx_area / math.pi))))
     bx, by, bw, bh = cv2.boundingRect(c)
     x0, y0 = max(0, bx - m - 2), max(0, by - m - 2)
@@ -419,6 +435,10 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     if area < params.glint_min_area_px or area > max_area:
         return None
     raw = img[y0:y1, x0:x1]
+    if wanted is not None and (
+        area > wanted[0] or cv2.minMaxLoc(raw, own)[1] < wanted[1]  # (its peak, as _skirt's)
+    ):
+        return None
     not_own = cv2.bitwise_not(own)
     others = cv2.bitwise_and(bright[y0:y1, x0:x1], not_own)
     d_own = cv2.distanceTransform(not_own, cv2.DIST_L2, 3)
