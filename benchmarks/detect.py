@@ -71,6 +71,19 @@ run's spread about its own fit sets the edge noise σ (the smallest over the run
 the inlier tolerance, so every hypothesis' fit counts, not only the winner's — 6 of 279 answers
 changed (the 255 realdata pictures, 24 synthetic), one itmo picture from ``ok`` to "pupil cut or
 hidden".
+
+Session 16 (2fdff8b): the one-pixel-glint search near the pupil (``glints.glints_near``, run on
+a smoothed picture without LEDs: the real frames) works out only the blobs its caller can take
+(≤ 2 px, peak at the top), not every blob's skirt and centroid; answers byte-identical on the
+255 realdata pictures and paper2005's 315-answer grid. Interleaved A/B against 9ba1345 (two
+processes alternating batches of 40 calls, 4 rounds, one thread, load 4–6), median CPU ms per
+call old / new: openeds 000160 5.98/5.73, 5.90/5.62, 5.94/5.56, 7.25/5.56; 000170 4.71/4.54,
+4.69/4.40, 4.67/4.43, 5.73/5.54; 000180 4.43/4.34, 4.36/4.19, 4.50/4.40, 5.36/4.23; synthetic
+640 × 400 (LEDs given: the search was already skipped) 4.78/4.85, 4.62/4.67, 4.62/4.62,
+5.71/4.62. Where 000160's 5.6 ms goes (one thread, CPU, each step's own clock): the robust fit
+1.28 ms (its 24 run hypotheses 0.89), the glints' step 2 1.09 (Gaussian 0.23, bright masks
+0.33), the working picture 0.61, the ladder 0.55, the glint fill 0.40, the full-resolution
+blob 0.33; nothing there repeats work the answer does not use.
 """
 
 from __future__ import annotations
