@@ -388,6 +388,23 @@ class _Table:
         self.rows_i.append(spec.int_row(tally_a, tally_b))
         self.names.append(name)
 
+    def group(self, first: int, sphere: tuple[np.ndarray, float], *, world: bool = True) -> None:
+        """Make the rows from ``first`` to the last one added a group (``G.GROUP_END``) that
+        the searches skip at once when a ray misses ``sphere`` (centre, radius; camera frame
+        when ``world`` is False, else world): it must hold every member's surface — the
+        caller's body is what it knows (a member's bounding sphere may poke out of the body's:
+        a disk's is a sphere of its radius). Bit for bit the same hits: a ray that misses the
+        sphere misses every member. A group of one row is left alone."""
+        end = len(self.rows_f)
+        if end - first < 2:
+            return
+        centre, radius = sphere
+        if world and not self.frame.is_identity:
+            centre = self.frame.point(centre)
+        head = self.rows_f[first]
+        head[G.GBX : G.GBZ + 1], head[G.GBR] = centre, radius
+        self.rows_i[first][G.GROUP_END] = end
+
 
 def _stack_rows(rows: list[np.ndarray]) -> np.ndarray:
     """The float rows as one table: the geometry's N_FLOAT columns, or N_FLOAT_WITH_TABLE (the
@@ -1472,6 +1489,7 @@ def _add_led_bodies(t: _Table, scene: Scene, centres: np.ndarray, axes: np.ndarr
     common = {"tally_a": "LED bodies", "tally_b": "LED bodies"}
     for i, b in enumerate(led_bodies(scene.leds, centres, axes)):
         rot, rb = _frame(b.axis), b.radius
+        first = len(t.rows_f)
         if b.shape == "sphere":
             t.add(f"LED {i} body", G.SHAPE_SPHERE, b.centre, rot, (b.centre, rb * 1.000001),
                   radius=rb, **common)  # fmt: skip
@@ -1483,6 +1501,7 @@ def _add_led_bodies(t: _Table, scene: Scene, centres: np.ndarray, axes: np.ndarr
         t.add(f"LED {i} body (side)", G.SHAPE_CYLINDER, back, rot,
               (b.centre, math.hypot(rb, half) * 1.000001), radius=rb,
               clip_z=(0.0, b.length), **common)  # fmt: skip
+        t.group(first, (b.centre, math.hypot(rb, half) * 1.000001))  # the closed cylinder's
 
 
 def led_body_rows(names: list[str], k: int) -> list[int]:
@@ -1566,11 +1585,13 @@ def _add_lens_entrance(t: _Table, lf: np.ndarray) -> None:
     )
 
 
-def _add_camera_body(t: _Table, scene: Scene, lf: np.ndarray) -> None:
+def _add_camera_body(t: _Table, scene: Scene, lf: np.ndarray, first: int) -> None:
     """The camera's body (:class:`eyelume.scene.model.CameraBody`), camera frame: an absorbing
     annulus in the plane of the lens's first vertex from its clear aperture to the body's
     radius, a cylinder to ``length_mm`` behind it and a back disk (the ledger's "camera
-    body"). Raises SceneError for a body narrower than the lens's clear aperture."""
+    body"), grouped (:meth:`_Table.group`) with the rows from ``first`` on (the lens's
+    entrance) in the closed body's sphere, grown to hold those rows' bounding spheres. Raises
+    SceneError for a body narrower than the lens's clear aperture."""
     body = scene.camera.body_used
     if body is None:
         return
@@ -1592,6 +1613,23 @@ def _add_camera_body(t: _Table, scene: Scene, lf: np.ndarray) -> None:
           clip_z=(0.0, body.length_mm), **common)  # fmt: skip
     t.add("camera body (back)", G.SHAPE_CONIC, back_o, rot, (back_o, rb * 1.000001),
           clip_r=(0.0, rb), **common)  # fmt: skip
+    centre, radius = mid, math.hypot(rb, body.length_mm / 2) * 1.000001
+    for row in t.rows_f[first : len(t.rows_f) - 3]:  # the lens's entrance
+        centre, radius = _sphere_union(centre, radius, row[G.BX : G.BZ + 1], row[G.BR])
+    t.group(first, (centre, radius), world=False)
+
+
+def _sphere_union(c1, r1: float, c2, r2: float) -> tuple[np.ndarray, float]:
+    """The smallest sphere holding spheres (c1, r1) and (c2, r2): the larger one if it holds
+    the other, else the one whose diameter spans both along the line of their centres."""
+    c1, c2 = np.asarray(c1, dtype=float), np.asarray(c2, dtype=float)
+    d = float(np.linalg.norm(c2 - c1))
+    if d + r2 <= r1:
+        return c1, r1
+    if d + r1 <= r2:
+        return c2, r2
+    radius = (d + r1 + r2) / 2
+    return c1 + (c2 - c1) * ((radius - r1) / d), radius * (1 + 1e-12)
 
 
 def element_label(k: int, element: Element) -> str:
@@ -2488,8 +2526,9 @@ def compile_scene(
         led, omega = _led_table(scene, centres, axes, None if group is None else group.leds)
     if group is None:  # a group's LEDs were looked at in the nominal compile
         _check_leds_light_the_eye(scene, *world, led)
+    lens_row = len(t.rows_f)
     _add_lens_entrance(t, lens.lf)
-    _add_camera_body(t, scene, lens.lf)
+    _add_camera_body(t, scene, lens.lf, lens_row)
     if scene.elements:
         _check_elements(scene, *world)
         _check_elements_clear_of_camera(scene, lens.lf, frame)

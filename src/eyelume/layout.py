@@ -154,7 +154,7 @@ def _surface_points(sf: np.ndarray, si: np.ndarray, s: int, extent: float, cut: 
 
 def world_table(cs: CompiledScene) -> np.ndarray:
     """The surface table ``sf`` with each surface's placement (origin, rotation, bounding
-    sphere) turned from the camera frame back to the world frame."""
+    sphere and a group's sphere) turned from the camera frame back to the world frame."""
     f = cs.frame
     sf = cs.sf.copy()
     if f.is_identity:
@@ -164,6 +164,8 @@ def world_table(cs: CompiledScene) -> np.ndarray:
         sf[s, G.R00 : G.R22 + 1] = rot.ravel()
         sf[s, G.OX : G.OZ + 1] = f.world_point(sf[s, G.OX : G.OZ + 1])
         sf[s, G.BX : G.BZ + 1] = f.world_point(sf[s, G.BX : G.BZ + 1])
+        if cs.si[s, G.GROUP_END] > s:
+            sf[s, G.GBX : G.GBZ + 1] = f.world_point(sf[s, G.GBX : G.GBZ + 1])
     return sf
 
 

@@ -41,14 +41,20 @@ BX, BY, BZ, BR = 19, 20, 21, 22  # bounding sphere, world frame
 N_A, N_B = 23, 24  # refractive index on sides A and B
 REFL, ABSORB = 25, 26  # fixed reflectance and absorptance of a refracting interface
 RHO_A, RHO_B = 27, 28  # Lambertian reflectance of the faces of an opaque surface
-N_FLOAT = 29
+GBX, GBY, GBZ, GBR = 29, 30, 31, 32  # a group head's sphere about the whole group (GROUP_END)
+N_FLOAT = 33
 # an eyelash fringe's strands (SHAPE_LASHES), in columns after the geometry's
 LASH_COUNT, LASH_PITCH, LASH_HALF_WIDTH = N_FLOAT, N_FLOAT + 1, N_FLOAT + 2
 N_FLOAT_WITH_LASHES = N_FLOAT + 3
 
 # --- int columns -------------------------------------------------------------------------------
 SHAPE, ACTION, FRESNEL, TALLY_A, TALLY_B = 0, 1, 2, 3, 4
-N_INT = 5
+#: On the first row of a group (the rows of one small body: an LED's package, the camera's lens
+#: and body), the row after the group's last; 0 on every other row. The searches below skip the
+#: whole group when a ray misses the sphere (GBX, GBY, GBZ, GBR) that holds every member's
+#: bounding sphere: one test instead of one per member for most rays.
+GROUP_END = 5
+N_INT = 6
 
 SHAPE_CONIC, SHAPE_SPHERE, SHAPE_CYLINDER, SHAPE_QUADRIC, SHAPE_LASHES = 0, 1, 2, 3, 4
 ACT_REFRACT, ACT_OPAQUE, ACT_LENS = 0, 1, 2
@@ -239,21 +245,33 @@ def surface_normal(sf, si, s, x, y, z):
 def nearest_hit(sf, si, x, y, z, dx, dy, dz):
     """Non-sequential search: (surface, t) of the nearest hit along the ray, or (-1, inf).
 
-    A bounding sphere per surface rejects most candidates before the exact test.
+    A bounding sphere per surface rejects most candidates before the exact test, and one per
+    group of rows (``GROUP_END``) rejects the whole group at once.
     """
     best_t = math.inf
     best_s = -1
-    for s in range(sf.shape[0]):
+    n = sf.shape[0]
+    s = 0
+    while s < n:
+        end = si[s, GROUP_END]
+        if end > s:  # a group: all its members are missed if its sphere is
+            cx, cy, cz = sf[s, GBX] - x, sf[s, GBY] - y, sf[s, GBZ] - z
+            tc = cx * dx + cy * dy + cz * dz
+            br = sf[s, GBR]
+            d2 = cx * cx + cy * cy + cz * cz - tc * tc
+            if d2 > br * br or tc + br < 0.0 or tc - br > best_t:
+                s = end
+                continue
         cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
         tc = cx * dx + cy * dy + cz * dz
         br = sf[s, BR]
         d2 = cx * cx + cy * cy + cz * cz - tc * tc
-        if d2 > br * br or tc + br < 0.0 or tc - br > best_t:
-            continue
-        t = intersect_surface(sf, si, s, x, y, z, dx, dy, dz, best_t)
-        if t > 0.0:
-            best_t = t
-            best_s = s
+        if not (d2 > br * br or tc + br < 0.0 or tc - br > best_t):
+            t = intersect_surface(sf, si, s, x, y, z, dx, dy, dz, best_t)
+            if t > 0.0:
+                best_t = t
+                best_s = s
+        s += 1
     return best_s, best_t
 
 
@@ -262,24 +280,40 @@ def nearest_hit_within(sf, si, x, y, z, dx, dy, dz, gaps, cos_t):
     """:func:`nearest_hit` for a ray whose direction makes polar cosine ``cos_t`` with the
     normal n of the point it leaves, given ``gaps`` (:func:`free_cone_gaps` at that point and
     n): surface s is skipped when cos_t > gaps[s] (the direction lies within the cone about n
-    that surely misses it), the others tested as :func:`nearest_hit` tests them — the same
-    answer, bit for bit, at the cost of one comparison for each surface out of reach (most of
-    a skin vertex's continuation rays meet nothing, ~80 % on vr-offaxis)."""
+    that surely misses it; a group's first row holds the whole group's, so the group is
+    skipped), the others tested as :func:`nearest_hit` tests them — the same answer, bit for
+    bit, at the cost of one comparison for each surface out of reach (most of a skin vertex's
+    continuation rays meet nothing, ~80 % on vr-offaxis)."""
     best_t = math.inf
     best_s = -1
-    for s in range(sf.shape[0]):
-        if cos_t > gaps[s]:
+    n = sf.shape[0]
+    s = 0
+    while s < n:
+        end = si[s, GROUP_END]
+        if end > s:
+            if cos_t > gaps[s]:
+                s = end
+                continue
+            cx, cy, cz = sf[s, GBX] - x, sf[s, GBY] - y, sf[s, GBZ] - z
+            tc = cx * dx + cy * dy + cz * dz
+            br = sf[s, GBR]
+            d2 = cx * cx + cy * cy + cz * cz - tc * tc
+            if d2 > br * br or tc + br < 0.0 or tc - br > best_t:
+                s = end
+                continue
+        elif cos_t > gaps[s]:
+            s += 1
             continue
         cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
         tc = cx * dx + cy * dy + cz * dz
         br = sf[s, BR]
         d2 = cx * cx + cy * cy + cz * cz - tc * tc
-        if d2 > br * br or tc + br < 0.0 or tc - br > best_t:
-            continue
-        t = intersect_surface(sf, si, s, x, y, z, dx, dy, dz, best_t)
-        if t > 0.0:
-            best_t = t
-            best_s = s
+        if not (d2 > br * br or tc + br < 0.0 or tc - br > best_t):
+            t = intersect_surface(sf, si, s, x, y, z, dx, dy, dz, best_t)
+            if t > 0.0:
+                best_t = t
+                best_s = s
+        s += 1
     return best_s, best_t
 
 
@@ -288,35 +322,62 @@ def occluded(sf, si, x, y, z, dx, dy, dz, t_max):
     """Whether any surface meets the ray at a distance in (T_MIN, ``t_max``): the shadow-ray
     test of next-event estimation. The same answer as ``nearest_hit``'s ``t < t_max`` (a hit
     before ``t_max`` exists exactly when the nearest one is before it), but it prunes every
-    bounding sphere that lies beyond ``t_max`` from the start and stops at the first hit."""
-    for s in range(sf.shape[0]):
+    bounding sphere (and group sphere) that lies beyond ``t_max`` from the start and stops at
+    the first hit."""
+    n = sf.shape[0]
+    s = 0
+    while s < n:
+        end = si[s, GROUP_END]
+        if end > s:
+            cx, cy, cz = sf[s, GBX] - x, sf[s, GBY] - y, sf[s, GBZ] - z
+            tc = cx * dx + cy * dy + cz * dz
+            br = sf[s, GBR]
+            d2 = cx * cx + cy * cy + cz * cz - tc * tc
+            if d2 > br * br or tc + br < 0.0 or tc - br > t_max:
+                s = end
+                continue
         cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
         tc = cx * dx + cy * dy + cz * dz
         br = sf[s, BR]
         d2 = cx * cx + cy * cy + cz * cz - tc * tc
-        if d2 > br * br or tc + br < 0.0 or tc - br > t_max:
-            continue
-        if intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max) > 0.0:
-            return True
+        if not (d2 > br * br or tc + br < 0.0 or tc - br > t_max):
+            if intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max) > 0.0:
+                return True
+        s += 1
     return False
 
 
 @per_ray
 def occluded_within(sf, si, x, y, z, dx, dy, dz, t_max, gaps, cos_t):
     """:func:`occluded` for a ray leaving a vertex at polar cosine ``cos_t`` about its normal,
-    skipping the surfaces out of its reach (``gaps``, as :func:`nearest_hit_within`): the same
-    answer, bit for bit."""
-    for s in range(sf.shape[0]):
-        if cos_t > gaps[s]:
+    skipping the surfaces (and groups) out of its reach (``gaps``, as
+    :func:`nearest_hit_within`): the same answer, bit for bit."""
+    n = sf.shape[0]
+    s = 0
+    while s < n:
+        end = si[s, GROUP_END]
+        if end > s:
+            if cos_t > gaps[s]:
+                s = end
+                continue
+            cx, cy, cz = sf[s, GBX] - x, sf[s, GBY] - y, sf[s, GBZ] - z
+            tc = cx * dx + cy * dy + cz * dz
+            br = sf[s, GBR]
+            d2 = cx * cx + cy * cy + cz * cz - tc * tc
+            if d2 > br * br or tc + br < 0.0 or tc - br > t_max:
+                s = end
+                continue
+        elif cos_t > gaps[s]:
+            s += 1
             continue
         cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
         tc = cx * dx + cy * dy + cz * dz
         br = sf[s, BR]
         d2 = cx * cx + cy * cy + cz * cz - tc * tc
-        if d2 > br * br or tc + br < 0.0 or tc - br > t_max:
-            continue
-        if intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max) > 0.0:
-            return True
+        if not (d2 > br * br or tc + br < 0.0 or tc - br > t_max):
+            if intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max) > 0.0:
+                return True
+        s += 1
     return False
 
 
@@ -447,10 +508,12 @@ def free_cone_gaps(sf, si, own, x, y, z, nx, ny, nz, gaps):
     """:func:`free_cone` (the same value), and into ``gaps`` (n_surfaces,) for each surface s
     the polar cosine about n above which a direction from x surely misses it (2.0: none
     does; −2.0: ``own``, which a ray leaving it never meets again), what
-    :func:`nearest_hit_within` skips by. The surfaces :func:`free_cone` leaves out because they
-    send nothing back (the lens, the black bodies) are bounded all the same — a ray meeting one
-    ends there, so skipping it is not the same answer — except that a cheap test stands in
-    for their shapes: their bounding sphere (they are small)."""
+    :func:`nearest_hit_within` skips by; on a group's first row (``GROUP_END``) the largest
+    over the group, so that a direction beyond it misses every member. The surfaces
+    :func:`free_cone` leaves out because they send nothing back (the lens, the black bodies)
+    are bounded all the same — a ray meeting one ends there, so skipping it is not the same
+    answer — except that a cheap test stands in for their shapes: their bounding sphere
+    (they are small)."""
     cmax = -1.0
     blocked = False
     for s in range(sf.shape[0]):
@@ -462,6 +525,9 @@ def free_cone_gaps(sf, si, own, x, y, z, nx, ny, nz, gaps):
         if c > 1.0:
             blocked = True
         cmax = max(cmax, c)
+    for s in range(sf.shape[0]):  # a group's first row: the gap of the whole group
+        for m in range(s + 1, si[s, GROUP_END]):
+            gaps[s] = max(gaps[s], gaps[m])
     if blocked:
         return 0.0
     if cmax <= 0.0:
