@@ -879,7 +879,8 @@ def _blobs_near_pupil(
     near = [b for b in blobs if corneal(b)]
     if floor is None:
         return near
-    smoothed = glint_smoothing(img.shape, params) >= 0.5
+    sigma = glint_smoothing(img.shape, params)
+    smoothed = sigma >= 0.5
     if n_leds is not None and sum(b["area_px"] > 2 for b in near) >= n_leds:
         # As many glints of several pixels as LEDs: the smoothing lost none here, and the
         # search below (1.3 ms of a 640 × 400 frame's 7) would only add specks.
@@ -906,13 +907,18 @@ def _blobs_near_pupil(
     least = value_range[1] - 0.02 * (value_range[1] - value_range[0])
     if not smoothed and not any(b["peak"] >= least for b in near):
         return near
-    # (Only blobs of ≤ 2 px at the top can be taken: the others are not worked out.)
-    wanted = (2.0, least)
+    # A saturated square of side 3σ keeps erf(3 / (2√2))² = 0.75 of its rise at its centre
+    # after step 2's smoothing: enough lost to fall under step 2's threshold (glasses-frame at
+    # (−10°, 0°) since d4b7805: LED 3's glint, 3 × 3 px at 1016 DN with a skirt ≤ 870, smoothed
+    # under the threshold's 837 DN), so a smoothed picture's search takes up to (3σ)² px.
+    # (Only blobs that small at the top can be taken: the others are not worked out.)
+    max_area = max(2.0, (3.0 * sigma) ** 2) if smoothed else 2.0
+    wanted = (max_area, least)
     for b in glints_near(img, value_range, noise, (cx, cy), r_max, floor, params, wanted=wanted):
         x, y = b["centre_px"]
         c, r = min(cols - 1, max(0, round(x))), min(rows - 1, max(0, round(y)))
         new = not bright[r, c] if smoothed else all(math.dist(t, (x, y)) > 1.5 for t in taken)
-        if b["area_px"] <= 2 and b["peak"] >= least and corneal(b) and new:
+        if b["area_px"] <= max_area and b["peak"] >= least and corneal(b) and new:
             near.append(b)
     return near
 
