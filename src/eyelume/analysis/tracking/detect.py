@@ -854,7 +854,8 @@ def _blobs_near_pupil(
     beside a small pupil is no glint) and with a peak ``glint_level`` of the way from the
     blob's own background to the picture's top — and, when step 2 worked on a smoothed
     picture, those the smoothing lost there (:func:`~.glints.glints_near`: glints under a
-    pixel across) — ≤ 2 px, their peak within 2 % of the picture's top — whose centre is off
+    pixel across, or a 3σ square that σ's smoothing dims by a quarter) — ≤ max(2, (3σ)²) px,
+    their peak within 2 % of the picture's top — whose centre is off
     step 2's mask.
 
     The peak test is the pixel test of step 2 against the blob's background (the median
@@ -886,7 +887,7 @@ def _blobs_near_pupil(
         # search below (1.3 ms of a 640 × 400 frame's 7) would only add specks.
         return near
     rows, cols = bright.shape
-    # A glint the smoothing lost holds its LED's light in a pixel or two (≤ 2 px: a larger
+    # A glint the smoothing lost holds its LED's light in a few pixels (≤ (3σ)², below: a larger
     # saturated blob keeps its smoothed peak, and one step 2 did not find was left out for a
     # reason — glasses-frame at (0°, −20°): pieces of a saturated lid highlight 150 px above
     # the pupil), the brightest thing per pixel, at the top of the scale (within 2 % of it, as
