@@ -241,6 +241,18 @@ def surface_normal(sf, si, s, x, y, z):
     return dir_to_world(sf, s, nx, ny, nz)
 
 
+@njit(cache=True, inline="always")
+def _beyond_sphere(sf, s, c, x, y, z, dx, dy, dz, t_far):
+    """Whether the ray (origin x, unit d) surely misses what row ``s``'s sphere holds before
+    ``t_far``: the sphere in columns c … c + 3 (centre, radius: ``BX`` for the row's bounding
+    sphere, ``GBX`` for its group's) lies off the line, behind the origin or beyond t_far."""
+    cx, cy, cz = sf[s, c] - x, sf[s, c + 1] - y, sf[s, c + 2] - z
+    tc = cx * dx + cy * dy + cz * dz
+    br = sf[s, c + 3]
+    d2 = cx * cx + cy * cy + cz * cz - tc * tc
+    return d2 > br * br or tc + br < 0.0 or tc - br > t_far
+
+
 @per_ray
 def nearest_hit(sf, si, x, y, z, dx, dy, dz):
     """Non-sequential search: (surface, t) of the nearest hit along the ray, or (-1, inf).
@@ -255,18 +267,10 @@ def nearest_hit(sf, si, x, y, z, dx, dy, dz):
     while s < n:
         end = si[s, GROUP_END]
         if end > s:  # a group: all its members are missed if its sphere is
-            cx, cy, cz = sf[s, GBX] - x, sf[s, GBY] - y, sf[s, GBZ] - z
-            tc = cx * dx + cy * dy + cz * dz
-            br = sf[s, GBR]
-            d2 = cx * cx + cy * cy + cz * cz - tc * tc
-            if d2 > br * br or tc + br < 0.0 or tc - br > best_t:
+            if _beyond_sphere(sf, s, GBX, x, y, z, dx, dy, dz, best_t):
                 s = end
                 continue
-        cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
-        tc = cx * dx + cy * dy + cz * dz
-        br = sf[s, BR]
-        d2 = cx * cx + cy * cy + cz * cz - tc * tc
-        if not (d2 > br * br or tc + br < 0.0 or tc - br > best_t):
+        if not _beyond_sphere(sf, s, BX, x, y, z, dx, dy, dz, best_t):
             t = intersect_surface(sf, si, s, x, y, z, dx, dy, dz, best_t)
             if t > 0.0:
                 best_t = t
@@ -294,21 +298,13 @@ def nearest_hit_within(sf, si, x, y, z, dx, dy, dz, gaps, cos_t):
             if cos_t > gaps[s]:
                 s = end
                 continue
-            cx, cy, cz = sf[s, GBX] - x, sf[s, GBY] - y, sf[s, GBZ] - z
-            tc = cx * dx + cy * dy + cz * dz
-            br = sf[s, GBR]
-            d2 = cx * cx + cy * cy + cz * cz - tc * tc
-            if d2 > br * br or tc + br < 0.0 or tc - br > best_t:
+            if _beyond_sphere(sf, s, GBX, x, y, z, dx, dy, dz, best_t):
                 s = end
                 continue
         elif cos_t > gaps[s]:
             s += 1
             continue
-        cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
-        tc = cx * dx + cy * dy + cz * dz
-        br = sf[s, BR]
-        d2 = cx * cx + cy * cy + cz * cz - tc * tc
-        if not (d2 > br * br or tc + br < 0.0 or tc - br > best_t):
+        if not _beyond_sphere(sf, s, BX, x, y, z, dx, dy, dz, best_t):
             t = intersect_surface(sf, si, s, x, y, z, dx, dy, dz, best_t)
             if t > 0.0:
                 best_t = t
@@ -329,18 +325,10 @@ def occluded(sf, si, x, y, z, dx, dy, dz, t_max):
     while s < n:
         end = si[s, GROUP_END]
         if end > s:
-            cx, cy, cz = sf[s, GBX] - x, sf[s, GBY] - y, sf[s, GBZ] - z
-            tc = cx * dx + cy * dy + cz * dz
-            br = sf[s, GBR]
-            d2 = cx * cx + cy * cy + cz * cz - tc * tc
-            if d2 > br * br or tc + br < 0.0 or tc - br > t_max:
+            if _beyond_sphere(sf, s, GBX, x, y, z, dx, dy, dz, t_max):
                 s = end
                 continue
-        cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
-        tc = cx * dx + cy * dy + cz * dz
-        br = sf[s, BR]
-        d2 = cx * cx + cy * cy + cz * cz - tc * tc
-        if not (d2 > br * br or tc + br < 0.0 or tc - br > t_max):
+        if not _beyond_sphere(sf, s, BX, x, y, z, dx, dy, dz, t_max):
             if intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max) > 0.0:
                 return True
         s += 1
@@ -360,21 +348,13 @@ def occluded_within(sf, si, x, y, z, dx, dy, dz, t_max, gaps, cos_t):
             if cos_t > gaps[s]:
                 s = end
                 continue
-            cx, cy, cz = sf[s, GBX] - x, sf[s, GBY] - y, sf[s, GBZ] - z
-            tc = cx * dx + cy * dy + cz * dz
-            br = sf[s, GBR]
-            d2 = cx * cx + cy * cy + cz * cz - tc * tc
-            if d2 > br * br or tc + br < 0.0 or tc - br > t_max:
+            if _beyond_sphere(sf, s, GBX, x, y, z, dx, dy, dz, t_max):
                 s = end
                 continue
         elif cos_t > gaps[s]:
             s += 1
             continue
-        cx, cy, cz = sf[s, BX] - x, sf[s, BY] - y, sf[s, BZ] - z
-        tc = cx * dx + cy * dy + cz * dz
-        br = sf[s, BR]
-        d2 = cx * cx + cy * cy + cz * cz - tc * tc
-        if not (d2 > br * br or tc + br < 0.0 or tc - br > t_max):
+        if not _beyond_sphere(sf, s, BX, x, y, z, dx, dy, dz, t_max):
             if intersect_surface(sf, si, s, x, y, z, dx, dy, dz, t_max) > 0.0:
                 return True
         s += 1
