@@ -1489,19 +1489,19 @@ def _add_led_bodies(t: _Table, scene: Scene, centres: np.ndarray, axes: np.ndarr
     common = {"tally_a": "LED bodies", "tally_b": "LED bodies"}
     for i, b in enumerate(led_bodies(scene.leds, centres, axes)):
         rot, rb = _frame(b.axis), b.radius
-        first = len(t.rows_f)
         if b.shape == "sphere":
             t.add(f"LED {i} body", G.SHAPE_SPHERE, b.centre, rot, (b.centre, rb * 1.000001),
                   radius=rb, **common)  # fmt: skip
             continue
         half = b.length / 2
         front, back = b.centre + half * b.axis, b.centre - half * b.axis
+        closed = (b.centre, math.hypot(rb, half) * 1.000001)  # holds the whole closed cylinder
+        first = len(t.rows_f)
         t.add(f"LED {i} body", G.SHAPE_CONIC, front, rot, (front, rb * 1.000001),
               clip_r=(0.0, rb), **common)  # fmt: skip
-        t.add(f"LED {i} body (side)", G.SHAPE_CYLINDER, back, rot,
-              (b.centre, math.hypot(rb, half) * 1.000001), radius=rb,
+        t.add(f"LED {i} body (side)", G.SHAPE_CYLINDER, back, rot, closed, radius=rb,
               clip_z=(0.0, b.length), **common)  # fmt: skip
-        t.group(first, (b.centre, math.hypot(rb, half) * 1.000001))  # the closed cylinder's
+        t.group(first, closed)
 
 
 def led_body_rows(names: list[str], k: int) -> list[int]:
