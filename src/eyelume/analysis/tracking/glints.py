@@ -48,6 +48,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Sequence
 
@@ -190,7 +191,7 @@ def glints_near(  # noqa: PLR0913 - the picture, its scale, the place, what to r
     scale = 255.0 / (hi - lo)
     u8 = cv2.convertScaleAbs(sub, alpha=scale, beta=-lo * scale)
     floor8 = int(math.floor((floor - lo) * scale))
-    one = dataclasses.replace(params, glint_window_px=w, glint_close_px=1, glint_min_area_px=1)
+    one = _one_pixel_params(params, w)
     # (min_rise > 0 but below the noise's rise: the mask returned holds the blobs kept only)
     blobs, kept = glint_blobs(u8, sub, floor8, one, noise=noise, min_rise=1e-300, wanted=wanted)
     if mask is not None:
@@ -201,6 +202,14 @@ def glints_near(  # noqa: PLR0913 - the picture, its scale, the place, what to r
         if math.hypot(x - cx, y - cy) <= radius:
             out.append({**b, "centre_px": (x, y)})
     return out
+
+
+@functools.lru_cache(maxsize=16)
+def _one_pixel_params(params, w: int):
+    """``params`` with ``glint_window_px`` = w and one-pixel blobs taken
+    (:func:`glints_near`), made once per (params, w): ``dataclasses.replace`` builds all of
+    its ~66 fields anew (~40 µs a frame); params are frozen and hashable."""
+    return dataclasses.replace(params, glint_window_px=w, glint_close_px=1, glint_min_area_px=1)
 
 
 def _histogram(u8: np.ndarray) -> np.ndarray:

@@ -1341,14 +1341,20 @@ def _glints_beside(bright: np.ndarray, pupil_area: int, params) -> np.ndarray:
     and joined to the blob or grown by its radius it would take the pupil's outline with it.
     ``bright`` itself when nothing is dropped."""
     lim = params.glint_max_pupil_frac * pupil_area
-    if not cv2.countNonZero(bright):
+    # Labelled on the glints' bounding box only (the same components: there is nothing
+    # outside it), not on the whole window (a fifth of the cost on the synthetic 640 × 400).
+    bx, by, bw, bh = cv2.boundingRect(bright)
+    if not bw:
         return bright
-    n, lab, stats, _ = cv2.connectedComponentsWithStats(bright, connectivity=8)
+    box = bright[by : by + bh, bx : bx + bw]
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(box, connectivity=8)
     big = stats[:, cv2.CC_STAT_AREA] > lim
     big[0] = False
     if not big.any():
         return bright
-    return np.where(big[lab], 0, bright).astype(np.uint8)
+    out = bright.copy()
+    out[by : by + bh, bx : bx + bw] = np.where(big[lab], 0, box)
+    return out
 
 
 def _closed_solidity(comp: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, float]:
