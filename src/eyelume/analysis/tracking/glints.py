@@ -308,6 +308,13 @@ def glint_blobs(
         cv2.drawContours(others, fragments, -1, 0, thickness=-1)
     for c, approx_area in zip(tops, areas, strict=True):
         if params.glint_min_area_px <= approx_area <= 1.5 * max_area + 4:
+            if wanted is not None and bright is above and len(c) > wanted[0]:
+                # Unclosed, each point of the outline is a pixel of the blob: more distinct
+                # points than the largest area wanted, it is left out before its mask is drawn
+                # (most of glints_near's blobs are: lit skin, lashes' gaps).
+                xy = c.reshape(-1, 2).astype(np.int64)
+                if len(np.unique(xy[:, 1] * cols + xy[:, 0])) > wanted[0]:
+                    continue
             b = _blob(c, approx_area, above, others, img, (max_area, rise, noise, wanted), params)
             if b is not None:
                 blobs.append(b)
