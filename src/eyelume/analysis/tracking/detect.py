@@ -101,7 +101,7 @@ from eyelume.analysis.tracking.pupil import (
     Ellipse,
     find_pupil,
     noise_sigma,
-    percentile,
+    percentiles,
     sampson_distance,
     support_of,
 )
@@ -489,17 +489,19 @@ def _black_border(img: np.ndarray, min_frac: float = 0.005) -> np.ndarray | None
     return np.isin(lab, on_edge)
 
 
-def _mend_hot_pixels(img: np.ndarray, noise: float) -> int:
+def _mend_hot_pixels(img: np.ndarray, noise: float, q: float) -> tuple[int, float | None]:
     """Isolated hot pixels (stuck or defective: above the 99.9th percentile and 8 σ of the pixel
     noise above all 8 neighbours, which are flat within 8 σ) take the median of those
-    neighbours, in place; returns how many. A glint, spread by the optics, lights some of its
-    neighbours more than others; a hot pixel alone would set the picture's range and hide the
-    glints."""
+    neighbours, in place; returns how many, and the ``q``-th percentile of the pixels that 99.9th
+    is taken over (every k-th each way, :func:`~.pupil._stride`: ``work_picture``'s, from the
+    same count) when none was mended (else, or for a picture under 3 px a side, None). A glint,
+    spread by the optics, lights some of its neighbours more than others; a hot pixel alone
+    would set the picture's range and hide the glints."""
     rows, cols = img.shape
     if rows < 3 or cols < 3:
-        return 0
+        return 0, None
     step = max(1, int(math.sqrt(img.size / 2e4)))
-    thr = percentile(img[::step, ::step], 99.9)
+    thr, pct = percentiles(img[::step, ::step], (99.9, q))
     # I > t ⇔ I > ⌊t⌋ for integers; cv2.compare is ~10× NumPy's comparison here.
     t = float(math.floor(thr)) if img.dtype.kind in "iu" else float(thr)
     above = cv2.compare(img, t, cv2.CMP_GT)
@@ -509,13 +511,14 @@ def _mend_hot_pixels(img: np.ndarray, noise: float) -> int:
     # at 640 × 400).
     hit = np.flatnonzero(cv2.reduce(above, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel())
     if not len(hit):
-        return 0
+        return 0, pct
     # cv2.findNonZero on those rows: (x, row) in row order, as np.nonzero (6 × its speed). The
     # rest — their 8 neighbours' range and median (float64, the median the mean of the middle
     # two, cast back to the picture's type), all judged before any is mended — in one compiled
     # pass (:func:`_mend_alone`; the NumPy gather and reductions it replaces cost ~0.1 ms).
     found = cv2.findNonZero(above[hit]).reshape(-1, 2)
-    return _mend_alone(img, found, hit, 8.0 * noise, 0.01 * img.size)
+    n = _mend_alone(img, found, hit, 8.0 * noise, 0.01 * img.size)
+    return n, (None if n else pct)
 
 
 @njit(cache=True, nogil=True)
@@ -565,11 +568,13 @@ def _mend_alone(img, found, hit, k_sigma, max_count):
     return m
 
 
-def _prepare(image: np.ndarray, valid: np.ndarray | None):
+def _prepare(image: np.ndarray, valid: np.ndarray | None, q: float):
     """Step 1: the picture as a contiguous array (uint8/uint16/int16/float32 kept, other reals
     converted), its small enclosed non-finite holes filled (:func:`_fill_holes`), its invalid
     pixels (non-finite, or outside ``valid``; ``None`` when none) set to the darkest valid value,
-    its range (min, max), its pixel noise and the counts (hot pixels, black border, filled).
+    its range (min, max), its pixel noise, the counts (hot pixels, black border, filled) and,
+    when known, the working picture's scale (:func:`~.pupil.work_picture`'s ``scale``: its
+    (min, max, ``q``-th percentile), which needs no pixel left out nor mended; else None).
     (The glints' 8-bit picture is made by :func:`~.glints.find_glints`, from the smoothed
     picture when it smooths.)
     Raises ValueError for a picture that is not 2-D, empty, or has no valid pixel."""
@@ -597,9 +602,10 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None):
         n_black = int(black.sum()) if invalid is None else int((black & ~invalid).sum())
         invalid = black if invalid is None else invalid | black
     noise = max(noise_sigma(img), 0.5 if img.dtype.kind in "iu" else 0.0)
-    n_hot = _mend_hot_pixels(img, noise)
+    n_hot, pct = _mend_hot_pixels(img, noise, q)
     lo, hi, _, _ = cv2.minMaxLoc(img)
-    return img, invalid, float(lo), float(hi), (n_hot, noise, n_black, n_filled)
+    scale = (lo, hi, pct) if invalid is None and pct is not None else None
+    return img, invalid, float(lo), float(hi), (n_hot, noise, n_black, n_filled), scale
 
 
 def _pupil_result(fit, params) -> tuple[Pupil | None, list[str], object]:
@@ -1256,7 +1262,8 @@ def detect(
             )
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    img, invalid, lo, hi, (n_hot, noise, n_black, n_filled) = _prepare(image, valid)
+    prepared = _prepare(image, valid, params.scale_percentile)
+    img, invalid, lo, hi, (n_hot, noise, n_black, n_filled), scale = prepared
     if hi <= lo:
         timings["total"] = 1e3 * (time.perf_counter() - t_start)
         return Detection(
@@ -1268,7 +1275,12 @@ def detect(
     t2 = time.perf_counter()
     timings["glints"] = 1e3 * (t2 - t1)
     fit = find_pupil(
-        img, invalid, bright, params, _sharp_glints(img, (lo, hi), noise, tg_value, params)
+        img,
+        invalid,
+        bright,
+        params,
+        _sharp_glints(img, (lo, hi), noise, tg_value, params),
+        scale=scale,
     )
     pupil, errors, fit = _pupil_result(fit, params)
     pupil_notes = [m for m in errors if m.startswith("warning: ")]

@@ -466,13 +466,14 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     tot = float(wgt.sum())
     if tot <= 0:
         return None
+    wtot = tot  # (the flux stays the light above the median: specks, fragments)
     if (
         spread > _UNEVEN_SPREAD * noise
         and spread > _UNEVEN_SHARE * (peak - base)
         and np.count_nonzero(wgt >= 0.98 * wgt.max()) >= 3
     ):
         wgt = _uneven_surround(raw, wgt, d_own, d_oth, has_others, float(m))
-    wtot = float(wgt.sum())  # (the flux stays the light above the median: specks, fragments)
+        wtot = float(wgt.sum())
     xs = np.arange(x0, x1, dtype=np.float64)
     ys = np.arange(y0, y1, dtype=np.float64)
     cx = float((wgt.sum(axis=0) * xs).sum() / wtot)

@@ -823,19 +823,29 @@ def _fill_glints(roi: np.ndarray, bright: np.ndarray, params) -> None:
 
 
 def work_picture(
-    img: np.ndarray, invalid: np.ndarray | None, bright: np.ndarray | None, params
+    img: np.ndarray,
+    invalid: np.ndarray | None,
+    bright: np.ndarray | None,
+    params,
+    scale: tuple[float, float, float] | None = None,
 ) -> WorkPicture | Refusal:
     """Step 1 (module doc): the 8-bit working picture, or a refusal for a featureless one.
 
     Glint pixels (``bright``, uint8 0/255) take the darkest value around them
     (:func:`_fill_glints`): a glint inside the pupil would otherwise punch a hole in the dark
-    blob and move its centroid off it."""
-    step = _stride(img.size)
-    sub = img[::step, ::step]
-    vals = sub[~invalid[::step, ::step]] if invalid is not None else sub.ravel()
-    mask = None if invalid is None else (~invalid).astype(np.uint8)
-    lo, top, _, _ = cv2.minMaxLoc(img, mask)
-    hi = percentile(vals, params.scale_percentile) if vals.size else top
+    blob and move its centroid off it. ``scale``: (min, max, ``scale_percentile``) of the valid
+    pixels as worked out here — min and max of all, the percentile of every k-th each way
+    (:func:`_stride`) — when the caller has them (``detect`` counts that percentile with the
+    hot pixels' 99.9th, over the same pixels)."""
+    if scale is not None:
+        lo, top, hi = scale
+    else:
+        step = _stride(img.size)
+        sub = img[::step, ::step]
+        vals = sub[~invalid[::step, ::step]] if invalid is not None else sub.ravel()
+        mask = None if invalid is None else (~invalid).astype(np.uint8)
+        lo, top, _, _ = cv2.minMaxLoc(img, mask)
+        hi = percentile(vals, params.scale_percentile) if vals.size else top
     if hi <= lo:
         hi = top
     if hi <= lo:
@@ -2069,7 +2079,9 @@ def _whole(fit: PupilFit, params) -> bool:
     return fit.support >= params.min_boundary_support and fit.gap <= params.max_boundary_gap
 
 
-def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params, sharp=None) -> PupilFit:
+def find_pupil(
+    img: np.ndarray, invalid, bright: np.ndarray, params, sharp=None, scale=None
+) -> PupilFit:
     """Find and fit the pupil (module doc, steps 1–7). ``img`` (rows, cols) float32/float64 or
     integer, the input's own units, with invalid pixels (``invalid``, bool or None) holding any
     finite value; ``bright`` the glint mask (uint8, 0/255). The first of the chosen candidates
@@ -2077,8 +2089,8 @@ def find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params, sharp=None)
     :class:`PupilFit` with ``ellipse`` None and the first candidate's refusal. ``sharp``: an
     optional function giving more glints (uint8 0/255) for :func:`_small_pupil` — those of
     the unsmoothed picture, one pixel each on a small sensor, which would notch a small
-    pupil's blob."""
-    wp = work_picture(img, invalid, bright, params)
+    pupil's blob. ``scale``: :func:`work_picture`'s, when known."""
+    wp = work_picture(img, invalid, bright, params, scale)
     if not wp:
         return PupilFit(None, reason=wp.reason)
     reduced = _reduced(wp, params)
