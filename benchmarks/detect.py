@@ -84,6 +84,29 @@ call old / new: openeds 000160 5.98/5.73, 5.90/5.62, 5.94/5.56, 7.25/5.56; 00017
 1.28 ms (its 24 run hypotheses 0.89), the glints' step 2 1.09 (Gaussian 0.23, bright masks
 0.33), the working picture 0.61, the ladder 0.55, the glint fill 0.40, the full-resolution
 blob 0.33; nothing there repeats work the answer does not use.
+
+Session 17 (3e8827d, 346e3e6, f57eade; answers identical on 613 (picture, LEDs) pairs: the 255
+realdata pictures, 144 renders 87 × 65 to 1024 × 768, 24 synthetic frames with and without
+LEDs, 24 close-ups): the glints' one-pixel search reuses its ``DetectParams``
+(``dataclasses.replace`` of 66 fields, ~40 µs a frame) and leaves out, before drawing its mask,
+a blob whose outline alone has more pixels than the largest area it takes (8, 7, 3 of the ~10
+a frame on the openeds frames); a dark blob's big bright neighbours labelled on the glints' box,
+not the blob's whole window (~0.15 ms on the synthetic frame); the working picture's scale
+taken from step 1 (the 99th percentile counted with the hot pixels' 99.9th over the same
+pixels, step 1's min and max) when no pixel is missing or mended. Interleaved A/B against
+2ebea58 (two processes alternating batches of 15 calls per frame, 12 rounds, one thread, load
+1.3), median CPU ms per batch old/new: synthetic 640 × 400 5.67/6.11, 5.06/4.54, 4.70/4.40,
+4.77/4.35, 5.66/4.37, 4.99/5.34, 6.35/4.39, 5.06/4.49, 5.07/4.61, 4.48/4.24, 4.50/4.18,
+4.56/4.33 (median ratio 0.92; best call 4.36 → 3.93); openeds 000160 5.55/7.97, 5.94/5.74,
+6.23/5.75, 5.89/5.86, 6.63/7.41, 7.74/7.90, 6.17/5.96, 8.26/5.54, 5.74/5.40, 5.43/5.38,
+5.48/5.93, 5.77/5.39 (0.98; 5.30 → 5.16); 000170 0.945 (4.21 → 4.01); 000180 0.935 (4.04 →
+3.84). Tried and not kept: working out step 2's blobs (skirt, centroid) only for those near
+the pupil found — on these frames every blob is within the search radius (2 × the pupil's
+major axis, 115 px) and passes, so nothing was saved. Not cut, as the answers would change:
+000160's 26 run hypotheses (one ``cv2.fitEllipse`` each, ~0.5 ms: each run's spread about its
+own fit can set σ, and every fit's inlier count can win). The rest is spread over ~40 steps of
+0.03–0.3 ms each (whole-frame OpenCV passes: the glints' Gaussian, 8-bit scaling and histogram,
+the ladder's 7–13 labellings, the glints' fill), none repeating work the answer does not use.
 """
 
 from __future__ import annotations
