@@ -2345,6 +2345,7 @@ def _camera_tables(  # noqa: PLR0913 - the compiled parts it is made of
         _iris_grid(scene.run),
         *_element_chains(scene, surfaces, names, led_points, cornea),
         _glint_aims(scene, frame, surfaces, cornea, led_points, (ep_z, ep_r)),
+        G.dark_tail(surfaces.sf, surfaces.si),
     )
 
 

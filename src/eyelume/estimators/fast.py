@@ -438,10 +438,15 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch, c
     has_branch = False
     s0 = 0.0
     for event in range(scene.max_events):
+        # a camera path's searches pass over the dark tail unless a lit row is met (the
+        # same light: a ray that meets only the dark rows ends with nothing, as one that
+        # meets nothing does)
         if event == 0 and cos0 > -2.0:
-            s, t = G.nearest_hit_within(sf, si, x, y, z, dx, dy, dz, scratch.gaps, cos0)
+            s, t = G.nearest_lit_hit_within(
+                sf, si, x, y, z, dx, dy, dz, scratch.gaps, cos0, cam.dark_from
+            )
         else:
-            s, t = G.nearest_hit(sf, si, x, y, z, dx, dy, dz)
+            s, t = G.nearest_lit_hit(sf, si, x, y, z, dx, dy, dz, cam.dark_from)
         if s < 0:
             break
         action = si[s, G.ACTION]

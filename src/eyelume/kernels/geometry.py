@@ -254,17 +254,12 @@ def _beyond_sphere(sf, s, c, x, y, z, dx, dy, dz, t_far):
 
 
 @per_ray
-def nearest_hit(sf, si, x, y, z, dx, dy, dz):
-    """Non-sequential search: (surface, t) of the nearest hit along the ray, or (-1, inf).
-
-    A bounding sphere per surface rejects most candidates before the exact test, and one per
-    group of rows (``GROUP_END``) rejects the whole group at once.
-    """
-    best_t = math.inf
-    best_s = -1
-    n = sf.shape[0]
-    s = 0
-    while s < n:
+def _nearest_in(sf, si, first, last, x, y, z, dx, dy, dz, best_s, best_t):
+    """The nearest hit nearer than ``best_t`` among rows ``first`` … ``last`` − 1 (``first`` a
+    group's first row or a row outside any group), or (``best_s``, ``best_t``) if none: the
+    search loop of :func:`nearest_hit`. A group that reaches past ``last`` is searched whole."""
+    s = first
+    while s < last:
         end = si[s, GROUP_END]
         if end > s:  # a group: all its members are missed if its sphere is
             if _beyond_sphere(sf, s, GBX, x, y, z, dx, dy, dz, best_t):
@@ -280,19 +275,11 @@ def nearest_hit(sf, si, x, y, z, dx, dy, dz):
 
 
 @per_ray
-def nearest_hit_within(sf, si, x, y, z, dx, dy, dz, gaps, cos_t):
-    """:func:`nearest_hit` for a ray whose direction makes polar cosine ``cos_t`` with the
-    normal n of the point it leaves, given ``gaps`` (:func:`free_cone_gaps` at that point and
-    n): surface s is skipped when cos_t > gaps[s] (the direction lies within the cone about n
-    that surely misses it; a group's first row holds the whole group's, so the group is
-    skipped), the others tested as :func:`nearest_hit` tests them — the same answer, bit for
-    bit, at the cost of one comparison for each surface out of reach (most of a skin vertex's
-    continuation rays meet nothing, ~80 % on vr-offaxis)."""
-    best_t = math.inf
-    best_s = -1
-    n = sf.shape[0]
-    s = 0
-    while s < n:
+def _nearest_in_within(sf, si, first, last, x, y, z, dx, dy, dz, gaps, cos_t, best_s, best_t):  # noqa: PLR0913
+    """:func:`_nearest_in` skipping the rows (and groups) out of reach
+    (:func:`nearest_hit_within`)."""
+    s = first
+    while s < last:
         end = si[s, GROUP_END]
         if end > s:
             if cos_t > gaps[s]:
@@ -311,6 +298,75 @@ def nearest_hit_within(sf, si, x, y, z, dx, dy, dz, gaps, cos_t):
                 best_s = s
         s += 1
     return best_s, best_t
+
+
+@per_ray
+def nearest_hit(sf, si, x, y, z, dx, dy, dz):
+    """Non-sequential search: (surface, t) of the nearest hit along the ray, or (-1, inf).
+
+    A bounding sphere per surface rejects most candidates before the exact test, and one per
+    group of rows (``GROUP_END``) rejects the whole group at once.
+    """
+    return _nearest_in(sf, si, 0, sf.shape[0], x, y, z, dx, dy, dz, -1, math.inf)
+
+
+@per_ray
+def nearest_hit_within(sf, si, x, y, z, dx, dy, dz, gaps, cos_t):
+    """:func:`nearest_hit` for a ray whose direction makes polar cosine ``cos_t`` with the
+    normal n of the point it leaves, given ``gaps`` (:func:`free_cone_gaps` at that point and
+    n): surface s is skipped when cos_t > gaps[s] (the direction lies within the cone about n
+    that surely misses it; a group's first row holds the whole group's, so the group is
+    skipped), the others tested as :func:`nearest_hit` tests them — the same answer, bit for
+    bit, at the cost of one comparison for each surface out of reach (most of a skin vertex's
+    continuation rays meet nothing, ~80 % on vr-offaxis)."""
+    n = sf.shape[0]
+    return _nearest_in_within(sf, si, 0, n, x, y, z, dx, dy, dz, gaps, cos_t, -1, math.inf)
+
+
+@per_ray
+def nearest_lit_hit(sf, si, x, y, z, dx, dy, dz, dark_from):
+    """:func:`nearest_hit` for a camera path, to which the rows from ``dark_from`` on are dark
+    (:func:`dark_tail`: each one ends the path and sends it no light): those rows are searched
+    only when a lit row is met, and only nearer than it, since a ray that meets no lit row
+    brings nothing back whether or not it meets a dark one. (surface, t) as :func:`nearest_hit`
+    when a lit row is met — a dark row in front of it included — else (-1, inf), where
+    :func:`nearest_hit` may name a dark row: to the camera path the same (nothing)."""
+    s, t = _nearest_in(sf, si, 0, dark_from, x, y, z, dx, dy, dz, -1, math.inf)
+    if s < 0:
+        return s, t
+    return _nearest_in(sf, si, dark_from, sf.shape[0], x, y, z, dx, dy, dz, s, t)
+
+
+@per_ray
+def nearest_lit_hit_within(sf, si, x, y, z, dx, dy, dz, gaps, cos_t, dark_from):  # noqa: PLR0913
+    """:func:`nearest_lit_hit` with :func:`nearest_hit_within`'s skipping of the rows out of
+    reach."""
+    s, t = _nearest_in_within(sf, si, 0, dark_from, x, y, z, dx, dy, dz, gaps, cos_t, -1, math.inf)
+    if s < 0:
+        return s, t
+    n = sf.shape[0]
+    return _nearest_in_within(sf, si, dark_from, n, x, y, z, dx, dy, dz, gaps, cos_t, s, t)
+
+
+def dark_tail(sf, si) -> int:
+    """The first row of the table's dark tail: the longest run of last rows each of which ends
+    a camera path without sending it light — the lens's entrance (``ACT_LENS``) or an opaque
+    surface black on both faces (``RHO_A`` = ``RHO_B`` = 0: the LED packages and the camera's
+    body) — moved up to a group's end if it falls inside one. ``sf.shape[0]`` when the last row
+    is not dark. Read by :func:`nearest_lit_hit` (``CameraTables.dark_from``)."""
+    n = sf.shape[0]
+    first = n
+    while first > 0:
+        s = first - 1
+        lens = si[s, ACTION] == ACT_LENS
+        black = si[s, ACTION] == ACT_OPAQUE and sf[s, RHO_A] <= 0.0 and sf[s, RHO_B] <= 0.0
+        if not (lens or black):
+            break
+        first = s
+    for s in range(first):
+        if si[s, GROUP_END] > first:  # a group that straddles it is searched whole
+            first = int(si[s, GROUP_END])
+    return int(first)
 
 
 @per_ray

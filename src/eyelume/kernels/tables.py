@@ -185,7 +185,12 @@ class CameraTables(NamedTuple):
     ``glint_aim`` (n_leds, GLINT_AIM_COLS) float64: per LED the cone its light paths aim at
     the cornea's specular point for the camera (the glint): unit axis (camera frame), cos of
     its half-angle, and the share of the LED's cornea-leg draws aimed in it (0: none, every
-    draw in the cone that holds the cornea; :mod:`eyelume.estimators.fast`)."""
+    draw in the cone that holds the cornea; :mod:`eyelume.estimators.fast`).
+
+    ``dark_from``: the first row of the surface table's dark tail
+    (:func:`eyelume.kernels.geometry.dark_tail`: the LED packages, the camera's body and lens
+    entrance when they come last), which a camera path searches only behind a lit row it meets
+    (:func:`eyelume.kernels.geometry.nearest_lit_hit`); the row count when there is none."""
 
     lf_rev: np.ndarray
     lf_open: np.ndarray
@@ -204,6 +209,7 @@ class CameraTables(NamedTuple):
     element_rows: np.ndarray
     chains: np.ndarray
     glint_aim: np.ndarray
+    dark_from: int
 
 
 class SceneTables(NamedTuple):
