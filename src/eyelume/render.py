@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
@@ -67,7 +68,7 @@ from eyelume.detectors.sensor import (
     quantum_efficiency_at,
     sunlight_band,
 )
-from eyelume.errors import SceneError
+from eyelume.errors import EyelumeWarning, SceneError
 from eyelume.estimators.fast_run import RunControl, direct_eye_plane, trace_fast, warm_up
 from eyelume.estimators.forward import trace_forward, trace_paths
 from eyelume.estimators.statistics import median_pixel_rel_error
@@ -773,7 +774,7 @@ def _render_leds(
             seed,
             opt.rel_error,
             status,
-            regions["skin"],
+            _judged_pixels(regions, opt),
             control=_run_control(cs, advance, opt),
         )
         plane = direct_eye_plane(cs, seed)
@@ -833,6 +834,22 @@ def _render_leds(
         **_Blur.facts([blur], [variance]),
         **extents,
     )
+
+
+def _judged_pixels(regions: dict, opt: RenderOptions) -> np.ndarray | None:
+    """The pixels whose median relative error a ``rel_error`` render is judged by: the skin's
+    (``regions["skin"]``), or — a picture that holds no skin, e.g. a small sensor on the eye —
+    None, every pixel with signal, with an :class:`~eyelume.errors.EyelumeWarning` saying so
+    (the skin's median would never be known, and the run would go on to its cap)."""
+    skin = regions["skin"]
+    if opt.rel_error is None or skin.any():
+        return skin
+    warnings.warn(
+        "the picture holds no skin pixel: rel_error is judged by the median pixel with signal",
+        EyelumeWarning,
+        stacklevel=4,
+    )
+    return None
 
 
 def _run_control(cs: CompiledScene, advance, opt: RenderOptions) -> RunControl:
@@ -958,7 +975,7 @@ def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> Render
     light = int(round(sc.run.light_paths_per_pixel * pixels * spp / 16))
     plane = np.zeros(groups.plane_shape)
     glints = np.zeros((sc.leds.count, *groups.shape))
-    skin = groups.regions["skin"]
+    skin = _judged_pixels(groups.regions, opt)
     ests, parts, done, blurs = [], [], [0], []
 
     def advance_in(d: int, planned: int) -> None:
@@ -991,7 +1008,7 @@ def _groups_fast(groups: _Groups, opt: RenderOptions, status, advance) -> Render
     dof = min(e.variance_dof for e in ests)
     reached = err = None
     if opt.rel_error is not None:  # the delivered sum's own error, not the groups'
-        m = skin & (image > 0) & np.isfinite(image)
+        m = (image > 0) & np.isfinite(image) & (True if skin is None else skin)
         e = median_pixel_rel_error(image[m], variance[m], dof) if m.any() else math.inf
         reached, err = e <= opt.rel_error, (e if math.isfinite(e) else None)
     return RenderResult(

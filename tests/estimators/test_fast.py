@@ -415,3 +415,36 @@ def test_pilot_skips_only_grids_that_could_not_be_chosen(paper_compiled, monkeyp
     monkeypatch.setattr(F, "camera_pass", spy)
     assert fast_run._pilot(cs, seed, target, rel_error, ratio) == best[:2]
     assert traced == expect_traced
+
+
+def test_rel_error_on_a_picture_without_skin_is_judged_by_every_lit_pixel():
+    """vr-offaxis's 3 µm pixels on a 100 × 100 sensor see the eye only, no skin: a ``rel_error``
+    render says so (one warning) and is judged by the median pixel with signal, instead of going
+    on to its cap with the skin's median never known (before: to 4096 samples per pixel, and the
+    CLI's progress line ended in an OverflowError)."""
+    from eyelume.errors import EyelumeWarning
+    from eyelume.estimators.statistics import median_pixel_rel_error
+
+    sc = eyelume.load_scene("vr-offaxis", {"sensor.cols": 100, "sensor.rows": 100})
+    opt = eyelume.RenderOptions(estimator="fast", rel_error=0.02, seed=1, max_samples_per_pixel=64)
+    with pytest.warns(EyelumeWarning, match="no skin pixel"):
+        r = eyelume.render(sc, opt)
+    assert not r.regions["skin"].any()
+    m = r.eye_image > 0
+    err = median_pixel_rel_error(r.eye_image[m], r.eye_image_variance[m], r.variance_dof)
+    assert r.target_reached and err <= 0.02 and r.samples_per_pixel < 64
+    assert r.rel_error_achieved == pytest.approx(err, rel=1e-9)
+
+
+def test_over_cap_message_with_the_error_not_known():
+    """The progress line for a target whose projection is not finite names no number."""
+    from eyelume.estimators.fast_run import _over_cap
+
+    said = []
+    _over_cap(said.append, 0.01, math.inf, 64)
+    _over_cap(said.append, 0.01, 100.4, 64)
+    assert said == [
+        "the target 0.01 needs an unknown number of samples per pixel, over the cap of 64: "
+        "rendering to the cap",
+        "the target 0.01 needs ~100 samples per pixel, over the cap of 64: rendering to the cap",
+    ]

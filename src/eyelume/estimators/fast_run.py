@@ -415,8 +415,9 @@ def _say(progress, run: _Run, err: float | None = None) -> None:
 
 def _over_cap(progress, rel_error: float, samples: float, cap: int) -> None:
     if progress and samples > cap:
+        need = f"~{int(samples)}" if math.isfinite(samples) else "an unknown number of"
         progress(
-            f"the target {rel_error:g} needs ~{int(samples)} samples per pixel, over the cap "
+            f"the target {rel_error:g} needs {need} samples per pixel, over the cap "
             f"of {cap}: rendering to the cap"
         )
 
