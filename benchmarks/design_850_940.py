@@ -162,10 +162,14 @@ def _args():
 
 def _stop_timer(stop_at: str | None) -> None:
     """SIGINT to this process at ``stop_at`` (UTC HH:MM today): run_tasks stops its workers and
-    the people finished are reported."""
+    the people finished are reported. Started in the background by a shell without job control
+    (``… &`` in a script), a process inherits SIGINT ignored and Python installs no handler for
+    it, so the timer's SIGINT (and Ctrl-C's) would do nothing: the handler is put back here."""
     if not stop_at:
         return
     import signal
+
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
     h, m = (int(x) for x in stop_at.split(":"))
     now = dt.datetime.now(dt.UTC)
