@@ -99,6 +99,7 @@ from eyelume.analysis.tracking.glints import (
 )
 from eyelume.analysis.tracking.pupil import (
     Ellipse,
+    _stride,
     find_pupil,
     noise_sigma,
     percentiles,
@@ -500,7 +501,7 @@ def _mend_hot_pixels(img: np.ndarray, noise: float, q: float) -> tuple[int, floa
     rows, cols = img.shape
     if rows < 3 or cols < 3:
         return 0, None
-    step = max(1, int(math.sqrt(img.size / 2e4)))
+    step = _stride(img.size)  # work_picture's: the same pixels for both percentiles
     thr, pct = percentiles(img[::step, ::step], (99.9, q))
     # I > t ⇔ I > ⌊t⌋ for integers; cv2.compare is ~10× NumPy's comparison here.
     t = float(math.floor(thr)) if img.dtype.kind in "iu" else float(thr)
