@@ -481,7 +481,9 @@ class RenderOptions:
         ``run.light_paths_per_pixel`` light paths per pixel and per 16 samples).
     rel_error : float or None
         Fast: keep adding rounds until the median skin pixel's relative standard error is this
-        (a fraction, e.g. 0.01) or ``max_samples_per_pixel`` is reached (``target_reached``).
+        (a fraction, e.g. 0.01) or ``max_samples_per_pixel`` is reached (``target_reached``); in
+        a picture that holds no skin pixel, the median pixel with signal's (an
+        :class:`~eyelume.errors.EyelumeWarning` says so).
     max_samples_per_pixel : int or None
         Fast, with ``rel_error``: the cap on samples per pixel (default: no cap below the fast
         run's hard limit, :class:`eyelume.estimators.fast_run.RunControl`; the CLI passes
