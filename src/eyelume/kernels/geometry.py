@@ -352,17 +352,12 @@ def dark_tail(sf, si) -> int:
     """The first row of the table's dark tail: the longest run of last rows each of which ends
     a camera path without sending it light — the lens's entrance (``ACT_LENS``) or an opaque
     surface black on both faces (``RHO_A`` = ``RHO_B`` = 0: the LED packages and the camera's
-    body) — moved up to a group's end if it falls inside one. ``sf.shape[0]`` when the last row
-    is not dark. Read by :func:`nearest_lit_hit` (``CameraTables.dark_from``)."""
-    n = sf.shape[0]
-    first = n
-    while first > 0:
-        s = first - 1
-        lens = si[s, ACTION] == ACT_LENS
-        black = si[s, ACTION] == ACT_OPAQUE and sf[s, RHO_A] <= 0.0 and sf[s, RHO_B] <= 0.0
-        if not (lens or black):
-            break
-        first = s
+    body; :func:`_sends_nothing`) — moved up to a group's end if it falls inside one.
+    ``sf.shape[0]`` when the last row is not dark. Read by :func:`nearest_lit_hit`
+    (``CameraTables.dark_from``)."""
+    first = sf.shape[0]
+    while first > 0 and _sends_nothing(sf, si, first - 1):
+        first -= 1
     for s in range(first):
         if si[s, GROUP_END] > first:  # a group that straddles it is searched whole
             first = int(si[s, GROUP_END])
