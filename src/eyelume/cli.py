@@ -748,9 +748,7 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
         err.print(
             f"[yellow]warning:[/] --rel-error {rel_error:g} not reached within "
             f"{result.samples_per_pixel:,} samples per pixel (--max-samples {max_samples:,}): "
-            f"reached {got:.4g}"
-            if got is not None
-            else "nothing",
+            + (f"reached {got:.4g}" if got is not None else "reached nothing"),
             highlight=False,
         )
     return result

@@ -448,3 +448,12 @@ def test_over_cap_message_with_the_error_not_known():
         "rendering to the cap",
         "the target 0.01 needs ~100 samples per pixel, over the cap of 64: rendering to the cap",
     ]
+
+
+def test_samples_needed_for_a_tiny_target_do_not_overflow():
+    """(err / rel_error)² for a target of 1e-160 is beyond a float: inf, not OverflowError."""
+    from eyelume.estimators.fast_run import _squared_ratio
+
+    assert _squared_ratio(0.02, 0.01) == pytest.approx(4.0)
+    assert _squared_ratio(0.02, 1e-160) == math.inf
+    assert _squared_ratio(math.inf, 0.01) == math.inf

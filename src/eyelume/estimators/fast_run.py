@@ -267,7 +267,7 @@ def _pilot(
         var = np.maximum(s2 - n * mean**2, 0.0) / (n * (n - 1))
         err = median_pixel_rel_error(mean[mean > 0], var[mean > 0], n - 1)
         err *= math.sqrt(variance_ratio)
-        sets = max(2, math.ceil(n * (err / rel_error) ** 2))
+        sets = max(2, math.ceil(min(n * _squared_ratio(err, rel_error), _MAX_SETS + 1)))
         cost = sets * grid * grid
         if cost < best[2]:
             best = (grid, sets, cost)
@@ -413,6 +413,13 @@ def _say(progress, run: _Run, err: float | None = None) -> None:
         progress(f"{run.samples_per_pixel} samples per pixel{tail}")
 
 
+def _squared_ratio(err: float, rel_error: float) -> float:
+    """(err / rel_error)², the factor of samples a target still needs; inf beyond 10¹⁸, where
+    the float square would overflow (a target of 1e-160 raised OverflowError)."""
+    r = err / rel_error
+    return r * r if r < 1e9 else math.inf
+
+
 def _over_cap(progress, rel_error: float, samples: float, cap: int) -> None:
     if progress and samples > cap:
         need = f"~{int(samples)}" if math.isfinite(samples) else "an unknown number of"
@@ -467,9 +474,11 @@ def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, control:
         err = judged(run.estimate(False))
         _say(progress, run, err)
         if err > rel_error:
-            _over_cap(progress, rel_error, run.samples_per_pixel * (err / rel_error) ** 2, cap)
+            _over_cap(
+                progress, rel_error, run.samples_per_pixel * _squared_ratio(err, rel_error), cap
+            )
     while err > rel_error and run.sets < max_sets and not stop.requested:
-        need = run.sets * (err / rel_error) ** 2 * 1.1
+        need = run.sets * _squared_ratio(err, rel_error) * 1.1
         n_more = int(min(max(need - run.sets, 1), 4 * run.sets, max_sets - run.sets))
         work.plan(run, run.sets + n_more)
         if not run.add(n_more, ratio, stop, work.tick):
