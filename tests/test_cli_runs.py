@@ -78,6 +78,7 @@ def test_a_bad_out_is_refused_before_any_work(tmp_path, monkeypatch, command, ki
         (["--samples", "10000000"], ["--samples 10000000", "1,000,000"]),
         (["--samples", "0"], ["--samples 0"]),
         (["--rel-error", "0.01", "--max-samples", "0"], ["--max-samples 0"]),
+        (["--rel-error", "0.01", "--max-samples", "1"], ["--max-samples 1", "2 to"]),
     ],
 )
 def test_budgets_beyond_the_model_are_refused(tmp_path, args, words):

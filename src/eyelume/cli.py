@@ -620,8 +620,11 @@ def _check_render_options(estimator, rays, samples, rel_error, max_samples, seed
         )
     if max_samples is not None and rel_error is None:
         _fail(f"--max-samples {max_samples}: caps a --rel-error run only (fixed: --samples)")
-    if max_samples is not None and not 1 <= max_samples <= cap:
-        _fail(f"--max-samples {max_samples}: must be 1 to {cap:,}")
+    if max_samples is not None and not 2 <= max_samples <= cap:
+        _fail(
+            f"--max-samples {max_samples}: must be 2 to {cap:,} (a --rel-error run's error is the "
+            "scatter between two sample sets at least)"
+        )
     if seed is not None and seed < 0:
         _fail(f"--seed {seed}: must be ≥ 0")
 

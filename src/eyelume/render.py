@@ -485,8 +485,9 @@ class RenderOptions:
         a picture that holds no skin pixel, the median pixel with signal's (an
         :class:`~eyelume.errors.EyelumeWarning` says so).
     max_samples_per_pixel : int or None
-        Fast, with ``rel_error``: the cap on samples per pixel (default: no cap below the fast
-        run's hard limit, :class:`eyelume.estimators.fast_run.RunControl`; the CLI passes
+        Fast, with ``rel_error``: the cap on samples per pixel, at least 2 (else
+        :class:`~eyelume.errors.BudgetError`; default: no cap below the fast run's hard limit,
+        :class:`eyelume.estimators.fast_run.RunControl`; the CLI passes
         :data:`eyelume.estimators.fast_run.MAX_SAMPLES_REL_ERROR`).
 
     Examples

@@ -102,6 +102,47 @@ def test_an_unreachable_target_stops_at_the_cap_and_says_so(paper_compiled):
     assert any("over the cap of 32" in s for s in said), said
 
 
+@pytest.mark.parametrize(("first", "cap"), [(32, 16), (32, 8), (8, 4), (8, 2)])
+def test_a_run_never_renders_more_than_its_cap(paper_compiled, first, cap):
+    """The grid of a capped run is the finest whose two sets fit under the cap: an unreachable
+    target renders exactly the cap (before: a first round of 32 samples per pixel, two 4 × 4
+    sets, was rendered whole under a cap of 16 or 8, and 2 × 2 sets under a cap of 4 or 2)."""
+    cs = paper_compiled
+    skin = region_masks(cs)["skin"]
+    est = FR.trace_fast(cs, first, _light(cs, first), 3, rel_error=1e-6, target_pixels=skin,
+                        control=FR.RunControl(max_samples_per_pixel=cap))  # fmt: skip
+    assert est.target_reached is False
+    assert est.samples_per_pixel == cap
+
+
+def test_the_pilot_tries_no_grid_over_the_cap(paper_compiled, monkeypatch):
+    """The pilot of a run capped at 16 samples per pixel does not trace 4 × 4 sets (two of them
+    are 32): uncapped, the same pilot traces them (so the spy can see it)."""
+    cs = paper_compiled
+    target = np.zeros((cs.picture.rows, cs.picture.cols), dtype=bool)
+    target[20:45:2, 25:60:3] = True
+    traced = []
+    real = FR.F.camera_pass
+
+    def spy(seed_, first, n_sets, tables, cam, grid, sums):
+        traced.append(grid)
+        return real(seed_, first, n_sets, tables, cam, grid, sums)
+
+    monkeypatch.setattr(FR.F, "camera_pass", spy)
+    FR._pilot(cs, 3, target, 1e-4, 0.5)
+    assert FR.GRID_FINE in traced
+    traced.clear()
+    grid, sets = FR._pilot(cs, 3, target, 1e-4, 0.5, FR._largest_grid(16))
+    assert FR.GRID_FINE not in traced and grid <= FR.GRID_COARSE
+    assert traced
+
+
+def test_a_cap_below_two_samples_is_refused(paper_compiled):
+    with pytest.raises(eyelume.errors.BudgetError, match="max_samples_per_pixel = 1: must be ≥ 2"):
+        FR.trace_fast(paper_compiled, 8, 0, 3, rel_error=0.01,
+                      control=FR.RunControl(max_samples_per_pixel=1))  # fmt: skip
+
+
 def test_samples_rendered_are_whole_sets():
     assert [FR.planned_sets(n) for n in (1, 9, 33)] == [(2, 2), (2, 3), (4, 3)]
     r = eyelume.render(

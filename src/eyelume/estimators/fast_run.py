@@ -238,8 +238,13 @@ _PILOT_PIXELS = 2048
 PILOT_OPTIONS = ((GRID_SINGLE, 4), (GRID_COARSE, 4), (GRID_FINE, 2))
 
 
-def _pilot(
-    cs: CompiledScene, seed: int, target: np.ndarray, rel_error: float, variance_ratio: float
+def _pilot(  # noqa: PLR0913
+    cs: CompiledScene,
+    seed: int,
+    target: np.ndarray,
+    rel_error: float,
+    variance_ratio: float,
+    max_grid: int = GRID_FINE,
 ) -> tuple[int, int]:
     """(grid, sets) expected to reach ``rel_error`` in the median target pixel at the least
     cost, from 4 sets of 1 × 1, 4 sets of 2 × 2 and 2 sets of 4 × 4 on up to 2048 target pixels
@@ -252,13 +257,15 @@ def _pilot(
     cost is not below the best choice so far is not traced, as it could not be chosen (a tie
     keeps the earlier, smaller grid) — the same choice, without the pilot's most expensive
     sets when a smaller grid already needs few samples (vr-offaxis: 4 per pixel, where the
-    4 × 4 sets alone cost 32 samples on each of the 2048 pixels, ~10 % of the render)."""
+    4 × 4 sets alone cost 32 samples on each of the 2048 pixels, ~10 % of the render). Grids
+    finer than ``max_grid`` are not tried: their two sets would be over the run's cap of
+    samples per pixel (:func:`_largest_grid`)."""
     idx = np.flatnonzero(target.reshape(-1))
     if idx.size > _PILOT_PIXELS:
         idx = np.sort(np.random.default_rng(seed).choice(idx, _PILOT_PIXELS, replace=False))
-    best = (GRID_FINE, 2, math.inf)
+    best = (max_grid, 2, math.inf)
     for grid, n in PILOT_OPTIONS:
-        if 2 * grid * grid >= best[2]:
+        if grid > max_grid or 2 * grid * grid >= best[2]:
             continue
         s1, s2 = np.zeros(idx.size), np.zeros(idx.size)
         sums = F.CameraSums(idx.astype(np.int64), s1, s2)
@@ -272,6 +279,16 @@ def _pilot(
         if cost < best[2]:
             best = (grid, sets, cost)
     return best[0], min(best[1], _MAX_SETS)
+
+
+def _largest_grid(cap: int) -> int:
+    """The finest camera grid whose two sets (the fewest a variance needs) stay within ``cap``
+    samples per pixel: 2 × grid² ≤ cap (cap ≥ 2, :func:`trace_fast` checks it).
+
+    >>> [_largest_grid(c) for c in (2, 7, 8, 31, 32, 4096)]
+    [1, 1, 2, 2, 4, 4]
+    """
+    return next(g for g in (GRID_FINE, GRID_COARSE, GRID_SINGLE) if 2 * g * g <= cap)
 
 
 def planned_sets(samples_per_pixel: int) -> tuple[int, int]:
@@ -374,7 +391,8 @@ class RunControl:
 
     ``advance(done, planned)`` is called after each chunk of work, in camera samples plus light
     paths (``planned`` grows with ``rel_error`` rounds); ``max_samples_per_pixel`` caps a
-    ``rel_error`` run (None: 65 536 sets, the hard limit).
+    ``rel_error`` run (None: 65 536 sets, the hard limit): at least 2, and the run's grid is the
+    finest whose two sets fit under it (:func:`_largest_grid`), so that no run renders more.
 
     ``deliver(image, variance)`` maps the traced picture's mean and variance (rows, cols; W/mm²,
     (W/mm²)²) to the picture the caller delivers — :func:`eyelume.render.render` passes the
@@ -455,19 +473,20 @@ def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, control:
             est = replace(est, image=image, variance=variance)
         return estimate_median_rel_error(est, target_pixels)
 
-    grid, sets = planned_sets(samples_per_pixel)[0], 0
+    max_grid = _largest_grid(cap)
+    grid, sets = min(planned_sets(samples_per_pixel)[0], max_grid), 0
     if (
         cs.picture.cols * cs.picture.rows > PILOT_ABOVE
         and target_pixels is not None
         and (target_pixels.any())
     ):
-        grid, sets = _pilot(cs, seed, target_pixels, rel_error, control.variance_ratio)
+        grid, sets = _pilot(cs, seed, target_pixels, rel_error, control.variance_ratio, max_grid)
         if progress:
             progress(f"pilot: {grid}×{grid} sets, {sets * grid * grid} samples per pixel")
         _over_cap(progress, rel_error, sets * grid * grid, cap)
     max_sets = max(2, min(_MAX_SETS, cap // (grid * grid)))
     run = _Run(cs, grid, seed)
-    first = max(2, min(sets, max_sets) or math.ceil(samples_per_pixel / grid**2))
+    first = max(2, min(sets or math.ceil(samples_per_pixel / grid**2), max_sets))
     work.plan(run, first)
     err = math.inf
     if run.add(first, ratio, stop, work.tick):
@@ -532,8 +551,11 @@ def trace_fast(
         raise BudgetError(f"light_paths = {light_paths}: must be ≥ 0")
     if rel_error is not None and not 0.0 < rel_error < 1.0:
         raise BudgetError(f"rel_error = {rel_error}: must be in (0, 1)")
-    if cap < 1:
-        raise BudgetError(f"max_samples_per_pixel = {cap}: must be ≥ 1")
+    if cap < 2:
+        raise BudgetError(
+            f"max_samples_per_pixel = {cap}: must be ≥ 2 (a rel_error run's error is the "
+            "scatter between two sample sets at least)"
+        )
     ratio = light_paths / samples_per_pixel  # light paths per camera sample
     work = _Work(cs.picture.cols * cs.picture.rows, ratio, control.advance)
     args = (cs, samples_per_pixel, ratio, seed)
