@@ -666,13 +666,19 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
     with an ETA, Ctrl-C/SIGTERM answered within about a second (nothing written when no sample
     set had finished), and a warning when a --rel-error target stops at --max-samples."""
     from eyelume.compile import wavelength_groups
-    from eyelume.estimators.fast_run import PILOT_ABOVE, array_bytes, pilot_rates, planned_sets
+    from eyelume.estimators.fast_run import (
+        PILOT_ABOVE,
+        array_bytes,
+        first_round,
+        pilot_rates,
+        planned_sets,
+    )
     from eyelume.render import RenderOptions
     from eyelume.render import render as render_scene
 
     sc = cs.scene
     asked = samples or sc.run.samples_per_pixel
-    grid, sets = planned_sets(asked)
+    grid, sets = planned_sets(asked) if rel_error is None else first_round(asked, max_samples)
     t_load = _warm_up(cs)
     need = array_bytes(cs)
     avail = _available_memory()
@@ -693,14 +699,16 @@ def _render_fast(cs, samples, rel_error, max_samples, seed):
 
     if rel_error is not None and pixels > PILOT_ABOVE:  # the pilot sizes the first round
         goal = (
-            f"to a {rel_error:.2%} relative error in the median skin pixel of the delivered "
-            f"picture, at most {max_samples:,} samples per pixel (first round sized by a pilot)"
+            f"to a {rel_error * 100:.3g} % relative error in the median skin pixel of the "
+            f"delivered picture, at most {max_samples:,} samples per pixel (first round sized "
+            "by a pilot)"
         )
         plan = f"{projection(sets * grid * grid)} per {sets * grid * grid} samples per pixel"
     elif rel_error is not None:
         goal = (
-            f"to a {rel_error:.2%} relative error in the median skin pixel of the delivered "
-            f"picture, at most {max_samples:,} samples per pixel (first round {sets * grid * grid})"
+            f"to a {rel_error * 100:.3g} % relative error in the median skin pixel of the "
+            f"delivered picture, at most {max_samples:,} samples per pixel (first round "
+            f"{sets * grid * grid})"
         )
         plan = f"first round {projection(sets * grid * grid)}"
     else:

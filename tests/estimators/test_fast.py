@@ -443,10 +443,13 @@ def test_over_cap_message_with_the_error_not_known():
     said = []
     _over_cap(said.append, 0.01, math.inf, 64)
     _over_cap(said.append, 0.01, 100.4, 64)
+    _over_cap(said.append, 1e-10, 5.335e17, 4)
     assert said == [
         "the target 0.01 needs an unknown number of samples per pixel, over the cap of 64: "
         "rendering to the cap",
         "the target 0.01 needs ~100 samples per pixel, over the cap of 64: rendering to the cap",
+        "the target 1e-10 needs ~5.3e+17 samples per pixel, over the cap of 4: rendering to the "
+        "cap",
     ]
 
 

@@ -291,6 +291,18 @@ def _largest_grid(cap: int) -> int:
     return next(g for g in (GRID_FINE, GRID_COARSE, GRID_SINGLE) if 2 * g * g <= cap)
 
 
+def first_round(samples_per_pixel: int, cap: int) -> tuple[int, int]:
+    """(grid, sets) of a ``rel_error`` run's first round when no pilot sizes it: the budget's
+    (:func:`planned_sets`) on a grid no finer than :func:`_largest_grid` of ``cap``, and never
+    more sets than fit under the cap (two at least).
+
+    >>> [first_round(32, 4096), first_round(32, 16), first_round(8, 4), first_round(8, 2)]
+    [(4, 2), (2, 4), (1, 4), (1, 2)]
+    """
+    grid = min(planned_sets(samples_per_pixel)[0], _largest_grid(cap))
+    return grid, max(2, min(math.ceil(samples_per_pixel / grid**2), cap // grid**2))
+
+
 def planned_sets(samples_per_pixel: int) -> tuple[int, int]:
     """(grid, sets) of a fixed budget: sets of 4 × 4 camera samples from 32 samples per pixel on,
     else of 2 × 2, rounded up to whole sets and two at least (a variance needs two), so the
@@ -440,7 +452,10 @@ def _squared_ratio(err: float, rel_error: float) -> float:
 
 def _over_cap(progress, rel_error: float, samples: float, cap: int) -> None:
     if progress and samples > cap:
-        need = f"~{int(samples)}" if math.isfinite(samples) else "an unknown number of"
+        if not math.isfinite(samples):
+            need = "an unknown number of"
+        else:
+            need = f"~{int(samples):,}" if samples < 1e9 else f"~{samples:.2g}"
         progress(
             f"the target {rel_error:g} needs {need} samples per pixel, over the cap "
             f"of {cap}: rendering to the cap"
@@ -474,7 +489,7 @@ def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, control:
         return estimate_median_rel_error(est, target_pixels)
 
     max_grid = _largest_grid(cap)
-    grid, sets = min(planned_sets(samples_per_pixel)[0], max_grid), 0
+    grid, sets = first_round(samples_per_pixel, cap)
     if (
         cs.picture.cols * cs.picture.rows > PILOT_ABOVE
         and target_pixels is not None
@@ -486,7 +501,7 @@ def _to_target(args: tuple, stop, work: _Work, progress, target: tuple, control:
         _over_cap(progress, rel_error, sets * grid * grid, cap)
     max_sets = max(2, min(_MAX_SETS, cap // (grid * grid)))
     run = _Run(cs, grid, seed)
-    first = max(2, min(sets or math.ceil(samples_per_pixel / grid**2), max_sets))
+    first = max(2, min(sets, max_sets))
     work.plan(run, first)
     err = math.inf
     if run.add(first, ratio, stop, work.tick):
