@@ -807,6 +807,14 @@ def _disc(k: int) -> np.ndarray:
     return el
 
 
+def _label_type(n_pixels: int) -> int:
+    """OpenCV's label type for a picture of ``n_pixels``: 16-bit when every label fits (an
+    8-connected picture has ≤ ¼ of its pixels + 1 components), else 32-bit. The same labels
+    either way (as :func:`ladder` uses them), labelled ~2× faster in 16 bits (a 45 × 164 glint
+    box: 24 against 58 µs)."""
+    return cv2.CV_16U if n_pixels < 4 * 65535 else cv2.CV_32S
+
+
 def _fill_glints(roi: np.ndarray, bright: np.ndarray, params) -> None:
     """Each glint of ``bright`` (grown by its own radius r, ≥ ``glint_margin_px``, + 2 px) takes
     the darkest value of ``roi`` within r + 2 px, in place: each glint with its own reach, so a
@@ -817,12 +825,24 @@ def _fill_glints(roi: np.ndarray, bright: np.ndarray, params) -> None:
     erosion that box padded by the element's half-width (outside the roi nothing counts, as for
     the whole roi) — which gives the same pixels as a dilation and an erosion of the whole roi
     per size class, at a fraction of the cost when the glints are spread over the picture."""
-    # 16-bit labels when they fit (as in :func:`ladder`: the same labels, labelled faster).
-    ltype = cv2.CV_16U if bright.size < 4 * 65535 else cv2.CV_32S
-    n, lab, stats, _ = cv2.connectedComponentsWithStats(bright, connectivity=8, ltype=ltype)
+    # Labelled on the glints' bounding box only (the roi pads it by their reach: a third of
+    # its pixels on a headset frame), the boxes put back in the roi's frame; 16-bit labels when
+    # they fit (:func:`_label_type`). (The glints' order does not matter: each lowers the
+    # picture to its own erosion's minimum, of the unchanged copy ``src``.)
+    bx, by, bw, bh = cv2.boundingRect(bright)
+    if not bw:
+        return
+    box = bright[by : by + bh, bx : bx + bw]
+    n, lab_box, stats, _ = cv2.connectedComponentsWithStats(
+        box, connectivity=8, ltype=_label_type(box.size)
+    )
     if n < 2:
         return
     rows, cols = roi.shape
+    lab = np.zeros(roi.shape, lab_box.dtype)
+    lab[by : by + bh, bx : bx + bw] = lab_box
+    stats[:, cv2.CC_STAT_LEFT] += bx
+    stats[:, cv2.CC_STAT_TOP] += by
     radius = np.ceil(np.sqrt(stats[:, cv2.CC_STAT_AREA] / math.pi)).astype(int)
     src = roi.copy()
     for i in range(1, n):
@@ -1330,7 +1350,9 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
         # closing. Worked on the grown glints' box (nothing joins outside it); the blob's
         # 3 × 3 dilation there from the box padded by 1 px (the same pixels).
         box = (slice(gy0, gy1), slice(gx0, gx1))
-        n_glab, glab = cv2.connectedComponents(near_glint[box], connectivity=8)
+        n_glab, glab = cv2.connectedComponents(
+            near_glint[box], connectivity=8, ltype=_label_type((gy1 - gy0) * (gx1 - gx0))
+        )
         py0, px0 = max(0, gy0 - 1), max(0, gx0 - 1)
         grown = cv2.dilate(comp[py0 : gy1 + 1, px0 : gx1 + 1], np.ones((3, 3), np.uint8))
         grown = grown[gy0 - py0 : gy0 - py0 + gy1 - gy0, gx0 - px0 : gx0 - px0 + gx1 - gx0]
@@ -1378,7 +1400,9 @@ def _glints_beside(bright: np.ndarray, pupil_area: int, params) -> np.ndarray:
     if not bw:
         return bright
     box = bright[by : by + bh, bx : bx + bw]
-    n, lab, stats, _ = cv2.connectedComponentsWithStats(box, connectivity=8)
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(
+        box, connectivity=8, ltype=_label_type(box.size)
+    )
     big = stats[:, cv2.CC_STAT_AREA] > lim
     big[0] = False
     if not big.any():
