@@ -108,25 +108,35 @@ own fit can set σ, and every fit's inlier count can win). The rest is spread ov
 0.03–0.3 ms each (whole-frame OpenCV passes: the glints' Gaussian, 8-bit scaling and histogram,
 the ladder's 7–13 labellings, the glints' fill), none repeating work the answer does not use.
 
-Session 18 (0f0c96f): the robust fit's run hypotheses (``pupil._best_run``) stop once they can
-no longer matter — with 3σ under the tolerance's floor (no later run can move it), a 50 % run
-whose fit holds ≥ 85 % of the outline ends the search, and the 30 % runs are left out when the
-best so far holds ≥ 60 % — and ``darker_core`` works out the interior's noise only when its 5th
-percentile is near the black level. A quality rule, not an identity: answers identical on the
-613 (picture, LEDs) pairs (their 144 robust fits: 2194 ``cv2.fitEllipse`` calls instead of
-3896; 000160 fits 4 runs instead of 26); a stop at 80 % changed one itmo answer (0.17 px
-farther from its annotation). Interleaved A/B against 1f7bafa (two processes alternating
-batches of 15 calls per frame, 12 rounds, one thread, load 6–7), median CPU ms per batch
-old/new: openeds 000160 8.52/7.28, 8.79/7.64, 9.09/7.50, 8.42/7.34, 7.74/6.54, 8.41/7.51,
-6.94/6.87, 8.75/8.02, 8.76/7.42, 8.16/6.21, 7.38/6.19, 8.13/5.93 (median ratio 0.851; best
-call 5.52 → 4.96); 000170 1.011 (4.58 → 4.29), 000180 1.010 (4.65 → 4.34), synthetic 640 ×
-400 0.992 (4.39 → 4.34): the slowest frame's excess over the others is gone, the others are
-untouched. Looked at and left (each exact cut found there saves under 0.05 ms): the glints'
-Gaussian is already ``sepFilter2D`` with GaussianBlur's own 9-tap kernel (the same floats) and
-its histogram, range and bright mask need the whole frame; a one-pixel-glint blob whose box
-holds no pixel at the top (0–1 a frame on openeds) could skip its mask; the ladder's 16
-labellings on 000170 are each of a 128 × 80 picture; the glints' fill is ~40–60 µs a glint
-(under load) of ~10 OpenCV calls on small windows.
+Session 18 (0f0c96f): the robust fit's run hypotheses (``pupil._best_run``) stop once they can no
+longer matter — with 3σ under the tolerance's floor (no later run can move it), a 50 % run whose
+fit holds ≥ 85 % of the outline ends the search, and the 30 % runs are left out when the best so
+far holds ≥ 60 % — and ``darker_core`` works out the interior's noise only when its 5th percentile
+is near the black level. A quality rule, not an identity: answers identical on the 613 (picture,
+LEDs) pairs (their 144 robust fits: 2194 ``cv2.fitEllipse`` calls instead of 3896; 000160 fits 4
+runs instead of 26); a stop at 80 % changed one itmo answer (0.17 px farther from its annotation).
+Interleaved A/B against 1f7bafa (two processes alternating batches of 15 calls per frame, 12
+rounds, one thread, load 6–7), median CPU ms per batch old/new: openeds 000160 8.52/7.28,
+8.79/7.64, 9.09/7.50, 8.42/7.34, 7.74/6.54, 8.41/7.51, 6.94/6.87, 8.75/8.02, 8.76/7.42, 8.16/6.21,
+7.38/6.19, 8.13/5.93 (median ratio 0.851; best call 5.52 → 4.96); 000170 1.011 (4.58 → 4.29),
+000180 1.010 (4.65 → 4.34), synthetic 640 × 400 0.992 (4.39 → 4.34): the slowest frame's excess
+over the others is gone, the others are untouched. Then (``pupil._label_type``; the same answers on
+the 613 pairs): 16-bit labels for the glints beside the dark blob and those joined to it (32-bit
+labelling is ~2× slower here; the same labels), and the glint fill labels the glints' box, not the
+roi padded by their reach (000160: 24 instead of 65 µs). Interleaved A/B against 334c439 (as above,
+load 4.6–5), median CPU ms per batch old/new: 000160 5.73/5.65, 5.40/5.57, 5.46/5.84, 5.44/5.20,
+8.42/8.21, 7.99/7.59, 8.34/8.32, 8.36/7.44, 7.94/7.74, 8.67/8.20, 6.86/6.31, 7.99/6.54 (median
+ratio 0.966; best call 4.93 → 4.69); 000170 0.935 (4.44 → 4.20), 000180 0.965 (4.30 → 3.97),
+synthetic 640 × 400 0.984 (4.37 → 4.28) — more than the ~0.1 ms these labellings measure alone (the
+machine's noise is of that size). Where a 640 × 400 frame's time goes now, by cProfile's own time
+on 000170: the ladder's 16 labellings of the 128 × 80 picture ~0.6 ms (each of the whole picture:
+from the 4th level on its dark pixels, 12–27 % of it, span every row), the glints' Gaussian ~0.35,
+the glint fill ~0.3 (8 glints, ~10 OpenCV calls each), and the glint blobs' skirts and centroids
+(10 blobs, ~20 OpenCV and NumPy calls each). Looked at and left (each exact cut found there saves
+under 0.05 ms): the glints' Gaussian is already ``sepFilter2D`` with GaussianBlur's own 9-tap
+kernel (the same floats) and its histogram, range and bright mask need the whole frame; a
+one-pixel-glint blob whose box holds no pixel at the top (0–1 a frame on openeds) could skip its
+mask; the glints' fill is ~40–60 µs a glint (under load) of ~10 OpenCV calls on small windows.
 """
 
 from __future__ import annotations
