@@ -24,7 +24,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, Ti
 from typer.core import TyperGroup
 
 from eyelume.errors import EyelumeError, EyelumeWarning, InputFileError, OptionError
-from eyelume.scene.io import load_scene
+from eyelume.scene.io import load_scene, preset_names
 from eyelume.scene.model import Run
 
 #: The model's cap on camera samples per pixel (``run.samples_per_pixel``), checked at the CLI.
@@ -168,7 +168,10 @@ app = typer.Typer(
 )
 
 SceneOpt = Annotated[
-    str, typer.Option("--scene", help="A preset name (paper2005) or a scene TOML file.")
+    str,
+    typer.Option(
+        "--scene", help=f"A preset name ({', '.join(preset_names())}) or a scene TOML file."
+    ),
 ]
 SetOpt = Annotated[
     list[str] | None,
@@ -577,7 +580,7 @@ def render(
     err.print(
         f"{result.rays:,} rays in {result.wall_time_s:.2f} s{compiled} ({result.estimator})"
         f"{noise}; "
-        f"on the sensor {summary['power_w']['sensor']:.3g} W of "
+        f"on the sensor {_sensor_w(summary['power_w']['sensor'])} of "
         f"{summary['power_w']['emitted']:.4g} W emitted; wrote {len(written)} files to {out}"
     )
     if "ambient" in summary:
@@ -586,6 +589,11 @@ def render(
         err.print(f"warning: {result.ghost_warning}", highlight=False, soft_wrap=True)
     if result.interrupted:
         _exit_interrupted()
+
+
+def _sensor_w(w) -> str:
+    """The power on the sensor, or why it is not known (a partial picture: pixels missing)."""
+    return "an unknown power (pixels missing)" if w is None else f"{w:.3g} W"
 
 
 def _ratio_text(x) -> str:
@@ -847,7 +855,9 @@ def sweep_leds_cmd(
 
 @app.command()
 def reproduce(
-    preset: Annotated[str, typer.Argument(help="The δ study's scene: paper2005 or a TOML file.")],
+    preset: Annotated[
+        str, typer.Argument(help="The δ study's scene: a preset (paper2005, …) or a TOML file.")
+    ],
     out: Annotated[Path, typer.Option("--out", help="Folder for the outputs (created).")],
     deltas: Annotated[
         str, typer.Option(help="Comma-separated δ values (the paper: 0 to 0.8 by 0.1).")

@@ -415,8 +415,9 @@ class RenderResult:
             out["surface_interactions"] = self.interactions
         if self.groups:
             out["wavelength_groups"] = self._groups_summary()
-        power = {"emitted": self.emitted_w, "sensor": float(self.eye_image.sum())}  # NaN: partial
-        power["sensor"] *= self.pixel_area_mm2
+        sensor = float(self.eye_image.sum()) * self.pixel_area_mm2
+        # a partial picture (missing pixels are NaN) has no sensor total: null, not NaN
+        power = {"emitted": self.emitted_w, "sensor": sensor if math.isfinite(sensor) else None}
         if self.ledger is not None:
             power["absorbed"] = {
                 k: v for k, v in self.ledger.items() if k not in ("sensor", "escaped") and v > 0

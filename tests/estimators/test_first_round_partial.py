@@ -81,3 +81,8 @@ def test_render_interrupted_in_its_first_round_writes_the_finished_rows(tmp_path
     digital = np.load(out / "eye_image_digital.npy")
     assert (digital.reshape(-1)[k:] == 0).all()
     assert "interrupted in the first round" in " ".join(res.output.split())
+    # the sensor's total is not known with pixels missing: null in the JSON (was NaN, which a
+    # strict JSON reader refuses) and said in words (was "on the sensor nan W")
+    assert summary["power_w"]["sensor"] is None
+    assert "on the sensor an unknown power (pixels missing)" in " ".join(res.output.split())
+    assert "nan W" not in res.output
