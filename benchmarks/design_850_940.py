@@ -160,8 +160,21 @@ def _args():
     return ap.parse_args()
 
 
-def _stop_timer(stop_at: str | None) -> None:
-    """SIGINT to this process at ``stop_at`` (UTC HH:MM today): run_tasks stops its workers and
+def _stop_at(text: str) -> tuple[int, int]:
+    """``--stop-at``'s (hour, minute) from 'HH:MM' (UTC), or one line and exit 2."""
+    try:
+        h, m = (int(x) for x in text.split(":"))
+        if not (0 <= h < 24 and 0 <= m < 60):
+            raise ValueError
+    except ValueError:
+        print(f"--stop-at {text!r}: must be a UTC time HH:MM (00:00 to 23:59)", file=sys.stderr)
+        sys.exit(2)
+    return h, m
+
+
+def _stop_timer(stop_at: tuple[int, int] | None) -> None:
+    """SIGINT to this process at ``stop_at`` (UTC (hour, minute), the next such time: tomorrow's
+    when today's has passed): run_tasks stops its workers and
     the people finished are reported. Started in the background by a shell without job control
     (``… &`` in a script), a process inherits SIGINT ignored and Python installs no handler for
     it, so the timer's SIGINT (and Ctrl-C's) would do nothing: the handler is put back here."""
@@ -171,10 +184,11 @@ def _stop_timer(stop_at: str | None) -> None:
 
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
-    h, m = (int(x) for x in stop_at.split(":"))
     now = dt.datetime.now(dt.UTC)
-    at = now.replace(hour=h, minute=m, second=0, microsecond=0)
-    delay = max(0.0, (at - now).total_seconds())
+    at = now.replace(hour=stop_at[0], minute=stop_at[1], second=0, microsecond=0)
+    if at <= now:  # 00:36 asked at 23:33: tomorrow's, not a stop at once
+        at += dt.timedelta(days=1)
+    delay = (at - now).total_seconds()
     t = threading.Timer(delay, os.kill, (os.getpid(), signal.SIGINT))
     t.daemon = True
     t.start()
@@ -187,6 +201,7 @@ def main() -> None:
     from eyelume.scene.population import sample_people
 
     a = _args()
+    stop_at = _stop_at(a.stop_at) if a.stop_at else None
     noise = parse_render_noise(a.render_noise)
     info = {"machine": C.machine(), "command": C.command_line(), "load_start": C.loadavg()}
     C.print_header("850 vs 940 nm over sampled people (vr-offaxis ring)", info["machine"])
@@ -207,9 +222,9 @@ def main() -> None:
             flush=True,
         )
 
-    _stop_timer(a.stop_at)
     interrupted = False
     try:
+        _stop_timer(stop_at)
         run_tasks(person_task, tasks, commit, workers=a.workers)
     except KeyboardInterrupt:
         interrupted = True
