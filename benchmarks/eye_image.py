@@ -62,6 +62,24 @@ memory          peak RSS (``ru_maxrss``) of one render per fresh process: fast a
 curve           error against wall time at 87 × 65: fast at 32…256 samples/pixel, forward at
                 2.5 M…40 M rays; skin and iris median pixel errors.
 
+Tried for the vr-offaxis target in session 18, not kept
+-------------------------------------------------------
+* ``error_model="numpy"`` on every kernel (no ZeroDivisionError checks): the same camera-pass
+  sums bit for bit, and no gain. Measured as two one-thread processes run *at the same time*,
+  one per core, so that both see the same load (a quarter of vr-offaxis, 2 sets, best of 3,
+  load 8–9): 1.62 / 1.61, 1.51 / 1.52, 1.35 / 1.28, 1.70 / 1.70 CPU-s (before / after). Run
+  concurrently, the same code agrees to ~1 %, where runs by turns spread by 20 % on this machine.
+* Continuation drawn only in *live* direction cells: 8 rings × 16 sectors beyond the free cone,
+  a cell live when the bounding cap of some surface that can send light (sphere, cylinder
+  pieces, a plane's half-space or bounding sphere) overlaps it; 16 rays spread over the live
+  cells with weight share × live / cells / 16. Checked unbiased (no lit hit in a dead cell over
+  152 544 lit hits from 3 827 vertices), but the caps are loose: 71 % of the cells stay live (the
+  hit rate rises only from 23 to 33 %), and a third of the vertices get no mask (the sclera lies
+  inside the lids' spheres). One thread, 8 samples/pixel, load ~8: per-sample sd of the median
+  skin pixel 1.44 % at 20.96 CPU-s of camera pass, against 1.26 % at 21.93 with 25 rays over the
+  whole hemisphere — err² · t 43.5 against 34.8, worse (with the cells' bounds by arccosines
+  instead of dot products: 1.28 % at 27.2 CPU-s, 44.6).
+
 History (the README's speed rows as they stood before session 13, verbatim)
 ---------------------------------------------------------------------------
 87 × 65: **Session 12, quiet (load 1.1–1.7, 41dd02c, 05:19 UTC, stored): rel-error call 0.671 s best
