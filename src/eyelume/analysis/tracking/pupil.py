@@ -586,18 +586,17 @@ def _best_run(x, y, e: Ellipse, d: np.ndarray, diam: float, params):
     for frac in (0.5, 0.3):
         m = max(params.min_edge_points, int(frac * n))
         if frac == 0.3 and 3.0 * sigma <= floor:
-            counts = [int((d <= floor).sum())] + [int((r <= floor).sum()) for r in dists]
-            if max(counts) >= _RUN_SKIP_SHARE * n:
+            if max(_inlier_counts(d, dists, floor)) >= _RUN_SKIP_SHARE * n:
                 break
-        ar = None if m <= n else np.arange(m)
+        ar = np.arange(m)
         stop = False
         for s0 in range(0, n, max(1, n // 12)):
-            h = _fit_points(pts2[s0 : s0 + m] if ar is None else pts[(s0 + ar) % n], diam)
+            run = (s0 + ar) % n
+            h = _fit_points(pts2[s0 : s0 + m] if m <= n else pts[run], diam)
             if h is None:
                 continue
             dist = np.abs(_sampson_many([h], x, y)[0])
-            # the run's spread about its own fit
-            sigma = min(sigma, 1.4826 * median(dist[(s0 + np.arange(m)) % n]))
+            sigma = min(sigma, 1.4826 * median(dist[run]))  # the run's spread about its own fit
             fits.append(h)
             dists.append(dist)
             if frac == 0.5 and 3.0 * sigma <= floor:
@@ -606,12 +605,17 @@ def _best_run(x, y, e: Ellipse, d: np.ndarray, diam: float, params):
                     break
         if stop:
             break
-    tol = max(floor, 3.0 * sigma)
-    counts = [int((d <= tol).sum())] + [int((r <= tol).sum()) for r in dists]
+    counts = _inlier_counts(d, dists, max(floor, 3.0 * sigma))
     best = int(np.argmax(counts))
     if best == 0:
         return e, d, sigma
     return fits[best - 1], dists[best - 1], sigma
+
+
+def _inlier_counts(d: np.ndarray, dists: list[np.ndarray], tol: float) -> list[int]:
+    """The points within ``tol`` of the whole outline's fit (distances ``d``) and of each run's
+    fit (``dists``), in that order (:func:`_best_run`)."""
+    return [int((d <= tol).sum())] + [int((r <= tol).sum()) for r in dists]
 
 
 _RUN_STOP_SHARE = 0.85  # :func:`_best_run`: a 50 % run's inlier share that ends the search
