@@ -490,6 +490,12 @@ class RenderOptions:
         :class:`~eyelume.errors.BudgetError`; default: no cap below the fast run's hard limit,
         :class:`eyelume.estimators.fast_run.RunControl`; the CLI passes
         :data:`eyelume.estimators.fast_run.MAX_SAMPLES_REL_ERROR`).
+    ambient_rel_error : float or None
+        Fast, with ``rel_error`` and ``ambient.sun``: the sunlight's render's own target (its
+        picture's median skin pixel, as ``rel_error`` for the LEDs'); default ``rel_error``.
+        The two renders' noises are independent and add in variance, as the two sources'
+        shot noises do (:func:`eyelume.optimize.render_budget.sensor_noise_target` gives each
+        its own).
 
     Examples
     --------
@@ -504,6 +510,7 @@ class RenderOptions:
     samples_per_pixel: int | None = None
     rel_error: float | None = None
     max_samples_per_pixel: int | None = None
+    ambient_rel_error: float | None = None
 
 
 #: What to do about a scene the fast estimator refuses, in a command that renders with it only
@@ -619,10 +626,11 @@ def render(
     source = SunSource(sun.direction(), band.irradiance_w_mm2, lam)
     cs_sun = compile_scene(sc, sun=source, nominal=cs)
     seed = sun_seed(result.seed)
+    sun_opt = replace(opt, seed=seed)
+    if opt.rel_error is not None and opt.ambient_rel_error is not None:
+        sun_opt = replace(sun_opt, rel_error=opt.ambient_rel_error)
     try:
-        sub = _render_leds(
-            cs_sun, replace(opt, seed=seed), progress=progress, status=status, advance=advance
-        )
+        sub = _render_leds(cs_sun, sun_opt, progress=progress, status=status, advance=advance)
     except KeyboardInterrupt:  # stopped before the sunlight had a sample: the LEDs' picture stays
         result.interrupted = True
         return result

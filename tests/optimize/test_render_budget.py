@@ -80,11 +80,15 @@ def test_a_fixed_relative_error_needs_no_pilot(monkeypatch):
 @pytest.fixture()
 def recorded(monkeypatch):
     """render_frame and the pilot replaced by stand-ins that record their calls: the pilot's
-    target is a function of the person's scene (their corneal radius)."""
-    frames, pilots = [], []
+    target is a function of the person's scene (their corneal radius), the sunlight's a third
+    of it (``ambients``: what each frame's sunlight render was asked)."""
+    frames, pilots, ambients = [], [], []
 
-    def render(scene, h, v, samples, seed, rel_error=None, max_samples=None):
+    def render(
+        scene, h, v, samples, seed, rel_error=None, max_samples=None, ambient_rel_error=None
+    ):
         frames.append((id(scene), rel_error))
+        ambients.append(ambient_rel_error)
         det = Detection(ok=True, failures=[], pupil=None, glints=[])
         f = Frame(gaze=(h, v), detection=det, truth={})
         f.samples_per_pixel = 7
@@ -95,7 +99,9 @@ def recorded(monkeypatch):
             return noise, {"budget": "render_noise", "target_rel_error": noise}
         target = scene.eye.surfaces[0].radius_mm / 1000.0
         pilots.append((id(scene), noise, seed))
-        return target, {"budget": "sensor", "target_rel_error": target}
+        sun = target / 3.0
+        return target, {"budget": "sensor", "target_rel_error": target,
+                        "ambient_target_rel_error": sun}  # fmt: skip
 
     def analyse(scene, leds, fr, calib):
         return TrackingReport(fr, calib, 0.01, {"detection_rate": 1.0})
@@ -103,11 +109,11 @@ def recorded(monkeypatch):
     monkeypatch.setattr(tr, "render_frame", render)
     monkeypatch.setattr(tr, "noise_options", pilot)
     monkeypatch.setattr(tr, "analyse_frames", analyse)
-    return frames, pilots
+    return frames, pilots, ambients
 
 
 def test_one_pilot_per_person_not_per_frame(recorded):
-    frames, pilots = recorded
+    frames, pilots, ambients = recorded
     people = sample_people(eyelume.load_scene("vr-offaxis"), 3, 4)
     results = tr.evaluate_people(people, 8, 5, render_noise="sensor")
     per = tr.people_frame_count()
@@ -117,6 +123,10 @@ def test_one_pilot_per_person_not_per_frame(recorded):
         mine = frames[k * per : (k + 1) * per]
         assert {s for s, _ in mine} == {id(person.scene)}
         assert {t for _, t in mine} == {person.scene.eye.surfaces[0].radius_mm / 1000.0}
+        # the pilot's sunlight target reaches every frame's sunlight render
+        assert set(ambients[k * per : (k + 1) * per]) == {
+            person.scene.eye.surfaces[0].radius_mm / 1000.0 / 3.0
+        }
         budget = results[k].row()["render_budget"]
         assert budget["render_noise"] == "sensor" and budget["samples_per_pixel_used"] == [7, 7]
     frames.clear()
@@ -126,7 +136,7 @@ def test_one_pilot_per_person_not_per_frame(recorded):
 
 
 def test_population_defaults_to_the_sensor_budget(tmp_path, recorded):
-    frames, pilots = recorded
+    frames, pilots, _ = recorded
     out = tmp_path / "o"
     res = runner.invoke(app, ["evaluate-tracking", "--scene", "vr-offaxis", "--population", "2",
                               *TINY, "--out", str(out)])  # fmt: skip
@@ -175,6 +185,50 @@ def test_noise_target_uses_the_pilot_seed_not_the_frames():
     assert rb.sensor_noise_target(sc, 11) == a
     b = rb.sensor_noise_target(sc, 12)
     assert b != a and np.isclose(a[1], b[1], rtol=0.2)
+
+
+#: the sun 40° up and 30° aside through a 40 nm band-pass about 850 nm (as in
+#: benchmarks/design_850_940.py)
+SUN = {"ambient.sun.elevation_deg": 40.0, "ambient.sun.azimuth_deg": 30.0,
+       "sensor.filter.kind": "band_pass", "sensor.filter.cut_on_nm": 830.0,
+       "sensor.filter.cut_off_nm": 870.0}  # fmt: skip
+
+
+def test_with_the_sun_each_source_is_rendered_to_its_own_shot_noise():
+    """The LEDs' and the sun's electrons are independent shot noises that add in variance, as
+    the two renders' noises do: each source gets m / sqrt(its own N̄). The LEDs' pilot picture
+    is the sunless scene's (the sunlight is rendered apart, with its own seed), so N̄_L is
+    exactly the sunless pilot's; the two targets' noises sum to m sqrt(N̄_L + N̄_S)."""
+    m = rb.SENSOR_NOISE_MARGIN
+    lit = rb.sensor_noise_target(eyelume.load_scene("vr-offaxis", {**SMALL, **SUN}), 3)
+    dark = rb.sensor_noise_target(eyelume.load_scene("vr-offaxis", SMALL), 3)
+    assert dark.ambient_rel_error is None and dark.ambient_electrons is None
+    assert lit.electrons == dark.electrons and lit.rel_error == dark.rel_error
+    assert lit.rel_error == pytest.approx(m / math.sqrt(lit.electrons), rel=1e-12)
+    assert lit.ambient_electrons > 0
+    assert lit.ambient_rel_error == pytest.approx(m / math.sqrt(lit.ambient_electrons), rel=1e-12)
+    noise = math.hypot(lit.rel_error * lit.electrons, lit.ambient_rel_error * lit.ambient_electrons)
+    assert noise == pytest.approx(m * math.sqrt(lit.electrons + lit.ambient_electrons), rel=1e-12)
+    target, facts = rb.noise_options(
+        eyelume.load_scene("vr-offaxis", {**SMALL, **SUN}), "sensor", 3
+    )
+    assert target == lit.rel_error
+    assert facts["ambient_target_rel_error"] == lit.ambient_rel_error
+    assert facts["pilot_ambient_skin_electrons"] == lit.ambient_electrons
+
+
+def test_the_sunlight_render_takes_its_own_target():
+    """``ambient_rel_error`` reaches the sunlight's render alone: a tighter one traces more of
+    the sunlight's paths and leaves the LEDs' picture as it was (same seed, same samples)."""
+    from eyelume.render import RenderOptions, render
+
+    sc = eyelume.load_scene("vr-offaxis", {**SMALL, **SUN})
+    runs = [
+        render(sc, RenderOptions(estimator="fast", rel_error=0.05, seed=4, ambient_rel_error=a))
+        for a in (None, 0.005)
+    ]
+    assert np.array_equal(runs[0].eye_image, runs[1].eye_image)
+    assert runs[1].ambient.rays > 4 * runs[0].ambient.rays
 
 
 @pytest.mark.slow

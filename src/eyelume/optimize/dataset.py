@@ -536,15 +536,21 @@ def _render_options(ds: Dataset, sc: Scene, seed: int):
         opts = RenderOptions(estimator="fast", samples_per_pixel=ds.samples_per_pixel, seed=seed)
         return opts, {"budget": "samples_per_pixel"}
     facts: dict = {"budget": "render_noise"}
+    sun = None
     if ds.noise == "sensor":
-        target, electrons = sensor_noise_target(sc, seed)
-        facts.update(budget="sensor", pilot_skin_electrons=electrons)
+        t = sensor_noise_target(sc, seed)
+        target, sun = t.rel_error, t.ambient_rel_error
+        facts.update(budget="sensor", pilot_skin_electrons=t.electrons)
+        if sun is not None:
+            facts.update(
+                ambient_target_rel_error=sun, pilot_ambient_skin_electrons=t.ambient_electrons
+            )
     else:
         target = float(ds.noise)
     facts["target_rel_error"] = target
     opts = RenderOptions(
         estimator="fast", rel_error=target, max_samples_per_pixel=ds.max_samples_per_pixel,
-        seed=seed,
+        seed=seed, ambient_rel_error=sun,
     )  # fmt: skip
     return opts, facts
 

@@ -15,6 +15,17 @@ coarse pixels is within a per cent or so), :data:`PILOT_SAMPLES` samples per pix
 seed; the target is :data:`SENSOR_NOISE_MARGIN` / sqrt(N̄) (the margin absorbs the pilot's
 estimate). A number instead is a fixed ``rel_error`` target.
 
+With sunlight (``ambient.sun``) the sensor counts two independent sources, the LEDs' N̄_L and
+the sun's N̄_S electrons, whose shot noises add in variance: sqrt(N̄_L + N̄_S). The LEDs' and
+the sunlight's renders are separate (:func:`eyelume.render.render`) with independent noises,
+which add in variance too, so each is rendered to the shot noise of its own electrons —
+``rel_error`` = m / sqrt(N̄_L), ``ambient_rel_error`` = m / sqrt(N̄_S) (m =
+:data:`SENSOR_NOISE_MARGIN`, each N̄ the median skin pixel of that source's pilot picture) —
+and their sum's noise, m sqrt(N̄_L + N̄_S), stays within the margin of the whole picture's shot
+noise. (One target m / sqrt(N̄_L + N̄_S) for both, the rule before, asks the weaker source for
+(N̄_L + N̄_S) / N̄ times the samples it needs: ~4.5× for the LEDs of ``vr-offaxis`` at 850 nm
+in the sun of ``benchmarks/design_850_940.py``.)
+
 Used by the labelled datasets (:mod:`eyelume.optimize.dataset`, one pilot per picture) and by
 tracking evaluation (:mod:`eyelume.optimize.tracking`, one pilot per scene: the skin's
 electrons do not follow the gaze, ``tests/optimize/test_render_budget.py``).
@@ -23,6 +34,7 @@ electrons do not follow the gaze, ``tests/optimize/test_render_budget.py``).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -35,6 +47,7 @@ __all__ = [
     "PILOT_COLS",
     "PILOT_SAMPLES",
     "SENSOR_NOISE_MARGIN",
+    "SensorTarget",
     "noise_options",
     "parse_render_noise",
     "sensor_noise_target",
@@ -51,16 +64,37 @@ MAX_SAMPLES_PER_PIXEL = 4096
 _PILOT_TAG = 0x9170
 
 
-def sensor_noise_target(scene: Scene, seed: int) -> tuple[float, float]:
-    """(rel_error target, the pilot's median skin electrons N̄) for ``render_noise =
-    "sensor"``: :data:`SENSOR_NOISE_MARGIN` / sqrt(N̄), N̄ from a pilot render of ``scene``
-    sampled by :data:`PILOT_COLS` columns over the same field of the sensor (module docstring),
-    :data:`PILOT_SAMPLES` samples per pixel, seed derived from ``seed``.
+class SensorTarget(NamedTuple):
+    """The render targets of ``render_noise = "sensor"`` (:func:`sensor_noise_target`).
+
+    ``rel_error``: the LEDs' render's, m / sqrt(``electrons``); ``electrons``: the pilot's
+    median skin pixel's photo-electrons from the LEDs, N̄_L; ``ambient_rel_error`` and
+    ``ambient_electrons``: the same for the sunlight's render (None without ``ambient.sun``)."""
+
+    rel_error: float
+    electrons: float
+    ambient_rel_error: float | None = None
+    ambient_electrons: float | None = None
+
+
+def _median_skin_electrons(image: np.ndarray, skin: np.ndarray, per_w_mm2: float) -> float | None:
+    lit = image[skin]
+    lit = lit[lit > 0]
+    return float(np.median(lit)) * per_w_mm2 if lit.size else None
+
+
+def sensor_noise_target(scene: Scene, seed: int) -> SensorTarget:
+    """The targets of ``render_noise = "sensor"``: :data:`SENSOR_NOISE_MARGIN` / sqrt(N̄) for
+    the LEDs' render and, with ``ambient.sun``, for the sunlight's (module docstring), N̄ the
+    median skin pixel's photo-electrons from each source in a pilot render of ``scene``
+    sampled by :data:`PILOT_COLS` columns over the same field of the sensor,
+    :data:`PILOT_SAMPLES` samples per pixel, seed derived from ``seed``. A sun that lights no
+    skin pixel gets no target of its own (``ambient_rel_error`` None: the LEDs').
 
     Raises
     ------
     GeometryError
-        The pilot's picture shows no skin with light on it.
+        The pilot's picture shows no skin with the LEDs' light on it.
     KeyboardInterrupt
         Ctrl-C or SIGTERM cut the pilot short.
     """
@@ -81,12 +115,19 @@ def sensor_noise_target(scene: Scene, seed: int) -> tuple[float, float]:
     result = render(pilot, opts)
     if result.interrupted:
         raise KeyboardInterrupt
-    image = result.eye_image_at_scene_wavelength[result.regions["skin"]]
-    image = image[image > 0]
-    if not image.size:
+    per = electrons_per_w_mm2(s, float(scene.wavelength_nm))
+    skin = result.regions["skin"]
+    electrons = _median_skin_electrons(result.led_image_at_scene_wavelength, skin, per)
+    if electrons is None:
         raise GeometryError("the pilot picture shows no lit skin: give samples_per_pixel")
-    electrons = float(np.median(image)) * electrons_per_w_mm2(s, float(scene.wavelength_nm))
-    return SENSOR_NOISE_MARGIN / math.sqrt(electrons), electrons
+    target = SensorTarget(SENSOR_NOISE_MARGIN / math.sqrt(electrons), electrons)
+    sun = None if result.ambient is None else result.ambient.eye_image
+    ambient = None if sun is None else _median_skin_electrons(sun, skin, per)
+    if ambient is None:
+        return target
+    return target._replace(
+        ambient_rel_error=SENSOR_NOISE_MARGIN / math.sqrt(ambient), ambient_electrons=ambient
+    )
 
 
 def parse_render_noise(text: str, option: str = "--render-noise") -> str | float:
@@ -111,14 +152,22 @@ def parse_render_noise(text: str, option: str = "--render-noise") -> str | float
 def noise_options(
     scene: Scene, noise: str | float, seed: int, max_samples: int = MAX_SAMPLES_PER_PIXEL
 ) -> tuple[float, dict]:
-    """(rel_error target, the budget's facts) of ``noise`` ("sensor": the pilot's target for
-    ``scene`` and ``seed``, :func:`sensor_noise_target`; a number: that target). The facts:
-    ``budget`` ("sensor" or "render_noise"), ``target_rel_error``, ``pilot_skin_electrons``
-    (sensor only), ``max_samples_per_pixel``."""
+    """(rel_error target, the budget's facts) of ``noise`` ("sensor": the pilot's targets for
+    ``scene`` and ``seed``, :func:`sensor_noise_target`; a number: that target, for the
+    sunlight's render too). The facts: ``budget`` ("sensor" or "render_noise"),
+    ``target_rel_error``, ``pilot_skin_electrons`` (sensor only: the LEDs'),
+    ``ambient_target_rel_error`` and ``pilot_ambient_skin_electrons`` (sensor, with a sun that
+    lights the skin), ``max_samples_per_pixel``."""
     facts: dict = {"budget": "render_noise"}
     if noise == "sensor":
-        target, electrons = sensor_noise_target(scene, seed)
-        facts.update(budget="sensor", pilot_skin_electrons=electrons)
+        t = sensor_noise_target(scene, seed)
+        target = t.rel_error
+        facts.update(budget="sensor", pilot_skin_electrons=t.electrons)
+        if t.ambient_rel_error is not None:
+            facts.update(
+                ambient_target_rel_error=t.ambient_rel_error,
+                pilot_ambient_skin_electrons=t.ambient_electrons,
+            )
     else:
         target = float(noise)
     facts["target_rel_error"] = target

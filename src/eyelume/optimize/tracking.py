@@ -83,11 +83,14 @@ def render_frame(
     seed: int,
     rel_error: float | None = None,
     max_samples: int = MAX_SAMPLES_PER_PIXEL,
+    ambient_rel_error: float | None = None,
 ) -> Frame:
     """Render the eye at gaze (``h``, ``v``) degrees (fast estimator, ``samples`` per pixel —
     or, with ``rel_error``, until the median skin pixel's relative standard error is at most
-    that, capped at ``max_samples`` per pixel), read it out with the sensor model and analyse
-    the picture against the truth. The frame's ``samples_per_pixel`` is what the render used.
+    that, capped at ``max_samples`` per pixel; the sunlight's render, with ``ambient.sun``, to
+    ``ambient_rel_error``, default ``rel_error``), read it out with the sensor model and
+    analyse the picture against the truth. The frame's ``samples_per_pixel`` is what the LEDs'
+    render used.
 
     (``h``, ``v``) is the target the person fixates: the eye turns so that its visual axis has
     these angles (:func:`eyelume.analysis.truth.optical_gaze_for`; the optical axis itself
@@ -100,8 +103,9 @@ def render_frame(
         opts = RenderOptions(estimator="fast", samples_per_pixel=samples, seed=seed)
     else:
         opts = RenderOptions(
-            estimator="fast", rel_error=rel_error, max_samples_per_pixel=max_samples, seed=seed
-        )
+            estimator="fast", rel_error=rel_error, max_samples_per_pixel=max_samples, seed=seed,
+            ambient_rel_error=ambient_rel_error,
+        )  # fmt: skip
     result = render(cs, opts)
     digital = digitize(result.eye_image_at_scene_wavelength, sc.sensor, sc.wavelength_nm, seed)
     azimuths = led_picture_azimuths(cs)
@@ -161,7 +165,10 @@ def evaluate_tracking(  # noqa: PLR0913 - grids, budget, calibration: one option
             return run_unit(render_frame, sc, h, v, samples_per_pixel, seed)
         if id(sc) not in budgets:
             budgets[id(sc)] = run_unit(noise_options, sc, render_noise, seed)
-        return run_unit(render_frame, sc, h, v, samples_per_pixel, seed, budgets[id(sc)][0])
+        target, facts = budgets[id(sc)]
+        sun = facts.get("ambient_target_rel_error")
+        return run_unit(render_frame, sc, h, v, samples_per_pixel, seed, target,
+                        ambient_rel_error=sun)  # fmt: skip
 
     cal_h, cal_v = calibrate if isinstance(calibrate, tuple) else (CALIBRATION_H, CALIBRATION_V)
     grid = [(h, v) for v in cal_v for h in cal_h] if calibrate else []
