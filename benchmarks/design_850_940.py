@@ -34,6 +34,9 @@ Per wavelength it reports:
   pixel in their worst test frame (``glint_signal_to_ambient_min``,
   :func:`eyelume.analysis.ambient.signal_to_ambient`); the median and the 5th percentile over
   people;
+* **saturated pixels**: the median over the test frames of the share of the picture's pixels
+  at the sensor's full scale (``Frame.saturated_share``): the sunlit face at the preset's 4 ms
+  exposure fills the 6000 e⁻ well at 850 nm, not at 940 nm;
 * **eye-safety margin** (:func:`eyelume.analysis.safety.eye_safety`, IEC 62471 exempt group):
   the corneal IR margin of the irradiance summed over the 8 LEDs, and the retinal thermal margin
   of the worst LED with the burn-hazard weight R(λ) at the wavelength. The margins are the
@@ -114,6 +117,7 @@ def person_task(person, seed: int, render_noise) -> dict:
         "cpu_s": time.process_time() - c0,
         "render_s": sum(f.render_s for f in every),
         "samples_per_pixel": [f.samples_per_pixel for f in every],
+        "saturated_share": [f.saturated_share for f in frames],
     }
 
 
@@ -144,6 +148,7 @@ def summarise(done: list[dict], safety: dict) -> dict:
         "burn_hazard_weight": safety["burn_hazard_weight"],
         "corneal_irradiance_w_m2": safety["corneal_irradiance_w_m2"],
         "samples_per_pixel_range": [min(spp), max(spp)] if spp else None,
+        "saturated_share_median": _pct([x for d in done for x in d.get("saturated_share", [])], 50),
         "cpu_s_per_person": float(np.mean([d["cpu_s"] for d in done])),
     }
 
@@ -269,6 +274,7 @@ def print_table(table: dict) -> None:
         ("gaze_error_p95_tracked_deg", "gaze error p95, tracked people (°)", "{:.2f}"),
         ("glint_signal_to_ambient_median", "glint signal/ambient, median", "{:.3g}"),
         ("glint_signal_to_ambient_p5", "glint signal/ambient, p5", "{:.3g}"),
+        ("saturated_share_median", "saturated pixels (median test frame)", "{:.1%}"),
         ("corneal_margin_summed_leds", "corneal IR margin (8 LEDs summed)", "{:.3g}"),
         ("retinal_margin_worst_led", "retinal thermal margin (worst LED)", "{:.3g}"),
     ]
