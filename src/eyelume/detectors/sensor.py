@@ -607,7 +607,10 @@ def camera_summary(
     extra = {}
     if estimate_std_w_mm2 is not None:
         per = electrons_per_w_mm2(sensor, wavelength_nm)
-        sigma = np.nan_to_num(np.asarray(estimate_std_w_mm2, dtype=np.float64)) * per
+        # a pixel's unknown error (inf: one sample) stays inf, not the largest float, whose
+        # product overflowed with a RuntimeWarning; a missing one (NaN) counts as none
+        std = np.asarray(estimate_std_w_mm2, dtype=np.float64)
+        sigma = np.nan_to_num(std, nan=0.0, posinf=np.inf) * per
         clip = min(
             float(sensor.full_well_e),
             (digital.full_scale_dn - sensor.black_level_dn + 0.5) * sensor.gain_e_per_dn,
