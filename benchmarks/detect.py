@@ -137,6 +137,28 @@ under 0.05 ms): the glints' Gaussian is already ``sepFilter2D`` with GaussianBlu
 kernel (the same floats) and its histogram, range and bright mask need the whole frame; a
 one-pixel-glint blob whose box holds no pixel at the top (0–1 a frame on openeds) could skip its
 mask; the glints' fill is ~40–60 µs a glint (under load) of ~10 OpenCV calls on small windows.
+
+Session 19 (det19). Kept, 3e241d3 (det19's 82849f4): the
+glints' smoothed float picture (1 MB at 640 × 400) freed once its 8-bit copy is made instead of
+at ``find_glints``' return: held through the blob search, it lifted each frame's peak of
+short-lived memory past glibc's trim threshold in a process given only 640 × 400 8-bit frames —
+as a tracker is — so the heap was handed back and taken again page by page every frame: ~500
+minor page faults a call (``getrusage``), none since. Concurrent pair of two such processes
+(each frame 40 calls in a row after 3, one thread) before/after, median CPU ms per call:
+000160 4.30/3.61, 000170 3.83/3.14, 000180 3.70/3.08 (twice, within 0.07 ms). This script runs
+the synthetic frames (16-bit, their float copies larger) first, which lifts glibc's thresholds:
+its openeds figures never had those faults and do not show that gain. Measured and not kept:
+the ladder's levels from one hand-written component tree (a union-find over the reduced
+picture's pixels taken darkest first, reproducing OpenCV's labels) instead of 13–16
+``cv2.connectedComponentsWithStats``: the same answers, the ladder 0.33–0.39 → 0.18 ms, but the
+whole call only 3–5 % faster on the openeds frames (concurrent pair, median CPU ms per call
+3.90/3.78, 3.48/3.31, 3.35/3.21; synthetic 640 × 400 3.53/3.57) for ~280 lines of our own code
+in place of OpenCV's, and the target is met without it. The glint fill's masked minimum by
+``cv2.min`` + ``cv2.copyTo``: the same bytes, ~10 µs a frame, not kept.
+Figures at 3e241d3 (03:00 UTC, load 1.05, another benchmark on the other core,
+``NUMBA_NUM_THREADS=1 python benchmarks/detect.py --repeats 100 --real``): synthetic 640 × 400
+3.52 ms CPU median (best 3.31), 640 × 480 3.90; openeds 3.48 / 3.95 ms median frame / slowest
+(best calls 3.30 / 3.82); itmo 1.81 / 2.06.
 """
 
 from __future__ import annotations
