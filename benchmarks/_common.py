@@ -205,3 +205,20 @@ def fmt_rate(x: float) -> str:
         if abs(x) >= scale:
             return f"{x / scale:.3g} {unit}"
     return f"{x:.3g} "
+
+
+def parse_sets(sets: list[str], option: str = "--set") -> dict:
+    """``key=value`` options as scene overrides (a JSON value where it parses as one, else the
+    text); one line naming the option and exit 2 for an item without ``=``."""
+    out = {}
+    for item in sets:
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip():
+            print(f"{option} {item!r}: must be key=value (a scene field's dotted path)",
+                  file=sys.stderr)  # fmt: skip
+            sys.exit(2)
+        try:
+            out[key.strip()] = json.loads(value)
+        except ValueError:
+            out[key.strip()] = value
+    return out

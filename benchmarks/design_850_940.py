@@ -4,6 +4,7 @@ table of a design question answered end to end.
     python benchmarks/design_850_940.py                 # the issue's: 50 people, ~hours on 2 cores
     python benchmarks/design_850_940.py --people 4      # fewer
     python benchmarks/design_850_940.py --stop-at 23:20 # stop at that UTC time: the people done
+    python benchmarks/design_850_940.py --set sensor.exposure_ms=1   # any scene field, both λ
 
 On ``vr-offaxis`` (its ring of 8 LEDs, nothing else changed but the wavelength), for each of N
 people sampled from the anatomy distributions (``population.toml``, population seed 1, the same
@@ -73,8 +74,9 @@ SUN = {"ambient.sun.elevation_deg": 40.0, "ambient.sun.azimuth_deg": 30.0}
 FILTERS = {850.0: (830.0, 870.0), 940.0: (920.0, 960.0)}
 
 
-def scene_at(name: str, wavelength: float):
-    """The preset at ``wavelength`` with the QE curve, the band-pass filter and the sun."""
+def scene_at(name: str, wavelength: float, overrides: dict | None = None):
+    """The preset at ``wavelength`` with the QE curve, the band-pass filter and the sun, then
+    ``overrides`` (``--set``: the same at both wavelengths)."""
     import eyelume
 
     lo, hi = FILTERS[wavelength]
@@ -87,6 +89,7 @@ def scene_at(name: str, wavelength: float):
             "sensor.filter.cut_on_nm": lo,
             "sensor.filter.cut_off_nm": hi,
             **SUN,
+            **(overrides or {}),
         },
     )
 
@@ -162,6 +165,13 @@ def _args():
     ap.add_argument("--render-noise", default="sensor", help="'sensor' or a relative error")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--stop-at", default=None, help="UTC HH:MM: stop then, report the people done")
+    ap.add_argument(
+        "--set",
+        dest="sets",
+        action="append",
+        default=[],
+        help="key=value scene override at both wavelengths, e.g. sensor.exposure_ms=1",
+    )
     return ap.parse_args()
 
 
@@ -210,7 +220,14 @@ def main() -> None:
     noise = parse_render_noise(a.render_noise)
     info = {"machine": C.machine(), "command": C.command_line(), "load_start": C.loadavg()}
     C.print_header("850 vs 940 nm over sampled people (vr-offaxis ring)", info["machine"])
-    scenes = {w: scene_at(a.scene, w) for w in WAVELENGTHS}
+    from eyelume.errors import EyelumeError
+
+    overrides = C.parse_sets(a.sets)
+    try:
+        scenes = {w: scene_at(a.scene, w, overrides) for w in WAVELENGTHS}
+    except EyelumeError as exc:  # a bad --scene or --set: one line, exit 2
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
     people = {w: sample_people(scenes[w], a.people, a.population_seed) for w in WAVELENGTHS}
     safety = {w: eye_safety(scenes[w]) for w in WAVELENGTHS}
     tasks = (((k, w), (people[w][k], a.seed, noise)) for k in range(a.people) for w in WAVELENGTHS)
@@ -255,6 +272,7 @@ def main() -> None:
         "workers": a.workers,
         "wall_s": round(wall, 1),
         "sun": SUN,
+        "overrides": overrides,
         "filters_nm": {f"{w:.0f}": FILTERS[w] for w in WAVELENGTHS},
         "table": table,
         "rows": {f"{k[1]:.0f}/{k[0]}": v["row"] for k, v in sorted(done.items())},

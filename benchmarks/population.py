@@ -43,7 +43,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _common import command_line, cpu_ticks, loadavg, machine, print_header  # noqa: E402
+from _common import command_line, cpu_ticks, loadavg, machine, parse_sets, print_header  # noqa: E402
 
 RESULTS = Path(__file__).parent / "results" / "population.jsonl"
 TARGET_S = 300.0  # issue 15: 50 people in ≤ 5 min
@@ -89,8 +89,8 @@ def main() -> None:
     from eyelume.scene.population import sample_people
 
     a = _args()
-    overrides = _parse_sets(a.sets)
-    info_people = _parse_sets(a.people_sets)
+    overrides = parse_sets(a.sets)
+    info_people = parse_sets(a.people_sets, "--people-set")
     scene = eyelume.load_scene(a.scene, overrides)
     info = {"machine": machine(), "command": command_line(), "load_start": loadavg()}
     print_header("evaluate-tracking over sampled people", info["machine"])
@@ -221,23 +221,14 @@ def _frames_only(a, scene, people, per: int, info: dict) -> None:
     with open(RESULTS, "a", encoding="utf-8") as fh:
         fh.write(json.dumps({"time_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
                              **info, "mode": "frames", "scene": scene.name,
-                             "overrides": _parse_sets(a.sets),
-                             "people_overrides": _parse_sets(a.people_sets),
+                             "overrides": parse_sets(a.sets),
+                             "people_overrides": parse_sets(a.people_sets, "--people-set"),
                              "sensor": [scene.sensor.cols, scene.sensor.rows],
                              "samples_per_pixel_asked": None if a.noise else a.samples,
                              "render_noise": a.noise, "frames": rows,
                              "cpu_s_per_frame": round(cpu, 2), "frames_per_person": per,
                              "ideal_50_people_s": round(ideal, 1), "target_s": TARGET_S})
                  + "\n")  # fmt: skip
-
-
-def _parse_sets(sets: list[str]) -> dict:
-    """``key=value`` options as scene overrides (a JSON value where it parses as one)."""
-    out = {}
-    for s in sets:
-        k, v = s.split("=", 1)
-        out[k] = json.loads(v) if v[:1] in "[{0123456789-tf" else v
-    return out
 
 
 def _with_sets(people: list, overrides: dict) -> list:
