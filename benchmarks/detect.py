@@ -190,7 +190,12 @@ def _synthetic(rows: int = 480):
     path = C.REPO / "tests" / "analysis" / "test_detect.py"
     spec = importlib.util.spec_from_file_location("_test_detect", path)
     mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    try:
+        spec.loader.exec_module(mod)
+    except ModuleNotFoundError as exc:  # the tests' module needs the test extra (pytest)
+        print(f"benchmarks/detect.py draws its synthetic frames with {path.name}, which needs "
+              f"{exc.name}: pip install -e '.[test]'", file=sys.stderr)  # fmt: skip
+        sys.exit(2)
     centre = (mod.CENTRE[0], mod.CENTRE[1] - (480 - rows) / 2)
     truth = {
         "pupil": {"centre_px": list(centre)},
