@@ -386,3 +386,31 @@ def test_a_study_file_saved_in_another_encoding_loads(tmp_path, encoding):
     text = "# °\n" + STUDY.replace('scene = "scene.toml"', 'scene = "paper2005"')
     (tmp_path / "study.toml").write_bytes(text.encode(encoding))
     assert len(plan_runs(load_study(tmp_path / "study.toml"))) == 4
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "words"),
+    [
+        ("eye.npy", b"hello\n", "not a NumPy .npy file"),  # text named .npy
+        ("eye.npy", b"\x89PNG\r\n\x1a\n" + bytes(32), "not a NumPy .npy file"),  # a PNG's start
+        ("pictures", None, "a directory, not a picture file"),
+    ],
+)
+def test_track_names_what_a_file_is_not(tmp_path, name, content, words):
+    """A file named .npy that is not one: NumPy took it for a pickle and said so ("pickled
+    (object) data … load it unsafely"), the wrong cause and an unsafe advice; a directory was
+    "no such file" (a new user's findings, session 19)."""
+    from typer.testing import CliRunner
+
+    from eyelume.cli import app
+
+    path = tmp_path / name
+    if content is None:
+        path.mkdir()
+    else:
+        path.write_bytes(content)
+    res = CliRunner().invoke(app, ["track", str(path)])
+    assert res.exit_code == 2, res.output
+    text = " ".join(res.output.split())
+    assert words in text and "pickle" not in text and "Traceback" not in res.output
+    assert len(res.output.strip().splitlines()) == 1

@@ -1000,6 +1000,34 @@ def _refuse_without_direct(direct, direct_leds, vary_spread, vary_azimuths) -> N
         _fail(f"{given[0]} with --direct 0: the direct optimisation is skipped; drop one")
 
 
+def _load_picture_file(image: Path):
+    """(array, channel order) of a picture file as stored: .npy by NumPy (no pickles), any
+    other by OpenCV unchanged. InputFileError (one line) for a directory, a missing file, a
+    file named .npy that is not one, or one OpenCV cannot read."""
+    import numpy as np
+
+    from eyelume.errors import InputFileError
+
+    if image.is_dir():
+        raise InputFileError("a directory, not a picture file", file=image)
+    if not image.is_file():
+        raise InputFileError("no such file", file=image)
+    try:
+        if image.suffix.lower() == ".npy":
+            with image.open("rb") as fh:  # NumPy takes any other file for a pickle and says so
+                if fh.read(6) != b"\x93NUMPY":
+                    raise ValueError("not a NumPy .npy file (no .npy header)")
+            return np.load(image, allow_pickle=False), "RGB"
+        import cv2
+
+        data = cv2.imread(str(image), cv2.IMREAD_UNCHANGED)
+        if data is None:
+            raise ValueError("not a picture OpenCV can read")
+        return data, "BGR"
+    except (ValueError, OSError) as exc:
+        raise InputFileError(str(exc), file=image) from None
+
+
 def _read_picture(image: Path):
     """A grey picture from a file a camera or eyelume writes: 8/16-bit PNG, TIFF, JPEG (OpenCV,
     unchanged depth) or .npy (any real dtype; NaN = missing pixels). Colour becomes luminance
@@ -1008,21 +1036,7 @@ def _read_picture(image: Path):
 
     from eyelume.errors import InputFileError
 
-    if not image.is_file():
-        raise InputFileError("no such file", file=image)
-    try:
-        if image.suffix.lower() == ".npy":
-            data = np.load(image, allow_pickle=False)
-            order = "RGB"
-        else:
-            import cv2
-
-            data = cv2.imread(str(image), cv2.IMREAD_UNCHANGED)
-            if data is None:
-                raise ValueError("not a picture OpenCV can read")
-            order = "BGR"
-    except (ValueError, OSError) as exc:
-        raise InputFileError(str(exc), file=image) from None
+    data, order = _load_picture_file(image)
     if not isinstance(data, np.ndarray) or data.dtype.kind not in "biuf":
         raise InputFileError(
             f"not a numeric picture ({getattr(data, 'dtype', type(data))})", file=image
