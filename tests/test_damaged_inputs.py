@@ -414,3 +414,28 @@ def test_track_names_what_a_file_is_not(tmp_path, name, content, words):
     text = " ".join(res.output.split())
     assert words in text and "pickle" not in text and "Traceback" not in res.output
     assert len(res.output.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("suffix", [".png", ".tif", ".jpg"])
+def test_track_refuses_a_picture_cut_short_in_one_line(tmp_path, suffix):
+    """A picture file cut in half: one line naming it on stderr, exit 2 — not OpenCV's
+    [ERROR] lines before ours (TIFF; written by the C library, so the command runs in its own
+    process here), nor a JPEG decoded with its missing half grey and analysed (libjpeg only
+    printed "Premature end of JPEG file"; a new user's findings, session 19)."""
+    import subprocess
+    import sys
+
+    import cv2
+    import numpy as np
+
+    img = (np.random.default_rng(0).random((100, 120)) * 255).astype(np.uint8)
+    data = cv2.imencode(suffix, img)[1].tobytes()
+    path = tmp_path / f"eye{suffix}"
+    path.write_bytes(data[: len(data) // 2])
+    code = "import sys; from eyelume.cli import app; sys.argv = ['eyelume', *sys.argv[1:]]; app()"
+    res = subprocess.run([sys.executable, "-c", code, "track", str(path)],
+                         capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert res.returncode == 2, (res.stdout, res.stderr)
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error:") and f"eye{suffix}" in lines[0], lines
+    assert res.stdout.strip() == ""

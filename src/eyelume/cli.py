@@ -1020,7 +1020,19 @@ def _load_picture_file(image: Path):
             return np.load(image, allow_pickle=False), "RGB"
         import cv2
 
-        data = cv2.imread(str(image), cv2.IMREAD_UNCHANGED)
+        if image.suffix.lower() in (".jpg", ".jpeg"):
+            # libjpeg decodes a cut file, fills the rest grey and only prints "Premature end of
+            # JPEG file": a JPEG ends with its end-of-image marker, FF D9
+            with image.open("rb") as fh:
+                fh.seek(max(0, image.stat().st_size - 1024))  # padding after it: some cameras
+                if b"\xff\xd9" not in fh.read():
+                    raise ValueError("a JPEG cut short (no end-of-image marker)")
+        log = cv2.utils.logging
+        level = log.setLogLevel(log.LOG_LEVEL_SILENT)  # the one line below says it, not OpenCV's
+        try:
+            data = cv2.imread(str(image), cv2.IMREAD_UNCHANGED)
+        finally:
+            log.setLogLevel(level)
         if data is None:
             raise ValueError("not a picture OpenCV can read")
         return data, "BGR"
