@@ -23,7 +23,7 @@ which add in variance too, so each is rendered to the shot noise of its own elec
 :data:`SENSOR_NOISE_MARGIN`, each N̄ the median skin pixel of that source's pilot picture) —
 and their sum's noise, m sqrt(N̄_L + N̄_S), stays within the margin of the whole picture's shot
 noise. (One target m / sqrt(N̄_L + N̄_S) for both, the rule before, asks the weaker source for
-(N̄_L + N̄_S) / N̄ times the samples it needs: ~4.5× for the LEDs of ``vr-offaxis`` at 850 nm
+(N̄_L + N̄_S) / N̄ times the samples it needs: ~4.4× for the LEDs of ``vr-offaxis`` at 850 nm
 in the sun of ``benchmarks/design_850_940.py``.)
 
 Used by the labelled datasets (:mod:`eyelume.optimize.dataset`, one pilot per picture) and by
