@@ -503,3 +503,58 @@ def test_track_too_few_valid_pixels_is_a_refusal_not_a_traceback(tmp_path):
     assert json.loads(res.stdout)["failures"][0].startswith("no pupil: too few valid pixels")
     first = res.stderr.splitlines()[0]
     assert first.startswith("no pupil: too few valid pixels") and first.endswith("grown by one")
+
+
+def headset_frame(iris: float, pupil: float, seed: int) -> np.ndarray:
+    """A 640 × 400 8-bit frame as a new user drew it (session 19): skin 170, the eye's opening
+    an ellipse of sclera 200 (400 × 220 px), an iris of radius 85 px, a pupil of radius 30 px
+    (edges antialiased over 1 px), four saturated glints 25 px from its centre, noise σ 3."""
+    yy, xx = np.mgrid[0:400, 0:640].astype(float)
+    cx, cy = 320.3, 200.7
+    img = np.full((400, 640), 170.0)
+    opening = ((xx - 320) / 200) ** 2 + ((yy - 200) / 110) ** 2 < 1
+    img[opening] = 200.0
+    r = np.hypot(xx - cx, yy - cy)
+    img[(r < 85) & opening] = iris
+    a = np.clip(30.5 - r, 0, 1)
+    img = img * (1 - a) + pupil * a
+    for dx, dy in ((25, 0), (0, -25), (-25, 0), (0, 25)):
+        img += 400 * np.exp(-((xx - cx - dx) ** 2 + (yy - cy - dy) ** 2) / (2 * 1.5**2))
+    img += np.random.default_rng(seed).normal(0.0, 3.0, img.shape)
+    return u8(img)
+
+
+@pytest.mark.parametrize("iris", [24.0, 26.0, 28.0])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_pupil_a_few_sigma_darker_than_its_iris_is_never_the_iris(iris, seed):
+    """Pupil 18, iris 24–28, noise σ 3 (2–3.3 σ a pixel apart): the ladder cannot part pupil
+    from iris and fitted the iris, whose interior's lower tail is within the pixel noise of its
+    median — answered `ok` with the 170 px iris as the pupil (a new user's pictures, session
+    19: 24 of 24). Averaged over 5 × 5 px the pupil is a core many σ under the iris: the
+    answer is the pupil or a refusal naming the merge, never the iris."""
+    d = detect(headset_frame(iris, 18.0, seed), led_azimuths_deg=[0, 90, 180, 270])
+    if d.ok:
+        assert_pupil(d, tol=0.5, centre=(320.3, 200.7))
+        assert d.pupil.axes_px[0] < 70  # the 60 px pupil, not the 170 px iris
+    else:
+        assert d.failures[0].startswith("pupil merged with iris: "), d.failures
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_shaded_uniform_pupil_has_no_averaged_core(seed):
+    """The averaged-core test judges the lower tail against the spread of the interior's
+    brighter half, so a real pupil shaded across (8 DN from side to side, noise σ 3) is no
+    core, as a uniform one is not."""
+    from eyelume.analysis.tracking.detect import DetectParams
+    from eyelume.analysis.tracking.pupil import darker_core, work_picture
+
+    params = DetectParams()
+    img = closeup(skin=200.0, iris=90.0, pupil=20.0, noise=3.0, blur=0.0, seed=seed)
+    img += np.linspace(-4.0, 4.0, SIZE)[None, :]  # shading across the picture
+    img = u8(img)
+    bright = np.zeros(img.shape, np.uint8)
+    wp = work_picture(img, None, bright, params)
+    pupil = _ellipse_fit(CENTRE[0], CENTRE[1], 17.0, 15.5)
+    assert darker_core(img, wp, pupil, bright, params) == ""
+    d = detect(img)
+    assert_pupil(d, tol=0.5)
