@@ -2019,7 +2019,9 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     noise σ (Immerkær's estimate over it, as :func:`noise_sigma`; the step between a core and the
     rest is a thin edge, which that median ignores; ≥ 1 for an integer picture, whose
     percentiles move in whole steps). A real pupil is uniform to its noise: its
-    5th percentile is a couple of σ under its median."""
+    5th percentile is a couple of σ under its median. When this finds no core, the interior
+    averaged over 5 × 5 px is looked at again (:func:`_smoothed_core`: a pupil only a few σ of
+    the pixel noise darker than its iris)."""
     rows, cols = img.shape
     reach = max(e.a, e.b) + 1
     x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
