@@ -95,6 +95,7 @@ from eyelume.optimize.render_budget import (  # noqa: F401 - the dataset's budge
     PILOT_COLS,
     PILOT_SAMPLES,
     SENSOR_NOISE_MARGIN,
+    noise_options,
     sensor_noise_target,
 )
 from eyelume.optimize.study import beside, read_input_file
@@ -529,28 +530,18 @@ class Picture:
 
 
 def _render_options(ds: Dataset, sc: Scene, seed: int):
-    """(RenderOptions, the budget's facts for the label)."""
+    """(RenderOptions, the budget's facts for the label): a fixed ``samples_per_pixel``, or the
+    targets and facts of :func:`eyelume.optimize.render_budget.noise_options` (the rule tracking
+    uses: with sunlight the LEDs' and the sun's renders each to their own shot noise)."""
     from eyelume.render import RenderOptions
 
     if ds.samples_per_pixel is not None:
         opts = RenderOptions(estimator="fast", samples_per_pixel=ds.samples_per_pixel, seed=seed)
         return opts, {"budget": "samples_per_pixel"}
-    facts: dict = {"budget": "render_noise"}
-    sun = None
-    if ds.noise == "sensor":
-        t = sensor_noise_target(sc, seed)
-        target, sun = t.rel_error, t.ambient_rel_error
-        facts.update(budget="sensor", pilot_skin_electrons=t.electrons)
-        if sun is not None:
-            facts.update(
-                ambient_target_rel_error=sun, pilot_ambient_skin_electrons=t.ambient_electrons
-            )
-    else:
-        target = float(ds.noise)
-    facts["target_rel_error"] = target
+    target, facts = noise_options(sc, ds.noise, seed, ds.max_samples_per_pixel)
     opts = RenderOptions(
         estimator="fast", rel_error=target, max_samples_per_pixel=ds.max_samples_per_pixel,
-        seed=seed, ambient_rel_error=sun,
+        seed=seed, ambient_rel_error=facts.get("ambient_target_rel_error"),
     )  # fmt: skip
     return opts, facts
 
