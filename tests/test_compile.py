@@ -198,3 +198,30 @@ def test_the_paper_lens_turned_away_from_the_eye_is_refused(overrides):
     not a black picture (a fresh-user finding)."""
     with pytest.raises(SceneError, match="camera: sees no eye: the corneal vertex is behind"):
         compile_scene(load_scene("paper2005", overrides))
+
+
+def test_refusals_name_the_scene_field_that_placed_the_led_or_the_view():
+    """A fresh user's finding (session 19): "leds: LED 1 …" and "camera: sees no eye" named the
+    object but not the field to change. LEDs placed one by one name ``leds.positions_mm[i]``,
+    a ring LED names the ring's fields, a camera that sees no eye names the view's field."""
+    both = {
+        "leds.count": 2,
+        "leds.positions_mm": [[10.0, 0.0, 15.0], [10.5, 0.0, 15.0]],
+        "leds.aim_at_mm": [0.0, 0.0, 0.0],
+    }
+    with pytest.raises(SceneError) as err:
+        compile_scene(load_scene("vr-offaxis", both))
+    assert "leds.positions_mm[1] and leds.positions_mm[0]" in str(err.value), err.value
+    with pytest.raises(SceneError) as err:
+        compile_scene(load_scene("paper2005", {"leds.height_mm": 0.0, "leds.distance_mm": 1.0}))
+    assert "LED 0 (the ring's" in str(err.value) and "leds.height_mm" in str(err.value)
+    with pytest.raises(SceneError) as err:
+        compile_scene(load_scene("vr-offaxis", {"camera.look_at_mm": [0.0, 100.0, 0.0]}))
+    assert "sees no eye" in str(err.value) and "camera.look_at_mm = [0.0, 100.0, 0.0]" in str(
+        err.value
+    )
+    with pytest.raises(SceneError) as err:
+        compile_scene(load_scene("paper2005", {"camera.direction": [0.3, 0.0, -1.0]}))
+    assert "sees no eye" in str(err.value) and "camera.direction = [0.3, 0.0, -1.0]" in str(
+        err.value
+    )

@@ -617,6 +617,17 @@ def real_best_focus(lf: np.ndarray) -> tuple[float, float] | None:
     return s_b, rms
 
 
+def _led_field(scene: Scene, i: int) -> str:
+    """The scene field that placed LED ``i``, for an error line: ``leds.positions_mm[i]`` (one
+    by one) or the ring's fields (``leds.azimuths_deg[i]`` or its share of ``count``, with
+    ``height_mm``, ``distance_mm`` and ``pitch_deg``)."""
+    leds = scene.leds
+    if leds.positions_mm is not None:
+        return f"leds.positions_mm[{i}]"
+    az = f"leds.azimuths_deg[{i}]" if leds.azimuths_deg is not None else f"LED {i} of leds.count"
+    return f"the ring's {az}, leds.height_mm, leds.distance_mm, leds.pitch_deg"
+
+
 def _check_leds(
     scene: Scene, centres: np.ndarray, lf: np.ndarray, frame: Frame, axes: np.ndarray
 ) -> None:
@@ -632,7 +643,8 @@ def _check_leds(
         if c[2] - reach <= plane_z:
             where = "lies behind" if c[2] + reach <= plane_z else "crosses"
             raise SceneError(
-                f"leds: LED {i} body (centre z = {c[2]:.2f} mm, {body.words()}) {where} the "
+                f"leds: LED {i} ({_led_field(scene, i)}) body (centre z = {c[2]:.2f} mm, "
+                f"{body.words()}) {where} the "
                 f"eye plane z = {plane_z + 0.0:g} (the eye's side): the LEDs must sit in front "
                 "of the eye"
             )
@@ -644,7 +656,8 @@ def _check_leds(
                     else f"{body.words()} and {bodies[j].words()}"
                 )
                 raise SceneError(
-                    f"leds: LED {i} and LED {j} bodies overlap (centres "
+                    f"leds: LED {i} and LED {j} bodies overlap ({_led_field(scene, i)} and "
+                    f"{_led_field(scene, j)}; centres "
                     f"{np.round(c, 3).tolist()} and {np.round(centres[j], 3).tolist()} mm, "
                     f"{np.linalg.norm(c - centres[j]):.3g} mm apart, {sizes})"
                 )
@@ -667,8 +680,8 @@ def _check_leds(
             cuts = bool(np.any(pts[near, 2] > _lens_surface_z(lf, 0, r[near])))
         if cuts:
             raise SceneError(
-                f"leds: LED {i} body (world centre {np.round(c, 1).tolist()} mm, "
-                f"{r_c:.1f} mm from the camera's axis) overlaps the imaging lens's first "
+                f"leds: LED {i} ({_led_field(scene, i)}) body (world centre "
+                f"{np.round(c, 1).tolist()} mm, {r_c:.1f} mm from the camera's axis) overlaps the imaging lens's first "
                 f"surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
             )
 
@@ -700,7 +713,8 @@ def _check_leds_in_head(
         if what == "camera":  # one lens: the field that placed it
             label, size = f"camera.position_mm = {at} (the lens)", ""
         else:
-            label, size = f"{what} {i} (world centre {at} mm", f", {body.words()})"
+            field = f" ({_led_field(scene, i)})" if what == "leds: LED" else ""
+            label, size = f"{what} {i}{field} (world centre {at} mm", f", {body.words()})"
         if where == "the eye":
             raise SceneError(f"{label}{size} is inside the eye")
         if where is not None:
@@ -823,9 +837,21 @@ def _check_view(
     if not straight:
         return
     unit = np.asarray(view, dtype=float) / np.linalg.norm(view)
+    cam = scene.camera
+    if cam.direction is not None:
+        field = f"camera.direction = {list(cam.direction)}"
+    elif cam.look_at_mm is not None:
+        field = f"camera.look_at_mm = {list(cam.look_at_mm)}"
+    else:
+        field = "camera.look_at_mm and camera.direction unset: looking along -z"
+    placed = (
+        f"camera.position_mm = {list(cam.position_mm)}"
+        if cam.position_mm is not None
+        else "camera.position_mm unset"
+    )
     where = (
         f"camera at {[round(float(x), 3) for x in pos]} mm looking along "
-        f"{np.round(unit, 3).tolist()}"
+        f"{np.round(unit, 3).tolist()}; {placed}, {field}"
     )
     # behind the lens's first vertex (camera-frame z = L) or its entrance pupil (which for a
     # long lens can lie far behind the first vertex)
@@ -1868,7 +1894,8 @@ def _check_leds_outside_camera_body(
             )
         if inside:
             raise SceneError(
-                f"leds: LED {i} body (world centre {np.round(c, 2).tolist()} mm, {b.words()}) "
+                f"leds: LED {i} ({_led_field(scene, i)}) body (world centre "
+                f"{np.round(c, 2).tolist()} mm, {b.words()}) "
                 f"is inside the camera body (camera.body: {body.diameter_mm} mm across, "
                 f"{body.length_mm} mm deep behind the lens)"
             )
