@@ -681,8 +681,8 @@ def _check_leds(
         if cuts:
             raise SceneError(
                 f"leds: LED {i} ({_led_field(scene, i)}) body (world centre "
-                f"{np.round(c, 1).tolist()} mm, {r_c:.1f} mm from the camera's axis) overlaps the imaging lens's first "
-                f"surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
+                f"{np.round(c, 1).tolist()} mm, {r_c:.1f} mm from the camera's axis) overlaps "
+                f"the imaging lens's first surface (semi-diameter {lf[0, Q.L_SD]:.1f} mm)"
             )
 
 
