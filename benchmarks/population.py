@@ -32,6 +32,13 @@ population"): ``--frames 3`` 14.3–15.3 CPU-s a frame (6, 5, 4 samples per pixe
 1.73–1.84 %), ≈ 5 400–5 700 s for 50 people on two idle cores (≈ 18× the target); with
 ``--people-set face.lashes.enabled=false``, interleaved, 5.9 CPU-s a frame at 2 samples per
 pixel (≈ 2 200 s): the lashes' shadows are what raise the samples, not the budget.
+
+Tried and dropped (session 20, b0567fc, a concurrent one-thread pair at load 13–15, the 2.6 GHz
+host): ``--frames 3 --set run.continuation_grid=2`` (4 continuation rays at the first skin
+vertex instead of the preset's 5 × 5) costs 1.0 against 2.2 CPU-s per sample per pixel but
+needs 12–17 samples per pixel instead of 3–5 for the same sensor target: 15.1 against 9.0 CPU-s
+a frame. The light the faces send each other is what varies between samples; the preset's grid
+is near the best cost × variance (a fit of the two points puts 4–6 within 10 % of 5).
 """
 
 from __future__ import annotations
