@@ -392,6 +392,36 @@ def test_a_blob_dark_on_one_side_only_is_refused():
     assert "dark on one side only" in _one_sided(img, wp, e, 40.0, none, params)
 
 
+def test_an_iris_in_a_shadow_on_one_side_is_still_a_surround():
+    """A sunlit face (vr-offaxis at 850 nm, 1 ms, the sun 40° up: the pupil 16 DN over a
+    black of 14, the iris in the lid's shadow 30-32, lit ~70-90, the sclera ~570): the shadowed
+    sector holds only 0.27 of the ring's step over the pupil, and the pupil was refused as
+    "dark on one side only". The shadowed iris has 8x the pupil's signal above the black: it
+    is a surround, not the dark side of a strip, which is as dark as the strip itself (the test
+    above)."""
+    from eyelume.analysis.tracking.detect import DetectParams
+    from eyelume.analysis.tracking.pupil import Ellipse, _one_sided, work_picture
+
+    def picture(shadow: float) -> np.ndarray:
+        img = np.full((100, 100), 570.0)
+        cv2.circle(img, (50, 50), 35, 90.0, -1)  # the lit iris
+        quadrant = img[:50, :50]  # the iris's upper-left quarter in the lid's shadow
+        quadrant[quadrant < 100.0] = shadow
+        img[99, 99] = 14.0  # the black level
+        cv2.ellipse(img, ((50.0, 50.0), (26.0, 24.0), 0.0), 16.0, -1)
+        return img
+
+    e = Ellipse(50.0, 50.0, 13.0, 12.0, 0.0)
+    none = np.zeros((100, 100), np.uint8)
+    params = DetectParams()
+    img = picture(31.0)  # the shadowed sector is (31 - 16) / (90 - 16) = 0.2 of the step
+    wp = work_picture(img, None, none, params)
+    assert _one_sided(img, wp, e, 16.0, none, params) is None
+    img = picture(17.0)  # a dark side: 3 DN over the black against the blob's 2
+    wp = work_picture(img, None, none, params)
+    assert "dark on one side only" in _one_sided(img, wp, e, 16.0, none, params)
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_unlit_surround_filling_most_of_the_picture(seed):
     """A wide-angle headset camera (eyetrackvr): only a disc around the eye is lit, the rest

@@ -1983,7 +1983,14 @@ def _one_sided(img, wp: WorkPicture, e: Ellipse, pupil_level: float, bright, par
     if not len(meds):
         return None
     worst = float(np.min((meds - pupil_level) / step))
-    if worst < params.surround_sector_min:
+    # A dark side is as dark as the blob, near enough: a fold or a strip beside a lid runs on
+    # into it. Signals count from the black level (the darkest valid pixel, ``wp.lo``): a
+    # darkest sector with over twice the blob's signal is iris, however it compares with the
+    # rest of the ring — on a sunlit face the iris in the lid's shadow holds 0.27 of the
+    # ring's step over the pupil (vr-offaxis at 850 nm, 1 ms, the sun 40° up: pupil 16 DN,
+    # the shadowed iris 30–32 and the lit one ~70 over a black of 14: 8× the pupil's signal).
+    lit = float(np.min(meds)) - wp.lo > 2.0 * (pupil_level - wp.lo)
+    if worst < params.surround_sector_min and not lit:
         return (
             f"no pupil: the dark blob at ({e.cx:.0f}, {e.cy:.0f}) px is dark on one side only "
             f"(its darkest surround sector is {worst:.2f} of the surround's step above it, "
