@@ -141,3 +141,28 @@ def test_score_placement_of_an_impossible_placement_is_infinite():
     # Z = 2 mm: the LED bodies (5 mm) cross the eye plane
     r = score_placement(eyelume.load_scene("paper2005"), 30.0, 2.0, 10.0, 8, 0)
     assert r.score_deg == float("inf")
+
+
+def test_a_kept_frame_is_analysed_again_to_the_same_answer():
+    """``render_frame(..., keep_picture=True)`` keeps the digital picture and the LEDs' layout;
+    :func:`reanalyse_frame` runs detection on them again: with the same detector, the same
+    answer (pupil, glints, errors) and the render's measurements carried over. A frame kept
+    without its picture cannot be analysed again."""
+    import dataclasses
+
+    from eyelume.optimize.tracking import reanalyse_frame
+
+    sc = eyelume.load_scene("paper2005")
+    f = render_frame(sc, 0.0, 0.0, 16, 1, keep_picture=True)
+    assert f.detection.ok, f.detection.failures
+    assert f.picture["counts"].shape == (sc.sensor.rows, sc.sensor.cols)
+    g = reanalyse_frame(f)
+    assert g.detection.ok and g.detection.failures == f.detection.failures
+    assert g.detection.pupil.centre_px == f.detection.pupil.centre_px
+    assert [x.centre_px for x in g.detection.glints] == [x.centre_px for x in f.detection.glints]
+    assert g.glints_px == f.glints_px and g.pupil_error_px == f.pupil_error_px
+    assert (g.samples_per_pixel, g.saturated_share, g.render_s) == (
+        f.samples_per_pixel, f.saturated_share, f.render_s
+    )  # fmt: skip
+    with pytest.raises(ValueError, match="kept no picture"):
+        reanalyse_frame(dataclasses.replace(f, picture=None))

@@ -67,6 +67,7 @@ __all__ = [
     "population_summary",
     "evaluate_tracking",
     "render_frame",
+    "reanalyse_frame",
     "score_placement",
     "sweep_tracking",
 ]
@@ -75,7 +76,7 @@ GAZE_H = (-20.0, 0.0, 20.0)
 GAZE_V = (-10.0, 0.0, 10.0)
 
 
-def render_frame(
+def render_frame(  # noqa: PLR0913 - the frame, its budget, and whether to keep its picture
     scene: Scene,
     h: float,
     v: float,
@@ -84,6 +85,7 @@ def render_frame(
     rel_error: float | None = None,
     max_samples: int = MAX_SAMPLES_PER_PIXEL,
     ambient_rel_error: float | None = None,
+    keep_picture: bool = False,
 ) -> Frame:
     """Render the eye at gaze (``h``, ``v``) degrees (fast estimator, ``samples`` per pixel —
     or, with ``rel_error``, until the median skin pixel's relative standard error is at most
@@ -95,7 +97,8 @@ def render_frame(
     (``h``, ``v``) is the target the person fixates: the eye turns so that its visual axis has
     these angles (:func:`eyelume.analysis.truth.optical_gaze_for`; the optical axis itself
     when ``eye.kappa_deg`` is 0), and the frame's errors are against it. GeometryError when
-    the optical gaze needed lies beyond the eye's ±30°."""
+    the optical gaze needed lies beyond the eye's ±30°. ``keep_picture``: the frame keeps the
+    digital picture and the LEDs' layout (``Frame.picture``) for :func:`reanalyse_frame`."""
     gh, gv = optical_gaze_for(scene, h, v)
     sc = apply_overrides(scene, {"eye.gaze_horizontal_deg": gh, "eye.gaze_vertical_deg": gv})
     cs = compile_scene(sc)
@@ -109,14 +112,21 @@ def render_frame(
     result = render(cs, opts)
     digital = digitize(result.eye_image_at_scene_wavelength, sc.sensor, sc.wavelength_nm, seed)
     azimuths = led_picture_azimuths(cs)
+    pattern = led_picture_pattern(cs)
     frame = analyse_frame(
         (h, v),
         digital.counts,
         eye_truth(cs),
         azimuths,
         render_s=result.wall_time_s,
-        led_pattern_px=led_picture_pattern(cs),
+        led_pattern_px=pattern,
     )
+    if keep_picture:
+        frame.picture = {
+            "counts": digital.counts,
+            "led_azimuths_deg": list(azimuths),
+            "led_pattern_px": pattern,
+        }
     frame.saturated_share = digital.saturated_pixels / max(digital.counts.size, 1)
     frame.samples_per_pixel = int(result.samples_per_pixel)
     if result.ambient is not None:  # ambient.sun: the LEDs' signal against the sunlight's
@@ -125,6 +135,32 @@ def render_frame(
         )
         frame.ambient = ambient_ratios(rated)
     return frame
+
+
+def reanalyse_frame(frame: Frame) -> Frame:
+    """Detection run again on a frame kept with its picture (:func:`render_frame`'s
+    ``keep_picture``): a new :class:`Frame` from :func:`~eyelume.analysis.tracking.evaluate.
+    analyse_frame` on the same digital picture, truth and LED layout, with what the render
+    measured (time, samples per pixel, saturated share, signal to ambient, calibration flag)
+    carried over — to score a changed detector on the same renders. ValueError when the frame
+    kept no picture."""
+    if frame.picture is None:
+        raise ValueError("the frame kept no picture (render_frame(..., keep_picture=True))")
+    pic = frame.picture
+    new = analyse_frame(
+        frame.gaze,
+        pic["counts"],
+        frame.truth,
+        pic["led_azimuths_deg"],
+        render_s=frame.render_s,
+        led_pattern_px=pic["led_pattern_px"],
+    )
+    new.saturated_share = frame.saturated_share
+    new.samples_per_pixel = frame.samples_per_pixel
+    new.ambient = frame.ambient
+    new.calibration = frame.calibration
+    new.picture = pic
+    return new
 
 
 def evaluate_tracking(  # noqa: PLR0913 - grids, budget, calibration: one option each
@@ -137,6 +173,7 @@ def evaluate_tracking(  # noqa: PLR0913 - grids, budget, calibration: one option
     calibration_scene: Scene | None = None,
     calibrate: bool | tuple[Sequence[float], Sequence[float]] = True,
     render_noise: str | float | None = None,
+    keep_pictures: bool = False,
 ) -> TrackingReport:
     """Render, detect and estimate gaze over the calibration and test grids (module doc).
 
@@ -157,18 +194,20 @@ def evaluate_tracking(  # noqa: PLR0913 - grids, budget, calibration: one option
     MAX_SAMPLES_PER_PIXEL` per pixel). The sensor's
     target comes from one pilot per scene (the scene and the calibration scene), not per
     frame: the skin's photo-electrons do not follow the gaze. The report's
-    ``summary["render_budget"]`` says what was asked and the samples per pixel used."""
+    ``summary["render_budget"]`` says what was asked and the samples per pixel used.
+    ``keep_pictures``: every frame keeps its picture (:func:`render_frame`)."""
     budgets: dict[int, tuple[float | None, dict]] = {}
+    keep = {"keep_picture": True} if keep_pictures else {}
 
     def frame(sc: Scene, h: float, v: float):
         if render_noise is None:
-            return run_unit(render_frame, sc, h, v, samples_per_pixel, seed)
+            return run_unit(render_frame, sc, h, v, samples_per_pixel, seed, **keep)
         if id(sc) not in budgets:
             budgets[id(sc)] = run_unit(noise_options, sc, render_noise, seed)
         target, facts = budgets[id(sc)]
         sun = facts.get("ambient_target_rel_error")
         return run_unit(render_frame, sc, h, v, samples_per_pixel, seed, target,
-                        ambient_rel_error=sun)  # fmt: skip
+                        ambient_rel_error=sun, **keep)  # fmt: skip
 
     cal_h, cal_v = calibrate if isinstance(calibrate, tuple) else (CALIBRATION_H, CALIBRATION_V)
     grid = [(h, v) for v in cal_v for h in cal_h] if calibrate else []
@@ -296,6 +335,7 @@ def evaluate_people(
     progress: Callable[[str], None] | None = None,
     render_noise: str | float | None = None,
     workers: int = 1,
+    keep_pictures: bool = False,
 ) -> list[PersonResult]:
     """:func:`evaluate_tracking` for each sampled person (:func:`eyelume.scene.population.
     sample_people`, built with scenes) on the person grids (:data:`PEOPLE_CALIBRATION_H` …):
@@ -313,9 +353,12 @@ def evaluate_people(
 
     ``progress(message)`` once per frame, "person i: …" (:func:`people_frame_count` frames).
     Ctrl-C or SIGTERM stops it after the people finished:
-    :class:`~eyelume.estimators.interrupt.PartialRun` with their results."""
+    :class:`~eyelume.estimators.interrupt.PartialRun` with their results. ``keep_pictures``:
+    every frame keeps its picture (:func:`render_frame`)."""
     if workers > 1 and len(people) > 1:
-        return _people_on_workers(people, samples_per_pixel, seed, progress, render_noise, workers)
+        return _people_on_workers(
+            people, samples_per_pixel, seed, progress, render_noise, workers, keep_pictures
+        )
     out: list[PersonResult] = []
     for person in people:
         say = None if progress is None else _prefixed(progress, f"person {person.index}")
@@ -323,7 +366,7 @@ def evaluate_people(
             rep = evaluate_tracking(
                 person.scene, PEOPLE_TEST_H, PEOPLE_TEST_V, samples_per_pixel, seed,
                 progress=say, calibrate=(PEOPLE_CALIBRATION_H, PEOPLE_CALIBRATION_V),
-                render_noise=render_noise,
+                render_noise=render_noise, keep_pictures=keep_pictures,
             )  # fmt: skip
         except KeyboardInterrupt:
             raise PartialRun(out, len(out), len(people), "people") from None
@@ -331,12 +374,18 @@ def evaluate_people(
     return out
 
 
-def _person_task(person, samples_per_pixel: int, seed: int, render_noise) -> PersonResult:
+def _person_task(
+    person, samples_per_pixel: int, seed: int, render_noise, keep_pictures: bool = False
+) -> PersonResult:
     """One person's evaluation on a worker (module level: pickled by name)."""
-    return evaluate_people([person], samples_per_pixel, seed, render_noise=render_noise)[0]
+    return evaluate_people(
+        [person], samples_per_pixel, seed, render_noise=render_noise, keep_pictures=keep_pictures
+    )[0]
 
 
-def _people_on_workers(people, samples_per_pixel, seed, progress, render_noise, workers):
+def _people_on_workers(  # noqa: PLR0913 - evaluate_people's arguments
+    people, samples_per_pixel, seed, progress, render_noise, workers, keep_pictures=False
+):
     """:func:`evaluate_people` with each person a task of :func:`~eyelume.optimize.runner.
     run_tasks` on ``workers`` processes; Ctrl-C or SIGTERM stops the workers:
     :class:`PartialRun` with the people finished, in their order."""
@@ -351,7 +400,9 @@ def _people_on_workers(people, samples_per_pixel, seed, progress, render_noise, 
             for _ in range(per):
                 progress(f"person {result.index}: done")
 
-    tasks = ((k, (p, samples_per_pixel, seed, render_noise)) for k, p in enumerate(people))
+    tasks = (
+        (k, (p, samples_per_pixel, seed, render_noise, keep_pictures)) for k, p in enumerate(people)
+    )
     try:
         run_tasks(_person_task, tasks, commit, workers=workers)
     except KeyboardInterrupt:

@@ -104,6 +104,10 @@ class Frame:
     rim_glints: int = 0  # matched glints cut by the cornea's rim (rim_glints)
     stray_glints: int = 0  # matched glints of an LED without a spot in the truth (stray_glints)
     ambient: dict | None = None  # ambient.sun: the frame's signal to ambient (ambient_ratios)
+    #: kept only when asked (``keep_picture``): what detection ran on, to run it again
+    #: (:func:`eyelume.optimize.tracking.reanalyse_frame`): ``counts`` (rows, cols) the
+    #: camera's digital picture (DN), ``led_azimuths_deg`` and ``led_pattern_px``
+    picture: dict | None = None
     samples_per_pixel: int = 0  # camera samples per pixel its render used (0: not recorded)
     #: the test frame is the calibration frame of its gaze (same scene, seed and budget: the
     #: same picture), so its PCCR error is the fit's in-sample residual, not a measurement:
