@@ -39,8 +39,12 @@ Pipeline (each step's choices are explained in :mod:`.pupil` and :mod:`.glints`)
    "valley after the darkest histogram mode" assumed the pupil had a mode of its own; on real
    pictures with a dark iris it had not (issue 13).
 4. :func:`_pupil_result`: the pupil and the checks that make it untrustworthy.
-5. Keep glints within ``glint_search_radius`` × the pupil's major axis of its centre; match to
-   LEDs (:func:`_match_glints`); 6. warnings (:func:`_glint_warnings`).
+5. Keep glints within ``glint_search_radius`` × the pupil's major axis of its centre, none
+   whose skirt holds a missing pixel (:func:`_off_missing`); with LEDs given and fewer glints
+   than LEDs, also the unsaturated ones standing out of the picture's white top-hat
+   (:func:`~.glints.faint_glints_near`); match to LEDs, strongest first (:func:`_match_glints`,
+   :func:`_strong_first`), and with an LED left without one look again out to twice as far
+   (:func:`_wider_look`: a small pupil); 6. warnings (:func:`_glint_warnings`).
 
 Which failures make ``ok`` False
 --------------------------------
@@ -53,7 +57,8 @@ that is not an ellipse (RMS residual of its edge points above max(``max_fit_resi
 ``max_fit_residual_frac`` × the semi-minor axis)); too few glints (LED azimuths given and
 fewer than ``min_matched_glints`` (2; all of them with a single LED) matched to an LED, or, with
 an LED missing, fewer than ``min_glints_when_missing`` (3), a glint left unmatched, or matched
-glints that do not fit the LEDs' pattern). Messages
+glints that do not fit the LEDs' pattern); a matched glint broken up into specks (its centre
+uncertain). Messages
 starting ``"warning: "`` leave ``ok`` True: LEDs without a glint when enough others have one
 (listed in ``Detection.missing_leds`` too: on a headset with 6–8 LEDs around an eye seen off its
 axis some glints routinely fall off the cornea or under a lid; the gaze models use the matched
@@ -80,6 +85,7 @@ Performance: measured by ``benchmarks/detect.py`` (one core) and, on real pictur
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from collections.abc import Sequence
@@ -91,6 +97,7 @@ from numba import njit
 
 from eyelume.analysis.tracking.glints import (
     default_max_angle,
+    faint_glints_near,
     find_glints,
     glint_smoothing,
     glints_near,
@@ -274,7 +281,12 @@ class DetectParams:
     glint_max_fragment_frac : a matched glint with more than this share (5 %) of its own light
         in specks around it is broken up and its centre uncertain (an error).
     glint_search_radius : glints farther than this × the pupil's major axis from its centre are
-        not the cornea's (2).
+        not the cornea's (2) — unless, with LEDs given and some left without a glint, a second
+        look out to twice as far gives every LED a glint fitting their pattern
+        (:func:`_wider_look`: a small pupil).
+    glint_strong_frac : glints are matched to LEDs strongest first (:func:`_match_glints`): those
+        rising ≥ this share (½) of the strongest one's rise above its own background first,
+        the weaker only where they fit the pattern of those matched.
     glint_edge_margin_px : a glint whose centroid is within its equivalent radius + this of the
         fitted pupil outline is "on the pupil edge".
     match_max_angle_deg : largest glint–LED direction difference for a match (``None`` = half
@@ -357,6 +369,7 @@ class DetectParams:
     glint_max_fragment_frac: float = 0.05
     glint_max_area_frac: float = 0.005
     glint_search_radius: float = 2.0
+    glint_strong_frac: float = 0.5
     glint_edge_margin_px: float = 1.0
     match_max_angle_deg: float | None = None
     min_matched_glints: int = 2
@@ -389,13 +402,15 @@ class Pupil:
 class Glint:
     """A glint: ``centre_px`` (x, y) intensity-weighted centroid, ``area_px`` pixels above the
     glint threshold, ``peak`` its brightest pixel (input units), ``led`` its LED index or None,
-    ``flux`` its light above the local background (input units × px)."""
+    ``flux`` its light above the local background (input units × px), ``base`` that
+    background (input units; None when not known)."""
 
     centre_px: tuple[float, float]
     area_px: float
     peak: float
     led: int | None = None
     flux: float = 0.0
+    base: float | None = None
 
 
 @dataclass
@@ -569,6 +584,23 @@ def _mend_alone(img, found, hit, k_sigma, max_count):
     return m
 
 
+def _valid_noise(img: np.ndarray, invalid: np.ndarray | None) -> float:
+    """The pixel noise σ (:func:`~.pupil.noise_sigma`) of the valid pixels: with missing pixels
+    (``invalid``, bool), which are set to one value, over the pixels whose 3 × 3 neighbourhood
+    is all valid (else the flat fill's zeros pull the median down: half a picture masked out
+    gave σ 0.5 for 3, and sclera noise 5 DN passed for glints at the mask's edge)."""
+    if invalid is None:
+        return noise_sigma(img)
+    inner = cv2.erode((~invalid).view(np.uint8), np.ones((3, 3), np.uint8))
+    m = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
+    r = cv2.filter2D(img.astype(np.float32), cv2.CV_32F, m, borderType=cv2.BORDER_REPLICATE)
+    vals = np.abs(r[inner > 0])
+    if vals.size == 0:
+        return noise_sigma(img)
+    vals = vals[:: max(1, vals.size // 20000)]
+    return 1.4826 * float(np.median(vals)) / 6.0
+
+
 def _prepare(image: np.ndarray, valid: np.ndarray | None, q: float):
     """Step 1: the picture as a contiguous array (uint8/uint16/int16/float32 kept, other reals
     converted), its small enclosed non-finite holes filled (:func:`_fill_holes`), its invalid
@@ -602,7 +634,7 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None, q: float):
     if black is not None and not (invalid is not None and (invalid | black).all()):
         n_black = int(black.sum()) if invalid is None else int((black & ~invalid).sum())
         invalid = black if invalid is None else invalid | black
-    noise = max(noise_sigma(img), 0.5 if img.dtype.kind in "iu" else 0.0)
+    noise = max(_valid_noise(img, invalid), 0.5 if img.dtype.kind in "iu" else 0.0)
     n_hot, pct = _mend_hot_pixels(img, noise, q)
     lo, hi, _, _ = cv2.minMaxLoc(img)
     scale = (lo, hi, pct) if invalid is None and pct is not None else None
@@ -852,8 +884,42 @@ def _sharp_glints(img, value_range, noise, floor, params):
     return sharp
 
 
-def _blobs_near_pupil(
-    img, value_range, noise, found, pupil, floor, params, n_leds=None
+def _blobs_near_pupil(  # noqa: PLR0913 - the picture, its scale, the pupil, the reach
+    img, value_range, noise, found, pupil, floor, params, n_leds=None, reach=1.0
+) -> list[dict]:
+    """Step 5 (start): the bright blobs near the pupil (:func:`_bright_blobs_near`) and, with
+    LEDs given and fewer blobs than LEDs among them, the unsaturated glints that stand out of
+    their own background but not toward the picture's top (:func:`~.glints.faint_glints_near`,
+    with a disc a quarter of the pupil's major axis across, ≥ 5 px: a glint is narrower, the
+    iris beside the pupil broader), within the bright ones' size cap and not where one is."""
+    near = _bright_blobs_near(img, value_range, noise, found, pupil, floor, params, n_leds, reach)
+    if n_leds is None or len(near) >= n_leds:
+        return near
+    r_max = reach * params.glint_search_radius * pupil.axes_px[0]
+    width = max(5, int(round(pupil.axes_px[0] / 4.0)) | 1)
+    cap = min(_glint_cap(pupil, params, reach), width * width)
+    for b in faint_glints_near(img, noise, pupil.centre_px, r_max, width, cap, params):
+        if all(math.dist(t["centre_px"], b["centre_px"]) > 1.5 for t in near):
+            near.append(b)
+    return near
+
+
+def _glint_cap(pupil, params, reach: float = 1.0) -> float:
+    """The largest area (px) of a glint near ``pupil``: ``glint_max_pupil_frac`` of the pupil's,
+    × ``reach`` on :func:`_wider_look`'s second look. A glint's picture is the LED's virtual
+    image (a fraction of a millimetre) spread by the camera's blur and a saturated spot's
+    bloom, neither of which shrinks with the pupil: a 2 mm pupil 8-10 px across holds glints
+    of 17-18 px, 0.27-0.42 of its area. Not on the first look: lit lid margins beside a
+    large pupil (glasses-frame at gaze (0°, 0°): 1234 px at full scale by a 7000 px pupil)
+    would pass, and, holding the most light at the top of the scale, make the real glints
+    specks (:func:`_split_specks`); saturated skin beside a small pupil (eyetrackvr: lit brow
+    and lid, 38-125 px by a 60 px pupil)."""
+    area = math.pi / 4.0 * pupil.axes_px[0] * pupil.axes_px[1]
+    return reach * params.glint_max_pupil_frac * area
+
+
+def _bright_blobs_near(  # noqa: PLR0913 - the picture, its scale, the pupil, the reach
+    img, value_range, noise, found, pupil, floor, params, n_leds=None, reach=1.0
 ) -> list[dict]:
     """Step 5 (start): the bright blobs that can be the cornea's glints on this pupil, from
     ``found`` = (blobs, bright mask) of step 2 — within ``glint_search_radius`` × its major
@@ -863,7 +929,7 @@ def _blobs_near_pupil(
     picture, those the smoothing lost there (:func:`~.glints.glints_near`: glints under a
     pixel across, or a 3σ square that σ's smoothing dims by a quarter) — ≤ max(2, (3σ)²) px,
     their peak within 2 % of the picture's top — whose centre is off
-    step 2's mask.
+    step 2's mask. ``reach`` scales the search radius (:func:`_wider_look`).
 
     The peak test is the pixel test of step 2 against the blob's background (the median
     around it, :func:`~.glints.glint_blobs`) instead of the box mean, which next to a dark
@@ -873,8 +939,8 @@ def _blobs_near_pupil(
     blobs, bright = found
     cx, cy = pupil.centre_px
     top = value_range[1]
-    r_max = params.glint_search_radius * pupil.axes_px[0]
-    cap = params.glint_max_pupil_frac * math.pi / 4.0 * pupil.axes_px[0] * pupil.axes_px[1]
+    r_max = reach * params.glint_search_radius * pupil.axes_px[0]
+    cap = _glint_cap(pupil, params, reach)
 
     def corneal(b: dict) -> bool:
         x, y = b["centre_px"]
@@ -931,6 +997,69 @@ def _blobs_near_pupil(
     return near
 
 
+def _match_or_look_wider(glints, specks, led_azimuths_deg, pattern, params, wider):
+    """Step 5b: :func:`_match_glints` on ``glints``; with an LED left without a glint and
+    ``wider`` given (a callable: :func:`_wider_look` bound to the frame), its answer when it has
+    one. Returns (glints, specks, messages, LEDs without a glint)."""
+    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern)
+    if missing and wider is not None:
+        again = wider()
+        if again is not None:
+            return again
+    return glints, specks, lost, missing
+
+
+def _off_missing(blobs: list[dict], invalid) -> list[dict]:
+    """The blobs whose skirt — their equivalent radius r plus 3 px around the centre, where
+    :func:`~.glints.glint_blobs` weighs the centroid and beyond which it reads the background —
+    holds no missing pixel (``invalid``, bool, the picture's shape, or None: all kept). A
+    missing pixel is set to the darkest valid value, so the picture's edge at a valid-area
+    mask or a black border is a step from black that the glint test takes for a bright spot
+    (a sclera pixel at a mask's edge was matched to an LED); a glint there cannot be told
+    from that edge, nor its background read."""
+    if invalid is None or not blobs:
+        return blobs
+    rows, cols = invalid.shape
+    out = []
+    for b in blobs:
+        x, y = b["centre_px"]
+        r = int(math.ceil(math.sqrt(b["area_px"] / math.pi))) + 3
+        c, w = int(round(x)), int(round(y))
+        if not invalid[max(0, w - r) : w + r + 1, max(0, c - r) : c + r + 1].any():
+            out.append(b)
+    return out
+
+
+def _wider_look(  # noqa: PLR0913 - the picture, its scale, the pupil, the LEDs
+    img, value_range, noise, found, pupil, floor, led_azimuths_deg, pattern, params, invalid=None
+):
+    """Step 5 again, out to twice ``glint_search_radius`` × the pupil's major axis, for a frame
+    whose LEDs were not all given a glint: the glints, specks and LEDs left without one when
+    every LED then has a glint and they fit the LEDs' pattern (:func:`_pattern_misfit`, the
+    azimuths' ring without ``pattern``), else None.
+
+    The search radius scales with the pupil, but the cornea does not: the pupil is 2-8 mm
+    across, the cornea's visible disc ~12 mm, so glints lie up to 3 diameters of a 2 mm pupil
+    from its centre (a 9 px pupil with glints 25 px out: all four lost), out of the radius
+    that keeps a large pupil's strays away (lit lashes' gaps 160 px from a 60 px pupil). Out
+    there a blob is taken only as part of a whole pattern: strays seldom complete one."""
+    # Step 2's blobs only (no floor: glints_near's search for glints the smoothing lost, 1.3 ms
+    # of a 640 × 400 frame, is not run again for every frame with an LED left without one).
+    blobs = _blobs_near_pupil(
+        img, value_range, noise, found, pupil, None, params, len(led_azimuths_deg), reach=2.0
+    )
+    glints, specks = _split_specks(_off_missing(blobs, invalid), params)
+    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern)
+    if missing or lost:
+        return None
+    max_ang = params.match_max_angle_deg
+    if max_ang is None:
+        max_ang = default_max_angle(led_azimuths_deg)
+    if _pattern_misfit(glints, led_azimuths_deg, pattern, max_ang, params):
+        return None
+    return glints, specks, lost, missing
+
+
 def _split_specks(blobs: list[dict], params) -> tuple[list[Glint], list[Glint]]:
     """Step 5a: the glints, and the specks — blobs with less than ``glint_min_flux_frac`` of the
     brightest glint's light (above its background), which no LED's corneal reflection is.
@@ -941,7 +1070,10 @@ def _split_specks(blobs: list[dict], params) -> tuple[list[Glint], list[Glint]]:
     highlight (a lit lid margin: vr-offaxis at gaze (0, 0), 54 px at 742 DN against eight
     saturated glints) may hold more light without being a glint, and must not make the real
     ones specks."""
-    every = [Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"]) for b in blobs]
+    every = [
+        Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"], base=b["base"])
+        for b in blobs
+    ]
     peak_top = max((g.peak for g in every), default=0.0)
     top = max((g.flux for g in every if g.peak >= 0.98 * peak_top), default=0.0)
     glints = [g for g in every if g.flux >= params.glint_min_flux_frac * top]
@@ -1135,6 +1267,74 @@ def _all_matched(glints, led_azimuths_deg, pattern, max_ang: float, params) -> l
     return []
 
 
+def _leds_by_direction(centres: np.ndarray, led_azimuths_deg, max_ang: float, pattern):
+    """Each glint's LED or None and the notes of :func:`_assign_leds` — or, with ``pattern``
+    and ≥ 3 glints, :func:`~.glints.match_pattern`'s when it matches as many."""
+    leds, ambiguous, between = _assign_leds(centres, led_azimuths_deg, max_ang)
+    if pattern is not None and len(centres) >= 3:
+        # The predicted layout (an off-axis camera's glints are a distorted ring, whose
+        # directions from its centre are not the LEDs' azimuths): used when it matches at
+        # least as many glints (glints.match_pattern; two glints fit any two of its points).
+        by_pattern = match_pattern(centres, pattern)
+        if sum(k is not None for k in by_pattern) >= sum(k is not None for k in leds):
+            leds, ambiguous, between = by_pattern, "", []
+    return leds, ambiguous, between
+
+
+def _strong_first(glints: list[Glint], centres, led_azimuths_deg, max_ang: float, pattern, params):
+    """The glints' LEDs matched strongest first, with :func:`_leds_by_direction`'s notes, or
+    None when all the glints are strong (or fewer than two are).
+
+    A corneal glint is the image of a point source: the brightest thing per pixel, saturated
+    on most cameras, rising over its own background (pupil, iris) by far more than anything
+    else near the pupil — the LEDs of one ring differ little at the cornea, and saturated
+    glints over the pupil and the iris rise within 2 × of each other (255 − 20 against
+    255 − 110). Specks rise a small share of that: a JPEG's compression specks 13–50 DN over
+    a flat sclera against saturated glints' 225 (quality 8–20: matching by direction alone,
+    which knows no scale, took specks 60 px out at an LED's azimuth over the glints 25 px
+    from the pupil's centre), noise, a lid's texture. So the glints rising ≥
+    ``glint_strong_frac`` of the strongest one's rise (peak − its background) are matched
+    first; a weaker glint is then matched only to an LED left without one, and only where
+    the strong ones' pattern puts that LED's glint (the fit t + s p_k of
+    :func:`_pattern_misfit`, within its tolerance s |p_k| sin(max_ang / 2)) — a glint over
+    the bright sclera, saturated too, rises less."""
+    rise = np.array([g.peak - g.base if g.base is not None else math.inf for g in glints])
+    if not np.isfinite(rise).all() or len(glints) < 3:
+        return None
+    strong = np.flatnonzero(rise >= params.glint_strong_frac * rise.max())
+    if len(strong) < 2 or len(strong) == len(glints):
+        return None
+    s_leds, ambiguous, between = _leds_by_direction(
+        centres[strong], led_azimuths_deg, max_ang, pattern
+    )
+    leds: list[int | None] = [None] * len(glints)
+    for i, k in zip(strong, s_leds, strict=True):
+        leds[int(i)] = k
+    pairs = [(i, k) for i, k in enumerate(leds) if k is not None]
+    missing = [k for k in range(len(led_azimuths_deg)) if k not in {k for _, k in pairs}]
+    if len(pairs) < 2 or not missing:
+        return leds, ambiguous, between
+    if pattern is None:
+        az = np.radians(np.asarray(led_azimuths_deg, float))
+        p_all = np.column_stack([np.cos(az), -np.sin(az)])
+    else:
+        p_all = np.asarray(pattern, float)
+    sol = _pattern_fit(centres[[i for i, _ in pairs]], p_all[[k for _, k in pairs]])
+    s = float(sol[2])
+    if not (s > 0 and math.isfinite(s)):
+        return leds, ambiguous, between
+    sin_half = math.sin(math.radians(0.5 * max_ang))
+    weak = [i for i in range(len(glints)) if leds[i] is None and i not in set(strong.tolist())]
+    for k in missing:
+        where = sol[:2] + s * p_all[k]
+        tol = s * math.hypot(*p_all[k]) * sin_half
+        d = {i: math.dist(centres[i], where) for i in weak if leds[i] is None}
+        best = min(d, key=d.get, default=None)
+        if best is not None and d[best] <= tol:
+            leds[best] = k
+    return leds, ambiguous, between
+
+
 def _match_glints(
     glints: list[Glint], led_azimuths_deg, params, pattern=None
 ) -> tuple[list[str], list[int]]:
@@ -1149,14 +1349,12 @@ def _match_glints(
     max_ang = params.match_max_angle_deg
     if max_ang is None:
         max_ang = default_max_angle(led_azimuths_deg)
-    leds, ambiguous, between = _assign_leds(centres, led_azimuths_deg, max_ang)
-    if pattern is not None and len(centres) >= 3:
-        # The predicted layout (an off-axis camera's glints are a distorted ring, whose
-        # directions from its centre are not the LEDs' azimuths): used when it matches at
-        # least as many glints (glints.match_pattern; two glints fit any two of its points).
-        by_pattern = match_pattern(centres, pattern)
-        if sum(k is not None for k in by_pattern) >= sum(k is not None for k in leds):
-            leds, ambiguous, between = by_pattern, "", []
+    leds, ambiguous, between = _leds_by_direction(centres, led_azimuths_deg, max_ang, pattern)
+    strong = _strong_first(glints, centres, led_azimuths_deg, max_ang, pattern, params)
+    if strong is not None and sum(k is not None for k in strong[0]) >= sum(
+        k is not None for k in leds
+    ):
+        leds, ambiguous, between = strong
     for g, k in zip(glints, leds, strict=True):
         g.led = k
     matched = {g.led for g in glints if g.led is not None}
@@ -1288,16 +1486,23 @@ def detect(
     errors = [m for m in errors if not m.startswith("warning: ")]
     t3 = time.perf_counter()
     timings["pupil"] = 1e3 * (t3 - t2)
+    n_leds = None if led_azimuths_deg is None else len(led_azimuths_deg)
+    near = blobs
     if pupil is not None:
-        n_leds = None if led_azimuths_deg is None else len(led_azimuths_deg)
-        blobs = _blobs_near_pupil(
+        near = _blobs_near_pupil(
             img, (lo, hi), noise, (blobs, bright), pupil, tg_value, params, n_leds
         )
-    glints, specks = _split_specks(blobs, params)
+    glints, specks = _split_specks(_off_missing(near, invalid), params)
     missing_leds: list[int] = []
     lost_note: list[str] = []
-    if led_azimuths_deg is not None and len(led_azimuths_deg) > 0:
-        lost, missing_leds = _match_glints(glints, led_azimuths_deg, params, led_pattern_px)
+    if n_leds:
+        wider = None if pupil is None else functools.partial(
+            _wider_look, img, (lo, hi), noise, (blobs, bright), pupil, tg_value,
+            led_azimuths_deg, led_pattern_px, params, invalid,
+        )  # fmt: skip
+        glints, specks, lost, missing_leds = _match_or_look_wider(
+            glints, specks, led_azimuths_deg, led_pattern_px, params, wider
+        )
         errors += [m for m in lost if not m.startswith("warning: ")]
         lost_note = [m for m in lost if m.startswith("warning: ")]
     glints.sort(key=lambda g: (g.led is None, g.led if g.led is not None else 0, -g.peak))

@@ -31,6 +31,13 @@
   blob: the unclosed mask of a small picture breaks a noisy glint into a blob and one-pixel
   fragments of the same spot, whose light is the glint's skirt, not another glint's (until
   session 16 they cut the skirt: paper2005's glints 1.03 and 1.09 px off, answered ``ok``).
+* **Unsaturated glints** (:func:`faint_glints_near`, called by ``detect`` near the pupil when
+  fewer glints than LEDs were found): a glint well below the top of the picture (80 DN over
+  a pupil at 20 in a picture whose sclera is at 200) is under the 99th percentile and less
+  than ``glint_level`` of the way to the top, yet stands tens of σ of the noise over its own
+  background; it is looked for on the white top-hat I − open(I) (a disc wider than a glint,
+  narrower than the iris), with a flat surround there and a peak ``glint_min_snr`` × the
+  noise over it.
 * **Matching** (:func:`match_leds`): LED k at azimuth φ_k (0° = picture +x, 90° = picture up, i.e.
   −row) makes a glint displaced from the glints' centroid toward φ_k; each glint's direction from
   that centroid is matched to the LED azimuths by the Hungarian algorithm
@@ -61,6 +68,7 @@ __all__ = [
     "find_glints",
     "glint_smoothing",
     "glints_near",
+    "faint_glints_near",
     "glint_blobs",
     "glint_threshold",
     "saturated_floor",
@@ -208,6 +216,101 @@ def glints_near(  # noqa: PLR0913 - the picture, its scale, the place, what to r
         if math.hypot(x - cx, y - cy) <= radius:
             out.append({**b, "centre_px": (x, y)})
     return out
+
+
+def faint_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the sizes
+    img: np.ndarray,
+    noise: float,
+    centre,
+    radius: float,
+    width_px: int,
+    max_area: float,
+    params,
+) -> list[dict]:
+    """Glint blobs (dicts, as :func:`glint_blobs`: centre_px, area_px, peak, flux, base) within
+    ``radius`` px of ``centre`` (x, y) px that need not be near the top of the picture: an
+    unsaturated glint (80 DN over a pupil at 20 DN in a picture whose sclera is at 200) is
+    below the picture's 99th percentile — the floor of :func:`find_glints` and
+    :func:`glints_near` — yet it stands 27 σ of the noise over its own background.
+
+    Everything is judged on the white top-hat h = I − open(I) of the picture (the grey
+    opening by a disc ``width_px`` across, odd ≥ 3, wider than a glint): a glint, narrower
+    than the disc, stays in h whole, while anything broader — the iris beside the dark pupil
+    (a disc rolls along a convex outline and leaves nothing of it), the sclera, the skin's
+    shading — is removed, so h is the light of a spot above the background that follows the
+    pupil's edge 5 px away. Pixels with h ≥ ½ ``glint_min_snr`` × ``noise`` (input units: half
+    the peak a glint must reach, as ``glint_level`` takes a glint's shoulders) make blobs of
+    ``glint_min_area_px`` to ``max_area`` px; a blob is a glint when on h (:func:`_skirt`) its
+    peak stands ``glint_min_snr`` × ``noise`` over the median of its surround (8 σ: Gaussian
+    noise exceeds it with probability ≪ 10⁻⁹ per pixel) and that surround is flat — its
+    10–90 % spread ≤ ``_UNEVEN_SPREAD`` × ``noise`` (2.56 σ for noise alone): a thin bright
+    line (a sliver of sclera between the iris and a lid, a gap between lashes) is narrower
+    than the disc too, but runs on into its surround. The centroid weighs h above that
+    median over the blob and its skirt; ``peak`` is the picture's, ``base`` the peak less the
+    rise on h."""
+    rows, cols = img.shape
+    if not noise > 0:
+        return []
+    cx, cy = centre
+    m = int(math.ceil(radius)) + width_px
+    x0, y0 = max(0, int(cx) - m), max(0, int(cy) - m)
+    x1, y1 = min(cols, int(cx) + m + 2), min(rows, int(cy) + m + 2)
+    if x1 - x0 < width_px or y1 - y0 < width_px:
+        return []
+    sub = np.ascontiguousarray(img[y0:y1, x0:x1], dtype=np.float32)
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (width_px, width_px))
+    hat = cv2.morphologyEx(sub, cv2.MORPH_TOPHAT, disc, borderType=cv2.BORDER_REPLICATE)
+    above = cv2.compare(hat, 0.5 * params.glint_min_snr * noise, cv2.CMP_GE)
+    contours, hier = cv2.findContours(above, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
+    if hier is None:
+        return []
+    hat = hat.astype(np.float64)
+    out = []
+    for c, h in zip(contours, hier[0], strict=True):
+        b = None if h[3] != -1 else _faint_blob(c, hat, sub, noise, width_px, max_area, params)
+        if b is None:
+            continue
+        x, y = b["centre_px"][0] + x0, b["centre_px"][1] + y0
+        if math.hypot(x - cx, y - cy) <= radius:
+            out.append({**b, "centre_px": (x, y)})
+    return out
+
+
+def _faint_blob(c, hat, sub, noise, width_px, max_area, params) -> dict | None:  # noqa: PLR0913
+    """One blob of :func:`faint_glints_near` from its outline ``c`` on the top-hat ``hat``
+    (float64) of the window ``sub`` (the picture's, float32), in the window's pixels; None
+    when it is not a glint there (its doc)."""
+    bx, by, bw, bh = cv2.boundingRect(c)
+    if bw * bh < params.glint_min_area_px or min(bw, bh) > width_px:
+        return None
+    rows, cols = hat.shape
+    r = max(2, int(math.ceil(math.sqrt(cv2.contourArea(c) / math.pi + 1.0))))
+    wx0, wy0 = max(0, bx - r - 2), max(0, by - r - 2)
+    wx1, wy1 = min(cols, bx + bw + r + 2), min(rows, by + bh + r + 2)
+    own = np.zeros((wy1 - wy0, wx1 - wx0), np.uint8)
+    cv2.drawContours(own, [c], 0, 255, thickness=-1, offset=(-wx0, -wy0))
+    area = cv2.countNonZero(own)
+    if area < params.glint_min_area_px or area > max_area:
+        return None
+    r = max(2, int(math.ceil(math.sqrt(area / math.pi))))
+    d_own = cv2.distanceTransform(cv2.bitwise_not(own), cv2.DIST_L2, 3)
+    base, peak, wgt, spread = _skirt(hat[wy0:wy1, wx0:wx1], own, d_own, d_own, False, float(r))
+    tot = float(wgt.sum())
+    if peak - base < params.glint_min_snr * noise or spread > _UNEVEN_SPREAD * noise or tot <= 0:
+        return None
+    xs = np.arange(wx0, wx1, dtype=np.float64)
+    ys = np.arange(wy0, wy1, dtype=np.float64)
+    top = float(cv2.minMaxLoc(sub[wy0:wy1, wx0:wx1], own)[1])
+    return {
+        "centre_px": (
+            float((wgt.sum(axis=0) * xs).sum() / tot),
+            float((wgt.sum(axis=1) * ys).sum() / tot),
+        ),
+        "area_px": float(area),
+        "peak": top,
+        "flux": tot,
+        "base": top - (peak - base),
+    }
 
 
 @functools.lru_cache(maxsize=16)
