@@ -5,6 +5,9 @@ table of a design question answered end to end.
     python benchmarks/design_850_940.py --people 4      # fewer
     python benchmarks/design_850_940.py --stop-at 23:20 # stop at that UTC time: the people done
     python benchmarks/design_850_940.py --set sensor.exposure_ms=1   # any scene field, both λ
+    python benchmarks/design_850_940.py --keep DIR      # also save every frame's picture, truth
+    python benchmarks/design_850_940.py --redetect DIR  # detection again on them, no render
+                                                        # (the same --people and --set)
 
 On ``vr-offaxis`` (its ring of 8 LEDs, nothing else changed but the wavelength), for each of N
 people sampled from the anatomy distributions (``population.toml``, population seed 1, the same
@@ -94,13 +97,89 @@ def scene_at(name: str, wavelength: float, overrides: dict | None = None):
     )
 
 
-def person_task(person, seed: int, render_noise) -> dict:
+def person_task(person, seed: int, render_noise, keep: str | None = None, tag=None) -> dict:
     """One person at one wavelength: their row, their test frames' PCCR errors (None: no
-    estimate) and glint signal to ambient, the renders' time and samples per pixel."""
+    estimate) and glint signal to ambient, the renders' time and samples per pixel. ``keep``:
+    a folder where the frames' digital pictures and truth are saved (:func:`save_frames`)."""
     from eyelume.optimize.tracking import evaluate_people
 
     t0, c0 = time.perf_counter(), time.process_time()
-    (res,) = evaluate_people([person], 8, seed, render_noise=render_noise)
+    (res,) = evaluate_people([person], 8, seed, render_noise=render_noise, keep_pictures=bool(keep))
+    out = person_result(res, time.perf_counter() - t0, time.process_time() - c0)
+    if keep:
+        save_frames(Path(keep) / f"person{tag[0]:03d}_{tag[1]:.0f}nm", res.report, out)
+    return out
+
+
+def save_frames(stem: Path, report, result: dict) -> None:
+    """A person's frames at one wavelength, kept (``--keep DIR``): ``stem.npz`` the digital
+    pictures (frames, rows, cols) DN, calibration frames first, and ``stem.json`` per frame the
+    gaze, truth, LEDs' layout and the render's measurements, with the person's result."""
+    every = [*report.calibration, *report.frames]
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(
+        stem.with_suffix(".npz"), counts=np.stack([f.picture["counts"] for f in every])
+    )
+    meta = {
+        "calibration_frames": len(report.calibration),
+        "render_budget": report.summary.get("render_budget"),
+        "result": {k: v for k, v in result.items() if k != "row"} | {"row": result["row"]},
+        "frames": [
+            {
+                "gaze": list(f.gaze),
+                "truth": f.truth,
+                "led_azimuths_deg": list(f.picture["led_azimuths_deg"]),
+                "led_pattern_px": None
+                if f.picture["led_pattern_px"] is None
+                else np.asarray(f.picture["led_pattern_px"]).tolist(),
+                "render_s": f.render_s,
+                "saturated_share": f.saturated_share,
+                "samples_per_pixel": f.samples_per_pixel,
+                "ambient": f.ambient,
+                "calibration": f.calibration,
+            }
+            for f in every
+        ],
+    }
+    stem.with_suffix(".json").write_text(json.dumps(meta, default=C._jsonable), encoding="utf-8")
+
+
+def redetect_person(stem: Path, person) -> dict:
+    """:func:`person_task`'s result for a person's kept frames (:func:`save_frames`), with
+    detection and gaze estimation run again by this code on the same pictures; the render's
+    figures (CPU, samples per pixel, saturation, signal to ambient) are the kept run's."""
+    from types import SimpleNamespace
+
+    from eyelume.analysis.tracking.evaluate import Frame
+    from eyelume.optimize.tracking import PersonResult, reanalyse_report
+
+    meta = json.loads(stem.with_suffix(".json").read_text(encoding="utf-8"))
+    counts = np.load(stem.with_suffix(".npz"))["counts"]
+    frames = []
+    for c, m in zip(counts, meta["frames"], strict=True):
+        f = Frame(tuple(m["gaze"]), None, m["truth"], render_s=m["render_s"])
+        f.saturated_share, f.samples_per_pixel = m["saturated_share"], m["samples_per_pixel"]
+        f.ambient, f.calibration = m["ambient"], m["calibration"]
+        pattern = None if m["led_pattern_px"] is None else np.asarray(m["led_pattern_px"])
+        f.picture = {
+            "counts": c,
+            "led_azimuths_deg": m["led_azimuths_deg"],
+            "led_pattern_px": pattern,
+        }
+        frames.append(f)
+    n = meta["calibration_frames"]
+    kept = SimpleNamespace(
+        frames=frames[n:], calibration=frames[:n], summary={"render_budget": meta["render_budget"]}
+    )
+    res = PersonResult(
+        person.index, person.values, reanalyse_report(person.scene, kept), person.not_applied
+    )
+    old = meta["result"]
+    return person_result(res, old["wall_s"], old["cpu_s"]) | {"render_s": old["render_s"]}
+
+
+def person_result(res, wall_s: float, cpu_s: float) -> dict:
+    """The figures :func:`summarise` reads, from a person's :class:`PersonResult`."""
     frames = res.report.frames
     errors = [
         None if f.pccr is None else math.hypot(f.pccr[0] - f.gaze[0], f.pccr[1] - f.gaze[1])
@@ -116,8 +195,8 @@ def person_task(person, seed: int, render_noise) -> dict:
         "row": res.row(),
         "pccr_errors_deg": errors,
         "glint_signal_to_ambient": sar,
-        "wall_s": time.perf_counter() - t0,
-        "cpu_s": time.process_time() - c0,
+        "wall_s": wall_s,
+        "cpu_s": cpu_s,
         "render_s": sum(f.render_s for f in every),
         "samples_per_pixel": [f.samples_per_pixel for f in every],
         "saturated_share": [f.saturated_share for f in frames],
@@ -171,6 +250,15 @@ def _args():
         action="append",
         default=[],
         help="key=value scene override at both wavelengths, e.g. sensor.exposure_ms=1",
+    )
+    ap.add_argument(
+        "--keep", default=None, help="folder: save every frame's digital picture and truth"
+    )
+    ap.add_argument(
+        "--redetect",
+        default=None,
+        help="folder of a --keep run: detection and gaze again on its pictures (no render); "
+        "give the same --people, --population-seed and --set",
     )
     return ap.parse_args()
 
@@ -230,7 +318,11 @@ def main() -> None:
         sys.exit(2)
     people = {w: sample_people(scenes[w], a.people, a.population_seed) for w in WAVELENGTHS}
     safety = {w: eye_safety(scenes[w]) for w in WAVELENGTHS}
-    tasks = (((k, w), (people[w][k], a.seed, noise)) for k in range(a.people) for w in WAVELENGTHS)
+    tasks = (
+        ((k, w), (people[w][k], a.seed, noise, a.keep, (k, w)))
+        for k in range(a.people)
+        for w in WAVELENGTHS
+    )
     done: dict = {}
     t0 = time.perf_counter()
 
@@ -247,7 +339,14 @@ def main() -> None:
     interrupted = False
     try:
         _stop_timer(stop_at)
-        run_tasks(person_task, tasks, commit, workers=a.workers)
+        if a.redetect:  # the kept pictures of the people there, analysed again here
+            for k in range(a.people):
+                for w in WAVELENGTHS:
+                    stem = Path(a.redetect) / f"person{k:03d}_{w:.0f}nm"
+                    if stem.with_suffix(".npz").exists():
+                        commit((k, w), redetect_person(stem, people[w][k]))
+        else:
+            run_tasks(person_task, tasks, commit, workers=a.workers)
     except KeyboardInterrupt:
         interrupted = True
     wall = time.perf_counter() - t0
@@ -273,6 +372,8 @@ def main() -> None:
         "wall_s": round(wall, 1),
         "sun": SUN,
         "overrides": overrides,
+        "kept_in": a.keep,
+        "redetected_from": a.redetect,
         "filters_nm": {f"{w:.0f}": FILTERS[w] for w in WAVELENGTHS},
         "table": table,
         "rows": {f"{k[1]:.0f}/{k[0]}": v["row"] for k, v in sorted(done.items())},

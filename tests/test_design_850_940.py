@@ -58,3 +58,23 @@ def test_summary_follows_its_definitions():
     assert t["people_with_ratio"] == 3
     assert t["corneal_margin_summed_leds"] == 8.3 and t["retinal_margin_worst_led"] == 72.9
     assert t["samples_per_pixel_range"] == [4, 6]
+
+
+def test_kept_frames_are_analysed_again_to_the_same_result(tmp_path):
+    """``--keep``/``--redetect``: a person's frames saved with their pictures and truth and
+    analysed again by the same code give the same row, PCCR errors and signal to ambient (a
+    changed detector can then be scored on the same renders without rendering them again)."""
+    import eyelume
+    from eyelume.optimize.tracking import evaluate_people
+    from eyelume.scene.population import sample_people
+
+    (person,) = sample_people(eyelume.load_scene("paper2005"), 1, 1)
+    (res,) = evaluate_people([person], 4, 0, keep_pictures=True)
+    first = D.person_result(res, 1.0, 2.0)
+    stem = tmp_path / "person000_850nm"
+    D.save_frames(stem, res.report, first)
+    again = D.redetect_person(stem, person)
+    assert again["row"] == first["row"]
+    assert again["pccr_errors_deg"] == first["pccr_errors_deg"]
+    assert again["glint_signal_to_ambient"] == first["glint_signal_to_ambient"]
+    assert (again["cpu_s"], again["samples_per_pixel"]) == (2.0, first["samples_per_pixel"])

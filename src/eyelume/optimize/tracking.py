@@ -68,6 +68,7 @@ __all__ = [
     "evaluate_tracking",
     "render_frame",
     "reanalyse_frame",
+    "reanalyse_report",
     "score_placement",
     "sweep_tracking",
 ]
@@ -160,6 +161,19 @@ def reanalyse_frame(frame: Frame) -> Frame:
     new.ambient = frame.ambient
     new.calibration = frame.calibration
     new.picture = pic
+    return new
+
+
+def reanalyse_report(scene: Scene, report: TrackingReport) -> TrackingReport:
+    """A tracking report whose frames were kept with their pictures (``keep_pictures``), with
+    detection and the gaze estimates run again on the same pictures (:func:`reanalyse_frame`,
+    then :func:`~eyelume.analysis.tracking.evaluate.analyse_frames` in ``scene``, the scene the
+    frames were rendered in: its LEDs for the geometric model). The render budget's summary is
+    carried over. ValueError when a frame kept no picture."""
+    frames = [reanalyse_frame(f) for f in report.frames]
+    calib = [reanalyse_frame(f) for f in report.calibration]
+    new = analyse_frames(scene, compile_scene(scene).led.points, frames, calib)
+    new.summary["render_budget"] = report.summary.get("render_budget")
     return new
 
 
