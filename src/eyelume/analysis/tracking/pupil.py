@@ -10,7 +10,9 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    percentile (saturated glints and stuck pixels, a small share of any eye picture, are
    clipped instead of stretching the scale); glint pixels take the darkest value around them,
    each within its own radius (a glint inside the pupil would punch a hole in it); invalid
-   pixels (NaN, outside the valid-area mask) are bright. The pixel noise σ
+   pixels (NaN, outside the valid-area mask) are bright, but for enclosed holes no larger
+   than a pupil, which take their surround's level (:func:`_fill_holes_dark`: a NaN hole in
+   the pupil would make it a ring). The pixel noise σ
    (:func:`noise_sigma`, Immerkær 1996).
 2. **Threshold ladder** (:func:`ladder`): the picture reduced to ~80 rows and thresholded at
    levels (P60 − P0.5) / 32 apart from its darkest pixel to its 60th percentile; at each
@@ -32,7 +34,14 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    with the iris?)" (compact dark blobs, none stable), "pupil too small: N px", "no dark pupil:
    bright-pupil image?" (no dark blob but a compact bright one of a pupil's size), and "no
    pupil off the picture's border" when a darker pupil-sized region touches the border or the
-   missing pixels (a pupil cut by the frame; the blob inside is then not called the pupil).
+   missing pixels (a pupil cut by the frame; the blob inside is then not called the pupil;
+   when that blob was refused for its own cause, only if darker than it by a pupil's
+   contrast, ``pupil_min_contrast_sigma`` σ). A blob whose outline runs over
+   ``max_boundary_gap`` along the border or missing pixels, or whose dark side is next to
+   them, is "pupil cut or hidden" (a valid-area mask across the pupil). A whole fit holding
+   a bright core larger than any glint (:func:`bright_core`) is "no dark pupil: bright-pupil
+   image?"; one holding a darker core (:func:`darker_core`) is "pupil merged with iris", or
+   "pupil too small" when that core is under ``pupil_min_area_px``.
 4. **Full-resolution blob** (:func:`full_res_blob`): the picture (σ 1 px Gaussian) thresholded
    at the chosen level around the blob; glints touching it joined; a closing with an
    elliptical element of ≈ 0.15 × its diameter (odd, ≥ 3) fills what is left of a glint's
@@ -710,7 +719,9 @@ class WorkPicture:
     ``u8`` (rows, cols) = clip(255 (I − lo) / (hi − lo)), lo the darkest valid pixel and hi the
     ``scale_percentile`` (99th) of the valid pixels: saturated glints and stuck pixels, a small
     share of any eye picture, are clipped instead of stretching the scale. Invalid pixels (NaN,
-    outside the valid-area mask) are set to 255 and listed in ``invalid`` (bool). ``noise`` is
+    outside the valid-area mask) are set to 255 and listed in ``invalid`` (bool), except enclosed
+    holes no larger than a pupil (``holes``, bool or None: :func:`_fill_holes_dark`), which
+    take their surround's median level. ``noise`` is
     the pixel noise σ in ``u8`` units (:func:`noise_sigma`), ≥ 0.5 (8-bit quantisation, 1/√12 ≈
     0.29, with margin), computed on first use."""
 
@@ -719,6 +730,7 @@ class WorkPicture:
     lo: float
     hi: float
     glint_radius: float = 0.0
+    holes: np.ndarray | None = None
 
     @cached_property
     def noise(self) -> float:
@@ -911,9 +923,45 @@ def work_picture(
         x0, y0 = max(0, bx - pad), max(0, by - pad)
         x1, y1 = min(img.shape[1], bx + bw + pad), min(img.shape[0], by + bh + pad)
         _fill_glints(u8[y0:y1, x0:x1], bright[y0:y1, x0:x1], params)
+    holes = None
     if invalid is not None:
         u8[invalid] = 255
-    return WorkPicture(u8, invalid, float(lo), float(hi), glint_r)
+        holes = _fill_holes_dark(u8, invalid, params)
+    return WorkPicture(u8, invalid, float(lo), float(hi), glint_r, holes)
+
+
+def _fill_holes_dark(u8: np.ndarray, invalid: np.ndarray, params) -> np.ndarray | None:
+    """Fill ``u8``'s enclosed holes of missing pixels (in place) with the median of the valid
+    pixels around each (a 2 px ring), and return them (bool), or None when there is none.
+
+    A hole is a piece of ``invalid`` off the picture's border and no larger than a pupil
+    (``pupil_max_area_frac``): NaN pixels inside the pupil left bright would make its blob a
+    ring, whose centroid is off it (not compact) and which touches the missing pixels (not off
+    them); filled with the pupil's level the blob is whole, and its outline points next to the
+    hole are still left out (:func:`edge_points`), so the ellipse is fitted to the outline seen.
+    Missing pixels on the border (a valid-area mask, a black border, a cut-off side) are left
+    bright: a dark region running into them may be cut there."""
+    rows, cols = invalid.shape
+    inv8 = invalid.view(np.uint8) if invalid.dtype == np.bool_ else invalid.astype(np.uint8)
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(inv8, connectivity=8)
+    if n <= 1:
+        return None
+    max_area = params.pupil_max_area_frac * rows * cols
+    holes = None
+    for i in range(1, n):
+        x, y, w, h, area = (int(v) for v in stats[i])
+        if x == 0 or y == 0 or x + w == cols or y + h == rows or area > max_area:
+            continue
+        x0, y0, x1, y1 = max(0, x - 2), max(0, y - 2), min(cols, x + w + 2), min(rows, y + h + 2)
+        hole = (lab[y0:y1, x0:x1] == i).astype(np.uint8)
+        ring = (cv2.dilate(hole, np.ones((5, 5), np.uint8)) > 0) & ~invalid[y0:y1, x0:x1]
+        if not ring.any():
+            continue
+        u8[y0:y1, x0:x1][hole > 0] = int(median(u8[y0:y1, x0:x1][ring]))
+        if holes is None:
+            holes = np.zeros_like(invalid, dtype=bool)
+        holes[y0:y1, x0:x1] |= hole > 0
+    return holes
 
 
 # --- Step 2: the threshold ladder ------------------------------------------------------------
@@ -1082,7 +1130,8 @@ def _levels(small: np.ndarray, params, fine: int) -> tuple[float, float, float]:
 
 
 def _edge_dark(lab, stats, touch, areas: tuple[int, float], f: int, level: float) -> tuple:
-    """(level, area in full-resolution px) of the largest dark region of a pupil's size
+    """(level, area in full-resolution px, what it touches) of the largest dark region of a
+    pupil's size
     (``areas`` = (min, max), ladder px) touching the picture's border or the missing pixels at
     this level, or () when none: the ladder leaves such regions out, so a pupil cut by the
     frame is not a refusal's "too small" blob. A region larger than any pupil (an unlit
@@ -1094,12 +1143,17 @@ def _edge_dark(lab, stats, touch, areas: tuple[int, float], f: int, level: float
     if not len(idx):
         return ()
     touching = set(touch.tolist()) if touch is not None else set()
-    largest = -1
+    largest, where = -1, ""
     for k in idx.tolist():
         x, y, w, h, area = stats[k].tolist()
-        if x == 0 or y == 0 or x + w == cols or y + h == rows or k in touching:
-            largest = max(largest, area)
-    return (level, largest * f * f) if largest >= 0 else ()
+        on_border = x == 0 or y == 0 or x + w == cols or y + h == rows
+        if (on_border or k in touching) and area > largest:
+            largest, where = area, "the picture's border" if on_border else _MISSING
+    return (level, largest * f * f, where) if largest >= 0 else ()
+
+
+#: What :func:`_edge_dark` names when a dark region runs into missing pixels, not the border.
+_MISSING = "the missing pixels (NaN, outside the valid-area mask, or a black border)"
 
 
 def _first_edge_dark(seen, areas: tuple[int, float], f: int) -> tuple:
@@ -1158,8 +1212,9 @@ def _reduced(wp: WorkPicture, params) -> tuple[np.ndarray, np.ndarray | None, in
     small = _area_reduced(wp.u8, f) if f > 1 else wp.u8
     small = cv2.GaussianBlur(small, (5, 5), 1.0)
     inv = None
-    if wp.invalid is not None and wp.invalid.any():
-        inv = cv2.resize(wp.invalid.astype(np.uint8), size, interpolation=cv2.INTER_AREA)
+    missing = wp.invalid if wp.holes is None else wp.invalid & ~wp.holes
+    if missing is not None and missing.any():
+        inv = cv2.resize(missing.astype(np.uint8), size, interpolation=cv2.INTER_AREA)
         inv = cv2.dilate(inv, np.ones((3, 3), np.uint8)) > 0
     return small, inv, f
 
@@ -1221,7 +1276,7 @@ def _area_at(areas, i: int, seed: tuple[int, int]) -> int:
 # --- Step 3: choosing the pupil ----------------------------------------------------------------
 
 
-def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, params):
+def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, params, img=None):
     """Step 3 (module doc): the darkest chain's first stable blob, or a refusal naming why none.
 
     A chain's blob is stable at the first level where q ≤ ``ladder_max_growth`` and q is a local
@@ -1255,9 +1310,8 @@ def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, 
     if tiny and edge_dark and edge_dark[0] <= min(tiny)[0]:
         return Refusal(
             f"no pupil off the picture's border: the darkest region of a pupil's size "
-            f"({edge_dark[1]} px) touches the border or missing pixels (a pupil cut by the "
-            f"frame?); the only compact dark blob inside is {min(tiny)[1]} px, too small for "
-            "a pupil"
+            f"({edge_dark[1]} px) touches {edge_dark[2]} (a pupil cut there?); the only "
+            f"compact dark blob inside is {min(tiny)[1]} px, too small for a pupil"
         )
     if tiny and (not unstable or min(tiny)[0] < min(unstable)):
         area = min(tiny)[1]
@@ -1265,7 +1319,7 @@ def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, 
             f"pupil too small: {area} px, the darkest compact blob (a pupil needs ≥ "
             f"{params.pupil_min_area_px} px)"
         )
-    hint = _bright_pupil_hint(wp, f, params)
+    hint = _bright_pupil_hint(wp, f, params, img)
     if hint:
         return Refusal(f"no dark pupil: bright-pupil image? ({hint})")
     if unstable:
@@ -1277,19 +1331,45 @@ def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, 
     return Refusal("no pupil: no compact dark blob off the picture's border stands out")
 
 
-def _bright_pupil_hint(wp: WorkPicture, f: int, params) -> str:
-    """A compact bright blob of a pupil's size (far bigger than a glint) off the border, if any:
-    the picture may be a bright-pupil one (on-axis illumination)."""
-    u8 = wp.u8 if wp.invalid is None else np.where(wp.invalid, 0, wp.u8).astype(np.uint8)
+def _bright_pupil_hint(wp: WorkPicture, f: int, params, img=None) -> str:
+    """A compact bright blob of a pupil's size off the border, if any: the picture may be a
+    bright-pupil one (on-axis illumination). Looked for on the input ``img`` when given (the
+    working picture fills glints' pixels with the dark around them, and a bright pupil over
+    the glints' floor is taken for one), else on ``wp.u8``. A blob far bigger than any glint
+    (4 × ``glint_max_area_frac`` of the picture) is one; a blob bigger than the largest glint
+    (1 ×) only when the ring around it (out to 1.5 × its equivalent radius) is darker than
+    the picture's median: a lit pupil in its iris, not a patch of bright skin."""
+    if img is not None:
+        scale = 255.0 / (wp.hi - wp.lo)
+        u8 = cv2.convertScaleAbs(np.asarray(img, np.float32), alpha=scale, beta=-wp.lo * scale)
+    else:
+        u8 = wp.u8
+    if wp.invalid is not None:
+        u8 = np.where(wp.invalid, 0, u8).astype(np.uint8)
     rows, cols = u8.shape
     thr = percentile(u8, 97)
     if thr >= 254:
         return ""
     _, bright = cv2.threshold(u8, thr, 255, cv2.THRESH_BINARY)
     _, lab, stats, cent = cv2.connectedComponentsWithStats(bright, connectivity=8)
-    min_area = max(params.pupil_min_area_px, 4 * params.glint_max_area_frac * rows * cols)
+    glint_max = params.glint_max_area_frac * rows * cols
+    min_area = max(params.pupil_min_area_px, glint_max)
+    typical = None
     for c in _level_candidates(lab, stats, cent, min_area, 0.1 * rows * cols, None):
-        return f"a compact bright blob of {c.area} px at ({c.seed[0]}, {c.seed[1]})"
+        what = f"a compact bright blob of {c.area} px at ({c.seed[0]}, {c.seed[1]})"
+        if c.area >= 4 * glint_max:
+            return what
+        if typical is None:
+            k = _stride(u8.size)
+            typical = median(u8[::k, ::k])
+        r = max(2, int(round(0.5 * math.sqrt(c.area / math.pi))))
+        x, y, w, h = c.bbox
+        x0, y0 = max(0, x - r), max(0, y - r)
+        x1, y1 = min(cols, x + w + r), min(rows, y + h + r)
+        blob = (lab[y0:y1, x0:x1] == lab[c.seed[1], c.seed[0]]).astype(np.uint8)
+        ring = cv2.dilate(blob, _disc(2 * r + 1)) > blob
+        if ring.any() and median(u8[y0:y1, x0:x1][ring]) < typical:
+            return f"{what} inside a darker ring"
     return ""
 
 
@@ -1454,6 +1534,9 @@ def _glint_forgiven(img, window, raw, near_glint, wp: WorkPicture, level: float)
     plain = cv2.convertScaleAbs(src, alpha=alpha, beta=-wp.lo * alpha)
     if wp.invalid is not None:
         plain[wp.invalid[y0:y1, x0:x1]] = 255
+    if wp.holes is not None:  # enclosed holes at their surround's level, as in ``wp.u8``
+        hole = wp.holes[y0:y1, x0:x1]
+        plain[hole] = wp.u8[y0:y1, x0:x1][hole]
     smooth = cv2.GaussianBlur(plain, (5, 5), 1.0)
     _, dark = cv2.threshold(smooth, level, 255, cv2.THRESH_BINARY_INV)
     core = cv2.bitwise_and(cv2.bitwise_and(raw, dark), cv2.bitwise_not(near_glint))
@@ -1814,6 +1897,20 @@ def support_of(e: Ellipse, x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     return len(filled) / n_bins, longest / n_bins
 
 
+def _no_edge(blob: Blob, dropped: dict, params) -> str:
+    """The refusal of a blob with too few sharp edge points: cut, when more of its outline
+    than a pupil may miss (``max_boundary_gap``) runs along the border or the missing pixels
+    (a valid-area mask across the pupil leaves a sliver without a pupil's edge)."""
+    n_out = len(blob.contour)
+    if dropped["border"] > params.max_boundary_gap * n_out:
+        return (
+            f"pupil cut or hidden: {dropped['border']} of the dark blob's {n_out} outline "
+            f"points lie on the picture's border or next to {_MISSING}, and the rest have no "
+            "sharp edge"
+        )
+    return "no pupil: the dark blob has no sharp edge"
+
+
 def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, params) -> PupilFit:
     """Steps 5–7 for one blob: contrast, outline, sub-pixel edge, robust fit, support."""
     levels = blob_contrast(img, wp, blob, params)
@@ -1835,7 +1932,7 @@ def fit_blob(img: np.ndarray, wp: WorkPicture, blob: Blob, bright: np.ndarray, p
     ok &= ~on_glint
     xr, yr = xr[ok], yr[ok]
     if len(xr) < params.min_edge_points:
-        return PupilFit(None, reason="no pupil: the dark blob has no sharp edge", dropped=dropped)
+        return PupilFit(None, reason=_no_edge(blob, dropped, params), dropped=dropped)
     e, inl, sigma = _robust_fit(xr, yr, blob.diam, params)
     if e is None:
         return PupilFit(None, reason="no pupil: the dark blob's outline fits no ellipse")
@@ -1990,6 +2087,17 @@ def _one_sided(img, wp: WorkPicture, e: Ellipse, pupil_level: float, bright, par
     # ring's step over the pupil (vr-offaxis at 850 nm, 1 ms, the sun 40° up: pupil 16 DN,
     # the shadowed iris 30–32 and the lit one ~70 over a black of 14: 8× the pupil's signal).
     lit = float(np.min(meds)) - wp.lo > 2.0 * (pupil_level - wp.lo)
+    if worst < params.surround_sector_min and not lit and wp.invalid is not None:
+        # A sector's worth (1 / ``surround_sectors``) of the ring missing: the dark side may be
+        # the rest of a pupil the missing pixels cut (a valid-area mask across it).
+        _, _, whole = _ring_scaled((x0, x1, y0, y1), s, _scaled_args(e), (float(r0), float(r1)))
+        lost = np.count_nonzero(whole & wp.invalid[y0:y1:s, x0:x1:s])
+        if lost * n >= np.count_nonzero(whole):
+            return (
+                f"pupil cut or hidden: the dark blob at ({e.cx:.0f}, {e.cy:.0f}) px is dark on "
+                f"one side only and {100 * lost / np.count_nonzero(whole):.0f} % of the ring "
+                f"around it is {_MISSING}: a pupil cut there?"
+            )
     if worst < params.surround_sector_min and not lit:
         return (
             f"no pupil: the dark blob at ({e.cx:.0f}, {e.cy:.0f}) px is dark on one side only "
@@ -2050,8 +2158,11 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     win = img[y0:y1, x0:x1].astype(np.float32)
     if p - black > params.core_max_fraction * (m - black):
         # no core at the black level, whatever the noise (its estimate is not worked out);
-        # perhaps one a few σ above it, which only the averaged interior shows
-        return _smoothed_core(win, inside, e, params)
+        # perhaps one a few σ above it, which only the averaged interior shows, or one too
+        # small to move the 5th percentile
+        return _smoothed_core(win, inside, e, params) or _small_core(
+            win, inside, e, (black, x0, y0, m, wp.hi - wp.lo), img.dtype.kind in "iu", params
+        )
     lap = np.abs(cv2.filter2D(win, cv2.CV_32F, _IMMERKAER, borderType=cv2.BORDER_REFLECT)[inside])
     if img.dtype.kind in "iu" and img.itemsize <= 2:
         # Integers (|M * I| ≤ 16 × 65535: exact in float32 and in int32): counted, not sorted.
@@ -2068,7 +2179,9 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
             f"against its median's {m - black:.3g} ({(m - p) / noise:.0f} σ of the noise): the "
             "pupil inside an iris (or a dark fold) it was not told from"
         )
-    return _smoothed_core(win, inside, e, params)
+    return _smoothed_core(win, inside, e, params) or _small_core(
+        win, inside, e, (black, x0, y0, m, wp.hi - wp.lo), img.dtype.kind in "iu", params
+    )
 
 
 #: :func:`_smoothed_core`'s box (px a side): a core of the least pupil's area (30 px, ~6 px
@@ -2114,6 +2227,145 @@ def _smoothed_core(win: np.ndarray, inside: np.ndarray, e: Ellipse, params) -> s
     )
 
 
+#: :func:`_small_core`'s box (px a side): noise falls 3×, and a dark spot keeps over half its
+#: depth in the box only when ≥ 5 of its 9 pixels are dark — a dead pixel or two do not.
+_SMALL_CORE_BOX = 3
+
+
+#: :func:`_small_core`'s least depth, as a share of the picture's range (``wp.hi − wp.lo``): a
+#: pupil too small to move the interior's 5th percentile is taken for one only where it
+#: stands well out of the range (a 2 px pupil 90 DN under a 110 DN iris, 203 DN range: 0.44;
+#: a JPEG's ringing in a flattened pupil, 0.06). A 2 px pupil in a dark iris (a few % of the
+#: range) is not found by it.
+_SMALL_CORE_DEPTH = 0.25
+
+
+def _small_core(win, inside, e: Ellipse, at: tuple, integer: bool, params) -> str:
+    """A darker core too small to move the interior's 5th percentile (:func:`darker_core`), or
+    "": a 2 px pupil (~13–20 px of area) inside the iris fitted as the pupil (22 000 px: 0.1 %
+    of its interior). On the interior averaged over :data:`_SMALL_CORE_BOX` px boxes (those
+    wholly inside), with m its median and σ the spread of its brighter half (as
+    :func:`_smoothed_core`; ≥ ⅓ of an integer picture's step), the darkest box is a core when
+    it lies within ``core_max_fraction`` of the way from the black level (the darkest valid
+    pixel; ``at`` = (black level, the window's first column, its first row, the raw interior's
+    median, the picture's range ``wp.hi − wp.lo``)) to m, ≥ ``core_min_sigma`` σ under m and
+    ≥ :data:`_SMALL_CORE_DEPTH` of the range under m.
+    Over a uniform interior of 10⁵ boxes the darkest is ~4.5 σ under m (Gaussian extreme
+    √(2 ln N)), and a real pupil at the black level has m − black of a few σ of its pixel
+    noise: neither test passes. The core's area is
+    the pixels of the input, around the darkest box, darker than halfway from m to it: under
+    ``pupil_min_area_px`` the answer is "pupil too small", else "pupil merged with iris"."""
+    k = _SMALL_CORE_BOX
+    black, x0, y0, m_raw, span = at
+    if min(win.shape) < 2 * k:
+        return ""
+    box = cv2.blur(win, (k, k), borderType=cv2.BORDER_REFLECT)
+    whole = cv2.erode(inside.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
+    masked = np.where(whole, box, np.inf)
+    r, c = np.unravel_index(int(np.argmin(masked)), masked.shape)
+    low = float(masked[r, c])
+    # (first against the raw interior's median ``m_raw``, which the boxes' median is within
+    # noise of: a real pupil's darkest box is far from the black level, and stops here)
+    if not np.isfinite(low) or low - black > params.core_max_fraction * (m_raw - black):
+        return ""
+    vals = box[whole]
+    if vals.size < params.pupil_min_area_px:
+        return ""
+    m = median(vals)
+    upper = vals[vals >= m] - m
+    sigma = median(upper) / 0.6745 if upper.size else 0.0
+    if integer:
+        sigma = max(sigma, 1.0 / k)
+    if not sigma > 0 or low - black > params.core_max_fraction * (m - black):
+        return ""
+    if m - low < max(params.core_min_sigma * sigma, _SMALL_CORE_DEPTH * span):
+        # (nor a dip shallower than :data:`_SMALL_CORE_DEPTH` of the range: a JPEG flattens a
+        # pupil's noise, σ falls to the integer floor, and its ringing beside a glint dips to
+        # the black level, 13 DN under a 16 DN pupil in a 203 DN range at quality 8)
+        return ""
+    # the core: the pixels darker than halfway from m to the darkest box, connected to it
+    dark = ((win < 0.5 * (m + low)) & inside).astype(np.uint8)
+    _, lab = cv2.connectedComponents(dark, connectivity=8)
+    area = int(np.count_nonzero(lab == lab[r, c])) if dark[r, c] else 0
+    where = f"inside the fitted blob at ({e.cx:.0f}, {e.cy:.0f}) px "
+    size = f"({2 * max(e.a, e.b):.0f} × {2 * min(e.a, e.b):.0f} px)"
+    if area < params.pupil_min_area_px:
+        return (
+            f"pupil too small: {area} px, a darker core at ({x0 + c}, {y0 + r}) "
+            f"{where}{size} — the iris around the pupil (a pupil needs "
+            f"≥ {params.pupil_min_area_px} px)"
+        )
+    return (
+        f"pupil merged with iris: the fitted blob at ({e.cx:.0f}, {e.cy:.0f}) px {size} has a "
+        f"darker core of {area} px, {(m - low) / sigma:.0f} σ under its median: the pupil "
+        "inside an iris it was not told from"
+    )
+
+
+def bright_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, params) -> str:
+    """Why a fitted dark blob is the iris around a bright pupil (a bright-pupil picture), or "".
+
+    Over the pixels inside 0.9 × the ellipse (missing pixels left out), in the input's units,
+    with d the interior's ``core_quantile`` (5th percentile, the blob's dark level) and h the
+    picture's bright level (``wp.hi``, its 99th percentile): the pixels brighter than halfway
+    from d to h, the connected piece with its centroid nearest the ellipse's centre. It is a
+    lit pupil, not a glint, when its centroid is inside half the ellipse, it fills ≥ ½ of its
+    box and it is larger than any glint the detector takes (``glint_max_area_frac`` of the
+    picture, or ``glint_max_pupil_frac`` of the blob: :func:`_glints_beside`) and than
+    ``pupil_min_area_px``. On-axis light makes the pupil glow inside its iris; the working
+    picture fills it as a glint, and the iris with the glow filled fits as the pupil."""
+    rows, cols = img.shape
+    reach = max(e.a, e.b) + 1
+    x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
+    y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
+    if x1 - x0 < 3 or y1 - y0 < 3:
+        return ""
+    box = (x0, x1, y0, y1)
+    inside = _inside_scaled(box, _scaled_args(e), 0.81)
+    if wp.invalid is not None:
+        inside &= ~wp.invalid[y0:y1, x0:x1]
+    if inside.sum() < params.pupil_min_area_px:
+        return ""
+    win = img[y0:y1, x0:x1]
+    d = percentile(win[inside], params.core_quantile)
+    if not wp.hi > d:
+        return ""
+    lit = (inside & (win > 0.5 * (d + wp.hi))).astype(np.uint8)
+    limit = max(
+        params.pupil_min_area_px,
+        min(
+            params.glint_max_area_frac * rows * cols,
+            params.glint_max_pupil_frac * math.pi * e.a * e.b,
+        ),
+    )
+    if cv2.countNonZero(lit) <= limit:  # (no piece can be larger: a real pupil's glints)
+        return ""
+    n, lab, stats, cent = cv2.connectedComponentsWithStats(lit, connectivity=8)
+    central = _inside_scaled(box, _scaled_args(e), 0.25)
+    for i in range(1, n):
+        bx, by, bw, bh, area = (int(v) for v in stats[i])
+        cx, cy = cent[i]
+        ci, ri = int(round(cx)), int(round(cy))
+        if area <= limit or area < 0.5 * bw * bh or not central[ri, ci]:
+            continue
+        return (
+            f"a bright core of {area} px at ({x0 + cx:.0f}, {y0 + cy:.0f}) inside the dark "
+            f"blob at ({e.cx:.0f}, {e.cy:.0f}) px ({2 * max(e.a, e.b):.0f} × "
+            f"{2 * min(e.a, e.b):.0f} px), larger than any glint: a lit pupil in its iris"
+        )
+    return ""
+
+
+def _inner_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params) -> str:
+    """Why a whole fit is not the pupil for what it holds, or "": a bright core larger than any
+    glint (:func:`bright_core`: "no dark pupil: bright-pupil image?") or a darker core
+    (:func:`darker_core`)."""
+    lit = bright_core(img, wp, e, params)
+    if lit:
+        return f"no dark pupil: bright-pupil image? ({lit})"
+    return darker_core(img, wp, e, bright, params)
+
+
 def _finer(img: np.ndarray, wp: WorkPicture, reduced, f: int, bright: np.ndarray, params):
     """:func:`find_pupil`'s second pass, the ladder's dark end again ``ladder_fine`` × finer:
     its fit when whole by the stricter ``ladder_fine_support`` with no darker core, else None."""
@@ -2133,7 +2385,7 @@ def _finer(img: np.ndarray, wp: WorkPicture, reduced, f: int, bright: np.ndarray
     if (
         fit2 is not None
         and _whole(fit2, strict)
-        and not darker_core(img, wp, fit2.ellipse, bright, params)
+        and not _inner_core(img, wp, fit2.ellipse, bright, params)
     ):
         return fit2
     return None
@@ -2171,7 +2423,7 @@ def _small_pupil(img: np.ndarray, invalid, bright: np.ndarray, f: int, params) -
         fit is None
         or not _whole(fit, params)
         or 2 * max(fit.ellipse.a, fit.ellipse.b) > params.small_pupil_axes * f
-        or darker_core(img, wp, fit.ellipse, glints, params)
+        or _inner_core(img, wp, fit.ellipse, glints, params)
     ):
         return None
     return fit
@@ -2208,13 +2460,13 @@ def find_pupil(
             "and the missing pixels are grown by one",
         )
     chains, f, tiny = ladder(wp, params, reduced)
-    picks = choose(chains, f, tiny, wp, params)
+    picks = choose(chains, f, tiny, wp, params, img)
     reasons: list[str] = []
     fit = _fit_candidates(img, wp, picks, f, bright, params, reasons) if picks else None
     # A whole fit with a darker core inside is an iris holding the pupil (a cut one is
     # refused as cut already, and a lid inside its ellipse would look like a core).
     whole = fit is not None and _whole(fit, params)
-    core = darker_core(img, wp, fit.ellipse, bright, params) if whole else ""
+    core = _inner_core(img, wp, fit.ellipse, bright, params) if whole else ""
     # A whole fit with an unbacked arc over 1 − ``ladder_fine_support`` (¼) of its outline, of
     # a pupil at the black level (its chain stable from the ladder's second level, the first
     # whose q has a level below it: the finer ladder's span holds the whole pupil), may be a
@@ -2254,11 +2506,15 @@ def find_pupil(
     if not picks:
         return PupilFit(None, reason=picks.reason)
     edge_dark = tiny[1]()
-    if edge_dark and edge_dark[0] <= picks[0].level:
+    # Darker by the contrast a pupil needs (``pupil_min_contrast_sigma`` σ of the noise): a
+    # region a few σ darker is the noise's (a close-up's iris running off the frame, 2 σ
+    # above its pupil, with bright skin filled as glints by the dark around them: called a
+    # pupil cut by the frame instead of the pupil merged with its iris).
+    if edge_dark and edge_dark[0] <= picks[0].level - params.pupil_min_contrast_sigma * wp.noise:
         return PupilFit(
             None,
             reason=f"no pupil off the picture's border: a darker region of a pupil's size "
-            f"({edge_dark[1]} px) touches the border or missing pixels (a pupil cut by the "
-            f"frame?); the darkest blob inside was refused: {reasons[0]}",
+            f"({edge_dark[1]} px) touches {edge_dark[2]} (a pupil cut there?); the darkest "
+            f"blob inside was refused: {reasons[0]}",
         )
     return PupilFit(None, reason=reasons[0])

@@ -1,0 +1,141 @@
+"""A new user's pupil cases (issue 13, session 19's check), made up here: a 2 px pupil, a bright
+pupil, a large NaN hole in the pupil, a valid-area mask across the pupil and a faint close-up.
+
+:func:`eye` draws their 640 × 400 frame: skin, an eye opening of sclera, an iris disc and a
+pupil disc with a 1 px anti-aliased edge, four saturated glints 25 px from the pupil's centre
+and Gaussian pixel noise, rounded to 8 bits. Each test asserts the right answer or the refusal
+naming the cause; each failed on the code before session 20 (the iris answered as the pupil,
+or another cause named).
+
+Tolerance of the NaN-hole test: the pupil's edge (a 90 DN step at noise σ 3, no blur but the
+1 px anti-aliasing) puts each edge point ≈ 0.05 px off and the centre of ~300 points ≈ 0.01
+px; 0.25 px (as tests/analysis/test_detect_kinds.py) is far above that and far below the
+12 px by which a fit to the hole's rim or a cut blob would miss.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from eyelume.analysis.tracking import detect
+
+H, W = 400, 640
+CENTRE = (320.3, 200.7)
+
+
+def eye(
+    pupil_r=30.0,
+    pupil=20.0,
+    iris=110.0,
+    centre=CENTRE,
+    skin=170.0,
+    sclera=200.0,
+    noise=3.0,
+    seed=0,
+):
+    """The frame as float DN before rounding (see the module doc); ``pupil`` may be brighter
+    than the iris (a bright-pupil picture)."""
+    yy, xx = np.mgrid[0:H, 0:W].astype(float)
+    img = np.full((H, W), skin)
+    opening = ((xx - 320) / 200) ** 2 + ((yy - 200) / 110) ** 2 < 1
+    img[opening] = sclera
+    img[(np.hypot(xx - CENTRE[0], yy - CENTRE[1]) < 85) & opening] = iris
+    a = np.clip(pupil_r + 0.5 - np.hypot(xx - centre[0], yy - centre[1]), 0, 1)
+    img = img * (1 - a) + pupil * a
+    for dx, dy in [(25, 0), (0, -25), (-25, 0), (0, 25)]:
+        img += 400 * np.exp(-((xx - centre[0] - dx) ** 2 + (yy - centre[1] - dy) ** 2) / 4.5)
+    img += np.random.default_rng(seed).normal(0, noise, img.shape)
+    return img
+
+
+def u8(img):
+    return np.clip(np.rint(img), 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.parametrize("offset", [(0, 0), (8.0, -3.5)])
+def test_two_px_pupil_in_its_iris_is_too_small_not_the_iris(seed, offset):
+    """A 2 px pupil (~13 px of area) inside a 170 px iris: the iris, a dark disc with a darker
+    core, was answered as the pupil; now the core is named as a pupil too small."""
+    centre = (CENTRE[0] + offset[0], CENTRE[1] + offset[1])
+    d = detect(u8(eye(pupil_r=2.0, centre=centre, seed=seed)), led_azimuths_deg=[0, 90, 180, 270])
+    assert not d.ok and d.pupil is None, d.failures
+    assert d.failures[0].startswith("pupil too small: "), d.failures
+
+
+@pytest.mark.parametrize("pupil_r", [4.0, 7.0])
+def test_small_pupils_above_the_least_are_still_found(pupil_r):
+    """4 and 7 px pupils (50 and 154 px of area) are found, centred within 0.25 px."""
+    d = detect(u8(eye(pupil_r=pupil_r)))
+    assert d.pupil is not None, d.failures
+    assert np.hypot(*np.subtract(d.pupil.centre_px, CENTRE)) < 0.25
+    assert d.pupil.axes_px[0] < 2 * pupil_r + 3
+
+
+@pytest.mark.parametrize("iris", [110.0, 60.0])
+@pytest.mark.parametrize("offset", [(0, 0), (8.0, -3.5)])
+def test_bright_pupil_is_refused_by_name(iris, offset):
+    """A pupil at 240 DN (lit on-axis) inside a darker iris, with skin (170) and sclera (200)
+    darker than the pupil: refused as a bright-pupil image, never the iris as the pupil."""
+    centre = (CENTRE[0] + offset[0], CENTRE[1] + offset[1])
+    d = detect(u8(eye(pupil=240.0, iris=iris, centre=centre)))
+    assert not d.ok and d.pupil is None, d.failures
+    assert d.failures[0].startswith("no dark pupil: bright-pupil image?"), d.failures
+
+
+def test_nan_hole_in_the_pupil_is_fitted_from_its_outline():
+    """A 25 × 25 px hole of NaN in the pupil's centre (the whole edge visible): the pupil is
+    fitted from its outline, not refused as merged with the iris."""
+    img = eye().astype(np.float32)
+    img[190:215, 305:330] = np.nan
+    d = detect(img, led_azimuths_deg=[0, 90, 180, 270])
+    assert d.ok, d.failures
+    assert np.hypot(*np.subtract(d.pupil.centre_px, CENTRE)) < 0.25
+    assert abs(d.pupil.axes_px[0] - 59.0) < 1.5  # the ¼-level iso-line of the 60 px disc
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_valid_area_mask_across_the_pupil_is_named(seed):
+    """A valid-area mask ending 20 px left of the pupil's centre (a sixth of its width left):
+    the sliver is named as a pupil cut by the missing pixels, not a blob without a sharp edge
+    or dark on one side only (a strip beside a lid)."""
+    valid = np.ones((H, W), bool)
+    valid[:, 300:] = False
+    d = detect(u8(eye(seed=seed)), valid=valid)
+    assert not d.ok and d.pupil is None, d.failures
+    assert d.failures[0].startswith("pupil cut or hidden: "), d.failures
+    assert "missing pixels" in d.failures[0], d.failures
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_faint_close_up_running_off_the_frame_is_merged_not_cut(seed):
+    """A 200 × 200 close-up: a 70 px pupil at 12 DN in an iris of 18 DN (2 σ of the noise σ
+    3) that runs off the frame, skin 150 in the corners. Bright skin taken as glints is
+    filled with the dark around it at the frame's edge; that was called a pupil cut by the
+    frame. The cause is the pupil's contrast to its iris."""
+    n = 200
+    yy, xx = np.mgrid[0:n, 0:n].astype(float)
+    r = np.hypot(xx - 100.3, yy - 99.6)
+    img = np.full((n, n), 150.0)
+    a = np.clip(120.5 - r, 0, 1)
+    img = img * (1 - a) + 18.0 * a
+    a = np.clip(35.5 - r, 0, 1)
+    img = img * (1 - a) + 12.0 * a
+    img = cv2.GaussianBlur(img, (0, 0), 1.0)
+    img += np.random.default_rng(seed).normal(0, 3.0, img.shape)
+    d = detect(u8(img))
+    assert not d.ok and d.pupil is None, d.failures
+    assert d.failures[0].startswith("pupil merged with iris"), d.failures
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_jpeg_ringing_in_a_pupil_is_no_small_core(seed):
+    """The same frame saved as a JPEG at quality 8: the pupil's noise is flattened and the
+    ringing beside a glint dips to the black level, ~13 DN under the pupil; that is no pupil
+    inside an iris (the pupil is still found, within the issue's 0.5 px)."""
+    ok, buf = cv2.imencode(".jpg", u8(eye(seed=seed)), [cv2.IMWRITE_JPEG_QUALITY, 8])
+    d = detect(cv2.imdecode(buf, cv2.IMREAD_GRAYSCALE))
+    assert d.pupil is not None, d.failures
+    assert np.hypot(*np.subtract(d.pupil.centre_px, CENTRE)) < 0.5
