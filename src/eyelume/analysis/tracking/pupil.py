@@ -2124,6 +2124,19 @@ def _fit_candidates(img, wp, picks, f: int, bright, params, reasons: list[str]):
     return None
 
 
+def _box_about(e: Ellipse, shape: tuple[int, int]) -> tuple[int, int, int, int] | None:
+    """(x0, x1, y0, y1): the picture's pixels within the ellipse's reach (its larger semi-axis
+    + 1 px) about its centre, clipped to ``shape`` (rows, cols); None when under 3 px either
+    way (nothing to look at)."""
+    rows, cols = shape
+    reach = max(e.a, e.b) + 1
+    x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
+    y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
+    if x1 - x0 < 3 or y1 - y0 < 3:
+        return None
+    return x0, x1, y0, y1
+
+
 def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params) -> str:
     """Why a fitted ellipse holds a darker core (an iris with the pupil inside it), or "".
 
@@ -2137,13 +2150,11 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     5th percentile is a couple of σ under its median. When this finds no core, the interior
     averaged over 5 × 5 px is looked at again (:func:`_smoothed_core`: a pupil only a few σ of
     the pixel noise darker than its iris)."""
-    rows, cols = img.shape
-    reach = max(e.a, e.b) + 1
-    x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
-    y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
-    if x1 - x0 < 3 or y1 - y0 < 3:
+    box = _box_about(e, img.shape)
+    if box is None:
         return ""
-    inside = _inside_scaled((x0, x1, y0, y1), _scaled_args(e), 0.81)
+    x0, x1, y0, y1 = box
+    inside = _inside_scaled(box, _scaled_args(e), 0.81)
     glints = bright[y0:y1, x0:x1]
     if glints.any():
         inside &= _grown_glints_box(glints, params)[0] == 0
@@ -2315,12 +2326,10 @@ def bright_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, params) -> str:
     ``pupil_min_area_px``. On-axis light makes the pupil glow inside its iris; the working
     picture fills it as a glint, and the iris with the glow filled fits as the pupil."""
     rows, cols = img.shape
-    reach = max(e.a, e.b) + 1
-    x0, x1 = max(0, int(e.cx - reach)), min(cols, int(e.cx + reach) + 2)
-    y0, y1 = max(0, int(e.cy - reach)), min(rows, int(e.cy + reach) + 2)
-    if x1 - x0 < 3 or y1 - y0 < 3:
+    box = _box_about(e, img.shape)
+    if box is None:
         return ""
-    box = (x0, x1, y0, y1)
+    x0, x1, y0, y1 = box
     inside = _inside_scaled(box, _scaled_args(e), 0.81)
     if wp.invalid is not None:
         inside &= ~wp.invalid[y0:y1, x0:x1]
