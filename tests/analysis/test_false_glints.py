@@ -89,3 +89,16 @@ def test_detected_ghost_in_place_of_a_lost_glint_is_counted_in_the_frame_and_sum
     s = summarise(report, pccr_calibrated=False)
     assert s["false_glints"] == {"total": 2, "frames_with": 2, "per_frame_mean": 2 / 3}
     assert [r["false_glints"] for r in error_map_rows(report.frames)] == [1, 0, 1]
+
+
+def test_the_suns_glint_matched_to_an_led_is_a_false_glint():
+    """The sun's corneal glint (``truth["sun_glint"]``) taken for LED 1's glint (3.5 px from
+    it, nearer the sun's spot) is a false glint; LED 0's own glint is not; a sun glint not
+    visible, or none, counts nothing."""
+    true = [(40.0, 30.0), (50.0, 30.0), (60.0, 30.0), (50.0, 40.0)]
+    sun = {"centre_px": [52.0, 27.0], "visible": True, "on_cornea": True, "reason": ""}
+    truth = _truth(true, []) | {"sun_glint": sun}
+    found = [Glint((40.1, 30.0), 4, 255.0, led=0), Glint((52.2, 27.1), 9, 255.0, led=1)]
+    assert false_glints(found, truth) == [1]
+    assert false_glints(found, truth | {"sun_glint": sun | {"visible": False}}) == []
+    assert false_glints(found, _truth(true, [])) == []

@@ -480,9 +480,11 @@ def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
         ray = None if ray is None else _through_elements(cs, *ray, led)
         return _miss(ray, led, n, g1, g2)
 
-    # first guess: the corneal centre's image, shifted toward the LED
+    # first guess: the corneal centre's image, shifted toward the LED (a far source, the
+    # sun's stand-in 10 m away, as if at an LED's distance along its direction)
     c_img = v.image_of(v.turned(np.array([0.0, 0.0, -3.9])))
-    guess = (c_img if c_img is not None else np.zeros(2)) - 0.05 * abs(v.par_m) * led[:2]
+    near = led if np.linalg.norm(led) < 1e3 else led * (70.0 / np.linalg.norm(led))
+    guess = (c_img if c_img is not None else np.zeros(2)) - 0.05 * abs(v.par_m) * near[:2]
     s = _solve(residual, guess)
     entry: dict = {
         "led": k,
@@ -768,7 +770,8 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
     elements, ``ghosts``: each LED's specular images by the elements (chain, pixel, flux:
     :func:`eyelume.analysis.ghosts.ghost_truth`, and each one's ``nearest_glint_px``; their
     count ``ghosts_visible``; no such keys without elements or with
-    ``ghosts=False``, which skips their search, ~1 s a scene). LEDs of several
+    ``ghosts=False``, which skips their search, ~1 s a scene); with ``ambient.sun``,
+    ``sun_glint``: the sun's own corneal glint (:func:`_sun_glint`). LEDs of several
     wavelengths: each LED's entries at its own wavelength, marked with it
     (:func:`_truth_by_wavelength`); the pupil at the scene's.
     """
@@ -809,12 +812,32 @@ def eye_truth(cs: CompiledScene, cam: CameraTables | None = None, *, ghosts: boo
         "glints_at_rim": sum(g["at_rim"] for g in glints),
         "leds_in_view": in_view,
     }
+    if cs.scene.ambient.sun is not None and cs.sun is None:
+        out["sun_glint"] = _sun_glint(cs, v)
     if cs.scene.elements and ghosts:
         from eyelume.analysis.ghosts import ghost_truth
 
         out["ghosts"] = _near_glints(ghost_truth(v, glints), glints)
         out["ghosts_visible"] = sum(g["visible"] for g in out["ghosts"])
     return out
+
+
+def _sun_glint(cs: CompiledScene, v: _View) -> dict:
+    """The sun's own corneal glint (``ambient.sun``), found as an LED's is
+    (:func:`_glint_truth`) for the sun's stand-in point source, :data:`eyelume.compile.
+    SUN_DISTANCE_MM` away along the sun's direction (:class:`eyelume.compile.SunSource`, as
+    :func:`eyelume.render.render` traces it): ``centre_px``, ``on_cornea``, ``visible``,
+    ``reason`` (no ``led``). The renderer draws it — a bright, saturated spot — and no LED's
+    glint is it: a detector that takes it for one is wrong (:func:`eyelume.analysis.tracking.
+    evaluate.false_glints` counts such matches)."""
+    from eyelume.compile import SunSource, compile_scene
+
+    sc = cs.scene
+    source = SunSource(sc.ambient.sun.direction(), 1.0, float(sc.wavelength_nm))
+    cs_sun = compile_scene(sc, sun=source, nominal=cs)
+    g = _glint_truth(_view(cs_sun, v.cam), 0, cs_sun.led.points[0], 0)
+    g["reason"] = g["reason"].replace("this LED", "the sun").replace("the LED", "the sun")
+    return {k: g[k] for k in ("centre_px", "on_cornea", "visible", "reason")}
 
 
 def _near_glints(ghosts: list[dict], glints: list[dict]) -> list[dict]:

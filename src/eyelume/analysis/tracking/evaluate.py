@@ -20,7 +20,8 @@ the mean of the found glints, which moves toward them. Rendering the frames over
 :mod:`eyelume.optimize.tracking`'s.
 
 With optical elements (spectacles, a hot mirror), a detected glint matched to an LED may be a
-spectacle ghost (:mod:`eyelume.analysis.ghosts`) taken for the corneal glint:
+spectacle ghost (:mod:`eyelume.analysis.ghosts`) taken for the corneal glint, and with sunlight
+(``ambient.sun``) the sun's own corneal glint (truth ``sun_glint``):
 :func:`false_glints` counts them per frame (``Frame.false_glints``) and the summary totals them.
 A matched glint may also be a real spot that is not a whole corneal glint — one cut by the
 cornea's rim (truth ``at_rim``: its centroid moved by ``rim.bias_px`` off where the gaze models
@@ -306,12 +307,16 @@ def stray_glints(glints, truth: dict, ghosts: Sequence[int] = ()) -> list[int]:
 
 def false_glints(glints, truth: dict, radius_px: float = FALSE_GLINT_PX) -> list[int]:
     """Indices into ``glints`` (detected, :class:`~.detect.Glint`: ``centre_px`` (x, y) px
-    and ``led``) of those matched to an LED that are an element's ghost, not the corneal
-    glint: within max(``radius_px``, the ghost's ``blur_px``/2) of a visible ghost's true
-    centre (``truth["ghosts"]``, :mod:`eyelume.analysis.ghosts`) and nearer to it than to
-    that LED's true glint (or the LED has no visible glint). A frame without ghosts in its
-    truth (no elements): []."""
+    and ``led``) of those matched to an LED that are a false spot, not the corneal glint: an
+    element's ghost (``truth["ghosts"]``, :mod:`eyelume.analysis.ghosts`) or the sun's own
+    corneal glint (``truth["sun_glint"]``, :func:`eyelume.analysis.truth.eye_truth`): within
+    max(``radius_px``, the ghost's ``blur_px``/2) of a visible one's true centre and nearer to
+    it than to that LED's true glint (or the LED has no visible glint). A frame without
+    either in its truth (no elements, no sun): []."""
     ghosts = [g for g in truth.get("ghosts", []) if g["visible"]]
+    sun = truth.get("sun_glint")
+    if sun is not None and sun["visible"] and sun["centre_px"] is not None:
+        ghosts.append(sun)
     if not ghosts:
         return []
     true = {
