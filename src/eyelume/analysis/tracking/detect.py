@@ -101,6 +101,7 @@ from eyelume.analysis.tracking.glints import (
     find_glints,
     glint_smoothing,
     glints_near,
+    in_bright_run,
     match_leds,
     match_pattern,
 )
@@ -942,12 +943,25 @@ def _bright_blobs_near(  # noqa: PLR0913 - the picture, its scale, the pupil, th
     r_max = reach * params.glint_search_radius * pupil.axes_px[0]
     cap = _glint_cap(pupil, params, reach)
 
+    # A glint is an isolated spot: at its peak's level it stops within its skirt. A gap between
+    # dark lashes on a saturated lid runs on along its strip of lid at that level
+    # (in_bright_run) — taken as glints, such pieces (eyelume's vr-offaxis at 850 nm in
+    # sunlight: 2-9 px at 1016 DN, 40-160 px from the true glints) were matched to LEDs and,
+    # counted as glints of several pixels, kept the true ones from being looked for. The
+    # peak's level: within glint_min_snr σ of it (what the noise cannot tell from it; a glint
+    # rises that much over its background) and above its core (halfway from glint_level to
+    # the peak) — not lower: a glint at the limbus (glasses-frame at (0°, 0°): 1016 DN, base
+    # 291) joins the sclera beside it (~840 DN) at its core's level alone.
+    core = 0.5 * (1.0 + params.glint_level)
+    same = params.glint_min_snr * noise
+
     def corneal(b: dict) -> bool:
         x, y = b["centre_px"]
         return (
             math.hypot(x - cx, y - cy) <= r_max
             and b["area_px"] <= cap
             and b["peak"] - b["base"] >= params.glint_level * (top - b["base"])
+            and not in_bright_run(img, b, core, same)
         )
 
     near = [b for b in blobs if corneal(b)]
