@@ -123,7 +123,7 @@ def save_frames(stem: Path, report, result: dict) -> None:
     meta = {
         "calibration_frames": len(report.calibration),
         "render_budget": report.summary.get("render_budget"),
-        "result": {k: v for k, v in result.items() if k != "row"} | {"row": result["row"]},
+        "result": result,
         "frames": [
             {
                 "gaze": list(f.gaze),
@@ -175,7 +175,7 @@ def redetect_person(stem: Path, person) -> dict:
         person.index, person.values, reanalyse_report(person.scene, kept), person.not_applied
     )
     old = meta["result"]
-    return person_result(res, old["wall_s"], old["cpu_s"]) | {"render_s": old["render_s"]}
+    return person_result(res, old["wall_s"], old["cpu_s"])
 
 
 def person_result(res, wall_s: float, cpu_s: float) -> dict:
