@@ -10,7 +10,9 @@ Run from the repository root::
 :func:`eyelume.analysis.tracking.detect` alone (with the four LED azimuths, so the matching is
 included) on one core (``cv2.setNumThreads(1)``), after ``--warmup`` calls: best, median and
 worst of ``--repeats`` (50) calls on the same frame, and the median of each stage's share
-(``Detection.timings_ms``). Frames:
+(``Detection.timings_ms``). The verdict is on the median CPU time of the calls
+(``time.process_time``: time on the one core; the wall time is shown beside it, not judged);
+for the real pictures on the slowest 640 × 400 picture's median. Frames:
 
 - ``synthetic``: ``draw_eye()`` of ``tests/analysis/test_detect.py`` (the tests' picture: a
   112 × 100 px pupil, 4 saturated glints, blur σ 1.5 px, noise σ 8 DN, 10-bit), its truth known;
@@ -241,30 +243,31 @@ def bench(name: str, frame: np.ndarray, truth: dict | None, a) -> dict:
         detect(frame, led_azimuths_deg=LEDS)
     stages: list[dict] = []
 
+    cpu = []
+
     def one():
+        c0 = time.process_time()
         d = detect(frame, led_azimuths_deg=LEDS)
+        cpu.append(1e3 * (time.process_time() - c0))
         stages.append(d.timings_ms)
         return d
 
-    cpu = []
-    for _ in range(max(5, a.repeats // 5)):
-        c0 = time.process_time()
-        detect(frame, led_azimuths_deg=LEDS)
-        cpu.append(1e3 * (time.process_time() - c0))
     t = C.timed(one, a.repeats)
     d = t.pop("last")
     share = {k: statistics.median(s[k] for s in stages) for k in stages[0]}
     err = _errors(d, truth)
     best, med = 1e3 * t["best_s"], 1e3 * t["median_s"]
-    verdict = "PASS" if med <= TARGET_MS else "FAIL"
+    cpu_med = statistics.median(cpu)
+    # The target is time on one core: the CPU time of the call (a shared machine's wall time
+    # also holds the waits for a core, shown beside it but not judged).
+    verdict = "PASS" if cpu_med <= TARGET_MS else "FAIL"
     print(
-        f"   {name:9s} {frame.shape[1]}×{frame.shape[0]} {frame.dtype}: best {best:.2f} ms, "
-        f"median {med:.2f} ms, worst {1e3 * t['worst_s']:.2f} ms  [{verdict} ≤ {TARGET_MS} ms]"
-        f"{C.disturbed(t)}"
+        f"   {name:9s} {frame.shape[1]}×{frame.shape[0]} {frame.dtype}: CPU per call median "
+        f"{cpu_med:.2f} ms, best {min(cpu):.2f} ms (of {len(cpu)})  [{verdict} ≤ {TARGET_MS} ms]"
     )
     print(
-        f"             CPU time per call (median of {len(cpu)}): {statistics.median(cpu):.2f} ms, "
-        f"best {min(cpu):.2f} ms"
+        f"             wall: best {best:.2f} ms, median {med:.2f} ms, worst "
+        f"{1e3 * t['worst_s']:.2f} ms{C.disturbed(t)}"
     )
     print("             stages (median ms): " + ", ".join(f"{k} {v:.2f}" for k, v in share.items()))
     res = detection_to_dict(d)
@@ -279,13 +282,13 @@ def bench(name: str, frame: np.ndarray, truth: dict | None, a) -> dict:
         "best_ms": best,
         "median_ms": med,
         "worst_ms": 1e3 * t["worst_s"],
-        "cpu_median_ms": statistics.median(cpu),
+        "cpu_median_ms": cpu_med,
         "cpu_best_ms": min(cpu),
         "stages_median_ms": share,
         "timing": {k: v for k, v in t.items() if k != "walls_s"},
         "detection": res,
         "errors": err,
-        "pass": med <= TARGET_MS,
+        "pass": cpu_med <= TARGET_MS,
     }
 
 
@@ -317,7 +320,7 @@ def bench_real(a) -> list[dict]:
                 d = detect(img)
             n_ok += bool(d.ok)
             cpu, wall = [], []
-            for _ in range(max(5, a.repeats // 5)):
+            for _ in range(a.repeats):
                 c0, w0 = time.process_time(), time.perf_counter()
                 detect(img)
                 cpu.append(1e3 * (time.process_time() - c0))
@@ -336,14 +339,17 @@ def bench_real(a) -> list[dict]:
             "cpu_best_slowest_ms": max(cpu_best),
             "wall_median_ms": statistics.median(wall_med),
             "wall_slowest_ms": max(wall_med),
+            "pass": max(cpu_med) <= TARGET_MS if "640" in "".join(shapes) else None,
         }
+        verdict = {True: "  [PASS", False: "  [FAIL", None: "  [no target"}[rec["pass"]]
         print(
             f"   real-{source:9s} {', '.join(rec['shapes'])}, {len(pick)} pictures "
             f"({n_ok} ok): CPU per call {rec['cpu_median_ms']:.2f} ms median over the pictures, "
             f"{rec['cpu_slowest_ms']:.2f} ms the slowest (best calls "
             f"{rec['cpu_best_median_ms']:.2f} / {rec['cpu_best_slowest_ms']:.2f} ms); wall "
             f"{rec['wall_median_ms']:.2f} / "
-            f"{rec['wall_slowest_ms']:.2f} ms"
+            f"{rec['wall_slowest_ms']:.2f} ms{verdict}"
+            + (f": slowest picture ≤ {TARGET_MS} ms]" if rec["pass"] is not None else ": not 640 × 400]")
         )
         out.append(rec)
     return out
