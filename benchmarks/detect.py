@@ -349,7 +349,11 @@ def bench_real(a) -> list[dict]:
             f"{rec['cpu_best_median_ms']:.2f} / {rec['cpu_best_slowest_ms']:.2f} ms); wall "
             f"{rec['wall_median_ms']:.2f} / "
             f"{rec['wall_slowest_ms']:.2f} ms{verdict}"
-            + (f": slowest picture ≤ {TARGET_MS} ms]" if rec["pass"] is not None else ": not 640 × 400]")
+            + (
+                f": slowest picture ≤ {TARGET_MS} ms]"
+                if rec["pass"] is not None
+                else ": not 640 × 400]"
+            )
         )
         out.append(rec)
     return out
