@@ -99,3 +99,16 @@ def test_pupil_with_lashes_darker_than_it_across_its_edge_is_found(pupil, iris, 
     d = detect(img, led_azimuths_deg=(0, 90, 180, 270))
     assert d.ok, d.failures
     assert math.dist(d.pupil.centre_px, (200.6, cy)) < 0.5
+
+
+@pytest.mark.parametrize("radius", [12.0, 22.0])
+def test_a_mole_darker_than_the_pupil_is_not_the_pupil(radius):
+    """A dark mole (5 DN, darker than the 20 DN pupil) on the skin 265 px from the eye: the
+    ladder's darkest chain, compact and whole, but with none of the picture's glints within 6
+    of its radii; the pupil, walked past to, has four beside it. Before: answered with the
+    mole as the pupil (without LEDs ``ok``)."""
+    img = eye(mole=(420.0, 300.0, radius, 5.0), seed=100)
+    for leds in (None, (0, 90, 180, 270)):
+        d = detect(img, led_azimuths_deg=leds)
+        assert d.ok, d.failures
+        assert math.dist(d.pupil.centre_px, (200.6, 150.2)) < 0.5

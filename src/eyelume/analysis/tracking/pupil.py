@@ -40,15 +40,24 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    ``max_boundary_gap`` along the border or missing pixels, or whose dark side is next to
    them, is "pupil cut or hidden" (a valid-area mask across the pupil). A whole fit holding
    a bright core larger than any glint (:func:`bright_core`) is "no dark pupil: bright-pupil
-   image?"; one holding a darker core (:func:`darker_core`) is "pupil merged with iris", or
-   "pupil too small" when that core is under ``pupil_min_area_px``.
+   image?"; one holding a darker core (:func:`darker_core`) is looked inside
+   (:func:`_pupil_inside`: the core averaged out of the noise, fitted and taken when whole and
+   ≥ 5 standard errors under its surround: a pupil a few σ under a dark iris), else "pupil
+   merged with iris" naming why the core was not taken, or "pupil too small" when that core
+   is under ``pupil_min_area_px``. When every candidate is refused, or the fit has none of the
+   picture's glints within 6 of its radii (a mole on the skin darker than the pupil), the
+   ladder is walked again past their chains (it stops once the darkest chain has settled, and
+   a lash over the sclera may be that chain) and a whole fit with glints beside it is taken
+   (:func:`_fit_chosen`).
 4. **Full-resolution blob** (:func:`full_res_blob`): the picture (σ 1 px Gaussian) thresholded
    at the chosen level around the blob; glints touching it joined; a closing with an
    elliptical element of ≈ 0.15 × its diameter (odd, ≥ 3) fills what is left of a glint's
    notch; refused when not compact (solidity < 0.8) — unless, with the glints' pixels left
    out (:func:`_glint_forgiven`: the core dark without the glints' fill, and under a glint its
    convex hull), it is one piece of solidity ≥ 0.9: a glint just outside a small pupil's edge,
-   filled with the pupil's dark, grows a bump on its blob.
+   filled with the pupil's dark, grows a bump on its blob; or, opened by the closing's element
+   (:func:`_without_strokes`), the piece under its seed has solidity ≥ 0.9: lashes darker than
+   the pupil across its edge.
 5. **Contrast and edge** (:func:`blob_contrast`, :func:`edge_points`, :func:`_refine_smoothed`):
    the pupil's median against its own surround (a ring 0.05–0.1 × its diameter outside), at
    least 5 σ of the pixel noise there (:func:`_local_noise`: shot noise grows with the signal,
@@ -267,6 +276,8 @@ class PupilFit:
     #: the ladder level of the first stable blob of the fitted blob's chain (:func:`choose`;
     #: 1 for a pupil at the black level), −1 when not from a ladder's chain
     stable_from: int = -1
+    #: the first seed of that chain (:attr:`Candidate.first`)
+    first: tuple[int, int] = (-1, -1)
 
     def __bool__(self) -> bool:
         return self.ellipse is not None
@@ -1475,8 +1486,8 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
 
 def _compact_again(pics, masks, k: int, seed: tuple[int, int], level: float, params):
     """A blob not compact (step 4) judged again: with the glints' pixels left out
-    (:func:`_glint_forgiven`, held to ``pupil_min_solidity_glints``), then with thin strokes
-    cut off (:func:`_without_strokes`, held to ``pupil_min_solidity``). ``pics``: (the input or
+    (:func:`_glint_forgiven`), then with thin strokes cut off (:func:`_without_strokes`),
+    each held to ``pupil_min_solidity_glints``. ``pics``: (the input or
     None, the working picture, the window (x0, y0, x1, y1)); ``masks``: the window's raw blob,
     the blob with its glints joined and the grown glints (0/255). Returns (closed, contour,
     solidity, raw) or None."""
@@ -1494,11 +1505,13 @@ def _compact_again(pics, masks, k: int, seed: tuple[int, int], level: float, par
     # Thin dark strokes joined to it (lashes, darker than the pupil, across its edge): cut off
     # by an opening with the closing's element, ≈ 0.15 × the pupil's diameter — a lash a few
     # px wide goes, the pupil (its outline's curvature radius ≥ its semi-minor axis, far over
-    # k / 2) keeps its shape — and the piece under the seed judged again.
+    # k / 2) keeps its shape — and the piece under the seed judged again, by the stricter
+    # measure too: on a real close-up (18 px pupil, k = 3) the opening split a ragged dark
+    # blob and kept a piece of solidity 0.88, 8 px off the pupil.
     lash_free = _without_strokes(comp, k, seed)
     if lash_free is not None:
         closed, contour, solidity = _closed_solidity(lash_free, k)
-        if solidity >= params.pupil_min_solidity:
+        if solidity >= params.pupil_min_solidity_glints:
             return closed, contour, solidity, cv2.bitwise_and(raw, lash_free)
     return None
 
@@ -2168,6 +2181,7 @@ def _fit_candidates(img, wp, picks, f: int, bright, params, reasons: list[str]):
         fit = fit_blob(img, wp, blob, bright, params)
         if fit.ellipse is not None:
             fit.stable_from = cand.stable_from
+            fit.first = cand.first
             return fit
         reasons.append(fit.reason)
     return None
@@ -2674,25 +2688,59 @@ def _core_answer(img, wp: WorkPicture, e: Ellipse, core: str, bright, params) ->
     return PupilFit(None, reason=f"{core}; looked for inside it, {why}")
 
 
+#: How far from a pupil its glints may lie, in its larger semi-axes: corneal reflections fall
+#: on the cornea, whose visible disc (the iris, ~12 mm across) is ≤ 6 × the least pupil (2 mm).
+_GLINT_REACH = 6.0
+
+
+def _off_the_glints(e: Ellipse, bright: np.ndarray) -> bool:
+    """Whether the picture has glints (``bright``, uint8 0/255) but none within
+    :data:`_GLINT_REACH` × the ellipse's larger semi-axis of its centre (a square window): a
+    dark spot off the eye (a mole on the skin), not the pupil the lights shine beside."""
+    rows, cols = bright.shape
+    r = _GLINT_REACH * max(e.a, e.b)
+    x0, x1 = max(0, int(e.cx - r)), min(cols, int(e.cx + r) + 1)
+    y0, y1 = max(0, int(e.cy - r)), min(rows, int(e.cy + r) + 1)
+    if x1 > x0 and y1 > y0 and cv2.countNonZero(bright[y0:y1, x0:x1]):
+        return False
+    return cv2.countNonZero(bright) > 0
+
+
 def _fit_chosen(img, wp: WorkPicture, got, bright, params, reasons: list[str]):
     """The chosen candidates fitted in turn (:func:`_fit_candidates`; ``got`` = (the reduced
-    picture, the picks, f)), and when every one was refused, the ladder again walked past
-    their chains (``passed``) and its new candidates fitted: the fit, or None (the first
-    candidates' refusals in ``reasons``). The ladder stops once the darkest chain has settled,
-    and the darkest may be a lash over the sclera (a thin dark stroke, compact once reduced,
-    not at full resolution) while the pupil's chain, a few levels brighter, has not: it was
-    never a candidate."""
+    picture, the picks, f)): the fit, or None (the candidates' refusals in ``reasons``).
+
+    When every one was refused, the ladder again walked past their chains (``passed``) and its
+    new candidates fitted: the ladder stops once the darkest chain has settled, and the darkest
+    may be a lash over the sclera (a thin dark stroke, compact once reduced, not at full
+    resolution) while the pupil's chain, a few levels brighter, has not: it was never a
+    candidate. And when the fit lies off every glint of a picture that has some
+    (:func:`_off_the_glints`: a mole on the skin darker than the pupil), the first of the
+    other candidates and of those walked past whose fit is whole, holds no core and has
+    glints beside it replaces it."""
     reduced, picks, f = got
     if not picks:
         return None
     fit = _fit_candidates(img, wp, picks, f, bright, params, reasons)
-    if fit is not None:
+    if fit is not None and not _off_the_glints(fit.ellipse, bright):
         return fit
     passed = frozenset(c.first for c in picks)
-    chains, f, _ = ladder(wp, params, reduced, passed=passed)
-    more = choose(chains, f, ([], tuple), wp, params)
+    chains, f2, _ = ladder(wp, params, reduced, passed=passed)
+    more = choose(chains, f2, ([], tuple), wp, params)
     more = [c for c in more or [] if c.first not in passed]
-    return _fit_candidates(img, wp, more, f, bright, params, []) if more else None
+    if fit is None:
+        return _fit_candidates(img, wp, more, f2, bright, params, []) if more else None
+    others = [(c, f) for c in picks if c.first != fit.first] + [(c, f2) for c in more]
+    for cand, fc in others[: params.max_candidates]:
+        alt = _fit_candidates(img, wp, [cand], fc, bright, params, [])
+        if (
+            alt is not None
+            and _whole(alt, params)
+            and not _off_the_glints(alt.ellipse, bright)
+            and not _inner_core(img, wp, alt.ellipse, bright, params)
+        ):
+            return alt
+    return fit
 
 
 def find_pupil(
