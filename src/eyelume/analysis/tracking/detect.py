@@ -187,7 +187,9 @@ class DetectParams:
         by an eyelid, is convex (1); lashes and shadows are not.
     pupil_min_solidity_glints : the same, when the blob passes only with the glints' pixels
         left out (:func:`~.pupil._glint_forgiven`: a glint beside a small pupil, filled with
-        its dark, grows a bump on its blob) — 0.9: an ellipse outside its glints is convex
+        its dark, grows a bump on its blob) or with thin strokes cut off
+        (:func:`~.pupil._without_strokes`: lashes across the pupil's edge) — 0.9: an
+        ellipse outside its glints is convex
         (0.93–0.98 on vr-offaxis at 100 × 100 and on the tests' small pupils with glints on
         their edge), while a real close-up's dark-iris crescent that the glints' fill had
         joined to the pupil passed 0.8 at 0.87 and was answered 8 px off.

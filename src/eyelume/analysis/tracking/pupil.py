@@ -40,15 +40,24 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    ``max_boundary_gap`` along the border or missing pixels, or whose dark side is next to
    them, is "pupil cut or hidden" (a valid-area mask across the pupil). A whole fit holding
    a bright core larger than any glint (:func:`bright_core`) is "no dark pupil: bright-pupil
-   image?"; one holding a darker core (:func:`darker_core`) is "pupil merged with iris", or
-   "pupil too small" when that core is under ``pupil_min_area_px``.
+   image?"; one holding a darker core (:func:`darker_core`) is looked inside
+   (:func:`_pupil_inside`: the core averaged out of the noise, fitted and taken when whole and
+   ≥ 5 standard errors under its surround: a pupil a few σ under a dark iris), else "pupil
+   merged with iris" naming why the core was not taken, or "pupil too small" when that core
+   is under ``pupil_min_area_px``. When every candidate is refused, or the fit has none of the
+   picture's glints within 6 of its radii (a mole on the skin darker than the pupil), the
+   ladder is walked again past their chains (it stops once the darkest chain has settled, and
+   a lash over the sclera may be that chain) and a whole fit with glints beside it is taken
+   (:func:`_fit_chosen`).
 4. **Full-resolution blob** (:func:`full_res_blob`): the picture (σ 1 px Gaussian) thresholded
    at the chosen level around the blob; glints touching it joined; a closing with an
    elliptical element of ≈ 0.15 × its diameter (odd, ≥ 3) fills what is left of a glint's
    notch; refused when not compact (solidity < 0.8) — unless, with the glints' pixels left
    out (:func:`_glint_forgiven`: the core dark without the glints' fill, and under a glint its
    convex hull), it is one piece of solidity ≥ 0.9: a glint just outside a small pupil's edge,
-   filled with the pupil's dark, grows a bump on its blob.
+   filled with the pupil's dark, grows a bump on its blob; or, opened by the closing's element
+   (:func:`_without_strokes`), the piece under its seed has solidity ≥ 0.9: lashes darker than
+   the pupil across its edge.
 5. **Contrast and edge** (:func:`blob_contrast`, :func:`edge_points`, :func:`_refine_smoothed`):
    the pupil's median against its own surround (a ring 0.05–0.1 × its diameter outside), at
    least 5 σ of the pixel noise there (:func:`_local_noise`: shot noise grows with the signal,
@@ -267,6 +276,8 @@ class PupilFit:
     #: the ladder level of the first stable blob of the fitted blob's chain (:func:`choose`;
     #: 1 for a pupil at the black level), −1 when not from a ladder's chain
     stable_from: int = -1
+    #: the first seed of that chain (:attr:`Candidate.first`)
+    first: tuple[int, int] = (-1, -1)
 
     def __bool__(self) -> bool:
         return self.ellipse is not None
@@ -982,6 +993,9 @@ class Candidate:
     q: float = math.nan
     index: int = 0
     stable_from: int = -1
+    #: the seed of its chain's first blob (set by :func:`choose`): the chain's name for
+    #: :func:`ladder`'s ``passed``
+    first: tuple[int, int] = (-1, -1)
 
 
 def _level_candidates(lab, stats, cent, min_area, max_area, touch):
@@ -1028,7 +1042,7 @@ def _compact_inner(lab, stats, cent, min_area, max_area, touch):
 
 
 def ladder(
-    wp: WorkPicture, params, reduced=None, fine: int = 1
+    wp: WorkPicture, params, reduced=None, fine: int = 1, passed: frozenset = frozenset()
 ) -> tuple[list[list[Candidate]], int, tuple]:
     """Step 2 (module doc): chains of nested compact dark blobs over a ladder of thresholds.
 
@@ -1044,7 +1058,8 @@ def ladder(
 
     ``reduced``: :func:`_reduced`'s triple when already made. ``fine`` > 1: the ladder's dark
     end again, ``fine`` times finer (steps ≥ 1 level), over the first ``ladder_fine_span``
-    levels (:func:`find_pupil`)."""
+    levels (:func:`find_pupil`). ``passed``: the first seeds of chains whose blobs were
+    refused already (:attr:`Candidate.first`): the ladder does not stop for them."""
     small, inv, f = reduced if reduced is not None else _reduced(wp, params)
     lo, top, step = _levels(small if inv is None else small[~inv], params, fine)
     min_area = max(2, int(params.pupil_min_area_px / f**2))
@@ -1075,7 +1090,7 @@ def ladder(
             for c in ch[-2:]:
                 if c.index == li - 1:
                     c.q = _growth(areas, c)
-        if _settled(chains, li, params):
+        if _settled(chains, li, params, passed):
             break
     for ch in chains:
         if ch[-1].index == len(areas) - 1:
@@ -1248,11 +1263,13 @@ def _pick(ch: list[Candidate], params) -> int | None:
     return i
 
 
-def _settled(chains: list[list[Candidate]], li: int, params) -> bool:
+def _settled(chains: list[list[Candidate]], li: int, params, passed=frozenset()) -> bool:
     """Whether the ladder can stop after level ``li``: the darkest chain that is not dead
     without a stable blob has its stable blob and the level after it measured (a brighter
-    chain can only rank after it)."""
+    chain can only rank after it); chains whose first seed is in ``passed`` do not count."""
     for ch in chains:
+        if ch[0].seed in passed:
+            continue
         i = _pick(ch, params)
         dead = ch[-1].index < li
         if i is None:
@@ -1292,6 +1309,7 @@ def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, 
         i = _pick(ch, params)
         if i is not None:
             ch[i].stable_from = next(c.index for c in ch if c.q <= params.ladder_max_growth)
+            ch[i].first = ch[0].seed
             picks.append(ch[i])
         else:
             unstable.append(ch[0].level)
@@ -1450,17 +1468,13 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
             else:
                 comp[box][joined[glab]] = 255
     closed, contour, solidity = _closed_solidity(comp, k)
+    if solidity < params.pupil_min_solidity:
+        got = _compact_again(
+            (img, wp, (x0, y0, x1, y1)), (raw, comp, near_glint), k, (sx, sy), cand.level, params
+        )
+        if got is not None:
+            closed, contour, solidity, raw = got
     area = float(cv2.countNonZero(closed))
-    if solidity < params.pupil_min_solidity and gx1 > gx0 and img is not None:
-        # Glints beside the pupil change its blob where they are (a glint a few px outside
-        # the edge is filled with the pupil's dark and grows a bump on it): judged again with
-        # the glints' pixels left out (:func:`_glint_forgiven`), by a stricter measure.
-        forgiven = _glint_forgiven(img, (x0, y0, x1, y1), raw, near_glint, wp, cand.level)
-        if forgiven is not None:
-            closed2, contour2, solidity2 = _closed_solidity(forgiven[0], k)
-            if solidity2 >= params.pupil_min_solidity_glints:
-                closed, contour, solidity, raw = closed2, contour2, solidity2, forgiven[1]
-                area = float(cv2.countNonZero(closed))
     if solidity < params.pupil_min_solidity:
         return Refusal(
             f"no pupil: the darkest blob ({int(area)} px) is not compact "
@@ -1468,6 +1482,54 @@ def full_res_blob(wp: WorkPicture, cand: Candidate, f: int, bright: np.ndarray, 
         )
     diam = math.sqrt(4.0 * area / math.pi)
     return Blob(x0, y0, closed, raw, near_glint, contour, area, diam, cand.level)
+
+
+def _compact_again(pics, masks, k: int, seed: tuple[int, int], level: float, params):
+    """A blob not compact (step 4) judged again: with the glints' pixels left out
+    (:func:`_glint_forgiven`), then with thin strokes cut off (:func:`_without_strokes`),
+    each held to ``pupil_min_solidity_glints``. ``pics``: (the input or
+    None, the working picture, the window (x0, y0, x1, y1)); ``masks``: the window's raw blob,
+    the blob with its glints joined and the grown glints (0/255). Returns (closed, contour,
+    solidity, raw) or None."""
+    img, wp, window = pics
+    raw, comp, near_glint = masks
+    if img is not None and near_glint.any():
+        # Glints beside the pupil change its blob where they are (a glint a few px outside
+        # the edge is filled with the pupil's dark and grows a bump on it): judged again with
+        # the glints' pixels left out (:func:`_glint_forgiven`), by a stricter measure.
+        forgiven = _glint_forgiven(img, window, raw, near_glint, wp, level)
+        if forgiven is not None:
+            closed, contour, solidity = _closed_solidity(forgiven[0], k)
+            if solidity >= params.pupil_min_solidity_glints:
+                return closed, contour, solidity, forgiven[1]
+    # Thin dark strokes joined to it (lashes, darker than the pupil, across its edge): cut off
+    # by an opening with the closing's element, ≈ 0.15 × the pupil's diameter — a lash a few
+    # px wide goes, the pupil (its outline's curvature radius ≥ its semi-minor axis, far over
+    # k / 2) keeps its shape — and the piece under the seed judged again, by the stricter
+    # measure too: on a real close-up (18 px pupil, k = 3) the opening split a ragged dark
+    # blob and kept a piece of solidity 0.88, 8 px off the pupil.
+    lash_free = _without_strokes(comp, k, seed)
+    if lash_free is not None:
+        closed, contour, solidity = _closed_solidity(lash_free, k)
+        if solidity >= params.pupil_min_solidity_glints:
+            return closed, contour, solidity, cv2.bitwise_and(raw, lash_free)
+    return None
+
+
+def _without_strokes(comp: np.ndarray, k: int, seed: tuple[int, int]) -> np.ndarray | None:
+    """The blob ``comp`` (0/255) opened by the k × k elliptical element, the piece under
+    ``seed`` (x, y) or else the largest (0/255), or None when nothing is left or the opening
+    changed nothing: thin strokes (lashes) joined to a pupil cut off."""
+    if k < 3:
+        return None
+    opened = cv2.morphologyEx(comp, cv2.MORPH_OPEN, _disc(k))
+    if not cv2.countNonZero(opened) or cv2.countNonZero(opened) == cv2.countNonZero(comp):
+        return None
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
+    i = int(lab[seed[1], seed[0]])
+    if i == 0:
+        i = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    return np.where(lab == i, 255, 0).astype(np.uint8)
 
 
 def _glints_beside(bright: np.ndarray, pupil_area: int, params) -> np.ndarray:
@@ -2119,6 +2181,7 @@ def _fit_candidates(img, wp, picks, f: int, bright, params, reasons: list[str]):
         fit = fit_blob(img, wp, blob, bright, params)
         if fit.ellipse is not None:
             fit.stable_from = cand.stable_from
+            fit.first = cand.first
             return fit
         reasons.append(fit.reason)
     return None
@@ -2313,6 +2376,176 @@ def _small_core(win, inside, e: Ellipse, at: tuple, integer: bool, params) -> st
     )
 
 
+#: :func:`_pupil_inside`'s Gaussian σ (px) for the edge read on a faint pupil: 2 px averages
+#: ~50 pixels (white noise falls 7×) and moves no iso-line's centre (module doc, step 5).
+_INSIDE_SMOOTH_PX = 2.0
+
+
+def _pupil_inside(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params):
+    """The pupil inside a whole fit that holds a darker core (:func:`darker_core`: a dark iris
+    only a few σ of the pixel noise above its pupil, which the ladder could not tell apart), as
+    a :class:`PupilFit`, or a :class:`Refusal` naming why the core is not taken for the pupil.
+
+    Inside 0.9 × the iris's ellipse, off glints (grown by their margin) and missing pixels, the
+    input is averaged over :data:`_CORE_BOX` × :data:`_CORE_BOX` px (the box of
+    :func:`_smoothed_core`, which saw the core; only valid pixels count). With b and m the
+    averaged interior's 1st percentile and median, the pixels under ½ (b + m) give the core's
+    level c (their median), and the core is the connected piece under ½ (c + m) around the
+    darkest box: the half-level iso-line, whose centre no symmetric blur moves. It must not
+    reach the 0.9 outline (a shadow or fold along the iris's edge), be compact (solidity ≥
+    ``pupil_min_solidity``) and hold ``pupil_min_area_px``. Its edge is then read on the input
+    smoothed by a Gaussian of :data:`_INSIDE_SMOOTH_PX` (:func:`_refine_smoothed`) and fitted
+    robustly (:func:`_robust_fit`). The step from the core to its surround (a ring as
+    :func:`blob_contrast`'s), a difference of medians over N₁ and N₂ pixels, has the standard
+    error 1.2533 σ √(1/N₁ + 1/N₂) (a median's efficiency against a mean, π/2), σ the pixel
+    noise there (Immerkær's, as :func:`_local_noise`): the pupil is taken when the step is ≥
+    ``pupil_min_contrast_sigma`` of that error and ≥ ``pupil_min_contrast`` of the range — a
+    40 px disc 2 σ of the pixel noise under its iris stands ~50 standard errors out."""
+    got = _core_piece(img, wp, e, bright, params)
+    if not got:
+        return got
+    win, off, near_glint, comp, closed, contour, t, where = got
+    x0, y0 = got.origin
+    u8 = wp.u8[y0 : y0 + win.shape[0], x0 : x0 + win.shape[1]]
+    levels = _core_step(win, u8, wp, (off, comp, closed), where, params)
+    if not levels:
+        return levels
+    pupil_level, surround, step = levels
+    pts = contour[:, 0, :].astype(np.float64)
+    keep = near_glint[pts[:, 1].astype(int), pts[:, 0].astype(int)] == 0
+    x, y = pts[keep, 0] + x0, pts[keep, 1] + y0
+    diam0 = math.sqrt(4.0 * cv2.countNonZero(comp) / math.pi)
+    e0 = _fit(x, y, diam0) if len(x) >= params.min_edge_points else None
+    if e0 is None:
+        return Refusal(f"{where} has too few outline points off the glints for an ellipse")
+    reach = max(params.refine_reach_px, params.refine_reach_frac * diam0)
+    # (the edge at ½ of the way to the iris: on a symmetric blur's profile the half-level
+    # crossing is the sharp edge's, so the axes are not narrowed by the added blur)
+    smooth = dataclasses.replace(params, refine_smooth_px=_INSIDE_SMOOTH_PX, edge_fraction=0.5)
+    xr, yr, ok = _refine_smoothed(img, bright, e0, x, y, pupil_level, reach, smooth)
+    ok &= ~_on_mask(near_glint, xr - x0, yr - y0)
+    dropped = {"border": 0, "glint": int((~keep).sum()), "no_edge": int((~ok).sum()), "outlier": 0}
+    xr, yr = xr[ok], yr[ok]
+    fit_e, inl, edge_sigma = (
+        _robust_fit(xr, yr, diam0, params)
+        if len(xr) >= params.min_edge_points
+        else (None, None, 0.0)
+    )
+    if fit_e is None:
+        return Refusal(f"{where} has no sharp edge that fits an ellipse")
+    implausible = _implausible(fit_e, params)
+    if implausible:
+        return Refusal(f"{where}: {implausible}")
+    d = sampson_distance(fit_e, xr[inl], yr[inl])
+    dropped["outlier"] = int((~inl).sum())
+    support, gap = support_of(fit_e, xr[inl], yr[inl])
+    return PupilFit(
+        fit_e,
+        area_px=float(cv2.countNonZero(closed)),
+        support=support,
+        gap=gap,
+        residual_px=float(np.sqrt(np.mean(d * d))),
+        edge_noise_px=float(edge_sigma),
+        edge_level=0.5 * (pupil_level + surround),
+        contrast=float(step / (wp.hi - wp.lo)),
+        n_points=int(inl.sum()),
+        dropped=dropped,
+        threshold=float(t),
+        inliers=(xr[inl], yr[inl]),
+    )
+
+
+class _Piece(tuple):
+    """:func:`_core_piece`'s result: (window, off, near_glint, comp, closed, contour, level,
+    words) with ``origin`` (x0, y0) of the window in the picture."""
+
+    origin: tuple[int, int] = (0, 0)
+
+
+def _core_piece(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params):
+    """:func:`_pupil_inside`'s core: the connected piece of the averaged interior under ½ (c +
+    m) around its darkest box, closed, with its outline — a :class:`_Piece` — or a refusal (too
+    small, reaching the 0.9 outline, not compact)."""
+    box = _box_about(e, img.shape)
+    if box is None:
+        return Refusal("the iris's fit is too small to look inside")
+    x0, x1, y0, y1 = box
+    inside = _inside_scaled(box, _scaled_args(e), 0.81)
+    off = inside.copy()
+    glints = bright[y0:y1, x0:x1]
+    near_glint = np.zeros_like(glints)
+    if glints.any():
+        near_glint = _grown_glints_box(glints, params)[0]
+        off &= near_glint == 0
+    if wp.invalid is not None:
+        off &= ~wp.invalid[y0:y1, x0:x1]
+    win = img[y0:y1, x0:x1].astype(np.float32)
+    k = _CORE_BOX
+    w = off.astype(np.float32)
+    num = cv2.blur(win * w, (k, k), borderType=cv2.BORDER_CONSTANT)
+    den = cv2.blur(w, (k, k), borderType=cv2.BORDER_CONSTANT)
+    usable = off & (den >= 0.5)  # (at least half of its box valid)
+    if np.count_nonzero(usable) < 4 * params.pupil_min_area_px:
+        return Refusal("too few valid pixels inside it to look for the pupil")
+    avg = np.where(usable, num / np.maximum(den, 1e-6), np.inf).astype(np.float32)
+    vals = avg[usable]
+    b = float(np.percentile(vals, 1.0))
+    m = median(vals)
+    t = 0.5 * (median(vals[vals < 0.5 * (b + m)]) + m)
+    dark = ((avg < t) & usable).astype(np.uint8)
+    r, c = np.unravel_index(int(np.argmin(avg)), avg.shape)
+    _, lab = cv2.connectedComponents(dark, connectivity=8)
+    comp = np.where(lab == lab[r, c], 255, 0).astype(np.uint8) if dark[r, c] else dark * 0
+    area = cv2.countNonZero(comp)
+    where = f"the darker core ({area} px at ({x0 + c}, {y0 + r}))"
+    if area < params.pupil_min_area_px:
+        return Refusal(
+            f"{where} is too small for a pupil (a pupil needs ≥ {params.pupil_min_area_px} px)"
+        )
+    edge = cv2.dilate((~inside).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+    if (edge & (comp > 0)).any():
+        return Refusal(f"{where} runs to the iris's outline (a shadow or a fold, not a pupil)")
+    diam0 = math.sqrt(4.0 * area / math.pi)
+    closed, contour, solidity = _closed_solidity(comp, _odd(params.closing_kernel_frac * diam0))
+    if solidity < params.pupil_min_solidity:
+        return Refusal(
+            f"{where} is not compact (solidity {solidity:.2f} < {params.pupil_min_solidity:.2f})"
+        )
+    piece = _Piece((win, off, near_glint, comp, closed, contour, t, where))
+    piece.origin = (x0, y0)
+    return piece
+
+
+def _core_step(win: np.ndarray, u8: np.ndarray, wp: WorkPicture, masks, where: str, params):
+    """:func:`_pupil_inside`'s contrast: (core's median, surround's, step) in the input's
+    units, or a refusal when the step is under ``pupil_min_contrast_sigma`` standard errors of
+    a difference of medians or ``pupil_min_contrast`` of the range. ``win`` and ``u8``: the
+    window of the input and of the working picture; ``masks``: the window's usable pixels,
+    the core and the core closed."""
+    off, comp, closed = masks
+    diam0 = math.sqrt(4.0 * cv2.countNonZero(comp) / math.pi)
+    ring_in = max(2, int(round(0.05 * diam0)))
+    ring_out = ring_in + max(2, int(round(0.05 * diam0)))
+    dist = cv2.distanceTransform(cv2.bitwise_not(closed), cv2.DIST_L2, 3)
+    ring = (dist > ring_in) & (dist <= ring_out) & off
+    core = (comp > 0) & off
+    n1, n2 = int(np.count_nonzero(core)), int(np.count_nonzero(ring))
+    if n1 < params.pupil_min_area_px or n2 < params.pupil_min_area_px:
+        return Refusal(f"{where} has too few pixels off the glints to measure its contrast")
+    pupil_level, surround = median(win[core]), median(win[ring])
+    span = wp.hi - wp.lo
+    sigma = max(_local_noise(u8, core, ring), 0.5) * span / 255.0
+    err = 1.2533 * sigma * math.sqrt(1.0 / n1 + 1.0 / n2)
+    step = surround - pupil_level
+    if step < params.pupil_min_contrast_sigma * err or step < params.pupil_min_contrast * span:
+        return Refusal(
+            f"{where} is only {step / err:.1f} standard errors ({100 * step / span:.1f} % of the "
+            f"range) darker than its surround (need {params.pupil_min_contrast_sigma:.0f} and "
+            f"{100 * params.pupil_min_contrast:.0f} %)"
+        )
+    return pupil_level, surround, step
+
+
 def bright_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, params) -> str:
     """Why a fitted dark blob is the iris around a bright pupil (a bright-pupil picture), or "".
 
@@ -2443,6 +2676,73 @@ def _whole(fit: PupilFit, params) -> bool:
     return fit.support >= params.min_boundary_support and fit.gap <= params.max_boundary_gap
 
 
+def _core_answer(img, wp: WorkPicture, e: Ellipse, core: str, bright, params) -> PupilFit:
+    """A whole fit ``e`` that holds a darker core (``core``, :func:`_inner_core`'s words): the
+    core itself, looked for inside it with the noise averaged out (:func:`_pupil_inside`), when
+    its fit is whole and holds no core itself; else a refusal naming the core and why it was
+    not taken for the pupil."""
+    inner = _pupil_inside(img, wp, e, bright, params)
+    if inner and _whole(inner, params) and not _inner_core(img, wp, inner.ellipse, bright, params):
+        return inner
+    why = inner.reason if not inner else "its fit is not whole or holds a darker core itself"
+    return PupilFit(None, reason=f"{core}; looked for inside it, {why}")
+
+
+#: How far from a pupil its glints may lie, in its larger semi-axes: corneal reflections fall
+#: on the cornea, whose visible disc (the iris, ~12 mm across) is ≤ 6 × the least pupil (2 mm).
+_GLINT_REACH = 6.0
+
+
+def _off_the_glints(e: Ellipse, bright: np.ndarray) -> bool:
+    """Whether the picture has glints (``bright``, uint8 0/255) but none within
+    :data:`_GLINT_REACH` × the ellipse's larger semi-axis of its centre (a square window): a
+    dark spot off the eye (a mole on the skin), not the pupil the lights shine beside."""
+    rows, cols = bright.shape
+    r = _GLINT_REACH * max(e.a, e.b)
+    x0, x1 = max(0, int(e.cx - r)), min(cols, int(e.cx + r) + 1)
+    y0, y1 = max(0, int(e.cy - r)), min(rows, int(e.cy + r) + 1)
+    if x1 > x0 and y1 > y0 and cv2.countNonZero(bright[y0:y1, x0:x1]):
+        return False
+    return cv2.countNonZero(bright) > 0
+
+
+def _fit_chosen(img, wp: WorkPicture, got, bright, params, reasons: list[str]):
+    """The chosen candidates fitted in turn (:func:`_fit_candidates`; ``got`` = (the reduced
+    picture, the picks, f)): the fit, or None (the candidates' refusals in ``reasons``).
+
+    When every one was refused, the ladder again walked past their chains (``passed``) and its
+    new candidates fitted: the ladder stops once the darkest chain has settled, and the darkest
+    may be a lash over the sclera (a thin dark stroke, compact once reduced, not at full
+    resolution) while the pupil's chain, a few levels brighter, has not: it was never a
+    candidate. And when the fit lies off every glint of a picture that has some
+    (:func:`_off_the_glints`: a mole on the skin darker than the pupil), the first of the
+    other candidates and of those walked past whose fit is whole, holds no core and has
+    glints beside it replaces it."""
+    reduced, picks, f = got
+    if not picks:
+        return None
+    fit = _fit_candidates(img, wp, picks, f, bright, params, reasons)
+    if fit is not None and not _off_the_glints(fit.ellipse, bright):
+        return fit
+    passed = frozenset(c.first for c in picks)
+    chains, f2, _ = ladder(wp, params, reduced, passed=passed)
+    more = choose(chains, f2, ([], tuple), wp, params)
+    more = [c for c in more or [] if c.first not in passed]
+    if fit is None:
+        return _fit_candidates(img, wp, more, f2, bright, params, []) if more else None
+    others = [(c, f) for c in picks if c.first != fit.first] + [(c, f2) for c in more]
+    for cand, fc in others[: params.max_candidates]:
+        alt = _fit_candidates(img, wp, [cand], fc, bright, params, [])
+        if (
+            alt is not None
+            and _whole(alt, params)
+            and not _off_the_glints(alt.ellipse, bright)
+            and not _inner_core(img, wp, alt.ellipse, bright, params)
+        ):
+            return alt
+    return fit
+
+
 def find_pupil(
     img: np.ndarray, invalid, bright: np.ndarray, params, sharp=None, scale=None
 ) -> PupilFit:
@@ -2471,7 +2771,7 @@ def find_pupil(
     chains, f, tiny = ladder(wp, params, reduced)
     picks = choose(chains, f, tiny, wp, params, img)
     reasons: list[str] = []
-    fit = _fit_candidates(img, wp, picks, f, bright, params, reasons) if picks else None
+    fit = _fit_chosen(img, wp, (reduced, picks, f), bright, params, reasons)
     # A whole fit with a darker core inside is an iris holding the pupil (a cut one is
     # refused as cut already, and a lid inside its ellipse would look like a core).
     whole = fit is not None and _whole(fit, params)
@@ -2509,7 +2809,7 @@ def find_pupil(
     if again is not None:
         return again
     if core:
-        return PupilFit(None, reason=core)
+        return _core_answer(img, wp, fit.ellipse, core, bright, params)
     if fit is not None:
         return fit
     if not picks:
