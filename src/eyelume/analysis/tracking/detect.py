@@ -40,11 +40,13 @@ Pipeline (each step's choices are explained in :mod:`.pupil` and :mod:`.glints`)
    pictures with a dark iris it had not (issue 13).
 4. :func:`_pupil_result`: the pupil and the checks that make it untrustworthy.
 5. Keep glints within ``glint_search_radius`` × the pupil's major axis of its centre, none
-   whose skirt holds a missing pixel (:func:`_off_missing`); with LEDs given and fewer glints
-   than LEDs, also the unsaturated ones standing out of the picture's white top-hat
-   (:func:`~.glints.faint_glints_near`); match to LEDs, strongest first (:func:`_match_glints`,
-   :func:`_strong_first`), and with an LED left without one look again out to twice as far
-   (:func:`_wider_look`: a small pupil); 6. warnings (:func:`_glint_warnings`).
+   whose spot is cut by a missing pixel (:func:`_glints_off_missing`); with LEDs given and
+   fewer glints than LEDs, also the unsaturated ones standing out of the picture's white
+   top-hat (:func:`~.glints.faint_glints_near`) and, still fewer, defocused ones with wider
+   discs (:func:`~.glints.broad_glints_near`); match to LEDs, strongest first
+   (:func:`_match_glints`, :func:`_strong_first`), and with an LED left without one look
+   again out to twice as far (:func:`_wider_look`: a small pupil); 6. warnings
+   (:func:`_glint_warnings`).
 
 Which failures make ``ok`` False
 --------------------------------
@@ -96,6 +98,7 @@ import numpy as np
 from numba import njit
 
 from eyelume.analysis.tracking.glints import (
+    broad_glints_near,
     default_max_angle,
     faint_glints_near,
     find_glints,
@@ -904,6 +907,21 @@ def _blobs_near_pupil(  # noqa: PLR0913 - the picture, its scale, the pupil, the
     for b in faint_glints_near(img, noise, pupil.centre_px, r_max, width, cap, params):
         if all(math.dist(t["centre_px"], b["centre_px"]) > 1.5 for t in near):
             near.append(b)
+    if len(near) < n_leds and not any(b["peak"] >= value_range[1] for b in near):
+        # A defocused picture's glints are broad unsaturated bumps, wider than that disc
+        # (:func:`~.glints.broad_glints_near`): looked for with wider discs, up to the pupil's
+        # major axis (a bump broader than the pupil is no glint of its cornea), within the
+        # glints' size cap (at half height: the disc's own bound, width², is what the narrow
+        # disc's search needs, not a defocused glint's) — not when a saturated glint was
+        # found, which is sharp, and so are the picture's others.
+        for b in broad_glints_near(
+            img, noise, pupil.centre_px, r_max, width, pupil.axes_px[0],
+            _glint_cap(pupil, params, reach), params,
+            n_leds - len(near),
+        ):  # fmt: skip
+            r = math.sqrt(b["area_px"] / math.pi)
+            if all(math.dist(t["centre_px"], b["centre_px"]) > r for t in near):
+                near.append(b)
     return near
 
 
@@ -1025,25 +1043,78 @@ def _match_or_look_wider(glints, specks, led_azimuths_deg, pattern, params, wide
     return glints, specks, lost, missing
 
 
-def _off_missing(blobs: list[dict], invalid) -> list[dict]:
-    """The blobs whose skirt — their equivalent radius r plus 3 px around the centre, where
-    :func:`~.glints.glint_blobs` weighs the centroid and beyond which it reads the background —
-    holds no missing pixel (``invalid``, bool, the picture's shape, or None: all kept). A
-    missing pixel is set to the darkest valid value, so the picture's edge at a valid-area
-    mask or a black border is a step from black that the glint test takes for a bright spot
-    (a sclera pixel at a mask's edge was matched to an LED); a glint there cannot be told
-    from that edge, nor its background read."""
+def _glints_off_missing(  # noqa: PLR0913 - the blobs, the mask, the picture, its scale
+    blobs: list[dict], invalid, img: np.ndarray, value_range, noise: float, params
+) -> tuple[list[dict], list[str]]:
+    """Step 5 (after the search): the blobs kept by the missing pixels (``invalid``, bool, the
+    picture's shape, or None: all kept) and a warning for each one those pixels changed.
+
+    A missing pixel is set to the darkest valid value, so the picture's edge at a valid-area
+    mask or a black border is a step from black that the glint test takes for a bright spot (a
+    sclera pixel at a mask's edge was matched to an LED). A blob whose square of half-side
+    ⌈r⌉ + 3 px about its centre (r its equivalent radius: its skirt and the first of the
+    background beyond) holds no missing pixel is kept as it is. One whose spot is cut — a
+    missing pixel within r + max(2, ⌈r⌉) + 1 px of its centre: the blob and the skirt
+    :func:`~.glints.glint_blobs` weighs, where its light is — is dropped with a warning
+    naming the missing pixels: its centroid would be that of its visible part, and a bright
+    edge beside a mask (a step from the black fill) looks the same. One whose spot is whole,
+    with missing pixels only in the ring beyond, where its background is read (a column of
+    missing pixels 6 px from a glint 3 px across: two of four glints were dropped until
+    session 21), is judged again on the valid pixels alone: its background the median of the
+    valid pixels of the square of half-side ⌈cut⌉ + 3 beyond the cut radius (≥ 8 of them),
+    its peak standing ``glint_min_snr`` × ``noise`` and ``glint_level`` of the way from there
+    to the picture's top (the corneal test of :func:`_bright_blobs_near`: a sclera pixel by a
+    valid-area mask, whose median was pulled down by the black fill, fails it), and its
+    centroid weighed again by max(I − B, 0) over the valid pixels within the cut radius; kept
+    with a warning."""
     if invalid is None or not blobs:
-        return blobs
+        return blobs, []
     rows, cols = invalid.shape
-    out = []
+    top = value_range[1]
+    kept, notes = [], []
     for b in blobs:
         x, y = b["centre_px"]
-        r = int(math.ceil(math.sqrt(b["area_px"] / math.pi))) + 3
+        r = math.sqrt(b["area_px"] / math.pi)
         c, w = int(round(x)), int(round(y))
-        if not invalid[max(0, w - r) : w + r + 1, max(0, c - r) : c + r + 1].any():
-            out.append(b)
-    return out
+        h = int(math.ceil(r)) + 3
+        if not invalid[max(0, w - h) : w + h + 1, max(0, c - h) : c + h + 1].any():
+            kept.append(b)
+            continue
+        cut = r + max(2, math.ceil(r)) + 1.0
+        h = int(math.ceil(cut)) + 3
+        y0, x0 = max(0, w - h), max(0, c - h)
+        win = img[y0 : w + h + 1, x0 : c + h + 1].astype(np.float64)
+        bad = invalid[y0 : w + h + 1, x0 : c + h + 1]
+        yy, xx = np.mgrid[y0 : y0 + win.shape[0], x0 : x0 + win.shape[1]]
+        d = np.hypot(xx - x, yy - y)
+        n_cut = int(np.count_nonzero(bad & (d <= cut)))
+        where = f"the glint candidate at ({x:.1f}, {y:.1f}) px"
+        if n_cut:
+            notes.append(
+                f"warning: {where} dropped: {n_cut} missing pixel(s) within {cut:.1f} px of it "
+                "cut its spot (its centre cannot be read from its visible part alone)"
+            )
+            continue
+        back = win[~bad & (d > cut)]
+        if back.size < 8:
+            continue
+        base = float(np.median(back))
+        peak = float(b["peak"])
+        if peak - base < max(params.glint_min_snr * noise, params.glint_level * (top - base)):
+            continue
+        inner = ~bad & (d <= cut)
+        wgt = np.where(inner, np.maximum(win - base, 0.0), 0.0)
+        tot = float(wgt.sum())
+        if tot <= 0:
+            continue
+        centre = (float((wgt * xx).sum() / tot), float((wgt * yy).sum() / tot))
+        n_near = int(np.count_nonzero(bad))
+        notes.append(
+            f"warning: {where} kept beside {n_near} missing pixel(s) (none within {cut:.1f} px: "
+            "its spot is whole); its background read from the valid pixels only"
+        )
+        kept.append({**b, "centre_px": centre, "base": base, "flux": tot})
+    return kept, notes
 
 
 def _wider_look(  # noqa: PLR0913 - the picture, its scale, the pupil, the LEDs
@@ -1064,7 +1135,8 @@ def _wider_look(  # noqa: PLR0913 - the picture, its scale, the pupil, the LEDs
     blobs = _blobs_near_pupil(
         img, value_range, noise, found, pupil, None, params, len(led_azimuths_deg), reach=2.0
     )
-    glints, specks = _split_specks(_off_missing(blobs, invalid), params)
+    kept, _ = _glints_off_missing(blobs, invalid, img, value_range, noise, params)
+    glints, specks = _split_specks(kept, params)
     lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern)
     if missing or lost:
         return None
@@ -1508,7 +1580,8 @@ def detect(
         near = _blobs_near_pupil(
             img, (lo, hi), noise, (blobs, bright), pupil, tg_value, params, n_leds
         )
-    glints, specks = _split_specks(_off_missing(near, invalid), params)
+    near, missing_notes = _glints_off_missing(near, invalid, img, (lo, hi), noise, params)
+    glints, specks = _split_specks(near, params)
     missing_leds: list[int] = []
     lost_note: list[str] = []
     if n_leds:
@@ -1523,7 +1596,12 @@ def detect(
         lost_note = [m for m in lost if m.startswith("warning: ")]
     glints.sort(key=lambda g: (g.led is None, g.led if g.led is not None else 0, -g.peak))
     errors += _broken_glints(glints, specks, params)
-    warnings = pupil_notes + lost_note + _glint_warnings(glints, fit, led_azimuths_deg, params)
+    warnings = (
+        pupil_notes
+        + lost_note
+        + _glint_warnings(glints, fit, led_azimuths_deg, params)
+        + missing_notes
+    )
     if n_hot:
         warnings.append(f"warning: {n_hot} isolated hot pixel(s) replaced by their neighbours")
     if n_filled:

@@ -69,6 +69,7 @@ __all__ = [
     "glint_smoothing",
     "glints_near",
     "faint_glints_near",
+    "broad_glints_near",
     "in_bright_run",
     "glint_blobs",
     "glint_threshold",
@@ -275,6 +276,101 @@ def faint_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
         if math.hypot(x - cx, y - cy) <= radius:
             out.append({**b, "centre_px": (x, y)})
     return out
+
+
+def broad_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the sizes
+    img: np.ndarray,
+    noise: float,
+    centre,
+    radius: float,
+    width_px: int,
+    max_width_px: float,
+    max_area: float,
+    params,
+    wanted: int,
+) -> list[dict]:
+    """Defocused glints within ``radius`` px of ``centre`` (x, y) px: blobs (dicts as
+    :func:`faint_glints_near`'s, plus ``sigma_px``) found by :func:`faint_glints_near` with
+    discs wider than ``width_px`` — 2 w − 1, then again, up to ``max_width_px`` — until
+    ``wanted`` spots are found (or none wider is tried), each centred by
+    :func:`_fit_spot`, for a picture whose glints the default disc missed.
+
+    A defocused camera spreads a glint into a broad, unsaturated bump (a saturated
+    glint blurred by a Gaussian of σ 3 px: 51 DN over the iris, ~11 px across at half its
+    height) — still many σ of the noise over its background, but wider than the disc of
+    :func:`faint_glints_near` (a quarter of the pupil's major axis), which leaves it no
+    top-hat blob narrow enough to pass (the opening by a disc narrower than the bump keeps
+    only its tip, and the blob of its threshold is wider than the disc). A wider disc keeps
+    the bump; the tests of :func:`faint_glints_near` (peak ``glint_min_snr`` × ``noise`` over a
+    flat surround on the top-hat) still apply. The top-hat's centroid of a bump as wide as
+    the disc is biased toward the side whose background the opening reads lower (1.5 px off
+    for σ 4 blur beside the pupil's edge), hence the fit. A blob whose fit fails, or whose
+    half-height area (2 ln 2 π σ² px) exceeds ``max_area``, is left out. Blobs found at a
+    narrower disc are kept; a wider disc's blob within its equivalent radius of one of them is
+    the same spot."""
+    out: list[dict] = []
+    w = 2 * int(width_px) - 1
+    while w <= max_width_px and len(out) < wanted:
+        for b in faint_glints_near(img, noise, centre, radius, w, w * w, params):
+            r = math.sqrt(b["area_px"] / math.pi)
+            if any(math.dist(o["centre_px"], b["centre_px"]) <= r for o in out):
+                continue
+            fitted = _fit_spot(img, noise, b, params)
+            if (
+                fitted is not None
+                and 2.0 * math.log(2.0) * math.pi * fitted["sigma_px"] ** 2 <= max_area
+                and math.dist(fitted["centre_px"], centre) <= radius
+            ):
+                out.append(fitted)
+        w = 2 * w - 1
+    return out
+
+
+def _fit_spot(img: np.ndarray, noise: float, blob: dict, params) -> dict | None:
+    """:func:`broad_glints_near`'s centre of a broad unsaturated spot: a least-squares fit of
+    B0 + bx (x − c) + by (y − r) + A exp(−|p − p0|² / 2 s²) to the picture (input units) in the
+    square of half-side ⌈1.5 s₀⌉ px (≥ 2) around the blob's top-hat centroid (c, r rounded),
+    s₀ = ½ its equivalent radius. The window holds the bump's top, where it dominates; a plane
+    takes the local slope of its background (the pupil's blurred edge beside it) — a wider
+    window reaches the edge's curvature, which no plane follows (on σ 1.5-4 blurred
+    pictures: ≤ 0.45 px off with this window, ≤ 0.6 px with 2.5 s₀, the top-hat's centroid
+    ≤ 1.7 px). None when the fit does not rise ``glint_min_snr`` × ``noise``, its σ is not
+    within [0.5, 2 s₀ + 2] px or its centre left the window. Returns the blob with centre_px,
+    sigma_px (the fit's s) and peak/base the fit's A + B0 and B0 at p0."""
+    from scipy.optimize import least_squares  # (only on this rare path)
+
+    rows, cols = img.shape
+    x, y = blob["centre_px"]
+    s0 = max(1.0, 0.5 * math.sqrt(blob["area_px"] / math.pi))
+    k = max(2, int(math.ceil(1.5 * s0)))
+    c, r = int(round(x)), int(round(y))
+    x0, y0, x1, y1 = max(0, c - k), max(0, r - k), min(cols, c + k + 1), min(rows, r + k + 1)
+    if x1 - x0 < 5 or y1 - y0 < 5:
+        return None
+    win = img[y0:y1, x0:x1].astype(np.float64)
+    yy, xx = np.mgrid[y0:y1, x0:x1].astype(np.float64)
+
+    def resid(q):
+        px, py, a, s, b0, bx, by = q
+        g = np.exp(-((xx - px) ** 2 + (yy - py) ** 2) / (2.0 * s * s))
+        return (b0 + bx * (xx - c) + by * (yy - r) + a * g - win).ravel()
+
+    rise = float(blob["peak"] - blob["base"])
+    q0 = [x, y, rise, s0, float(blob["base"]), 0.0, 0.0]
+    try:
+        q = least_squares(resid, q0).x
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    px, py, a, s, b0, bx, by = (float(v) for v in q)
+    if not (
+        a >= params.glint_min_snr * noise
+        and 0.5 <= abs(s) <= 2.0 * s0 + 2.0
+        and x0 <= px <= x1 - 1
+        and y0 <= py <= y1 - 1
+    ):
+        return None
+    base = b0 + bx * (px - c) + by * (py - r)
+    return {**blob, "centre_px": (px, py), "sigma_px": abs(s), "peak": base + a, "base": base}
 
 
 def _faint_blob(c, hat, sub, noise, width_px, max_area, params) -> dict | None:  # noqa: PLR0913
