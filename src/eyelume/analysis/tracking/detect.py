@@ -107,6 +107,7 @@ from eyelume.analysis.tracking.glints import (
     in_bright_run,
     match_leds,
     match_pattern,
+    pattern_fits,
 )
 from eyelume.analysis.tracking.pupil import (
     Ellipse,
@@ -286,6 +287,10 @@ class DetectParams:
         far less at the cornea; specks are fragments, stray reflections or hot pixels).
     glint_max_fragment_frac : a matched glint with more than this share (5 %) of its own light
         in specks around it is broken up and its centre uncertain (an error).
+    glint_max_flux_ratio : a matched glint with more than this × the light of the brightest
+        other matched glint (3; correctly matched ones in eyelume's renders: ≤ 2.3 ×) is left
+        out, its LED without a glint (a warning; :func:`_too_bright`): merged with another
+        spot (the sun's glint) or a lit patch, its centroid is not the glint's.
     glint_search_radius : glints farther than this × the pupil's major axis from its centre are
         not the cornea's (2) — unless, with LEDs given and some left without a glint, a second
         look out to twice as far gives every LED a glint fitting their pattern
@@ -381,6 +386,7 @@ class DetectParams:
     min_matched_glints: int = 2
     min_glints_when_missing: int = 3
     pattern_min_scale: float = 0.5
+    glint_max_flux_ratio: float = 3.0
 
 
 @dataclass
@@ -1031,11 +1037,14 @@ def _bright_blobs_near(  # noqa: PLR0913 - the picture, its scale, the pupil, th
     return near
 
 
-def _match_or_look_wider(glints, specks, led_azimuths_deg, pattern, params, wider):
-    """Step 5b: :func:`_match_glints` on ``glints``; with an LED left without a glint and
-    ``wider`` given (a callable: :func:`_wider_look` bound to the frame), its answer when it has
-    one. Returns (glints, specks, messages, LEDs without a glint)."""
-    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern)
+def _match_or_look_wider(  # noqa: PLR0913 - the glints, the LEDs, the pupil, the second look
+    glints, specks, led_azimuths_deg, pattern, params, wider, pupil=None
+):
+    """Step 5b: :func:`_match_glints` on ``glints`` (``pupil``: the :class:`Pupil` or None); with
+    an LED left without a glint and ``wider`` given (a callable: :func:`_wider_look` bound to
+    the frame), its answer when it has one. Returns (glints, specks, messages, LEDs without a
+    glint)."""
+    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil)
     if missing and wider is not None:
         again = wider()
         if again is not None:
@@ -1137,7 +1146,7 @@ def _wider_look(  # noqa: PLR0913 - the picture, its scale, the pupil, the LEDs
     )
     kept, _ = _glints_off_missing(blobs, invalid, img, value_range, noise, params)
     glints, specks = _split_specks(kept, params)
-    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern)
+    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil)
     if missing or lost:
         return None
     max_ang = params.match_max_angle_deg
@@ -1157,16 +1166,34 @@ def _split_specks(blobs: list[dict], params) -> tuple[list[Glint], list[Glint]]:
     brightest thing per pixel, and when it saturates its light is clipped — a broad diffuse
     highlight (a lit lid margin: vr-offaxis at gaze (0, 0), 54 px at 742 DN against eight
     saturated glints) may hold more light without being a glint, and must not make the real
-    ones specks."""
+    ones specks; nor may a lit patch near the top of the scale (:func:`_brightest_glint_flux`)."""
     every = [
         Glint(b["centre_px"], b["area_px"], b["peak"], flux=b["flux"], base=b["base"])
         for b in blobs
     ]
-    peak_top = max((g.peak for g in every), default=0.0)
-    top = max((g.flux for g in every if g.peak >= 0.98 * peak_top), default=0.0)
+    top = _brightest_glint_flux(every)
     glints = [g for g in every if g.flux >= params.glint_min_flux_frac * top]
     specks = [g for g in every if g.flux < params.glint_min_flux_frac * top]
     return glints, specks
+
+
+def _brightest_glint_flux(every: list[Glint]) -> float:
+    """The light (flux above background) of the brightest glint among ``every`` blob: the most
+    among those whose peak reaches the brightest pixel of any (to 2 %) and whose light per pixel
+    above the glint threshold (flux / area) is at least half the most of those.
+
+    A glint, the image of a point source, is compact: its light is held in a few pixels and
+    their skirt; a lit patch of sclera or lid near the top of the scale spreads more light
+    over hundreds of pixels at a fraction of that per pixel (glasses-frame's digital picture
+    at gaze (10°, −5°): a 1360 px patch at 1002 of 1017 DN, 551 per pixel, against glints of
+    2–5 px at 1016, 2900–6400 per pixel and 12–17 k in all — taken as the brightest glint it
+    made all six glints specks and the frame was refused). A saturated glint bloomed over
+    tens of pixels holds about (top − background) per pixel, as such a patch would: the patch
+    is then left to the matching (:func:`_too_bright`)."""
+    peak_top = max((g.peak for g in every), default=0.0)
+    tops = [g for g in every if g.peak >= 0.98 * peak_top and g.area_px > 0]
+    most = max((g.flux / g.area_px for g in tops), default=0.0)
+    return max((g.flux for g in tops if g.flux / g.area_px >= 0.5 * most), default=0.0)
 
 
 def _broken_glints(glints: list[Glint], specks: list[Glint], params) -> list[str]:
@@ -1423,15 +1450,237 @@ def _strong_first(glints: list[Glint], centres, led_azimuths_deg, max_ang: float
     return leds, ambiguous, between
 
 
+def _pattern_points(led_azimuths_deg, pattern) -> np.ndarray:
+    """The LEDs' glint pattern p_k (k, 2): ``pattern`` when given, else the unit vectors of the
+    LED azimuths, (cos φ, −sin φ) (a ring)."""
+    if pattern is not None:
+        return np.asarray(pattern, float)
+    az = np.radians(np.asarray(led_azimuths_deg, float))
+    return np.column_stack([np.cos(az), -np.sin(az)])
+
+
+def _rival_patterns(  # noqa: PLR0913 - the glints, their LEDs, the layout, the pupil
+    glints, centres, leds, led_azimuths_deg, pattern, max_ang: float, pupil, params
+):
+    """Step 5b, with glints left over after matching: the matching checked against the whole
+    patterns the glints fit (:func:`~.glints.pattern_fits`, tolerance s |p_k| sin(max_ang / 2),
+    :func:`_pattern_misfit`'s). Returns (leds, errors, warnings).
+
+    Matching each glint by its direction (or nearest place) alone can mix two patterns: a
+    spectacle lens reflects the LEDs too — a shifted copy of the glints, as bright — and two
+    glints of each, both in the LEDs' directions from the mixed set's centre, were matched (27–
+    32 px off, answered ``ok``). Only strong glints (rising ≥ ``glint_strong_frac`` of the
+    strongest one's rise, :func:`_strong_first`) and the matched ones take part. The
+    candidates: the matching made, when it fits the pattern and has ≥ 3 glints, and the fits
+    with at least as many glints (only those with the most when it does not fit), the best
+    fitting (least residual) first. Candidates
+    sharing < 2 glint–LED pairs are different patterns: the one whose centre t lies nearest
+    the pupil's centre is taken when the other's is ≥ 2 × as far and farther by more than the
+    pupil's semi-major axis (the LEDs' glints lie on the cornea around the pupil, their
+    pattern's centre off the pupil's by the pupil–glint vector; a reflection's place is set by
+    the lens, not the eye), else the frame is refused as ambiguous. Candidates sharing ≥ 2
+    pairs differ at some LEDs only (two glints near one LED's place: the sun's glint beside an
+    LED's): at each such LED the glint nearest where the shared glints' fit puts it is kept
+    when the other is farther by more than 3 × that fit's residual (what the fit cannot tell
+    apart is not told apart), else the LED is left without a glint (a warning). A fit that
+    only adds a glint the matching left out is no rival, nor, when the matching made fits and
+    no fit gives every LED a glint, a fit of another pattern (three glints of four fit more
+    than one way): those glints are judged as strays by :func:`_match_glints`."""
+    p_all = _pattern_points(led_azimuths_deg, pattern)
+    sin_half = math.sin(math.radians(0.5 * max_ang))
+    cands = _candidate_fits(glints, centres, leds, p_all, sin_half, params)
+    if not cands:
+        return leds, [], []
+    families: list[list[dict]] = []
+    for f in cands:  # by residual: each family's first is its best fit
+        for fam in families:
+            if len(_pairs(f) & _pairs(fam[0])) >= 2:
+                fam.append(f)
+                break
+        else:
+            families.append([f])
+    mine = [fam for fam in families if any(f.get("now") for f in fam)]
+    if mine and max(f["count"] for f in cands) < len(p_all):
+        # The matching made fits, and no fit gives every LED a glint: three glints of four fit
+        # more than one way; the glints left over are strays for _match_glints to judge (one
+        # where a missing LED's glint could be makes the matching uncertain).
+        families = mine
+    family, error = _pick_family(families, pupil)
+    if error:
+        return leds, [error], []
+    return _contested(centres, list(family[0]["leds"]), family, p_all)
+
+
+def _pairs(fit: dict) -> set[tuple[int, int]]:
+    """A fit's (glint index, LED) pairs."""
+    return {(j, k) for j, k in enumerate(fit["leds"]) if k is not None}
+
+
+def _candidate_fits(glints, centres, leds, p_all, sin_half: float, params) -> list[dict]:
+    """:func:`_rival_patterns`'s candidates, least residual first (none: nothing to check)."""
+    n = len(centres)
+    n_now = sum(k is not None for k in leds)
+    if n < 3 or n_now == n:
+        return []
+    rise = np.array([g.peak - g.base if g.base is not None else math.inf for g in glints])
+    if np.isfinite(rise).all() and rise.max() > 0:
+        strong = rise >= params.glint_strong_frac * rise.max()
+        use = np.flatnonzero(strong | np.array([k is not None for k in leds]))
+    else:
+        use = np.arange(n)
+    if len(use) < 3 or len(use) == n_now:
+        return []
+    fits = []
+    for f in pattern_fits(np.asarray(centres, float)[use], p_all, sin_half):
+        full: list[int | None] = [None] * n
+        for j, k in zip(use, f["leds"], strict=True):
+            full[int(j)] = k
+        fits.append({**f, "leds": full})
+    now = _as_fit(centres, leds, p_all, sin_half)
+    if now is not None:
+        cands = [now] + [
+            f
+            for f in fits
+            if f["count"] >= n_now and f["leds"] != list(leds) and not _pairs(f) > _pairs(now)
+        ]
+    elif fits and fits[0]["count"] >= n_now:
+        cands = [f for f in fits if f["count"] == fits[0]["count"]]
+    else:
+        return []
+    return sorted(cands, key=lambda f: f["rms"])
+
+
+def _pick_family(families: list[list[dict]], pupil) -> tuple[list[dict], str]:
+    """:func:`_rival_patterns`: the one pattern, or the one nearest the pupil's centre when the
+    other's centre is ≥ 2 × as far and farther by more than the pupil's semi-major axis; else
+    ([], the refusal)."""
+    if len(families) == 1:
+        return families[0], ""
+    top = min(len(_pairs(fam[0])) for fam in families)
+    if pupil is None:
+        return [], _two_patterns(families, None, top)
+    c = np.asarray(pupil.centre_px, float)
+    d = [float(np.hypot(*(fam[0]["t"] - c))) for fam in families]
+    order = np.argsort(d)
+    d1, d2 = d[order[0]], d[order[1]]
+    if not (d2 >= 2.0 * d1 and d2 - d1 > 0.5 * pupil.axes_px[0]):
+        return [], _two_patterns([families[i] for i in order], sorted(d), top)
+    return families[order[0]], ""
+
+
+def _as_fit(centres, leds, p_all, sin_half: float) -> dict | None:
+    """The matching ``leds`` as a :func:`~.glints.pattern_fits` entry (marked ``now``) when ≥ 3
+    glints are matched and each lies within s |p_k| sin_half of t + s p_k of their fit, else
+    None."""
+    pairs = [(j, k) for j, k in enumerate(leds) if k is not None]
+    if len(pairs) < 3:
+        return None
+    g = np.asarray(centres, float)[[j for j, _ in pairs]]
+    p = p_all[[k for _, k in pairs]]
+    sol = _pattern_fit(g, p)
+    s = float(sol[2])
+    if not (s > 0 and math.isfinite(s)):
+        return None
+    res = np.hypot(*(g - (sol[:2] + s * p)).T)
+    if (res > s * np.hypot(*p.T) * sin_half).any():
+        return None
+    rms = float(np.sqrt((res**2).mean()))
+    return {"leds": list(leds), "count": len(pairs), "t": sol[:2], "s": s, "rms": rms, "now": True}
+
+
+def _contested(centres, chosen, family, p_all):
+    """:func:`_rival_patterns` within one pattern: at each LED k where another fit of
+    ``family`` takes a different glint than ``chosen`` (the family's first), the glints are
+    compared with where the fit of ``chosen``'s other glints puts k's: the nearest is kept when
+    the others are farther by more than 3 × that fit's residual σ (per coordinate, 2m − 3
+    degrees of freedom for m glints), else none (a warning). Returns (leds, [], warnings)."""
+    first = list(chosen)
+    contested = sorted(
+        {
+            k
+            for f in family[1:]
+            for j, k in enumerate(f["leds"])
+            if k is not None and k in first and first.index(k) != j
+        }
+    )
+    g = np.asarray(centres, float)
+    warnings = []
+    for k in contested:
+        cands = {first.index(k)} | {f["leds"].index(k) for f in family if k in f["leds"]}
+        chosen = [None if kk == k else kk for kk in chosen]
+        others = [(j, kk) for j, kk in enumerate(first) if kk is not None and kk != k]
+        sigma = math.nan
+        if len(others) >= 2:
+            gs, ps = g[[j for j, _ in others]], p_all[[kk for _, kk in others]]
+            sol = _pattern_fit(gs, ps)
+            res = gs - (sol[:2] + sol[2] * ps)
+            sigma = float(np.sqrt((res**2).sum() / max(1, 2 * len(others) - 3)))
+            where = sol[:2] + sol[2] * p_all[k]
+            dists = sorted((float(np.hypot(*(g[j] - where))), j) for j in cands)
+            if dists[1][0] - dists[0][0] > 3.0 * sigma:
+                if chosen[dists[0][1]] is None:
+                    chosen[dists[0][1]] = k
+                continue
+        spots = ", ".join(f"({g[j][0]:.1f}, {g[j][1]:.1f})" for j in sorted(cands))
+        warnings.append(
+            f"warning: LED {k}'s glint left out: {len(cands)} glints fit the pattern at its "
+            f"place ({spots}) and the other glints' fit (residual {sigma:.2f} px) does not "
+            "tell which"
+        )
+    return chosen, [], warnings
+
+
+def _two_patterns(families, dist, count: int) -> str:
+    """The refusal for two sets of glints each fitting the LEDs' whole pattern."""
+    where = []
+    for i, fam in enumerate(families[:2]):
+        t = fam[0]["t"]
+        off = "" if dist is None else f", {dist[i]:.0f} px from the pupil's centre"
+        where.append(f"centred at ({t[0]:.1f}, {t[1]:.1f}){off}")
+    return (
+        f"glint lost: two glint patterns fit the LEDs' with ≥ {count} glints each "
+        f"({'; '.join(where)}): which is the LEDs' glints is ambiguous (a reflection of the "
+        "LEDs in spectacles?)"
+    )
+
+
+def _too_bright(glints: list[Glint], params) -> list[tuple[int, float]]:
+    """Matched glints holding more than ``glint_max_flux_ratio`` × the light (flux above their
+    background) of the brightest other matched glint — (index, that ratio) each; none unless
+    ≥ 3 are matched (two others to compare with).
+
+    One ring's LEDs make glints of like light: the LEDs differ in distance and angle to the
+    cornea, the glints in their background (pupil, iris) and how much of them saturates — in
+    eyelume's renders (design benchmark frames, glasses-frame, vr-offaxis, paper2005) a
+    correctly matched glint held at most 2.3 × the brightest other one's light. A blob at an
+    LED's place holding several times more is the glint merged with another spot — the sun's
+    corneal glint beside LED 1's (vr-offaxis in sunlight: 4.1–7.8 ×, its centroid 2–6 px off
+    the glint, answered ``ok``) — or a lit patch of sclera or lid (hundreds of px) matched to
+    an LED whose glint was not found; neither one's centroid is the glint's."""
+    m = [(i, g) for i, g in enumerate(glints) if g.led is not None and g.flux > 0]
+    if len(m) < 3:
+        return []
+    out = []
+    for i, g in m:
+        other = max(o.flux for j, o in m if j != i)
+        if g.flux > params.glint_max_flux_ratio * other:
+            out.append((i, g.flux / other))
+    return out
+
+
 def _match_glints(
-    glints: list[Glint], led_azimuths_deg, params, pattern=None
+    glints: list[Glint], led_azimuths_deg, params, pattern=None, pupil=None
 ) -> tuple[list[str], list[int]]:
     """Step 5b: each glint's LED (in place, :func:`_assign_leds`, or with ``pattern`` and ≥ 3
     glints :func:`~.glints.match_pattern` when it matches as many); the messages and the LEDs
     left without a glint: an error when fewer than ``min_matched_glints`` (or, with fewer
     LEDs, all of them) are matched or when the matched do not fit the LEDs' pattern
     (:func:`_pattern_misfit`; with ``pattern`` given, also when every LED has one), else a
-    warning."""
+    warning. With glints left over, the matching is checked against the whole pattern those
+    glints fit (:func:`_rival_patterns`: two patterns — a spectacle reflection — chosen by
+    ``pupil``, the :class:`Pupil` or None, or refused; two glints at one LED's place told
+    apart by the fit or that LED left out); a matched glint far brighter than the others is
+    left out (:func:`_too_bright`, a warning)."""
     n_led = len(led_azimuths_deg)
     centres = np.array([g.centre_px for g in glints]).reshape(-1, 2)
     max_ang = params.match_max_angle_deg
@@ -1443,12 +1692,45 @@ def _match_glints(
         k is not None for k in leds
     ):
         leds, ambiguous, between = strong
+    before = list(leds)
+    leds, rival, notes = _rival_patterns(
+        glints, centres, leds, led_azimuths_deg, pattern, max_ang, pupil, params
+    )
+    if leds != before:
+        ambiguous, between = "", []
     for g, k in zip(glints, leds, strict=True):
         g.led = k
+    if rival:
+        for g in glints:
+            g.led = None
+        return rival, list(range(n_led))
+    bright = _too_bright(glints, params)
+    for i, ratio in bright:
+        x, y = glints[i].centre_px
+        notes.append(
+            f"warning: LED {glints[i].led}'s glint left out: the blob at ({x:.1f}, {y:.1f}) holds "
+            f"{ratio:.1f} × the light of the brightest other glint (> "
+            f"{params.glint_max_flux_ratio:g} ×: merged with another spot — the sun's glint? — "
+            "or a lit patch; its centre is not the glint's)"
+        )
+        glints[i].led = None
+    skip = {i for i, _ in bright}
     matched = {g.led for g in glints if g.led is not None}
     missing = [k for k in range(n_led) if k not in matched]
     if not missing:
-        return _all_matched(glints, led_azimuths_deg, pattern, max_ang, params), []
+        return notes + _all_matched(glints, led_azimuths_deg, pattern, max_ang, params), []
+    lost, missing = _some_missing(glints, missing, led_azimuths_deg, pattern, max_ang, params,
+                                  ambiguous, between, skip)  # fmt: skip
+    return notes + lost, missing
+
+
+def _some_missing(  # noqa: PLR0913 - the matching and its notes
+    glints, missing, led_azimuths_deg, pattern, max_ang, params, ambiguous, between, skip
+) -> tuple[list[str], list[int]]:
+    """:func:`_match_glints` with LEDs left without a glint: the error or warning; glints
+    ``skip`` (indices: left out as too bright, :func:`_too_bright`) are no strays."""
+    n_led = len(led_azimuths_deg)
+    matched = {g.led for g in glints if g.led is not None}
     need = min(params.min_matched_glints, n_led)
     which = f"no glint for LED {', '.join(str(k) for k in missing)}"
     if len(matched) < need:
@@ -1460,7 +1742,8 @@ def _match_glints(
             f"missing {params.min_glints_when_missing} are needed to tell which LEDs the glints "
             "are (two fit a shifted copy of the pattern: reflections in spectacles, strays)"
         ], missing
-    strays = _uncertain_strays(glints, missing, pattern, max_ang)
+    kept = [g for i, g in enumerate(glints) if i not in skip]
+    strays = _uncertain_strays(kept, missing, pattern, max_ang)
     if strays:
         x, y = strays[0].centre_px
         return [
@@ -1590,7 +1873,7 @@ def detect(
             led_azimuths_deg, led_pattern_px, params, invalid,
         )  # fmt: skip
         glints, specks, lost, missing_leds = _match_or_look_wider(
-            glints, specks, led_azimuths_deg, led_pattern_px, params, wider
+            glints, specks, led_azimuths_deg, led_pattern_px, params, wider, pupil
         )
         errors += [m for m in lost if not m.startswith("warning: ")]
         lost_note = [m for m in lost if m.startswith("warning: ")]

@@ -50,6 +50,10 @@
   An off-axis camera sees the LEDs' glints as a foreshortened, distorted ring whose
   directions from its centre are not the azimuths: there the glints are matched to the
   predicted layout itself by a fitted shift, scale and rotation (:func:`match_pattern`).
+  With glints left over, every distinct set of ≥ 3 glints fitting the whole pattern (shift and
+  scale) is listed (:func:`pattern_fits`): ``detect`` checks the matching against them (a
+  spectacle reflection of the LEDs is a second whole pattern; two glints at one LED's place
+  are two fits differing there).
 """
 
 from __future__ import annotations
@@ -77,6 +81,7 @@ __all__ = [
     "match_leds",
     "match_pattern",
     "default_max_angle",
+    "pattern_fits",
 ]
 
 
@@ -998,3 +1003,105 @@ def match_pattern(
             break
         tz = (sol[0], sol[1])
     return out
+
+
+def pattern_fits(
+    centres: np.ndarray, pattern_px: np.ndarray, tol_frac: float, min_count: int = 3
+) -> list[dict]:
+    """Every distinct way ≥ ``min_count`` glints fit the LEDs' pattern as a whole.
+
+    ``centres`` (n, 2) px: the glints; ``pattern_px`` (k, 2): each LED's glint place relative to
+    the pattern's centre (px, or the unit vectors of the LED azimuths, (cos φ, −sin φ)). A fit
+    is g_k = t + s p_k (shift t, scale s > 0; no rotation: :func:`~.detect._pattern_misfit`'s
+    model): each choice of two glints and two LEDs gives one (s from the glints' difference
+    along the LEDs', t from their midpoint), then each LED takes the nearest glint within
+    ``tol_frac`` × s |p_k| of t + s p_k (one glint per LED, the nearer LED keeping a shared
+    one), t and s are refitted to those pairs (least squares) and the LEDs matched again.
+
+    Returns one dict per distinct matching with ≥ ``min_count`` pairs, most pairs first, then
+    least residual: ``leds`` (per glint its LED index or None), ``count``, ``t`` (2,) px, ``s``,
+    ``rms`` the root-mean-square distance (px) of the matched glints from t + s p_k. Fewer than
+    ``min_count`` glints or LEDs: [].
+
+    >>> ring = np.array([[1.0, 0.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 1.0]])
+    >>> g = np.array([[30.0, 0], [0, -30], [-30, 0], [0, 30], [70, 40], [38, 6]])
+    >>> best, *others = pattern_fits(g, ring, 0.38)
+    >>> best["leds"], best["count"], round(best["s"], 1)
+    ([0, 1, 2, 3, None, None], 4, 30.0)
+    >>> others[0]["leds"], others[0]["count"]
+    ([None, 1, 2, 3, None, 0], 4)
+    """
+    g = np.asarray(centres, float).reshape(-1, 2)
+    p = np.asarray(pattern_px, float).reshape(-1, 2)
+    n, k = len(g), len(p)
+    if n < min_count or k < min_count:
+        return []
+    ii, jj = np.nonzero(~np.eye(n, dtype=bool))
+    aa, bb = np.nonzero(np.triu(~np.eye(k, dtype=bool)))
+    dg = (g[ii] - g[jj])[:, None, :]  # (pairs of glints, 1, 2)
+    dp = (p[aa] - p[bb])[None, :, :]  # (1, pairs of LEDs, 2)
+    s = (dg * dp).sum(axis=2) / (dp * dp).sum(axis=2)
+    t = 0.5 * (g[ii] + g[jj])[:, None, :] - s[:, :, None] * 0.5 * (p[aa] + p[bb])[None, :, :]
+    good = s > 0
+    s, t = s[good], t[good]
+    if not len(s):
+        return []
+    norm = np.hypot(*p.T)
+    seen: dict[tuple, dict] = {}
+    for _ in range(2):
+        q = t[:, None, :] + s[:, None, None] * p[None, :, :]  # (H, k, 2)
+        dist = np.hypot(*(g[None, None, :, :] - q[:, :, None, :]).transpose(3, 0, 1, 2))
+        best = dist.argmin(axis=2)  # (H, k): each LED's nearest glint
+        near = np.take_along_axis(dist, best[:, :, None], axis=2)[:, :, 0]
+        inside = near <= tol_frac * s[:, None] * norm[None, :]
+        count = inside.sum(axis=1)
+        keep = np.flatnonzero(count >= min_count)
+        if not len(keep):
+            return []
+        t2, s2 = [], []
+        for h in keep:
+            leds = _one_each(best[h], near[h], inside[h], n)
+            pairs = [(j, kk) for j, kk in enumerate(leds) if kk is not None]
+            if len(pairs) < min_count:
+                continue
+            sol = _ring_fit(g[[j for j, _ in pairs]], p[[kk for _, kk in pairs]])
+            if not (sol[2] > 0 and np.isfinite(sol).all()):
+                continue
+            t2.append(sol[:2])
+            s2.append(sol[2])
+            key = tuple(-1 if kk is None else kk for kk in leds)
+            if key not in seen:
+                res = g[[j for j, _ in pairs]] - (sol[:2] + sol[2] * p[[kk for _, kk in pairs]])
+                seen[key] = {
+                    "leds": leds,
+                    "count": len(pairs),
+                    "t": sol[:2],
+                    "s": float(sol[2]),
+                    "rms": float(np.sqrt((res**2).sum(axis=1).mean())),
+                }
+        if not t2:
+            break
+        t, s = np.array(t2), np.array(s2)
+    return sorted(seen.values(), key=lambda f: (-f["count"], f["rms"]))
+
+
+def _one_each(best, near, inside, n: int) -> list[int | None]:
+    """Per glint its LED from each LED's nearest glint ``best`` (k,) at distance ``near`` (k,),
+    those ``inside`` the tolerance only; a glint two LEDs take goes to the nearer."""
+    leds: list[int | None] = [None] * n
+    dist = [math.inf] * n
+    for kk in np.argsort(near):
+        if inside[kk] and leds[best[kk]] is None:
+            leds[int(best[kk])] = int(kk)
+            dist[best[kk]] = near[kk]
+    return leds
+
+
+def _ring_fit(g: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Least-squares (t_x, t_y, s) of glints ``g`` (m, 2) = t + s ``p`` (m, 2)."""
+    a = np.zeros((2 * len(g), 3))
+    a[0::2, 0] = 1.0
+    a[1::2, 1] = 1.0
+    a[0::2, 2] = p[:, 0]
+    a[1::2, 2] = p[:, 1]
+    return np.linalg.lstsq(a, g.reshape(-1), rcond=None)[0]
