@@ -1353,15 +1353,18 @@ class Run(_Model):
     point (i k, j k) (k = ``indirect_cache_spacing`` pixels), Ê_ij/π from
     ``indirect_cache_grid``² stratified continuation rays; a camera sample's vertex x in the
     cell then takes Σ w_ij Ê_ij / π Σ w_ij, w_ij the bilinear weights of its picture point,
-    over the cell's four points that lie on x's surface, within 2 point spacings of x (world
-    distance) and whose normal is within ~18° of n — a point across an edge, a fold, a lash or
-    a depth step is not read; with none left (and on the iris, lit through the cornea) the
+    over the cell's four points that lie on x's surface, within their reach of x (1.5 × the
+    world distance to the farthest of their row and column neighbours on the same face with a
+    normal alike) and whose normal is within ~18° of n — a point across an edge, a fold, a lash
+    or a depth step is not read; with none left (and on the iris, lit through the cornea) the
     sample continues by paths. Bias: the interpolation's, ≈ ⅛ h² ∂²E_ind over a cell of world
     size h where E_ind curves (it is smooth over skin and sclera: the faces it comes from are
     centimetres away), and each point's Monte Carlo error, shared by the ~k² pixels that read
     it, so not in the per-pixel variance the estimator reports (a fixed pattern: the cache
-    points' own variance is kept, ``CameraTables.indirect``). The camera samples' variance then
-    has no continuation term, so a render to a target error stops at fewer samples;
+    points' own variance is kept, ``CameraTables.indirect``; on a vr-offaxis person at 400 ×
+    400, k = 4, 12² rays, a median 0.5 % of a skin pixel, measured by two cache seeds under the
+    same camera samples). The camera samples' variance then has no continuation term, so a
+    render to a target error stops at fewer samples (``benchmarks/population.py``);
     ``tests/estimators/test_indirect_cache.py`` compares it with ``"paths"``.
     """
 
