@@ -51,6 +51,7 @@ from eyelume.kernels.tables import (
     G_COS,
     G_P,
     GLINT_AIM_COLS,
+    INDIRECT_COLS,
     N_AIM,
     REFLECT,
     TRANSMIT,
@@ -2373,6 +2374,9 @@ def _camera_tables(  # noqa: PLR0913 - the compiled parts it is made of
         *_element_chains(scene, surfaces, names, led_points, cornea),
         _glint_aims(scene, frame, surfaces, cornea, led_points, (ep_z, ep_r)),
         G.dark_tail(surfaces.sf, surfaces.si),
+        np.zeros((0, 0, INDIRECT_COLS)),  # the irradiance cache: built by a run that uses it
+        0.0,
+        0.0,
     )
 
 

@@ -121,6 +121,7 @@ __all__ = [
     "direct_irradiance",
     "primary_surfaces",
     "plane_direct",
+    "indirect_cache",
 ]
 
 _INV_PI = 1.0 / math.pi
@@ -131,6 +132,11 @@ _CORNEA_TAG = 0x434F524E4541  # the LED of a later vertex's connection through t
 _CHAIN_TAG = 0x434841494E  # … and through an element
 _ELEMENT_TAG = 0x454C454D  # the light paths' legs toward an element surface (+ its row)
 _GHOST_TAG = 0x47484F5354  # … and toward the lens's pupil mirrored in it (+ its row)
+_CACHE_TAG = 0x4952524144  # the irradiance cache's points (indirect_cache)
+_NOWHERE = (-1.0, -1.0)  # a path that reads no irradiance cache
+#: The irradiance cache's interpolation reads a point only when its normal is within this
+#: cosine of the vertex's (~18°; Ward et al. 1988 reject by the normal's change as well)
+CACHE_MIN_COS = 0.95
 
 
 class Branch(NamedTuple):
@@ -568,13 +574,20 @@ def _camera_branch(state, scene, cam, ray, beta, split, first_vertex, scratch, c
 
 
 @per_ray
-def _path_radiance(state, scene, cam, ray, beta, split, grid, iris_grid, scratch):  # noqa: PLR0913
+def _path_radiance(state, scene, cam, ray, beta, split, grid, iris_grid, scratch, at):  # noqa: PLR0913
     """A camera path with its first Lambertian vertex's continuation(s) in ``grid``² strata,
-    ``iris_grid``² on the surfaces lit through the cornea; see _camera_branch. Returns (state,
+    ``iris_grid``² on the surfaces lit through the cornea; see _camera_branch. ``at`` (u, v):
+    the sample's point on the picture, in pixels (u < 0: none): with an irradiance cache
+    (``cam.indirect``) the first vertex's indirect light is read from it there
+    (:func:`_cached_indirect`) when it can be, instead of continuing. Returns (state,
     radiance, has_branch, branch)."""
     out = _camera_branch(state, scene, cam, ray, beta, split, True, scratch, -3.0)
     state, radiance = out.state, out.radiance
     v = out.vertex
+    if v.s >= 0 and at[0] >= 0.0 and cam.indirect_spacing > 0.0:
+        found, value = _cached_indirect(cam, at[0], at[1], v)
+        if found:
+            return state, radiance + v.beta * value, out.has_branch, out.branch
     if v.s >= 0:
         g = iris_grid if cam.through_cornea[v.s] else grid
         k = g * g
@@ -599,8 +612,10 @@ def _path_radiance(state, scene, cam, ray, beta, split, grid, iris_grid, scratch
 
 
 @per_ray
-def _camera_radiance(state, scene, cam, ray, scratch):
-    """Radiance (W/(mm²·sr)) arriving at the lens along −d from the origin of ``ray``.
+def _camera_radiance(state, scene, cam, ray, scratch, at):
+    """Radiance (W/(mm²·sr)) arriving at the lens along −d from the origin of ``ray``, the
+    camera sample at picture point ``at`` (u, v) pixels (for the irradiance cache, read by the
+    main path's first vertex only; u < 0: none).
 
     At a Lambertian vertex on a surface with ``cam.through_cornea[s]`` (the iris), the light
     refracted by the cornea (surfaces ``cam.cornea``, ``cam.cornea + 1``) is added by a
@@ -610,12 +625,12 @@ def _camera_radiance(state, scene, cam, ray, scratch):
     element's surface before it (:func:`_camera_branch`); ``scratch``: :class:`Scratch`."""
     scratch.count[0] = 0
     state, radiance, has_branch, branch = _path_radiance(
-        state, scene, cam, ray, 1.0, True, cam.split_grid, cam.iris_grid, scratch
+        state, scene, cam, ray, 1.0, True, cam.split_grid, cam.iris_grid, scratch, at
     )
     if has_branch and branch.beta > 0.0:
         # the reflected branch (beta = R, ~2 %) continues in one direction, not g²
         state, more, _, _ = _path_radiance(
-            state, scene, cam, branch.ray, branch.beta, False, 1, IRIS_GRID, scratch
+            state, scene, cam, branch.ray, branch.beta, False, 1, IRIS_GRID, scratch, _NOWHERE
         )
         radiance += more
     # the elements' weaker parts (none without elements: the same stream as before), in one
@@ -624,10 +639,134 @@ def _camera_radiance(state, scene, cam, ray, scratch):
         row = scratch.rays[b]
         weak = Ray(row[0], row[1], row[2], row[3], row[4], row[5])
         state, more, _, _ = _path_radiance(
-            state, scene, cam, weak, row[6], False, 1, IRIS_GRID, scratch
+            state, scene, cam, weak, row[6], False, 1, IRIS_GRID, scratch, _NOWHERE
         )
         radiance += more
     return state, radiance
+
+
+@per_ray
+def _cached_indirect(cam, u, v, vertex):
+    """The irradiance cache's estimate of a first vertex's indirect radiance per unit
+    throughput (W/(mm²·sr)): the four cache points about picture point (u, v) (pixels),
+    weighted bilinearly in the picture, each read only if it lies on the vertex's surface,
+    within its reach (its column 9, mm) of it and its normal within :data:`CACHE_MIN_COS` of the
+    vertex's — an edge, a fold, a lash or a depth step in between rejects it. Returns (found,
+    value); found False (every point rejected, or the vertex on a surface the cache leaves to
+    paths): the caller continues by paths, as without a cache."""
+    tab = cam.indirect
+    ny, nx = tab.shape[0], tab.shape[1]
+    if ny < 2 or nx < 2:
+        return False, 0.0
+    a = u / cam.indirect_spacing
+    b = v / cam.indirect_spacing
+    i0 = min(max(int(math.floor(a)), 0), nx - 2)
+    j0 = min(max(int(math.floor(b)), 0), ny - 2)
+    fa = min(max(a - i0, 0.0), 1.0)
+    fb = min(max(b - j0, 0.0), 1.0)
+    w_sum = 0.0
+    acc = 0.0
+    for c in range(4):
+        di, dj = c & 1, c >> 1
+        p = tab[j0 + dj, i0 + di]
+        if int(p[7]) != vertex.s:
+            continue
+        if p[3] * vertex.nx + p[4] * vertex.ny + p[5] * vertex.nz < CACHE_MIN_COS:
+            continue
+        ex, ey, ez = p[0] - vertex.x, p[1] - vertex.y, p[2] - vertex.z
+        if ex * ex + ey * ey + ez * ez > p[9] * p[9]:
+            continue
+        w = (fa if di else 1.0 - fa) * (fb if dj else 1.0 - fb)
+        w_sum += w
+        acc += w * p[6]
+    if w_sum <= 0.0:
+        return False, 0.0
+    return True, acc / w_sum
+
+
+@njit(cache=True)
+def indirect_cache(seed, scene, cam, spacing, grid, out):
+    """Fill ``out`` (ny, nx, INDIRECT_COLS; :class:`~eyelume.kernels.tables.CameraTables`'s
+    ``indirect``) with the irradiance cache's points: point (j, i) at picture point
+    (i × ``spacing``, j × ``spacing``) pixels, where the chief ray (the stop's centre)
+    transmitted by the eye's interfaces meets its first Lambertian face, and there the mean
+    radiance arriving over the hemisphere, cosine-weighted — the indirect light a camera
+    path's continuation estimates, per unit throughput, E_ind/π — from ``grid``² stratified
+    continuation rays (outside the vertex's free cone, as :func:`_path_radiance`), and a
+    conservative estimate of its variance from pairs of neighbouring strata. Surface −1 where
+    the ray meets no Lambertian face or meets one lit through the cornea (the iris keeps its
+    paths). A point's rays depend on its index and ``seed`` only (threads change nothing)."""
+    _indirect_cache(seed, *scene_parts(scene), cam, spacing, grid, out)
+
+
+@njit(cache=True, parallel=True)
+def _indirect_cache(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139)
+    seed, surfaces, lens, leds, picture, eye_plane, max_events, camera, spacing, grid, out
+):
+    """:func:`indirect_cache` with the scene's parts (:func:`scene_parts`, numba#10139)."""
+    ny, nx = out.shape[0], out.shape[1]
+    cseed = mix64(np.uint64(seed) ^ np.uint64(_CACHE_TAG))
+    for p in prange(ny * nx):
+        tables = SceneTables(surfaces, lens, leds, picture, eye_plane, max_events)
+        scratch = Scratch(
+            np.empty(leds.points.shape[0]),
+            np.empty((ELEMENT_BRANCHES, 7)),
+            np.zeros(1, dtype=np.int64),
+            np.empty(surfaces.sf.shape[0]),
+        )
+        j = p // nx
+        _cache_point(stream_start(cseed, p), tables, camera, spacing, grid, p - j * nx, j,
+                     scratch, out[j, p - j * nx])  # fmt: skip
+
+
+@per_ray
+def _cache_point(state, tables, camera, spacing, grid, i, j, scratch, row):  # noqa: PLR0913
+    """Cache point (j, i) of :func:`indirect_cache` into ``row`` (INDIRECT_COLS,)."""
+    for c in range(row.shape[0]):
+        row[c] = 0.0
+    row[7] = -1.0
+    xs, ys = from_grid(tables.picture, i * spacing, j * spacing)
+    chief = aim_chief(camera, xs, ys)
+    if not chief.found:
+        return
+    ok, x, y, z, dx, dy, dz, _ = into_scene(camera, xs, ys, chief.qx, chief.qy)
+    if not ok:
+        return
+    scratch.count[0] = 0
+    out = _camera_branch(state, tables, camera, Ray(x, y, z, dx, dy, dz), 1.0, True, True,
+                         scratch, -3.0)  # fmt: skip
+    state = out.state
+    v = out.vertex
+    if v.s < 0 or camera.through_cornea[v.s]:
+        return
+    s0 = v.s0
+    share = 1.0 - s0
+    k = grid * grid
+    total = 0.0
+    pairs = 0.0
+    last = 0.0
+    if share > 0.0:
+        for q in range(k):
+            state, u1 = next_uniform(state)
+            state, u2 = next_uniform(state)
+            lx, ly, lz = cosine_hemisphere(s0 + share * (q // grid + u1) / grid,
+                                           (q % grid + u2) / grid)  # fmt: skip
+            ex, ey, ez = about_axis(lx, ly, lz, v.nx, v.ny, v.nz)
+            cont = Ray(v.x, v.y, v.z, ex, ey, ez)
+            more = _camera_branch(state, tables, camera, cont, 1.0, False, False, scratch, lz)
+            state = more.state
+            total += more.radiance
+            if q & 1:
+                pairs += (more.radiance - last) ** 2
+            last = more.radiance
+    row[0], row[1], row[2] = v.x, v.y, v.z
+    row[3], row[4], row[5] = v.nx, v.ny, v.nz
+    row[6] = share * total / k
+    row[7] = v.s
+    # the strata paired (0, 1), (2, 3), …: Var(Σ y) ≈ Σ (y_a − y_b)², conservative for
+    # stratified draws (an odd k's last stratum in proportion); × (share / k)² for the mean
+    if k >= 2:
+        row[8] = pairs * k / (2 * (k // 2)) * (share / k) ** 2
 
 
 @njit(cache=True)
@@ -705,11 +844,9 @@ def _camera_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139
                 state, u3 = next_uniform(state)
                 state, u4 = next_uniform(state)
                 cell = (k * stride + offset) % strata
-                xs, ys = from_grid(
-                    tables.picture,
-                    col + (cell % grid + u1) / grid,
-                    row + (cell // grid + u2) / grid,
-                )
+                pu = col + (cell % grid + u1) / grid
+                pv = row + (cell // grid + u2) / grid
+                xs, ys = from_grid(tables.picture, pu, pv)
                 tx, ty = disk_stratum(k, grid, u3, u4, stop_r)
                 # first guess: the chief ray's crossing, moved with the sensor point and the
                 # stop point to first order
@@ -719,7 +856,7 @@ def _camera_pass(  # noqa: PLR0913 - the scene's parts as arguments (numba#10139
                 if not (aim.found and r.passed):
                     continue
                 state, radiance = _camera_radiance(
-                    state, tables, camera, Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz), scratch
+                    state, tables, camera, Ray(r.x, r.y, r.z, r.dx, r.dy, r.dz), scratch, (pu, pv)
                 )
                 total += area * r.g / aim.det * radiance
             mean = total / strata

@@ -16,7 +16,7 @@ from eyelume.estimators import fast as F
 from eyelume.estimators.interrupt import interrupt_between_batches
 from eyelume.estimators.statistics import median_pixel_rel_error
 from eyelume.kernels import geometry as G
-from eyelume.kernels.tables import G_COS, G_P
+from eyelume.kernels.tables import G_COS, G_P, INDIRECT_COLS
 
 __all__ = [
     "FastEstimate",
@@ -25,6 +25,7 @@ __all__ = [
     "estimate_median_rel_error",
     "primary_surface_map",
     "trace_fast",
+    "with_indirect_cache",
 ]
 
 _MAX_SETS = 1 << 16
@@ -377,6 +378,8 @@ def warm_up(cs: CompiledScene) -> float:
     F.camera_pass(0, 0, 1, tiny.tables, tiny.camera, GRID_COARSE, none)
     F.light_pass(0, 0, 0, tiny.tables, tiny.camera, run.tally())
     direct_eye_plane(tiny, 0, n_sub=1)
+    if cs.scene.run.indirect == "cache":
+        F.indirect_cache(0, tiny.tables, tiny.camera, 1.0, 1, np.zeros((0, 0, INDIRECT_COLS)))
     return time.perf_counter() - t0
 
 
@@ -572,6 +575,7 @@ def trace_fast(
             "scatter between two sample sets at least)"
         )
     ratio = light_paths / samples_per_pixel  # light paths per camera sample
+    cs = with_indirect_cache(cs, seed)
     work = _Work(cs.picture.cols * cs.picture.rows, ratio, control.advance)
     args = (cs, samples_per_pixel, ratio, seed)
     with interrupt_between_batches() as stop:
@@ -587,6 +591,57 @@ def trace_fast(
         est.target_reached = err <= rel_error
         est.rel_error_achieved = err if math.isfinite(err) else None
     return est
+
+
+#: The irradiance cache reads a point from a vertex at most this many times the distance to
+#: the farthest of its neighbours (the next points along the picture's rows and columns) on
+#: the same face with a normal alike (:data:`~eyelume.estimators.fast.CACHE_MIN_COS`).
+CACHE_REACH = 1.5
+_CACHE_SEED_TAG = 0x1CAC
+
+
+def with_indirect_cache(cs: CompiledScene, seed: int) -> CompiledScene:
+    """``cs`` with its irradiance cache (``run.indirect = "cache"``;
+    :func:`eyelume.estimators.fast.indirect_cache`) built for this picture and ``seed`` into
+    ``cs.camera.indirect``, or ``cs`` itself (``run.indirect = "paths"``, or built already).
+    Points every ``run.indirect_cache_spacing`` pixels, ``run.indirect_cache_grid``² rays
+    each. A point's reach is :data:`CACHE_REACH` × the distance to its farthest neighbour on
+    the same face with a normal alike (a point with none is read by no vertex);
+    ``indirect_tol`` the median reach (mm). The cache's seed is derived from ``seed``, so the
+    same seed gives the same cache whatever the threads."""
+    run = cs.scene.run
+    if run.indirect != "cache" or cs.camera.indirect.shape[0] > 0:
+        return cs
+    import dataclasses
+
+    from eyelume.estimators.fast import CACHE_MIN_COS
+
+    k = int(run.indirect_cache_spacing)
+    nx = -(-cs.picture.cols // k) + 1
+    ny = -(-cs.picture.rows // k) + 1
+    out = np.zeros((ny, nx, INDIRECT_COLS))
+    cseed = int(np.random.SeedSequence([seed, _CACHE_SEED_TAG]).generate_state(1)[0] >> 1)
+    F.indirect_cache(cseed, cs.tables, cs.camera, float(k), int(run.indirect_cache_grid), out)
+    far = np.zeros((ny, nx))
+    on = out[..., 7] >= 0
+    for axis in (0, 1):
+        a = [slice(None)] * 2
+        b = [slice(None)] * 2
+        a[axis], b[axis] = slice(1, None), slice(None, -1)
+        pa, pb = out[tuple(a)], out[tuple(b)]
+        alike = (
+            (pa[..., 7] == pb[..., 7])
+            & on[tuple(a)]
+            & ((pa[..., 3:6] * pb[..., 3:6]).sum(axis=-1) >= CACHE_MIN_COS)
+        )
+        d = np.where(alike, np.linalg.norm(pa[..., :3] - pb[..., :3], axis=-1), 0.0)
+        far[tuple(a)] = np.maximum(far[tuple(a)], d)
+        far[tuple(b)] = np.maximum(far[tuple(b)], d)
+    out[..., 9] = CACHE_REACH * far
+    reach = out[..., 9][on & (far > 0)]
+    tol = float(np.median(reach)) if reach.size else 0.0
+    camera = cs.camera._replace(indirect=out, indirect_spacing=float(k), indirect_tol=tol)
+    return dataclasses.replace(cs, camera=camera)
 
 
 def estimate_median_rel_error(est: FastEstimate, pixels: np.ndarray | None = None) -> float:

@@ -82,6 +82,11 @@ CHAIN_STEPS = 4
 CHAIN_COLS = 2 + 2 * CHAIN_STEPS
 
 
+#: The columns of ``CameraTables.indirect`` (x, y, z, nx, ny, nz, value, surface, variance,
+#: reach).
+INDIRECT_COLS = 10
+
+
 #: The least continuation grid on the surfaces lit through the cornea (the iris) when the scene
 #: gives none (``run.iris_continuation_grid`` None): :mod:`eyelume.compile` sets
 #: ``CameraTables.iris_grid`` to max(``run.continuation_grid``, this), and the fast estimator's
@@ -190,7 +195,18 @@ class CameraTables(NamedTuple):
     ``dark_from``: the first row of the surface table's dark tail
     (:func:`eyelume.kernels.geometry.dark_tail`: the LED packages, the camera's body and lens
     entrance when they come last), which a camera path searches only behind a lit row it meets
-    (:func:`eyelume.kernels.geometry.nearest_lit_hit`); the row count when there is none."""
+    (:func:`eyelume.kernels.geometry.nearest_lit_hit`); the row count when there is none.
+
+    ``indirect`` (ny, nx, INDIRECT_COLS) float64: the irradiance cache of ``run.indirect =
+    "cache"`` (:func:`eyelume.estimators.fast.indirect_cache`), a point every
+    ``indirect_spacing`` pixels of the picture (rows and columns, from its corner): the first
+    Lambertian vertex of the pixel point's chief ray (x, y, z, its normal toward the camera's
+    side), its indirect radiance per unit throughput (W/(mm²·sr)), the surface row (−1: none,
+    or a surface lit through the cornea, which keeps its paths), the cache estimate's variance
+    and its reach (mm): the farthest a vertex may lie from it to read it
+    (:func:`eyelume.estimators.fast_run.with_indirect_cache`); ``indirect_tol`` (mm) the
+    median reach.
+    (0, 0, INDIRECT_COLS) and spacing 0: no cache, every first vertex continues by paths."""
 
     lf_rev: np.ndarray
     lf_open: np.ndarray
@@ -210,6 +226,9 @@ class CameraTables(NamedTuple):
     chains: np.ndarray
     glint_aim: np.ndarray
     dark_from: int
+    indirect: np.ndarray
+    indirect_spacing: float
+    indirect_tol: float
 
 
 class SceneTables(NamedTuple):

@@ -1342,6 +1342,30 @@ class Run(_Model):
     whose continuation rays cross the cornea twice and cost ~3 × a skin vertex's (vr-offaxis:
     ~1.3 µs against ~0.4 µs; there they carry ~2.5 % of the median iris pixel's camera-path
     light but all of its sample-to-sample noise); None: ``continuation_grid``, but at least 3.
+
+    ``indirect``: how the fast estimator gets the indirect light at a camera path's first
+    Lambertian vertex x (normal n, reflectance ρ), the ρ/π E_ind(x) of L(x) = ρ/π (E_dir(x) +
+    E_ind(x)), E_ind(x) = ∫ L_i(x, ω) cos θ dω over the hemisphere (the light the faces send
+    each other): ``"paths"`` (default) by the continuation rays above, for every camera sample
+    (unbiased); ``"cache"`` by an irradiance cache (Ward, Rubinstein & Clear 1988, "A ray
+    tracing solution for diffuse interreflection", SIGGRAPH '88; here on a regular grid of the
+    picture): once per render, at the first vertex x_ij of the chief ray through picture
+    point (i k, j k) (k = ``indirect_cache_spacing`` pixels), Ê_ij/π from
+    ``indirect_cache_grid``² stratified continuation rays; a camera sample's vertex x in the
+    cell then takes Σ w_ij Ê_ij / π Σ w_ij, w_ij the bilinear weights of its picture point,
+    over the cell's four points that lie on x's surface, within their reach of x (1.5 × the
+    world distance to the farthest of their row and column neighbours on the same face with a
+    normal alike) and whose normal is within ~18° of n — a point across an edge, a fold, a lash
+    or a depth step is not read; with none left (and on the iris, lit through the cornea) the
+    sample continues by paths. Bias: the interpolation's, ≈ ⅛ h² ∂²E_ind over a cell of world
+    size h where E_ind curves (it is smooth over skin and sclera: the faces it comes from are
+    centimetres away), and each point's Monte Carlo error, shared by the ~k² pixels that read
+    it, so not in the per-pixel variance the estimator reports (a fixed pattern: the cache
+    points' own variance is kept, ``CameraTables.indirect``; on a vr-offaxis person at 400 ×
+    400, k = 4, 12² rays, a median 0.5 % of a skin pixel, measured by two cache seeds under the
+    same camera samples). The camera samples' variance then has no continuation term, so a
+    render to a target error stops at fewer samples (``benchmarks/population.py``);
+    ``tests/estimators/test_indirect_cache.py`` compares it with ``"paths"``.
     """
 
     estimator: Literal["forward", "fast"] = "fast"
@@ -1350,6 +1374,9 @@ class Run(_Model):
     light_paths_per_pixel: float = Field(16.0, ge=0.0, le=1e6)
     continuation_grid: int = Field(2, ge=1, le=8)
     iris_continuation_grid: int | None = Field(None, ge=1, le=8)
+    indirect: Literal["paths", "cache"] = "paths"
+    indirect_cache_spacing: int = Field(4, ge=1, le=64)
+    indirect_cache_grid: int = Field(12, ge=1, le=64)
     seed: int = Field(0, ge=0, lt=2**63)
     batch_size: int = Field(1 << 18, ge=1)
     max_events: int = Field(64, ge=2, le=10_000)
