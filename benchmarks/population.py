@@ -44,9 +44,13 @@ is near the best cost × variance (a fit of the two points puts 4–6 within 10 
 
 The irradiance cache (``--set run.indirect=cache``, opt-in, session 21: the first skin
 vertex's indirect light read from a per-frame cache instead of its 25 continuation rays; the
-``Run`` docstring): a concurrent one-thread pair at load 12–16 (08:35–08:38 UTC, the
-2.6 GHz host), ``--frames 3`` 3.3 CPU-s a frame at 3, 3, 2 samples per pixel against 8.3 at
-5, 4, 3 (≈ 1 240 against ≈ 3 120 s for 50 people: 2.5×, still ≈ 4× the target). Where its
+``Run`` docstring): concurrent one-thread pairs at load 10–16 (abf952f, 09:03–09:05 UTC,
+the 2.6 GHz host), ``--frames 3`` 3.3 CPU-s a frame at 3, 3, 2 samples per pixel against 8.2
+at 5, 4, 3 (≈ 1 235 against ≈ 3 074 s for 50 people: 2.5×, still ≈ 4× the target; an earlier
+pair at 08:35 gave 3.3 against 8.3). ``--set run.indirect_cache_spacing=6 --set
+run.indirect_cache_grid=16`` beside the default 4 and 12 (a pair): 3.3 against 3.4 CPU-s (its
+cache costs ~0.34 instead of 0.44 CPU-s and errs a median 0.40 % of a skin pixel instead of
+0.53 %, over cells 1.5× wider). Where its
 frame goes (person 0, one thread): the cache 0.44 CPU-s, a camera sample per pixel 0.71
 (paths: 1.75), the light paths of one 0.22; the skin's median pixel is then at ~0.5 % from its
 sets, under the ~1.7 % target already at the 2 sets a variance needs, and the cache's own
