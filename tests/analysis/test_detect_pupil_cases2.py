@@ -97,7 +97,9 @@ def test_pupil_with_lashes_darker_than_it_across_its_edge_is_found(pupil, iris, 
     blob (… px) is not compact"."""
     img = eye(cy=cy, pupil=pupil, iris=iris, lashes=lashes, seed=seed)
     d = detect(img, led_azimuths_deg=(0, 90, 180, 270))
-    assert d.ok, d.failures
+    # (the pupil only: a lash across a glint is the glints' matter)
+    assert not [m for m in d.failures if "pupil" in m.split(":")[0]], d.failures
+    assert d.pupil is not None
     assert math.dist(d.pupil.centre_px, (200.6, cy)) < 0.5
 
 
