@@ -85,6 +85,31 @@ def test_bright_pupil_is_refused_by_name(iris, offset):
     assert d.failures[0].startswith("no dark pupil: bright-pupil image?"), d.failures
 
 
+@pytest.mark.parametrize(("pupil", "iris"), [(120.0, 60.0), (125.0, 90.0), (120.0, 110.0)])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_bright_pupil_a_little_over_its_iris_is_refused_by_name(pupil, iris, seed):
+    """A lit pupil only 10-65 DN over its iris (σ 3), under the halfway level from the iris to
+    the sclera that the 240 DN pupil above crosses: the iris with the lit pupil inside was
+    answered as the pupil (session 20's new user, 13 of 17 contrasts); now refused by name
+    from the interior averaged over 5 × 5 px (a plateau 15-90 σ of those averages over its
+    median)."""
+    d = detect(u8(eye(pupil=pupil, iris=iris, seed=seed)), led_azimuths_deg=[0, 90, 180, 270])
+    assert not d.ok and d.pupil is None, d.failures
+    assert d.failures[0].startswith("no dark pupil: bright-pupil image?"), d.failures
+
+
+@pytest.mark.parametrize("quality", [12, 25])
+def test_dark_pupil_in_a_jpeg_is_not_taken_for_a_bright_one(quality):
+    """The control: a dark pupil whose glints a JPEG smears into its interior (ringing a few DN
+    over the pupil around each) is still found; the averaged bright-core test leaves the grown
+    glints out and asks for a plateau larger than any glint."""
+    ok, buf = cv2.imencode(".jpg", u8(eye()), [cv2.IMWRITE_JPEG_QUALITY, quality])
+    img = cv2.imdecode(buf, cv2.IMREAD_GRAYSCALE)
+    d = detect(img, led_azimuths_deg=[0, 90, 180, 270])
+    assert d.pupil is not None, d.failures
+    assert np.hypot(*np.subtract(d.pupil.centre_px, CENTRE)) < 0.5
+
+
 def test_nan_hole_in_the_pupil_is_fitted_from_its_outline():
     """A 25 × 25 px hole of NaN in the pupil's centre (the whole edge visible): the pupil is
     fitted from its outline, not refused as merged with the iris."""

@@ -2572,7 +2572,7 @@ def bright_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, params) -> str:
     d = percentile(win[inside], params.core_quantile)
     if not wp.hi > d:
         return ""
-    lit = (inside & (win > 0.5 * (d + wp.hi))).astype(np.uint8)
+    lit = inside & (win > 0.5 * (d + wp.hi))
     limit = max(
         params.pupil_min_area_px,
         min(
@@ -2580,29 +2580,105 @@ def bright_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, params) -> str:
             params.glint_max_pupil_frac * math.pi * e.a * e.b,
         ),
     )
-    if cv2.countNonZero(lit) <= limit:  # (no piece can be larger: a real pupil's glints)
+    piece = _central_piece(lit, box, e, limit)  # (none when a real pupil holds its glints)
+    if piece is None:
         return ""
-    n, lab, stats, cent = cv2.connectedComponentsWithStats(lit, connectivity=8)
+    area, cx, cy = piece
+    return (
+        f"a bright core of {area} px at ({cx:.0f}, {cy:.0f}) inside the dark blob at "
+        f"({e.cx:.0f}, {e.cy:.0f}) px ({2 * max(e.a, e.b):.0f} × {2 * min(e.a, e.b):.0f} px), "
+        "larger than any glint: a lit pupil in its iris"
+    )
+
+
+def _smoothed_bright_core(
+    img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params
+) -> str:
+    """:func:`bright_core` for a lit pupil only a little brighter than its iris, or "".
+
+    A bright pupil 5–40 DN over a 60–110 DN iris (σ 3) lies under :func:`bright_core`'s
+    level, halfway from the blob's dark level to the picture's bright one (sclera, skin):
+    the iris with the lit pupil inside was answered as the pupil. Here, as
+    :func:`_smoothed_core` mirrored: the interior inside 0.9 × the ellipse, off the glints
+    grown by their margin and missing pixels, averaged over :data:`_CORE_BOX` px boxes (those
+    wholly inside), with m its median, q its (100 − ``core_quantile``)th percentile (95th)
+    and t its 99th; σ the spread of its darker half (median(m − v | v ≤ m) / 0.6745: measured
+    on the averaged values, so a JPEG's blocks or a blur widen it as they widen the tail). A
+    bright core is there when q − m ≥ ``core_min_sigma`` σ and t − q ≤ ``core_max_fraction``
+    (t − m) (a plateau: many pixels near the top, not a tail of ringing or one bright spot);
+    it is a lit pupil when the piece brighter than (m + q) / 2 nearest the centre has its
+    centroid inside half the ellipse, fills ≥ ½ of its box and is larger than any glint (as
+    :func:`bright_core`). A dark pupil is uniform to its noise: its 95th percentile is
+    ~1.6 σ over its median."""
+    box = _box_about(e, img.shape)
+    if box is None:
+        return ""
+    x0, x1, y0, y1 = box
+    k = _CORE_BOX
+    inside = _inside_scaled(box, _scaled_args(e), 0.81)
+    glints = bright[y0:y1, x0:x1]
+    if glints.any():
+        inside &= _grown_glints_box(glints, params)[0] == 0
+    if wp.invalid is not None:
+        inside &= ~wp.invalid[y0:y1, x0:x1]
+    win = img[y0:y1, x0:x1].astype(np.float32)
+    if min(win.shape) < 2 * k or inside.sum() < params.pupil_min_area_px:
+        return ""
+    avg = cv2.blur(win, (k, k), borderType=cv2.BORDER_REFLECT)
+    whole = cv2.erode(inside.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
+    vals = avg[whole]
+    if vals.size < params.pupil_min_area_px:
+        return ""
+    m = median(vals)
+    q, t = (float(v) for v in np.percentile(vals, [100.0 - params.core_quantile, 99.0]))
+    lower = m - vals[vals <= m]
+    sigma = median(lower) / 0.6745 if lower.size else 0.0
+    if not sigma > 0 or q - m < params.core_min_sigma * sigma:
+        return ""
+    if t - q > params.core_max_fraction * (t - m):
+        return ""
+    rows, cols = img.shape
+    limit = max(
+        params.pupil_min_area_px,
+        min(
+            params.glint_max_area_frac * rows * cols,
+            params.glint_max_pupil_frac * math.pi * e.a * e.b,
+        ),
+    )
+    piece = _central_piece(whole & (avg > 0.5 * (m + q)), box, e, limit)
+    if piece is None:
+        return ""
+    area, cx, cy = piece
+    return (
+        f"a core of {area} px at ({cx:.0f}, {cy:.0f}) brighter than the dark blob at "
+        f"({e.cx:.0f}, {e.cy:.0f}) px ({2 * max(e.a, e.b):.0f} × {2 * min(e.a, e.b):.0f} px) "
+        f"around it by {q - m:.3g} ({(q - m) / sigma:.0f} σ of the {k} × {k} px averages), "
+        "larger than any glint: a lit pupil in its iris"
+    )
+
+
+def _central_piece(mask: np.ndarray, box, e: Ellipse, limit: float):
+    """(area px, centroid x, centroid y in picture px) of the first connected piece of
+    ``mask`` (over ``box``) with its centroid inside half the ellipse ``e``, filling ≥ ½ of
+    its bounding box and larger than ``limit`` px, or None."""
+    lit = mask.astype(np.uint8)
+    if cv2.countNonZero(lit) <= limit:
+        return None
+    n, _, stats, cent = cv2.connectedComponentsWithStats(lit, connectivity=8)
     central = _inside_scaled(box, _scaled_args(e), 0.25)
     for i in range(1, n):
-        bx, by, bw, bh, area = (int(v) for v in stats[i])
+        bw, bh, area = (int(v) for v in stats[i][2:])
         cx, cy = cent[i]
-        ci, ri = int(round(cx)), int(round(cy))
-        if area <= limit or area < 0.5 * bw * bh or not central[ri, ci]:
-            continue
-        return (
-            f"a bright core of {area} px at ({x0 + cx:.0f}, {y0 + cy:.0f}) inside the dark "
-            f"blob at ({e.cx:.0f}, {e.cy:.0f}) px ({2 * max(e.a, e.b):.0f} × "
-            f"{2 * min(e.a, e.b):.0f} px), larger than any glint: a lit pupil in its iris"
-        )
-    return ""
+        if area > limit and area >= 0.5 * bw * bh and central[int(round(cy)), int(round(cx))]:
+            return area, box[0] + cx, box[2] + cy
+    return None
 
 
 def _inner_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params) -> str:
     """Why a whole fit is not the pupil for what it holds, or "": a bright core larger than any
     glint (:func:`bright_core`: "no dark pupil: bright-pupil image?") or a darker core
     (:func:`darker_core`)."""
-    lit = bright_core(img, wp, e, params)
+    lit = bright_core(img, wp, e, params) or _smoothed_bright_core(img, wp, e, bright, params)
     if lit:
         return f"no dark pupil: bright-pupil image? ({lit})"
     return darker_core(img, wp, e, bright, params)
