@@ -934,7 +934,7 @@ def _fitted_centre(img, noise: float, blob: dict, params) -> dict:
     residuals of RMS over 1.5 × the noise: a right model leaves the noise, ≤ 1 σ (0.74-1.33 σ on
     the unsaturated glints of the session 19-20 pictures), but a glint on the pupil's edge
     sits on a step no plane follows (2.8-3.0 σ; fitted 2.4 px off, its centroid 0.5)."""
-    fitted = fit_spot(img, noise, blob, params)
+    fitted = fit_spot(img, noise, blob, params, min_half=3)
     if fitted is None or fitted["fit_rms"] > 1.5 * noise:
         return blob
     r = math.sqrt(blob["area_px"] / math.pi)

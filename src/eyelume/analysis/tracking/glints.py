@@ -327,14 +327,16 @@ def broad_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
     return out
 
 
-def fit_spot(img: np.ndarray, noise: float, blob: dict, params) -> dict | None:
+def fit_spot(img: np.ndarray, noise: float, blob: dict, params, min_half: int = 2) -> dict | None:
     """The centre of an unsaturated spot (:func:`broad_glints_near`'s, and ``detect``'s for
     :func:`faint_glints_near`'s): ``img`` (rows, cols) the picture, input units; ``noise`` its
     pixel σ; ``blob`` a dict with centre_px (x, y) px, area_px, peak and base (input units).
     Raises nothing (a failed fit gives None). A least-squares fit of
     B0 + bx (x − c) + by (y − r) + A exp(−|p − p0|² / 2 s²) to the picture (input units) in the
-    square of half-side ⌈1.5 s₀⌉ px (≥ 3: 7 parameters on a 5 × 5 window leave a 10 σ
-    glint's height and width confused — s 2.65 px and twice the rise, 0.9 px off) around the blob's top-hat centroid (c, r rounded),
+    square of half-side ⌈1.5 s₀⌉ px (≥ ``min_half``: 2 for :func:`broad_glints_near`; 3 for
+    ``detect``'s faint glints — 7 parameters on a 5 × 5 window leave a 10 σ glint's height
+    and width confused, s 2.65 px and twice the rise, 0.9 px off) around the blob's top-hat
+    centroid (c, r rounded),
     s₀ = ½ its equivalent radius. The window holds the bump's top, where it dominates; a plane
     takes the local slope of its background (the pupil's blurred edge beside it) — a wider
     window reaches the edge's curvature, which no plane follows (on σ 1.5-4 blurred
@@ -348,7 +350,7 @@ def fit_spot(img: np.ndarray, noise: float, blob: dict, params) -> dict | None:
     rows, cols = img.shape
     x, y = blob["centre_px"]
     s0 = max(1.0, 0.5 * math.sqrt(blob["area_px"] / math.pi))
-    k = max(3, int(math.ceil(1.5 * s0)))
+    k = max(min_half, int(math.ceil(1.5 * s0)))
     c, r = int(round(x)), int(round(y))
     x0, y0, x1, y1 = max(0, c - k), max(0, r - k), min(cols, c + k + 1), min(rows, r + k + 1)
     if x1 - x0 < 5 or y1 - y0 < 5:
