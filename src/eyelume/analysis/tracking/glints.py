@@ -74,6 +74,7 @@ __all__ = [
     "glints_near",
     "faint_glints_near",
     "broad_glints_near",
+    "fit_spot",
     "in_bright_run",
     "glint_blobs",
     "glint_threshold",
@@ -298,7 +299,7 @@ def broad_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
     :func:`faint_glints_near`'s, plus ``sigma_px``) found by :func:`faint_glints_near` with
     discs wider than ``width_px`` — 2 w − 1, then again, up to ``max_width_px`` — until
     ``wanted`` spots are found (or none wider is tried), each centred by
-    :func:`_fit_spot`, for a picture whose glints the default disc missed.
+    :func:`fit_spot`, for a picture whose glints the default disc missed.
 
     A defocused camera spreads a glint into a broad, unsaturated bump (a saturated
     glint blurred by a Gaussian of σ 3 px: 51 DN over the iris, ~11 px across at half its
@@ -320,7 +321,7 @@ def broad_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
             r = math.sqrt(b["area_px"] / math.pi)
             if any(math.dist(o["centre_px"], b["centre_px"]) <= r for o in out):
                 continue
-            fitted = _fit_spot(img, noise, b, params)
+            fitted = fit_spot(img, noise, b, params)
             if (
                 fitted is not None
                 and 2.0 * math.log(2.0) * math.pi * fitted["sigma_px"] ** 2 <= max_area
@@ -331,23 +332,30 @@ def broad_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
     return out
 
 
-def _fit_spot(img: np.ndarray, noise: float, blob: dict, params) -> dict | None:
-    """:func:`broad_glints_near`'s centre of a broad unsaturated spot: a least-squares fit of
+def fit_spot(img: np.ndarray, noise: float, blob: dict, params, min_half: int = 2) -> dict | None:
+    """The centre of an unsaturated spot (:func:`broad_glints_near`'s, and ``detect``'s for
+    :func:`faint_glints_near`'s): ``img`` (rows, cols) the picture, input units; ``noise`` its
+    pixel σ; ``blob`` a dict with centre_px (x, y) px, area_px, peak and base (input units).
+    Raises nothing (a failed fit gives None). A least-squares fit of
     B0 + bx (x − c) + by (y − r) + A exp(−|p − p0|² / 2 s²) to the picture (input units) in the
-    square of half-side ⌈1.5 s₀⌉ px (≥ 2) around the blob's top-hat centroid (c, r rounded),
+    square of half-side ⌈1.5 s₀⌉ px (≥ ``min_half``: 2 for :func:`broad_glints_near`; 3 for
+    ``detect``'s faint glints — 7 parameters on a 5 × 5 window leave a 10 σ glint's height
+    and width confused, s 2.65 px and twice the rise, 0.9 px off) around the blob's top-hat
+    centroid (c, r rounded),
     s₀ = ½ its equivalent radius. The window holds the bump's top, where it dominates; a plane
     takes the local slope of its background (the pupil's blurred edge beside it) — a wider
     window reaches the edge's curvature, which no plane follows (on σ 1.5-4 blurred
     pictures: ≤ 0.45 px off with this window, ≤ 0.6 px with 2.5 s₀, the top-hat's centroid
     ≤ 1.7 px). None when the fit does not rise ``glint_min_snr`` × ``noise``, its σ is not
     within [0.5, 2 s₀ + 2] px or its centre left the window. Returns the blob with centre_px,
-    sigma_px (the fit's s) and peak/base the fit's A + B0 and B0 at p0."""
+    sigma_px (the fit's s), peak/base the fit's A + B0 and B0 at p0, and fit_rms the RMS of
+    its residuals (input units)."""
     from scipy.optimize import least_squares  # (only on this rare path)
 
     rows, cols = img.shape
     x, y = blob["centre_px"]
     s0 = max(1.0, 0.5 * math.sqrt(blob["area_px"] / math.pi))
-    k = max(2, int(math.ceil(1.5 * s0)))
+    k = max(min_half, int(math.ceil(1.5 * s0)))
     c, r = int(round(x)), int(round(y))
     x0, y0, x1, y1 = max(0, c - k), max(0, r - k), min(cols, c + k + 1), min(rows, r + k + 1)
     if x1 - x0 < 5 or y1 - y0 < 5:
@@ -375,7 +383,15 @@ def _fit_spot(img: np.ndarray, noise: float, blob: dict, params) -> dict | None:
     ):
         return None
     base = b0 + bx * (px - c) + by * (py - r)
-    return {**blob, "centre_px": (px, py), "sigma_px": abs(s), "peak": base + a, "base": base}
+    rms = float(np.sqrt(np.mean(resid(q) ** 2)))
+    return {
+        **blob,
+        "centre_px": (px, py),
+        "sigma_px": abs(s),
+        "peak": base + a,
+        "base": base,
+        "fit_rms": rms,
+    }
 
 
 def _faint_blob(c, hat, sub, noise, width_px, max_area, params) -> dict | None:  # noqa: PLR0913
