@@ -108,6 +108,7 @@ from eyelume.analysis.tracking.glints import (
     in_bright_run,
     match_leds,
     match_pattern,
+    pattern_fit,
     pattern_fits,
 )
 from eyelume.analysis.tracking.pupil import (
@@ -1267,7 +1268,7 @@ def _pattern_misfit(glints: list[Glint], led_azimuths_deg, pattern, max_ang: flo
         p_all = np.asarray(pattern, float)
     g = np.array([c for c, _ in pairs], float)
     p = p_all[[k for _, k in pairs]]
-    sol = _pattern_fit(g, p)
+    sol = pattern_fit(g, p)
     s = float(sol[2])
     if not (s > 0 and math.isfinite(s)):
         return "the matched glints lie in the reverse order of their LEDs'"
@@ -1285,17 +1286,6 @@ def _pattern_misfit(glints: list[Glint], led_azimuths_deg, pattern, max_ang: flo
             f"glints put it (tolerance {tol[worst]:.1f} px)"
         )
     return ""
-
-
-def _pattern_fit(g: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Least-squares (t_x, t_y, s) of glints ``g`` (n × 2, px) = t + s ``p`` (their pattern
-    points, n × 2)."""
-    a = np.zeros((2 * len(g), 3))
-    a[0::2, 0] = 1.0
-    a[1::2, 1] = 1.0
-    a[0::2, 2] = p[:, 0]
-    a[1::2, 2] = p[:, 1]
-    return np.linalg.lstsq(a, g.reshape(-1), rcond=None)[0]
 
 
 def _uncertain_strays(glints: list[Glint], missing, pattern, max_ang: float) -> list[Glint]:
@@ -1318,7 +1308,7 @@ def _strays_off_pattern(glints: list[Glint], missing, pattern, max_ang: float) -
     would be)."""
     p_all = np.asarray(pattern, float)
     pairs = [(g.centre_px, g.led) for g in glints if g.led is not None]
-    sol = _pattern_fit(np.array([c for c, _ in pairs], float), p_all[[k for _, k in pairs]])
+    sol = pattern_fit(np.array([c for c, _ in pairs], float), p_all[[k for _, k in pairs]])
     s = float(sol[2])
     if not (s > 0 and math.isfinite(s)):
         return False
@@ -1463,7 +1453,7 @@ def _strong_first(glints: list[Glint], centres, led_azimuths_deg, max_ang: float
         p_all = np.column_stack([np.cos(az), -np.sin(az)])
     else:
         p_all = np.asarray(pattern, float)
-    sol = _pattern_fit(centres[[i for i, _ in pairs]], p_all[[k for _, k in pairs]])
+    sol = pattern_fit(centres[[i for i, _ in pairs]], p_all[[k for _, k in pairs]])
     s = float(sol[2])
     if not (s > 0 and math.isfinite(s)):
         return leds, ambiguous, between
@@ -1606,7 +1596,7 @@ def _as_fit(centres, leds, p_all, sin_half: float) -> dict | None:
         return None
     g = np.asarray(centres, float)[[j for j, _ in pairs]]
     p = p_all[[k for _, k in pairs]]
-    sol = _pattern_fit(g, p)
+    sol = pattern_fit(g, p)
     s = float(sol[2])
     if not (s > 0 and math.isfinite(s)):
         return None
@@ -1641,7 +1631,7 @@ def _contested(centres, chosen, family, p_all):
         sigma = math.nan
         if len(others) >= 2:
             gs, ps = g[[j for j, _ in others]], p_all[[kk for _, kk in others]]
-            sol = _pattern_fit(gs, ps)
+            sol = pattern_fit(gs, ps)
             res = gs - (sol[:2] + sol[2] * ps)
             sigma = float(np.sqrt((res**2).sum() / max(1, 2 * len(others) - 3)))
             where = sol[:2] + sol[2] * p_all[k]

@@ -1080,7 +1080,7 @@ def pattern_fits(
             pairs = [(j, kk) for j, kk in enumerate(leds) if kk is not None]
             if len(pairs) < min_count:
                 continue
-            sol = _ring_fit(g[[j for j, _ in pairs]], p[[kk for _, kk in pairs]])
+            sol = pattern_fit(g[[j for j, _ in pairs]], p[[kk for _, kk in pairs]])
             if not (sol[2] > 0 and np.isfinite(sol).all()):
                 continue
             t2.append(sol[:2])
@@ -1113,8 +1113,9 @@ def _one_each(best, near, inside, n: int) -> list[int | None]:
     return leds
 
 
-def _ring_fit(g: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Least-squares (t_x, t_y, s) of glints ``g`` (m, 2) = t + s ``p`` (m, 2)."""
+def pattern_fit(g: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Least-squares (t_x, t_y, s) of glints ``g`` (n × 2, px) = t + s ``p`` (their pattern
+    points, n × 2): the pattern's shift and scale."""
     a = np.zeros((2 * len(g), 3))
     a[0::2, 0] = 1.0
     a[1::2, 1] = 1.0

@@ -2200,6 +2200,26 @@ def _box_about(e: Ellipse, shape: tuple[int, int]) -> tuple[int, int, int, int] 
     return x0, x1, y0, y1
 
 
+def _interior(wp: WorkPicture, e: Ellipse, bright: np.ndarray, params, shape):
+    """(box (x0, x1, y0, y1), mask over the box) of the pixels inside 0.9 × the ellipse ``e``,
+    off the glints ``bright`` grown by their margin and off missing pixels: the interior
+    :func:`darker_core` and :func:`_smoothed_bright_core` judge; None when the box is empty or
+    fewer than ``pupil_min_area_px`` pixels are left."""
+    box = _box_about(e, shape)
+    if box is None:
+        return None
+    x0, x1, y0, y1 = box
+    inside = _inside_scaled(box, _scaled_args(e), 0.81)
+    glints = bright[y0:y1, x0:x1]
+    if glints.any():
+        inside &= _grown_glints_box(glints, params)[0] == 0
+    if wp.invalid is not None:
+        inside &= ~wp.invalid[y0:y1, x0:x1]
+    if inside.sum() < params.pupil_min_area_px:
+        return None
+    return box, inside
+
+
 def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params) -> str:
     """Why a fitted ellipse holds a darker core (an iris with the pupil inside it), or "".
 
@@ -2213,18 +2233,11 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     5th percentile is a couple of σ under its median. When this finds no core, the interior
     averaged over 5 × 5 px is looked at again (:func:`_smoothed_core`: a pupil only a few σ of
     the pixel noise darker than its iris)."""
-    box = _box_about(e, img.shape)
-    if box is None:
+    interior = _interior(wp, e, bright, params, img.shape)
+    if interior is None:
         return ""
+    box, inside = interior
     x0, x1, y0, y1 = box
-    inside = _inside_scaled(box, _scaled_args(e), 0.81)
-    glints = bright[y0:y1, x0:x1]
-    if glints.any():
-        inside &= _grown_glints_box(glints, params)[0] == 0
-    if wp.invalid is not None:
-        inside &= ~wp.invalid[y0:y1, x0:x1]
-    if inside.sum() < params.pupil_min_area_px:
-        return ""
     vals = img[y0:y1, x0:x1][inside]
     black = wp.lo
     m, p = median_and_percentile(vals, params.core_quantile)
@@ -2610,19 +2623,14 @@ def _smoothed_bright_core(
     centroid inside half the ellipse, fills ≥ ½ of its box and is larger than any glint (as
     :func:`bright_core`). A dark pupil is uniform to its noise: its 95th percentile is
     ~1.6 σ over its median."""
-    box = _box_about(e, img.shape)
-    if box is None:
+    interior = _interior(wp, e, bright, params, img.shape)
+    if interior is None:
         return ""
+    box, inside = interior
     x0, x1, y0, y1 = box
     k = _CORE_BOX
-    inside = _inside_scaled(box, _scaled_args(e), 0.81)
-    glints = bright[y0:y1, x0:x1]
-    if glints.any():
-        inside &= _grown_glints_box(glints, params)[0] == 0
-    if wp.invalid is not None:
-        inside &= ~wp.invalid[y0:y1, x0:x1]
     win = img[y0:y1, x0:x1].astype(np.float32)
-    if min(win.shape) < 2 * k or inside.sum() < params.pupil_min_area_px:
+    if min(win.shape) < 2 * k:
         return ""
     avg = cv2.blur(win, (k, k), borderType=cv2.BORDER_REFLECT)
     whole = cv2.erode(inside.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
