@@ -2276,6 +2276,22 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
 _CORE_BOX = 5
 
 
+def _box_averages(win: np.ndarray, inside: np.ndarray, params):
+    """(values, averaged window, mask) of ``win`` (float32) averaged over :data:`_CORE_BOX` px
+    boxes, at the boxes wholly ``inside`` (none reaches over the ellipse's 0.9 outline or a
+    glint's margin): what :func:`_smoothed_core` and :func:`_smoothed_bright_core` judge. None
+    when the window is under two boxes across or fewer than ``pupil_min_area_px`` are left."""
+    k = _CORE_BOX
+    if min(win.shape) < 2 * k:
+        return None
+    avg = cv2.blur(win, (k, k), borderType=cv2.BORDER_REFLECT)
+    whole = cv2.erode(inside.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
+    vals = avg[whole]
+    if vals.size < params.pupil_min_area_px:
+        return None
+    return vals, avg, whole
+
+
 def _smoothed_core(win: np.ndarray, inside: np.ndarray, e: Ellipse, params) -> str:
     """The darker core of :func:`darker_core` looked for again on the interior averaged over
     :data:`_CORE_BOX` × :data:`_CORE_BOX` boxes, or "": a pupil only a few σ of the pixel
@@ -2289,14 +2305,10 @@ def _smoothed_core(win: np.ndarray, inside: np.ndarray, e: Ellipse, params) -> s
     pupil widen σ as they widen the lower tail, and a uniform pupil (its 5th percentile 1.6 σ
     under its median, its 1st 2.3 σ: p − b = 0.3 (m − b)) has no core by either test."""
     k = _CORE_BOX
-    if min(win.shape) < 2 * k:
+    averaged = _box_averages(win, inside, params)
+    if averaged is None:
         return ""
-    box = cv2.blur(win, (k, k), borderType=cv2.BORDER_REFLECT)
-    # the boxes wholly inside: none reaches over the ellipse's 0.9 outline or a glint's margin
-    whole = cv2.erode(inside.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
-    vals = box[whole]
-    if vals.size < params.pupil_min_area_px:
-        return ""
+    vals = averaged[0]
     b = float(np.percentile(vals, 1.0))  # (the least value is the noise's extreme, ~3.5 σ)
     m, p = median_and_percentile(vals, params.core_quantile)
     upper = vals[vals >= m] - m
@@ -2629,14 +2641,10 @@ def _smoothed_bright_core(
     box, inside = interior
     x0, x1, y0, y1 = box
     k = _CORE_BOX
-    win = img[y0:y1, x0:x1].astype(np.float32)
-    if min(win.shape) < 2 * k:
+    averaged = _box_averages(img[y0:y1, x0:x1].astype(np.float32), inside, params)
+    if averaged is None:
         return ""
-    avg = cv2.blur(win, (k, k), borderType=cv2.BORDER_REFLECT)
-    whole = cv2.erode(inside.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
-    vals = avg[whole]
-    if vals.size < params.pupil_min_area_px:
-        return ""
+    vals, avg, whole = averaged
     m = median(vals)
     q, t = (float(v) for v in np.percentile(vals, [100.0 - params.core_quantile, 99.0]))
     lower = m - vals[vals <= m]
