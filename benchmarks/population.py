@@ -62,20 +62,20 @@ cached picture with the paths' extra Monte Carlo noise added was detected in 2 o
 the detector, not a bias, but the outcome changes, so the cache stays opt-in.
 
 Session 22 (eab3d93; concurrent one-thread pairs at load 15–24, 10:47–11:12 UTC, the 2.6 GHz
-host; CPU seconds are inflated by the busy hyperthreads): ``--frames 3`` 9.5 CPU-s a frame
-with paths (5, 4, 3 samples per pixel) against 6.4 with the cache (3, 3, 2); a second pair,
-the cache 6.1. Where a frame goes now: the renders are about half of it (render against wall:
-20.4 of 42.8 s, 24.3 of 49.2, 16.0 of 31.9 with the cache), the detector the other half — on
-person 0's frame (−10°, −5°) under cProfile, 11 of the frame's 22 s in
-``analysis.tracking.glints.fit_spot`` (29 scipy ``least_squares`` fits with a
-finite-difference Jacobian, ~10 500 Jacobians: ~360 iterations a fit), which came after the
-cache's measurement above (f2ecba1); without the profiler, 2.6 of the frame's 6.4 CPU-s,
-14 of the 29 fits stopping at scipy's evaluation cap (700) rather than converging. In a camera sample with the cache (one 1 × 1 set over
-the 400 × 400 picture, person 0 at (0°, −5°), one thread): 0.69 CPU-s, of which the iris —
-11.5 % of the pixels — takes ~47 % (17.8 µs a sample against 2.7 on the skin, 2.0 on the
-sclera): ~1 µs for each of its 4 continuation rays (iris grid 1: 14.5 µs, 3: 22.7) and
-~13 µs for its light through the cornea from the 8 LEDs (a Newton solve each); without
-lashes the sample costs 0.56 CPU-s.
+host; CPU seconds are inflated by the busy hyperthreads): ``--frames 3`` 9.5 CPU-s a frame with
+paths (5, 4, 3 samples per pixel) against 6.4 with the cache (3, 3, 2); a second pair, the
+cache 6.1. Where a frame goes now: the renders are about half of it (render against wall: 20.4
+of 42.8 s, 24.3 of 49.2, 16.0 of 31.9 with the cache), the detector the other half — on person
+0's frame (−10°, −5°) under cProfile, 11 of the frame's 22 s in
+``analysis.tracking.glints.fit_spot`` (29 scipy ``least_squares`` fits with a finite-difference
+Jacobian, ~10 500 Jacobians: ~360 iterations a fit), which came after the cache's measurement
+above (f2ecba1); without the profiler, 2.6 of the frame's 6.4 CPU-s, 14 of the 29 fits stopping
+at scipy's evaluation cap (700) rather than converging. In a camera sample with the cache (one
+1 × 1 set over the 400 × 400 picture, person 0 at (0°, −5°), one thread): 0.69 CPU-s, of which
+the iris — 11.5 % of the pixels — takes ~47 % (17.8 µs a sample against 2.7 on the skin, 2.0 on
+the sclera): ~1 µs for each of its 4 continuation rays (iris grid 1: 14.5 µs, 3: 22.7) and ~13
+µs without them, ~10.6 of it its light through the cornea from the 8 LEDs (a Newton solve each;
+measured at 4000 iris points); without lashes the sample costs 0.56 CPU-s.
 
 Tried and dropped (session 22): one camera set where the frame's own pilot predicts it meets
 the target (``fast_run._pilot``'s 4 sets of 1 × 1 on 2048 skin pixels; the light paths of two
