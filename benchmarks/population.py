@@ -81,13 +81,20 @@ Tried and dropped (session 22): one camera set where the frame's own pilot predi
 the target (``fast_run._pilot``'s 4 sets of 1 × 1 on 2048 skin pixels; the light paths of two
 sets kept for the glints): 1 sample per pixel on all three frames, 5.0 against 6.1 CPU-s a
 frame (a pair), the same detections — but the pilot's prediction of one set's error (1.30,
-1.40, 0.81 %) is about half what six sets of the same frames measure (2.63, 2.40, 1.97 %,
-each over its target of 1.78, 1.87, 1.77 %: the lashes' thin shadows and strands make a
-skin pixel's samples heavy-tailed, which four sets under-sample), so one set does not meet
-the sensor target and the guarantee would be false. Also: the cornea NEE's path check by
-``occluded`` up to each leg's surface instead of a whole-table nearest-hit search
-(bit-identical pictures): 17.65 against 17.61 µs an iris sample, no gain (the Newton solves
-are the cost: 6.4 of 10.6 µs at 4000 iris points, 3–4 Newton steps for most LEDs).
+1.40, 0.81 %) is about half what six sets of the same frames measure (2.63, 2.40, 1.97 %, each
+over its target of 1.78, 1.87, 1.77 %), so one set does not meet the sensor target and the
+guarantee would be false. Why the pilot errs (person 0's frame, 8 sets of 1 × 1 on its skin): a
+skin pixel's samples are heavy-tailed (relative standard deviation over 8 samples: median
+3.5 %, 75th percentile 16 %, 90th 91 % — the lashes' thin shadows and strands across a pixel),
+so the median's estimate grows with the sets (one set's error with the PSF's scalar variance
+ratio: 1.30 % from 4 sets on the pilot's pixels, 1.69 % from 8), and the PSF's convolution
+spreads the few noisy pixels' variance onto their neighbours beyond what the scalar ratio ΣK²
+says for similar neighbours (2.63 % convolved, from 6 sets). The same bias makes the pilot pick
+2 sets where two of the three frames then need 3 (an extra round, no error: the run measures
+its own). Also: the cornea NEE's path check by ``occluded`` up to each leg's surface instead of
+a whole-table nearest-hit search (bit-identical pictures): 17.65 against 17.61 µs an iris
+sample, no gain (the Newton solves are the cost: 6.4 of 10.6 µs at 4000 iris points, 3–4 Newton
+steps for most LEDs).
 
 Measured, not tried (session 22): one cache per person and vertical gaze, read by the frames
 that differ only in the horizontal one (10 of a person's 15 caches saved, ~0.29 of 0.44
