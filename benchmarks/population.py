@@ -48,12 +48,14 @@ vertex's indirect light read from a per-frame cache instead of its 25 continuati
 the 2.6 GHz host), ``--frames 3`` 3.3 CPU-s a frame at 3, 3, 2 samples per pixel against 8.2
 at 5, 4, 3 (≈ 1 235 against ≈ 3 074 s for 50 people: 2.5×, still ≈ 4× the target; an earlier
 pair at 08:35 gave 3.3 against 8.3). ``--set run.indirect_cache_spacing=6 --set
-run.indirect_cache_grid=16`` beside the default 4 and 12 (a pair): 3.3 against 3.4 CPU-s (its
+run.indirect_cache_grid=16`` beside the then default 4 and 12 (a pair): 3.3 against 3.4 CPU-s (its
 cache costs ~0.34 instead of 0.44 CPU-s and errs a median 0.40 % of a skin pixel instead of
 0.53 %, over cells 1.5× wider). Where its
 frame goes (person 0, one thread): the cache 0.44 CPU-s, a camera sample per pixel 0.71
 (paths: 1.75), the light paths of one 0.22; the skin's median pixel is then at ~0.5 % from its
-sets, under the ~1.7 % target already at the 2 sets a variance needs, and the cache's own
+sets, under the ~1.7 % target already at the 2 sets a variance needs (session 22: six sets
+of the three frames put the two-set picture's delivered median error at 1.86, 1.69, 1.39 %
+against targets of 1.78, 1.87, 1.77 % — near them, hence 3, 3, 2 sets), and the cache's own
 error (same camera seed, two cache seeds) a median 0.5 % of a skin pixel, a fixed pattern the
 reported error leaves out. Person 0's frame (−10°, −5°) was detected with paths at seeds 0, 1,
 2 and at 3 samples per pixel, and not with the cache at seeds 0 and 1 (a sixth candidate glint
@@ -76,6 +78,21 @@ the iris — 11.5 % of the pixels — takes ~47 % (17.8 µs a sample against 2.7
 the sclera): ~1 µs for each of its 4 continuation rays (iris grid 1: 14.5 µs, 3: 22.7) and ~13
 µs without them, ~10.6 of it its light through the cornea from the 8 LEDs (a Newton solve each;
 measured at 4000 iris points); without lashes the sample costs 0.56 CPU-s.
+
+The cache's points every 8th picture point (``run.indirect_cache_spacing`` 8, the default since
+session 22; 4 before; the ``Run`` docstring): the cache costs 0.12 instead of 0.46 CPU-s a
+frame (person 0's and 1's frames, one thread) and a camera sample the same (0.62 against 0.61,
+0.76 against 0.75 CPU-s a sample per pixel: no more samples fall back to paths); the picture
+moves from the 4th-point cache's by a median 0.60 and 0.51 % of a skin pixel where a second
+cache seed at 4 moves it by 0.50 and 0.46 %; region means against paths (the test's 100 × 100
+at 2 pixels, two cache seeds): skin within 0.006 %, sclera 0.19 %, iris 0.06 %, every |z| ≤
+0.7. Two concurrent one-thread pairs at load 16–25 (eab3d93 + the change, 11:22–11:39 UTC):
+``--frames 3 --set run.indirect=cache`` 5.1 against 6.0 CPU-s a frame with ``--set
+run.indirect_cache_spacing=4`` (≈ 1 916 against ≈ 2 258 s for 50 people; both pairs alike to
+0.1 CPU-s): per frame 5.5, 4.7, 5.2 against 6.4, 6.9, 4.7 CPU-s at 3, 2, 2 samples per pixel
+against 3, 3, 2 (the cache's 0.34 CPU-s; person 1's two-set picture now under its target; the
+detector's time, which varies with the picture) and the same detections (person 0 lost, 1 and 2
+detected, the same glints found).
 
 Tried and dropped (session 22): one camera set where the frame's own pilot predicts it meets
 the target (``fast_run._pilot``'s 4 sets of 1 × 1 on 2048 skin pixels; the light paths of two

@@ -1,8 +1,8 @@
 """The fast estimator's irradiance cache (``run.indirect = "cache"``,
 :func:`eyelume.estimators.fast.indirect_cache`) against its continuation paths
 (``run.indirect = "paths"``), on vr-offaxis with the population's eyelashes at a quarter of
-the tracking picture's resolution over the same field (the cache's points then 1 pixel apart,
-the same world spacing as 4 pixels of the 400 × 400 picture).
+the tracking picture's resolution over the same field (the cache's points then 1 or 2 pixels
+apart, the same world spacing as 4 or 8 pixels — the default — of the 400 × 400 picture).
 
 Per region (skin, sclera, iris, pupil: the primary surface map's), the difference of the two
 renders' means against its standard error from the statistics: each render's pixels are
@@ -70,9 +70,10 @@ def _cache_variance_of_means(cs, masks, labels, sides) -> dict[str, float]:
 
 
 @pytest.mark.slow
-def test_cache_agrees_with_paths_by_region():
+@pytest.mark.parametrize("spacing", [1, 2])
+def test_cache_agrees_with_paths_by_region(spacing):
     paths = compile_scene(_scene("paths"))
-    cached = with_indirect_cache(compile_scene(_scene("cache")), 5)
+    cached = with_indirect_cache(compile_scene(_scene("cache", spacing)), 5)
     spp = 64
     light = COLS * COLS * spp
     ep = trace_fast(paths, spp, light, 3)
