@@ -94,6 +94,13 @@ against 3, 3, 2 (the cache's 0.34 CPU-s; person 1's two-set picture now under it
 detector's time, which varies with the picture) and the same detections (person 0 lost, 1 and 2
 detected, the same glints found).
 
+The detector's fit (4b44aaf): ``fit_spot`` with the residual's analytic Jacobian and a cap of
+100 evaluations (a fit not converged by then: no centre; its accepted fits took ≤ 23 before,
+and every fit of the detection tests gives the same answer): ``--frames 3 --set
+run.indirect=cache`` 3.5 against 5.4 CPU-s a frame (a concurrent one-thread pair at load
+19–22, 11:42–11:50 UTC; per frame 4.9, 2.8, 2.8 against 5.6, 5.1, 5.6; the same detections and
+glints): ≈ 1 306 s for 50 people, ≈ 4× the target.
+
 Tried and dropped (session 22): one camera set where the frame's own pilot predicts it meets
 the target (``fast_run._pilot``'s 4 sets of 1 × 1 on 2048 skin pixels; the light paths of two
 sets kept for the glints): 1 sample per pixel on all three frames, 5.0 against 6.1 CPU-s a
