@@ -1,5 +1,6 @@
 """Session 21's new user's pupil cases (issue 13), made up here: a pupil a few σ of the pixel
-noise under a dark iris with saturated glints just inside its edge.
+noise under a dark iris with saturated glints just inside its edge, or at σ 6; a small lit
+pupil dimmer than the sclera; bloomed glints beside a small pupil.
 
 :func:`eye` draws a 640 × 400 frame as that user's generator did: skin, an eye opening of
 sclera, an iris disc and a pupil ellipse (drawn 4× finer and averaged down: anti-aliased
@@ -119,3 +120,28 @@ def test_pupil_ten_dn_under_its_iris_at_sigma_six_is_not_the_iris(seed):
     assert math.dist(d.pupil.centre_px, (390.2, 180.4)) < 1.0
     assert abs(d.pupil.axes_px[0] - 52.0) < 2.0 and abs(d.pupil.axes_px[1] - 44.0) < 2.0
 
+
+@pytest.mark.parametrize("level", [170.0, 200.0])
+def test_small_bright_pupil_dimmer_than_the_sclera_is_named(level):
+    """A lit pupil (170 or 200 DN, radius 20 px) in a 100 DN iris, sclera 190: refused as a
+    bright-pupil picture. Before: "no pupil (merged with the iris?)" — the bright blob was
+    looked for only over the 97th percentile (the sclera's level) and only when larger than the
+    cap on a glint's area (1280 px here; the pupil is 1257 px, the glints ~30)."""
+    img = eye(pupil=level, iris=100.0, pa=20.0, iris_r=60.0, glint_frac=1.5, noise=3.0)
+    d = detect(img, led_azimuths_deg=LEDS)
+    assert not d.ok
+    assert d.failures[0].startswith("no dark pupil: bright-pupil image?"), d.failures
+
+
+@pytest.mark.parametrize("pa,gsig", [(12.0, 2.0), (10.0, 1.5)])
+def test_bloom_beside_a_small_pupil_is_named(pa, gsig):
+    """Four 3000 DN glints (σ 1.5–2 px, blooming to ~6 px) 6 px outside a 20–24 px pupil:
+    filled with the pupil's dark they join its blob, whose outline then lies mostly on them.
+    Refused naming the glints. Before: "no pupil: the dark blob has no sharp edge"."""
+    img = eye(pupil=20.0, iris=110.0, pa=pa, iris_r=70.0, gamp=3000.0, gsig=gsig,
+              glint_frac=(pa + 6.0) / pa)
+    d = detect(img, led_azimuths_deg=LEDS)
+    if d.ok:  # found after all: then right
+        assert math.dist(d.pupil.centre_px, (320.0, 200.0)) < 0.5
+    else:
+        assert d.failures[0].startswith("pupil hidden by glints"), d.failures
