@@ -135,11 +135,14 @@ def test_valid_area_mask_across_the_pupil_is_named(seed):
 
 
 @pytest.mark.parametrize("seed", [0, 1])
-def test_faint_close_up_running_off_the_frame_is_merged_not_cut(seed):
+def test_faint_close_up_running_off_the_frame_is_found_not_cut(seed):
     """A 200 × 200 close-up: a 70 px pupil at 12 DN in an iris of 18 DN (2 σ of the noise σ
     3) that runs off the frame, skin 150 in the corners. Bright skin taken as glints is
     filled with the dark around it at the frame's edge; that was called a pupil cut by the
-    frame. The cause is the pupil's contrast to its iris."""
+    frame, then (session 20) "pupil merged with iris": its 6 DN step was judged against the
+    pixel noise (5 σ needed). Since session 22 the step is judged by its own standard error
+    (a difference of medians over ~3900 and ~900 px: ≈ 0.14 DN, the step ≈ 40 of them) and the
+    pupil is found. Tolerance as the module's (0.5 px)."""
     n = 200
     yy, xx = np.mgrid[0:n, 0:n].astype(float)
     r = np.hypot(xx - 100.3, yy - 99.6)
@@ -151,8 +154,8 @@ def test_faint_close_up_running_off_the_frame_is_merged_not_cut(seed):
     img = cv2.GaussianBlur(img, (0, 0), 1.0)
     img += np.random.default_rng(seed).normal(0, 3.0, img.shape)
     d = detect(u8(img))
-    assert not d.ok and d.pupil is None, d.failures
-    assert d.failures[0].startswith("pupil merged with iris"), d.failures
+    assert d.ok, d.failures
+    assert np.hypot(*np.subtract(d.pupil.centre_px, (100.3, 99.6))) < 0.5
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

@@ -212,8 +212,10 @@ class DetectParams:
         (20°, 0°) before the PSF; the presets' real pupils, lid-cut too, ≥ 0.65). A guess
         between those, checked on the real close-ups (benchmarks/detect_real.py).
     pupil_min_contrast_sigma, pupil_min_contrast : the surround's median must exceed the
-        pupil's by 5 σ of the pixel noise (a 5 σ step is not noise) and by 3 % of the robust
-        range (a guess at the smallest step a camera's shading and vignetting do not make).
+        pupil's by 5 standard errors of that difference of medians (1.2533 σ √(1/N₁ + 1/N₂)
+        over the N₁ and N₂ pixels, σ the pixel noise there: a 5 standard-error step is not
+        noise) and by 3 % of the robust range (a guess at the smallest step a camera's
+        shading and vignetting do not make).
     closing_kernel_px : the closing's elliptical element, px (odd); ``None`` = odd ≥ 3 near
         ``closing_kernel_frac`` (0.15) × the blob's equivalent diameter: 5 px for the 16 px
         pupil of an 87 × 65 picture, 17 px for a 110 px one. A glint is ≲ 0.25 of the pupil

@@ -60,9 +60,10 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    the pupil across its edge.
 5. **Contrast and edge** (:func:`blob_contrast`, :func:`edge_points`, :func:`_refine_smoothed`):
    the pupil's median against its own surround (a ring 0.05–0.1 × its diameter outside), at
-   least 5 σ of the pixel noise there (:func:`_local_noise`: shot noise grows with the signal,
-   so the picture's own σ, set by bright skin, overstates it between a dark pupil and iris)
-   and 3 % of the robust range, else "pupil merged with iris";
+   least 5 standard errors of that difference of medians, 1.2533 σ √(1/N₁ + 1/N₂), σ the
+   pixel noise there (:func:`_local_noise`: shot noise grows with the signal, so the
+   picture's own σ, set by bright skin, overstates it between a dark pupil and iris), and 3 %
+   of the robust range, else "pupil merged with iris";
    the outline points less those on glints (grown by their own radius: a glint's skirt
    brightens the edge under it), the picture's border and invalid pixels; each point moves
    along the normal of a first ellipse fit to where the profile (the mean of three parallel
@@ -1355,8 +1356,13 @@ def _bright_pupil_hint(wp: WorkPicture, f: int, params, img=None) -> str:
     working picture fills glints' pixels with the dark around them, and a bright pupil over
     the glints' floor is taken for one), else on ``wp.u8``. A blob far bigger than any glint
     (4 × ``glint_max_area_frac`` of the picture) is one; a blob bigger than the largest glint
-    (1 ×) only when the ring around it (out to 1.5 × its equivalent radius) is darker than
-    the picture's median: a lit pupil in its iris, not a patch of bright skin."""
+    (1 ×; or, when the picture's glints are known, ``wp.glint_radius``, 4 × the largest of
+    them) only when the ring around it (out to 1.5 × its equivalent radius) is darker than
+    the picture's median: a lit pupil in its iris, not a patch of bright skin. The bright
+    pixels are those over the 97th percentile, then over levels ``pupil_min_contrast_sigma``
+    σ of the noise lower, down to the median: a lit pupil dimmer than the sclera (170 DN in a
+    100 DN iris, sclera 190) is under the 97th percentile but stands alone at a lower level,
+    where the iris around it parts it from the sclera."""
     if img is not None:
         scale = 255.0 / (wp.hi - wp.lo)
         u8 = cv2.convertScaleAbs(np.asarray(img, np.float32), alpha=scale, beta=-wp.lo * scale)
@@ -1368,27 +1374,33 @@ def _bright_pupil_hint(wp: WorkPicture, f: int, params, img=None) -> str:
     thr = percentile(u8, 97)
     if thr >= 254:
         return ""
-    _, bright = cv2.threshold(u8, thr, 255, cv2.THRESH_BINARY)
-    _, lab, stats, cent = cv2.connectedComponentsWithStats(bright, connectivity=8)
     glint_max = params.glint_max_area_frac * rows * cols
-    min_area = max(params.pupil_min_area_px, glint_max)
-    typical = None
-    for c in _level_candidates(lab, stats, cent, min_area, 0.1 * rows * cols, None):
-        what = f"a compact bright blob of {c.area} px at ({c.seed[0]}, {c.seed[1]})"
-        if c.area >= 4 * glint_max:
-            return what
-        if typical is None:
-            k = _stride(u8.size)
-            typical = median(u8[::k, ::k])
-        r = max(2, int(round(0.5 * math.sqrt(c.area / math.pi))))
-        x, y, w, h = c.bbox
-        x0, y0 = max(0, x - r), max(0, y - r)
-        x1, y1 = min(cols, x + w + r), min(rows, y + h + r)
-        blob = (lab[y0:y1, x0:x1] == lab[c.seed[1], c.seed[0]]).astype(np.uint8)
-        ring = cv2.dilate(blob, _disc(2 * r + 1)) > blob
-        if ring.any() and median(u8[y0:y1, x0:x1][ring]) < typical:
-            return f"{what} inside a darker ring"
-    return ""
+    # (the picture's own glints, when known: a lit pupil under the cap on a glint's area, a
+    # 20 px radius one in 640 × 400, is still far larger than any glint there)
+    known = 4.0 * math.pi * wp.glint_radius**2 if wp.glint_radius > 0 else glint_max
+    min_area = max(params.pupil_min_area_px, min(glint_max, known))
+    k = _stride(u8.size)
+    typical = median(u8[::k, ::k])
+    step = max(1.0, params.pupil_min_contrast_sigma * wp.noise)
+    level = thr
+    while True:
+        _, bright = cv2.threshold(u8, level, 255, cv2.THRESH_BINARY)
+        _, lab, stats, cent = cv2.connectedComponentsWithStats(bright, connectivity=8)
+        for c in _level_candidates(lab, stats, cent, min_area, 0.1 * rows * cols, None):
+            what = f"a compact bright blob of {c.area} px at ({c.seed[0]}, {c.seed[1]})"
+            if c.area >= 4 * glint_max:
+                return what
+            r = max(2, int(round(0.5 * math.sqrt(c.area / math.pi))))
+            x, y, w, h = c.bbox
+            x0, y0 = max(0, x - r), max(0, y - r)
+            x1, y1 = min(cols, x + w + r), min(rows, y + h + r)
+            blob = (lab[y0:y1, x0:x1] == lab[c.seed[1], c.seed[0]]).astype(np.uint8)
+            ring = cv2.dilate(blob, _disc(2 * r + 1)) > blob
+            if ring.any() and median(u8[y0:y1, x0:x1][ring]) < typical:
+                return f"{what} inside a darker ring"
+        level -= step
+        if level <= typical:
+            return ""
 
 
 # --- Steps 4–7: the blob at full resolution, closing, outline, edge, fit, support -------------
@@ -1854,12 +1866,20 @@ def blob_contrast(img: np.ndarray, wp: WorkPicture, blob: Blob, params):
     win = wp.u8[blob.y0 : blob.y0 + h, blob.x0 : blob.x0 + w][box]
     noise = _local_noise(win, inside[box], ring[box])
     noise = max(noise, 0.5) * span / 255.0
-    if step < params.pupil_min_contrast_sigma * noise or step < params.pupil_min_contrast * span:
+    # The step is a difference of medians over N₁ and N₂ pixels: judged by its own standard
+    # error, 1.2533 σ √(1/N₁ + 1/N₂) (a median's efficiency against a mean, π/2), as
+    # :func:`_core_step` judges the pupil found inside an iris — not by the pixel noise σ,
+    # which refused a 60 px pupil 2–3 σ under its iris (pupil 20, iris 30 DN at σ 3: ~60
+    # standard errors) whenever the ladder's first blob was that pupil rather than the iris
+    # around it (saturated glints' filled discs joined the iris's ramp differently).
+    n_in, n_ring = int(np.count_nonzero(inside)), int(np.count_nonzero(ring))
+    err = 1.2533 * noise * math.sqrt(1.0 / n_in + 1.0 / n_ring)
+    if step < params.pupil_min_contrast_sigma * err or step < params.pupil_min_contrast * span:
         return Refusal(
             f"pupil merged with iris: the darkest compact blob ({int(blob.area)} px) is only "
-            f"{step / noise:.1f} σ of the pixel noise ({100 * step / span:.0f} % of the range) "
-            f"darker than its surround (need {params.pupil_min_contrast_sigma:.0f} σ and "
-            f"{100 * params.pupil_min_contrast:.0f} %)"
+            f"{step / err:.1f} standard errors ({step / noise:.1f} σ of the pixel noise, "
+            f"{100 * step / span:.0f} % of the range) darker than its surround (need "
+            f"{params.pupil_min_contrast_sigma:.0f} and {100 * params.pupil_min_contrast:.0f} %)"
         )
     return pupil_level, surround
 
@@ -1962,13 +1982,22 @@ def support_of(e: Ellipse, x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
 def _no_edge(blob: Blob, dropped: dict, params) -> str:
     """The refusal of a blob with too few sharp edge points: cut, when more of its outline
     than a pupil may miss (``max_boundary_gap``) runs along the border or the missing pixels
-    (a valid-area mask across the pupil leaves a sliver without a pupil's edge)."""
+    (a valid-area mask across the pupil leaves a sliver without a pupil's edge); hidden by
+    glints, when as much of it lies on glints (grown by their radius): bloomed glints beside a
+    small pupil, filled with its dark, join its blob and leave it little outline of its own
+    (four 3000 DN glints of σ 2 px 6 px outside a 24 px pupil: 152 of 168 outline points)."""
     n_out = len(blob.contour)
     if dropped["border"] > params.max_boundary_gap * n_out:
         return (
             f"pupil cut or hidden: {dropped['border']} of the dark blob's {n_out} outline "
             f"points lie on the picture's border or next to {_MISSING}, and the rest have no "
             "sharp edge"
+        )
+    if dropped["glint"] > params.max_boundary_gap * n_out:
+        return (
+            f"pupil hidden by glints: {dropped['glint']} of the dark blob's {n_out} outline "
+            "points lie on glints or their skirts (glint bloom over the pupil's edge?), and "
+            "the rest have no sharp edge"
         )
     return "no pupil: the dark blob has no sharp edge"
 
@@ -2276,12 +2305,11 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
 _CORE_BOX = 5
 
 
-def _box_averages(win: np.ndarray, inside: np.ndarray, params):
-    """(values, averaged window, mask) of ``win`` (float32) averaged over :data:`_CORE_BOX` px
+def _box_averages(win: np.ndarray, inside: np.ndarray, params, k: int = _CORE_BOX):
+    """(values, averaged window, mask) of ``win`` (float32) averaged over k (:data:`_CORE_BOX`) px
     boxes, at the boxes wholly ``inside`` (none reaches over the ellipse's 0.9 outline or a
     glint's margin): what :func:`_smoothed_core` and :func:`_smoothed_bright_core` judge. None
     when the window is under two boxes across or fewer than ``pupil_min_area_px`` are left."""
-    k = _CORE_BOX
     if min(win.shape) < 2 * k:
         return None
     avg = cv2.blur(win, (k, k), borderType=cv2.BORDER_REFLECT)
@@ -2303,18 +2331,29 @@ def _smoothed_core(win: np.ndarray, inside: np.ndarray, e: Ellipse, params) -> s
     (median(v − m | v ≥ m) / 0.6745, a normal's): measured on the averaged values themselves,
     so noise that is not white (a JPEG's blocks, a blur) and a smooth shading across a real
     pupil widen σ as they widen the lower tail, and a uniform pupil (its 5th percentile 1.6 σ
-    under its median, its 1st 2.3 σ: p − b = 0.3 (m − b)) has no core by either test."""
+    under its median, its 1st 2.3 σ: p − b = 0.3 (m − b)) has no core by either test.
+
+    When the first test finds a darker mode but not the depth, and the fit is wide, both are
+    made again on boxes as wide as half the least pupil it can hold (its minor axis / (2 ×
+    :data:`_GLINT_REACH`): an iris is at most 6 × its pupil across), odd, if wider than
+    :data:`_CORE_BOX`: a pupil in that iris keeps its level in most of its boxes, and white
+    noise falls k×. A pupil 10 DN under its iris at σ 6
+    (134 px iris, 52 × 44 px pupil) is 7.6 σ under at 5 × 5 px and was answered as the iris;
+    at 11 × 11 px it is 16 σ. Shading does not fall with the box, and widens σ with it."""
     k = _CORE_BOX
-    averaged = _box_averages(win, inside, params)
-    if averaged is None:
+    found = _averaged_core(win, inside, params, k)
+    if found is None:
         return ""
-    vals = averaged[0]
-    b = float(np.percentile(vals, 1.0))  # (the least value is the noise's extreme, ~3.5 σ)
-    m, p = median_and_percentile(vals, params.core_quantile)
-    upper = vals[vals >= m] - m
-    sigma = median(upper) / 0.6745 if upper.size else 0.0
-    if not sigma > 0 or p - b > params.core_max_fraction * (m - b):
-        return ""
+    m, p, sigma = found
+    wide = _odd(min(e.a, e.b) / _GLINT_REACH)
+    if m - p < params.core_min_sigma * sigma and wide > _CORE_BOX:
+        # (only when the 5 × 5 px averages already hold a separate darker mode, the first
+        # test, but not deep enough: a uniform pupil's frames pay nothing more)
+        k = wide
+        found = _averaged_core(win, inside, params, k)
+        if found is None:
+            return ""
+        m, p, sigma = found
     if m - p < params.core_min_sigma * sigma:
         return ""
     return (
@@ -2324,6 +2363,24 @@ def _smoothed_core(win: np.ndarray, inside: np.ndarray, e: Ellipse, params) -> s
         f"median ({(m - p) / sigma:.0f} σ of the averaged values' spread): the pupil inside an "
         "iris it was not told from, only a few σ of the pixel noise darker"
     )
+
+
+def _averaged_core(win: np.ndarray, inside: np.ndarray, params, k: int):
+    """:func:`_smoothed_core`'s first test on the interior averaged over k × k px boxes:
+    (median, ``core_quantile`` percentile, σ of the brighter half) when that percentile is
+    within ``core_max_fraction`` of the way from the 1st percentile to the median (a darker
+    mode apart from the rest), else None. The caller judges the depth."""
+    averaged = _box_averages(win, inside, params, k)
+    if averaged is None:
+        return None
+    vals = averaged[0]
+    b = float(np.percentile(vals, 1.0))  # (the least value is the noise's extreme, ~3.5 σ)
+    m, p = median_and_percentile(vals, params.core_quantile)
+    upper = vals[vals >= m] - m
+    sigma = median(upper) / 0.6745 if upper.size else 0.0
+    if not sigma > 0 or p - b > params.core_max_fraction * (m - b):
+        return None
+    return m, p, sigma
 
 
 #: :func:`_small_core`'s box (px a side): noise falls 3×, and a dark spot keeps over half its
@@ -2531,7 +2588,18 @@ def _core_piece(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     if (edge & (comp > 0)).any():
         return Refusal(f"{where} runs to the iris's outline (a shadow or a fold, not a pupil)")
     diam0 = math.sqrt(4.0 * area / math.pi)
-    closed, contour, solidity = _closed_solidity(comp, _odd(params.closing_kernel_frac * diam0))
+    # The glints' pixels (grown by their margin) and missing ones are unknown, not bright: under
+    # the core's convex hull they are forgiven (as :func:`_glint_forgiven` does for the ladder's
+    # blob). Else the discs of saturated glints on a pupil's edge, grown by their own radius,
+    # notch the core (pupil 20, iris 26–30 DN, four glints of 3000 DN: solidity 0.78–0.80,
+    # refused; the same pupil with unsaturated glints: 0.9).
+    shape = comp
+    unseen = inside & ~off
+    if unseen.any():
+        hull = np.zeros_like(comp)
+        cv2.fillConvexPoly(hull, cv2.convexHull(cv2.findNonZero(comp)), 255)
+        shape = np.where(unseen & (hull > 0), np.uint8(255), comp)
+    closed, contour, solidity = _closed_solidity(shape, _odd(params.closing_kernel_frac * diam0))
     if solidity < params.pupil_min_solidity:
         return Refusal(
             f"{where} is not compact (solidity {solidity:.2f} < {params.pupil_min_solidity:.2f})"
