@@ -279,8 +279,10 @@ class DetectParams:
         ≥ 2 px, as the optics spread a glint over several pixels while a hot pixel or a noise
         spike is one; ≤ 0.5 % of the picture.
     glint_min_snr : a glint's peak stands ≥ this many σ of the pixel noise (Immerkær's
-        estimate) above its local background (8: a Gaussian noise speck of 2–4 px is beyond
-        8 σ with probability ≪ 10⁻⁹ per pixel); a noise speck is never a glint.
+        estimate, or the noise of the blob's own surround when larger: a JPEG's, which second
+        differences miss — :func:`~.glints._ring_noise`) above its local background (8: a
+        Gaussian noise speck of 2–4 px is beyond 8 σ with probability ≪ 10⁻⁹ per pixel); a
+        noise speck is never a glint.
     glint_smooth_px : Gaussian σ (px) of the picture the bright mask is taken from (``None`` =
         min(rows, cols) / 480, none below 0.5: 1 px at 640 × 480, where a Monte Carlo render's
         or a noisy camera's glint is then one blob, not a scatter of specks; a glint's size in
@@ -945,6 +947,7 @@ def _fitted_centre(img, noise: float, blob: dict, params) -> dict:
     residuals of RMS over 1.5 × the noise: a right model leaves the noise, ≤ 1 σ (0.74-1.33 σ on
     the unsaturated glints of the session 19-20 pictures), but a glint on the pupil's edge
     sits on a step no plane follows (2.8-3.0 σ; fitted 2.4 px off, its centroid 0.5)."""
+    noise = max(noise, blob.get("noise", 0.0))  # (the local σ it was found with)
     fitted = fit_spot(img, noise, blob, params, min_half=3)
     if fitted is None or fitted["fit_rms"] > 1.5 * noise:
         return blob

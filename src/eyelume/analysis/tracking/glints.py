@@ -255,7 +255,10 @@ def faint_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
     line (a sliver of sclera between the iris and a lid, a gap between lashes) is narrower
     than the disc too, but runs on into its surround. The centroid weighs h above that
     median over the blob and its skirt; ``peak`` is the picture's, ``base`` the peak less the
-    rise on h."""
+    rise on h. ``noise`` is raised to the window's σ read at coarser lags
+    (:func:`_coarse_noise`) and, blob by blob, to its surround's (:func:`_ring_noise`): a
+    JPEG's noise, which second differences miss; each blob dict carries the σ it was judged
+    by (``noise``)."""
     rows, cols = img.shape
     if not noise > 0:
         return []
@@ -266,6 +269,7 @@ def faint_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
     if x1 - x0 < width_px or y1 - y0 < width_px:
         return []
     sub = np.ascontiguousarray(img[y0:y1, x0:x1], dtype=np.float32)
+    noise = max(noise, _coarse_noise(sub))
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (width_px, width_px))
     hat = cv2.morphologyEx(sub, cv2.MORPH_TOPHAT, disc, borderType=cv2.BORDER_REPLICATE)
     above = cv2.compare(hat, 0.5 * params.glint_min_snr * noise, cv2.CMP_GE)
@@ -275,12 +279,42 @@ def faint_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
     hat = hat.astype(np.float64)
     out = []
     for c, h in zip(contours, hier[0], strict=True):
-        b = None if h[3] != -1 else _faint_blob(c, hat, sub, noise, width_px, max_area, params)
+        b = (
+            None
+            if h[3] != -1
+            else _faint_blob(c, (hat, above), sub, noise, width_px, max_area, params)
+        )
         if b is None:
             continue
         x, y = b["centre_px"][0] + x0, b["centre_px"][1] + y0
         if math.hypot(x - cx, y - cy) <= radius:
             out.append({**b, "centre_px": (x, y)})
+    return out
+
+
+def _coarse_noise(sub: np.ndarray, lags=(2, 4)) -> float:
+    """The pixel noise σ of the window ``sub`` (float32) seen at coarser lags: Immerkær's
+    σ (:func:`~.pupil.noise_sigma`: 1.4826 median|M * I| / 6) with the mask's taps ``k`` px
+    apart, for k in ``lags``, the largest (0 for a window too small). For white noise every
+    lag gives the same σ (the mask's coefficients are the same, its taps independent); a
+    JPEG's quantisation removes the high frequencies the one-pixel mask sees and keeps the
+    blocks' low ones, which make the specks a glint must stand out of (noise of 3 DN coded at
+    quality 75: σ 0.25 DN at lag 1, 1.0 at lag 2, 2.0 at lag 4 over the whole picture)."""
+    out = 0.0
+    rows, cols = sub.shape
+    for k in lags:
+        if rows <= 2 * k or cols <= 2 * k:
+            continue
+
+        def at(dr: int, dc: int, k=k) -> np.ndarray:
+            return sub[k + dr * k : rows - k + dr * k, k + dc * k : cols - k + dc * k]
+
+        r = (
+            4 * at(0, 0)
+            - 2 * (at(-1, 0) + at(1, 0) + at(0, -1) + at(0, 1))
+            + (at(-1, -1) + at(-1, 1) + at(1, -1) + at(1, 1))
+        )
+        out = max(out, 1.4826 * float(np.median(np.abs(r))) / 6.0)
     return out
 
 
@@ -415,10 +449,12 @@ def fit_spot(img: np.ndarray, noise: float, blob: dict, params, min_half: int = 
     }
 
 
-def _faint_blob(c, hat, sub, noise, width_px, max_area, params) -> dict | None:  # noqa: PLR0913
+def _faint_blob(c, hats, sub, noise, width_px, max_area, params) -> dict | None:  # noqa: PLR0913
     """One blob of :func:`faint_glints_near` from its outline ``c`` on the top-hat ``hat``
-    (float64) of the window ``sub`` (the picture's, float32), in the window's pixels; None
-    when it is not a glint there (its doc)."""
+    (float64) of the window ``sub`` (the picture's, float32), in the window's pixels, ``hats``
+    = (hat, the mask of its pixels over the blobs' threshold, uint8); None when it is not a
+    glint there (its doc)."""
+    hat, above = hats
     bx, by, bw, bh = cv2.boundingRect(c)
     if bw * bh < params.glint_min_area_px or min(bw, bh) > width_px:
         return None
@@ -434,6 +470,9 @@ def _faint_blob(c, hat, sub, noise, width_px, max_area, params) -> dict | None: 
     r = max(2, int(math.ceil(math.sqrt(area / math.pi))))
     d_own = cv2.distanceTransform(cv2.bitwise_not(own), cv2.DIST_L2, 3)
     base, peak, wgt, spread = _skirt(hat[wy0:wy1, wx0:wx1], own, d_own, d_own, False, float(r))
+    cx, cy = bx + 0.5 * (bw - 1), by + 0.5 * (bh - 1)
+    req = math.sqrt(area / math.pi)
+    noise = max(noise, _ring_noise(hat, above, cx, cy, req + r, req + r + _RING_PX))
     tot = float(wgt.sum())
     if peak - base < params.glint_min_snr * noise or spread > _UNEVEN_SPREAD * noise or tot <= 0:
         return None
@@ -449,6 +488,7 @@ def _faint_blob(c, hat, sub, noise, width_px, max_area, params) -> dict | None: 
         "peak": top,
         "flux": tot,
         "base": top - (peak - base),
+        "noise": noise,
     }
 
 
@@ -581,6 +621,11 @@ def glint_blobs(
     light, weighed when within its skirt). The
     spot's whole profile, down to its background, then weighs in: a saturated (flat-topped)
     spot's centroid is as smooth in its position as an unsaturated one's.
+
+    A blob's ``rise`` is judged against the larger of ``noise`` and its surround's own σ
+    (:func:`_ring_noise`, the other blobs and their skirts left out): a JPEG's sclera specks
+    8–10 DN over a surround whose σ is 1.5 DN are no glints where the picture's σ (0.5 DN)
+    would pass them. Each blob dict carries the σ it was judged by (``noise``).
 
     With ``min_rise`` > 0 (an over-exposed picture, :func:`saturated_floor`) a blob's peak must
     also stand ``min_rise`` (input units) above its local background — a saturated fragment of
@@ -768,6 +813,13 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     has_others = cv2.countNonZero(others) > 0
     d_oth = cv2.distanceTransform(cv2.bitwise_not(others), cv2.DIST_L2, 3) if has_others else d_own
     base, peak, wgt, spread = _skirt(raw, own, d_own, d_oth, has_others, float(m))
+    req = math.sqrt(area / math.pi)
+    cx, cy = bx + 0.5 * (bw - 1), by + 0.5 * (bh - 1)
+    local = _ring_noise_off(img, bright, cx, cy, req + m, req + m + _RING_PX, m)
+    if local > noise:
+        # (rise = max(glint_min_snr × noise, min_rise): the noise's part, with the local σ)
+        rise = max(rise, params.glint_min_snr * local)
+        noise = local
     if peak - base < rise:
         return None  # a noise speck (or, over-exposed, saturated skin), not a glint
     tot = float(wgt.sum())
@@ -785,9 +837,17 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     ys = np.arange(y0, y1, dtype=np.float64)
     cx = float((wgt.sum(axis=0) * xs).sum() / wtot)
     centre = (cx, float((wgt.sum(axis=1) * ys).sum() / wtot))
-    return {"centre_px": centre, "area_px": float(area), "peak": peak, "flux": tot, "base": base}
+    return {
+        "centre_px": centre,
+        "area_px": float(area),
+        "peak": peak,
+        "flux": tot,
+        "base": base,
+        "noise": noise,
+    }
 
 
+_RING_PX = 4.0  # width of the ring _ring_noise reads, px: ≥ 4 pixels a sector for a 1 px blob
 _UNEVEN_SPREAD = 8.0  # × the noise σ: a flat surround's 10–90 % spread is 2.56 σ
 _UNEVEN_SHARE = 0.25  # × the glint's largest weight: a step that pulls its centroid
 
@@ -871,6 +931,66 @@ def _skirt(raw, own, d_own, d_oth, has_others, m):
                 v = np.float64(raw[i, j]) - base
                 wgt[i, j] = v if v >= 0.0 else 0.0
     return base, peak, wgt, spread
+
+
+_SECTORS = 8  # of a blob's surround, for _ring_noise
+
+
+def _ring_noise_off(img, bright, cx, cy, r_in, r_out, m):  # noqa: PLR0913
+    """:func:`_ring_noise` about a blob of :func:`glint_blobs` with the other bright blobs
+    (``bright``, uint8, the picture's shape, the blob's own pixels too) and their skirts
+    (``m`` px around them) left out: a neighbouring glint's skirt is no noise."""
+    rows, cols = img.shape
+    x0, x1 = max(0, int(cx - r_out) - 1), min(cols, int(cx + r_out) + 3)
+    y0, y1 = max(0, int(cy - r_out) - 1), min(rows, int(cy + r_out) + 3)
+    k = 2 * int(math.ceil(m)) + 1
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+    near = cv2.dilate(np.ascontiguousarray(bright[y0:y1, x0:x1]), disc)
+    return _ring_noise(np.ascontiguousarray(img[y0:y1, x0:x1]), near, cx - x0, cy - y0, r_in, r_out)
+
+
+@njit(cache=True, nogil=True)
+def _ring_noise(img, others, cx, cy, r_in, r_out):
+    """The local pixel noise σ about a spot centred at (``cx``, ``cy``) (px, in ``img``'s
+    pixels): the pixels at r_in < d ≤ r_out from it and off ``others`` (uint8, ``img``'s
+    shape: 0 where no other bright blob is), in ``_SECTORS`` sectors of direction; in each
+    with ≥ 4 pixels 1.4826 × the median absolute deviation from its median; σ the median of
+    those (0 when none).
+
+    The picture's σ (Immerkær's, from second differences: :func:`~.pupil.noise_sigma`) misses
+    noise that is not white — a JPEG's coding removes the high frequencies it sees and keeps
+    the blocks' low ones (sclera noise of 3 DN: σ 0.5 DN at quality 75, while the sclera keeps
+    specks 8–10 DN over their surround, 1.5 DN of σ here). Sectors, not the whole ring: an
+    edge through the surround (the pupil's beside a glint on it, the limbus) or a lash lifts
+    the spread of the few sectors it crosses, and the noise is in every sector. (Callers leave
+    out the other glints and their skirts: on a small picture — paper2005's 87 × 65, glints
+    3-4 px apart — they fill most sectors.)"""
+    rows, cols = img.shape
+    x0, x1 = max(0, int(cx - r_out)), min(cols, int(cx + r_out) + 2)
+    y0, y1 = max(0, int(cy - r_out)), min(rows, int(cy + r_out) + 2)
+    cap = (x1 - x0) * (y1 - y0)
+    vals = np.empty(max(cap, 1), np.float64)
+    sect = np.empty(max(cap, 1), np.int64)
+    n = 0
+    for i in range(y0, y1):
+        for j in range(x0, x1):
+            d2 = (i - cy) ** 2 + (j - cx) ** 2
+            if r_in * r_in < d2 <= r_out * r_out and others[i, j] == 0:
+                a = math.atan2(i - cy, j - cx)
+                sect[n] = min(int((a + math.pi) / (2.0 * math.pi) * _SECTORS), _SECTORS - 1)
+                vals[n] = np.float64(img[i, j])
+                n += 1
+    sig = np.empty(_SECTORS, np.float64)
+    ns = 0
+    for k in range(_SECTORS):
+        v = vals[:n][sect[:n] == k]
+        if v.size >= 4:
+            med = np.median(v)
+            sig[ns] = 1.4826 * np.median(np.abs(v - med))
+            ns += 1
+    if ns == 0:
+        return 0.0
+    return np.sort(sig[:ns])[(ns - 1) // 2]
 
 
 def default_max_angle(led_azimuths_deg: Sequence[float]) -> float:
