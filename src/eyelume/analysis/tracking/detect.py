@@ -1696,15 +1696,14 @@ def _too_bright(glints: list[Glint], params) -> list[tuple[int, float]]:
     return out
 
 
-def _spot_shape(img: np.ndarray, g: Glint) -> tuple[float, float, float | None] | None:
-    """The shape of glint ``g``'s spot in ``img``: (λ₁, λ₂, σ²) px² — the second moments
-    (major, minor) of its light above its background B (weights I − B) over its core, the
-    pixels connected to its centre rising ≥ ½ of its rise P − B, and σ² its edge's width as a
-    Gaussian's, from the areas of the core (a₅₀) and of the pixels rising ≥ 1/10 connected to
-    it (a₁₀): for a Gaussian spot of σ, clipped or not, r₁₀² − r₅₀² = 2 σ² ln 5, so
-    σ² = (a₁₀ − a₅₀) / (2π ln 5). None when the spot has no background or no core, or when
-    that region reaches the window's edge (3 equivalent radii + 4 px out): another bright
-    thing — a lid, the sclera, a highlight — joins it, and its shape is not the spot's."""
+def _spot_shape(img: np.ndarray, g: Glint) -> float | None:
+    """The width of glint ``g``'s spot edge in ``img`` as a Gaussian's σ² (px²), from the area
+    a₅₀ of its core — the pixels connected to its centre rising ≥ ½ of its rise P − B over
+    its background B — and the area a₁₀ of the pixels rising ≥ 1/10 connected to it: for a
+    Gaussian spot of σ, clipped or not, r₁₀² − r₅₀² = 2 σ² ln 5, so σ² = (a₁₀ − a₅₀) /
+    (2π ln 5). None when the spot has no background or no core, or when that region reaches
+    the window's edge (3 equivalent radii + 4 px out): another bright thing — a lid, the
+    sclera, a highlight — joins it, and its edge is not the spot's alone."""
     if g.base is None or not g.peak > g.base:
         return None
     rows, cols = img.shape
@@ -1714,28 +1713,18 @@ def _spot_shape(img: np.ndarray, g: Glint) -> tuple[float, float, float | None] 
     y0, x0 = max(0, r - h), max(0, c - h)
     win = np.asarray(img[y0 : r + h + 1, x0 : c + h + 1], np.float64) - g.base
     rise = g.peak - g.base
-    core_n, core_lab = cv2.connectedComponents((win >= 0.5 * rise).astype(np.uint8), connectivity=8)
+    _, core_lab = cv2.connectedComponents((win >= 0.5 * rise).astype(np.uint8), connectivity=8)
     # The core the centroid lies in (or, between two pixels, the nearest core pixel's).
     yy, xx = np.nonzero(core_lab)
     if not len(yy):
         return None
     near = int(np.argmin((yy + y0 - y) ** 2 + (xx + x0 - x) ** 2))
-    core = core_lab == core_lab[yy[near], xx[near]]
-    wt = np.where(core, win, 0.0)
-    tot = float(wt.sum())
-    gy, gx = np.mgrid[0 : win.shape[0], 0 : win.shape[1]]
-    mx, my = float((wt * gx).sum() / tot), float((wt * gy).sum() / tot)
-    cxx = float((wt * (gx - mx) ** 2).sum() / tot)
-    cyy = float((wt * (gy - my) ** 2).sum() / tot)
-    cxy = float((wt * (gx - mx) * (gy - my)).sum() / tot)
-    half = math.sqrt(max(0.25 * (cxx - cyy) ** 2 + cxy**2, 0.0))
-    lam1, lam2 = 0.5 * (cxx + cyy) + half, 0.5 * (cxx + cyy) - half
+    a50 = int(np.count_nonzero(core_lab == core_lab[yy[near], xx[near]]))
     _, low_lab = cv2.connectedComponents((win >= 0.1 * rise).astype(np.uint8), connectivity=8)
     low = low_lab == low_lab[yy[near], xx[near]]
     if low[0, :].any() or low[-1, :].any() or low[:, 0].any() or low[:, -1].any():
-        return None  # joined to a lid, the sclera or another spot: not this spot's shape alone
-    a10, a50 = int(np.count_nonzero(low)), int(np.count_nonzero(core))
-    return lam1, lam2, (a10 - a50) / (2.0 * math.pi * math.log(5.0))
+        return None  # joined to a lid, the sclera or another spot: not this spot's edge alone
+    return (int(np.count_nonzero(low)) - a50) / (2.0 * math.pi * math.log(5.0))
 
 
 def _unlike_the_others(img: np.ndarray, glints: list[Glint], params) -> list[tuple[int, str]]:
@@ -1756,15 +1745,14 @@ def _unlike_the_others(img: np.ndarray, glints: list[Glint], params) -> list[tup
     out = []
     for i in m:
         own = shapes[i]
-        others = [shapes[j] for j in m if j != i and shapes[j] is not None]
-        if own is None or len(others) < 2:
+        edges = [shapes[j] for j in m if j != i and shapes[j] is not None]
+        if own is None or len(edges) < 2:
             continue
-        edges = [o[2] for o in others if o[2] is not None]
-        if own[2] is not None and edges and min(edges) >= 1.0 and own[2] < 0.25 * min(edges):
+        if min(edges) >= 1.0 and own < 0.25 * min(edges):
             out.append(
                 (
                     i,
-                    f"its edge is {math.sqrt(max(own[2], 0.0)):.2f} px wide as a Gaussian's σ, "
+                    f"its edge is {math.sqrt(max(own, 0.0)):.2f} px wide as a Gaussian's σ, "
                     f"the other glints' {math.sqrt(min(edges)):.2f} px or more: no blur skirt "
                     "(stuck or hot pixels, not the optics' image of an LED)",
                 )
@@ -1799,20 +1787,23 @@ def _off_the_others(glints: list[Glint], led_azimuths_deg, pattern, params) -> t
     q = 0.5 * nu * (params.glint_off_fit_p ** (-2.0 / nu) - 1.0)  # F(2, ν) upper quantile
     floor2 = params.glint_centroid_floor_px**2
     worst = None
+    # Normal equations of g = t + s p over all glints, each one's rows then taken out.
+    rows_x = np.column_stack([np.ones(len(m)), np.zeros(len(m)), p[:, 0]])
+    rows_y = np.column_stack([np.zeros(len(m)), np.ones(len(m)), p[:, 1]])
+    ata = rows_x.T @ rows_x + rows_y.T @ rows_y
+    atb = rows_x.T @ c[:, 0] + rows_y.T @ c[:, 1]
     for j in range(len(m)):
-        keep = np.arange(len(m)) != j
-        a = np.zeros((2 * (len(m) - 1), 3))
-        a[0::2, 0] = 1.0
-        a[1::2, 1] = 1.0
-        a[0::2, 2] = p[keep, 0]
-        a[1::2, 2] = p[keep, 1]
-        sol, *_ = np.linalg.lstsq(a, c[keep].reshape(-1), rcond=None)
+        ax, ay = rows_x[j], rows_y[j]
+        mat = ata - np.outer(ax, ax) - np.outer(ay, ay)
+        if abs(np.linalg.det(mat)) < 1e-12:
+            continue
+        inv = np.linalg.inv(mat)
+        sol = inv @ (atb - ax * c[j, 0] - ay * c[j, 1])
         if not (sol[2] > 0 and np.isfinite(sol).all()):
             continue
-        res = c[keep].reshape(-1) - a @ sol
-        var = float(res @ res) / nu
-        inv = np.linalg.pinv(a.T @ a)
-        ax, ay = np.array([1.0, 0.0, p[j, 0]]), np.array([0.0, 1.0, p[j, 1]])
+        keep = np.arange(len(m)) != j
+        res = c[keep] - (sol[:2] + sol[2] * p[keep])
+        var = float((res**2).sum()) / nu
         h = 0.5 * float(ax @ inv @ ax + ay @ inv @ ay)
         d = float(np.hypot(*(c[j] - (sol[:2] + sol[2] * p[j]))))
         allowed = math.sqrt(2.0 * q * (var * (1.0 + h) + floor2))
