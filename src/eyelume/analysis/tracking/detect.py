@@ -320,6 +320,13 @@ class DetectParams:
         copy of it — the LEDs' reflections in spectacles, or strays beside the pupil — passes
         for them (glasses-frame at 160 × 120, where the corneal glints are single pixels: two
         such strays answered frames 35–41° off); an unmatched glint may be a missing LED's.
+    glint_off_fit_p : with ≥ 4 glints matched, one lying farther from where the others' fit
+        puts its LED's glint than the others' scatter allows at this false-alarm rate (1 %)
+        is a stray, not that LED's glint (:func:`_off_the_others`).
+    glint_centroid_floor_px : the least uncertainty (px, per coordinate) granted a glint's
+        centroid in that test (½ px: a spot one or two pixels across is placed to about its
+        pixel when its own bias — clipping, a pupil edge or a missing pixel under it — does
+        not show in the other glints' scatter).
     pattern_min_scale : with ``led_pattern_px`` given, the fitted pattern's scale must be within
         [this, 1 / this] of the prediction (0.5: a guess — the glints' spread changes with gaze
         and with the eye's distance by far less than 2×; strays beside the pupil do not keep it).
@@ -393,6 +400,8 @@ class DetectParams:
     min_glints_when_missing: int = 3
     pattern_min_scale: float = 0.5
     glint_max_flux_ratio: float = 3.0
+    glint_off_fit_p: float = 0.01
+    glint_centroid_floor_px: float = 0.5
 
 
 @dataclass
@@ -1064,13 +1073,13 @@ def _bright_blobs_near(  # noqa: PLR0913 - the picture, its scale, the pupil, th
 
 
 def _match_or_look_wider(  # noqa: PLR0913 - the glints, the LEDs, the pupil, the second look
-    glints, specks, led_azimuths_deg, pattern, params, wider, pupil=None
+    glints, specks, led_azimuths_deg, pattern, params, wider, pupil=None, img=None
 ):
     """Step 5b: :func:`_match_glints` on ``glints`` (``pupil``: the :class:`Pupil` or None); with
     an LED left without a glint and ``wider`` given (a callable: :func:`_wider_look` bound to
     the frame), its answer when it has one. Returns (glints, specks, messages, LEDs without a
     glint)."""
-    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil)
+    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil, img)
     if missing and wider is not None:
         again = wider()
         if again is not None:
@@ -1172,7 +1181,7 @@ def _wider_look(  # noqa: PLR0913 - the picture, its scale, the pupil, the LEDs
     )
     kept, _ = _glints_off_missing(blobs, invalid, img, value_range, noise, params)
     glints, specks = _split_specks(kept, params)
-    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil)
+    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil, img)
     if missing or lost:
         return None
     max_ang = params.match_max_angle_deg
@@ -1692,8 +1701,124 @@ def _too_bright(glints: list[Glint], params) -> list[tuple[int, float]]:
     return out
 
 
-def _match_glints(
-    glints: list[Glint], led_azimuths_deg, params, pattern=None, pupil=None
+def _spot_shape(img: np.ndarray, g: Glint) -> float | None:
+    """The width of glint ``g``'s spot edge in ``img`` as a Gaussian's σ² (px²), from the area
+    a₅₀ of its core — the pixels connected to its centre rising ≥ ½ of its rise P − B over
+    its background B — and the area a₁₀ of the pixels rising ≥ 1/10 connected to it: for a
+    Gaussian spot of σ, clipped or not, r₁₀² − r₅₀² = 2 σ² ln 5, so σ² = (a₁₀ − a₅₀) /
+    (2π ln 5). None when the spot has no background or no core, or when that region reaches
+    the window's edge (3 equivalent radii + 4 px out): another bright thing — a lid, the
+    sclera, a highlight — joins it, and its edge is not the spot's alone."""
+    if g.base is None or not g.peak > g.base:
+        return None
+    rows, cols = img.shape
+    x, y = g.centre_px
+    h = int(math.ceil(3.0 * math.sqrt(g.area_px / math.pi))) + 4
+    c, r = min(cols - 1, max(0, round(x))), min(rows - 1, max(0, round(y)))
+    y0, x0 = max(0, r - h), max(0, c - h)
+    win = np.asarray(img[y0 : r + h + 1, x0 : c + h + 1], np.float64) - g.base
+    rise = g.peak - g.base
+    _, core_lab = cv2.connectedComponents((win >= 0.5 * rise).astype(np.uint8), connectivity=8)
+    # The core the centroid lies in (or, between two pixels, the nearest core pixel's).
+    yy, xx = np.nonzero(core_lab)
+    if not len(yy):
+        return None
+    near = int(np.argmin((yy + y0 - y) ** 2 + (xx + x0 - x) ** 2))
+    a50 = int(np.count_nonzero(core_lab == core_lab[yy[near], xx[near]]))
+    _, low_lab = cv2.connectedComponents((win >= 0.1 * rise).astype(np.uint8), connectivity=8)
+    low = low_lab == low_lab[yy[near], xx[near]]
+    if low[0, :].any() or low[-1, :].any() or low[:, 0].any() or low[:, -1].any():
+        return None  # joined to a lid, the sclera or another spot: not this spot's edge alone
+    return (int(np.count_nonzero(low)) - a50) / (2.0 * math.pi * math.log(5.0))
+
+
+def _unlike_the_others(img: np.ndarray, glints: list[Glint], params) -> list[tuple[int, str]]:
+    """Matched glints whose spot is not one point source's image like the other matched
+    glints' — (index, why) each; none unless ≥ 3 are matched:
+
+    - no skirt: a spot whose edge (σ² of :func:`_spot_shape`, the width of its fall from ½
+      to 1/10 of its rise) is under ¼ of the narrowest other glint's (less than half as wide)
+      when those are ≥ 1 px² — a point source's image has the optics' blur whatever its
+      brightness or clipping, and a block of stuck or hot pixels has none (a 2 × 2 block at
+      230 DN where LED 1's glint was absent, beside glints of σ 1.4 px, matched to LED 1).
+      With sharper optics (the others' edges under 1 px) a block and a glint differ by less
+      than the pixel grid shows: not judged."""
+    m = [i for i, g in enumerate(glints) if g.led is not None]
+    if len(m) < 3:
+        return []
+    shapes = {i: _spot_shape(img, glints[i]) for i in m}
+    out = []
+    for i in m:
+        own = shapes[i]
+        edges = [shapes[j] for j in m if j != i and shapes[j] is not None]
+        if own is None or len(edges) < 2:
+            continue
+        if min(edges) >= 1.0 and own < 0.25 * min(edges):
+            out.append(
+                (
+                    i,
+                    f"its edge is {math.sqrt(max(own, 0.0)):.2f} px wide as a Gaussian's σ, "
+                    f"the other glints' {math.sqrt(min(edges)):.2f} px or more: no blur skirt "
+                    "(stuck or hot pixels, not the optics' image of an LED)",
+                )
+            )
+    return out
+
+
+def _off_the_others(glints: list[Glint], led_azimuths_deg, pattern, params) -> tuple | None:
+    """The matched glint lying farthest, beyond what the others' scatter allows, from where the
+    other matched glints put its LED's glint — (index, distance px, allowed px, the others'
+    residual σ px) — or None (fewer than 4 matched, or none beyond).
+
+    Each matched glint j is left out in turn and the others fitted as g_k = t + s p_k
+    (:func:`_pattern_misfit`'s model, least squares; p_k :func:`_pattern_points`). With m
+    others their residual gives σ̂ per coordinate on ν = 2m − 3 degrees of freedom, and the
+    prediction at p_j has variance σ̂² (1 + h) per coordinate (h the fit's leverage there,
+    averaged over x and y). A glint of that LED lies at d from the prediction with
+    d² / (2 σ² (1 + h)) an F(2, ν) variable, whose upper quantile at ``glint_off_fit_p`` is
+    (ν / 2) (p^(−2/ν) − 1); the glint's own centroid bias, which the others' scatter need
+    not show, adds ``glint_centroid_floor_px`` in quadrature. A glint beyond that is not
+    the LED's (a stray 20–45° off a missing LED's direction on a 4-LED ring, matched by
+    direction, or a lit patch 21 px from where a hidden LED's glint would be: both answered
+    ``ok``). The others must number ≥ 3 (ν ≥ 3): two others fit t and s exactly and show no
+    scatter."""
+    m = [(i, g.led) for i, g in enumerate(glints) if g.led is not None]
+    if len(m) < 4:
+        return None
+    p_all = _pattern_points(led_azimuths_deg, pattern)
+    c = np.array([glints[i].centre_px for i, _ in m], float)
+    p = p_all[[k for _, k in m]]
+    nu = 2 * (len(m) - 1) - 3
+    q = 0.5 * nu * (params.glint_off_fit_p ** (-2.0 / nu) - 1.0)  # F(2, ν) upper quantile
+    floor2 = params.glint_centroid_floor_px**2
+    worst = None
+    # Normal equations of g = t + s p over all glints, each one's rows then taken out.
+    rows_x = np.column_stack([np.ones(len(m)), np.zeros(len(m)), p[:, 0]])
+    rows_y = np.column_stack([np.zeros(len(m)), np.ones(len(m)), p[:, 1]])
+    ata = rows_x.T @ rows_x + rows_y.T @ rows_y
+    atb = rows_x.T @ c[:, 0] + rows_y.T @ c[:, 1]
+    for j in range(len(m)):
+        ax, ay = rows_x[j], rows_y[j]
+        mat = ata - np.outer(ax, ax) - np.outer(ay, ay)
+        if abs(np.linalg.det(mat)) < 1e-12:
+            continue
+        inv = np.linalg.inv(mat)
+        sol = inv @ (atb - ax * c[j, 0] - ay * c[j, 1])
+        if not (sol[2] > 0 and np.isfinite(sol).all()):
+            continue
+        keep = np.arange(len(m)) != j
+        res = c[keep] - (sol[:2] + sol[2] * p[keep])
+        var = float((res**2).sum()) / nu
+        h = 0.5 * float(ax @ inv @ ax + ay @ inv @ ay)
+        d = float(np.hypot(*(c[j] - (sol[:2] + sol[2] * p[j]))))
+        allowed = math.sqrt(2.0 * q * (var * (1.0 + h) + floor2))
+        if d > allowed and (worst is None or d / allowed > worst[1] / worst[2]):
+            worst = (m[j][0], d, allowed, math.sqrt(var))
+    return worst
+
+
+def _match_glints(  # noqa: PLR0913 - the glints, the LEDs, the pupil, the picture
+    glints: list[Glint], led_azimuths_deg, params, pattern=None, pupil=None, img=None
 ) -> tuple[list[str], list[int]]:
     """Step 5b: each glint's LED (in place, :func:`_assign_leds`, or with ``pattern`` and ≥ 3
     glints :func:`~.glints.match_pattern` when it matches as many); the messages and the LEDs
@@ -1704,7 +1829,11 @@ def _match_glints(
     glints fit (:func:`_rival_patterns`: two patterns — a spectacle reflection — chosen by
     ``pupil``, the :class:`Pupil` or None, or refused; two glints at one LED's place told
     apart by the fit or that LED left out); a matched glint far brighter than the others is
-    left out (:func:`_too_bright`, a warning)."""
+    left out (:func:`_too_bright`, a warning), and so is one whose spot in ``img`` (the
+    picture, or None: not judged) is not a point source's image like the others' — no blur
+    skirt (:func:`_unlike_the_others`); one lying farther from where the
+    other matched glints put its LED's glint than their scatter allows
+    (:func:`_off_the_others`: a stray) is unmatched and the frame refused."""
     n_led = len(led_azimuths_deg)
     centres = np.array([g.centre_px for g in glints]).reshape(-1, 2)
     max_ang = params.match_max_angle_deg
@@ -1728,6 +1857,29 @@ def _match_glints(
         for g in glints:
             g.led = None
         return rival, list(range(n_led))
+    skip, stray = _leave_out(glints, led_azimuths_deg, pattern, params, img, notes)
+    matched = {g.led for g in glints if g.led is not None}
+    missing = [k for k in range(n_led) if k not in matched]
+    if stray:
+        return [*notes, stray], missing
+    if not missing:
+        return notes + _all_matched(glints, led_azimuths_deg, pattern, max_ang, params), []
+    lost, missing = _some_missing(glints, missing, led_azimuths_deg, pattern, max_ang, params,
+                                  ambiguous, between, skip)  # fmt: skip
+    return notes + lost, missing
+
+
+def _leave_out(  # noqa: PLR0913 - the glints, the LEDs, the picture, the notes
+    glints: list[Glint], led_azimuths_deg, pattern, params, img, notes: list[str]
+) -> tuple[set[int], str]:
+    """:func:`_match_glints`'s matched glints that are not their LED's, unmatched in place:
+    far brighter than the others (:func:`_too_bright`) or unlike the others' spots
+    (:func:`_unlike_the_others`; ``img`` the picture, None: not judged) — a warning each
+    appended to ``notes``, their LEDs left without a glint — or a stray off the others' fit
+    (:func:`_off_the_others`). Returns the indices of the first kinds (blobs at an LED's
+    place, no strays) and the error for a stray ("" none): a stray taken for a glint means
+    strays are about, and what is left of the matching is not trusted (design frames: with
+    the stray left out, a second one, also matched, passed the pattern checks)."""
     bright = _too_bright(glints, params)
     for i, ratio in bright:
         x, y = glints[i].centre_px
@@ -1739,13 +1891,25 @@ def _match_glints(
         )
         glints[i].led = None
     skip = {i for i, _ in bright}
-    matched = {g.led for g in glints if g.led is not None}
-    missing = [k for k in range(n_led) if k not in matched]
-    if not missing:
-        return notes + _all_matched(glints, led_azimuths_deg, pattern, max_ang, params), []
-    lost, missing = _some_missing(glints, missing, led_azimuths_deg, pattern, max_ang, params,
-                                  ambiguous, between, skip)  # fmt: skip
-    return notes + lost, missing
+    for i, why in [] if img is None else _unlike_the_others(img, glints, params):
+        x, y = glints[i].centre_px
+        notes.append(
+            f"warning: LED {glints[i].led}'s glint left out: the blob at ({x:.1f}, {y:.1f}): {why}"
+        )
+        glints[i].led = None
+        skip.add(i)
+    off = _off_the_others(glints, led_azimuths_deg, pattern, params)
+    if off is None:
+        return skip, ""
+    i, d, allowed, sigma = off
+    x, y = glints[i].centre_px
+    k, glints[i].led = glints[i].led, None
+    return skip, (
+        f"glint lost: the glint at ({x:.1f}, {y:.1f}) matched to LED {k} lies {d:.1f} px from "
+        f"where the other matched glints put that LED's glint (at most {allowed:.1f} px by "
+        f"their fit's residual {sigma:.2f} px): a stray taken for a glint — the matching is "
+        "uncertain"
+    )
 
 
 def _some_missing(  # noqa: PLR0913 - the matching and its notes
@@ -1897,7 +2061,7 @@ def detect(
             led_azimuths_deg, led_pattern_px, params, invalid,
         )  # fmt: skip
         glints, specks, lost, missing_leds = _match_or_look_wider(
-            glints, specks, led_azimuths_deg, led_pattern_px, params, wider, pupil
+            glints, specks, led_azimuths_deg, led_pattern_px, params, wider, pupil, img
         )
         errors += [m for m in lost if not m.startswith("warning: ")]
         lost_note = [m for m in lost if m.startswith("warning: ")]
