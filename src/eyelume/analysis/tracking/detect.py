@@ -1716,20 +1716,53 @@ def _spot_shape(img: np.ndarray, g: Glint) -> float | None:
     h = int(math.ceil(3.0 * math.sqrt(g.area_px / math.pi))) + 4
     c, r = min(cols - 1, max(0, round(x))), min(rows - 1, max(0, round(y)))
     y0, x0 = max(0, r - h), max(0, c - h)
-    win = np.asarray(img[y0 : r + h + 1, x0 : c + h + 1], np.float64) - g.base
-    rise = g.peak - g.base
-    _, core_lab = cv2.connectedComponents((win >= 0.5 * rise).astype(np.uint8), connectivity=8)
-    # The core the centroid lies in (or, between two pixels, the nearest core pixel's).
-    yy, xx = np.nonzero(core_lab)
-    if not len(yy):
-        return None
-    near = int(np.argmin((yy + y0 - y) ** 2 + (xx + x0 - x) ** 2))
-    a50 = int(np.count_nonzero(core_lab == core_lab[yy[near], xx[near]]))
-    _, low_lab = cv2.connectedComponents((win >= 0.1 * rise).astype(np.uint8), connectivity=8)
-    low = low_lab == low_lab[yy[near], xx[near]]
-    if low[0, :].any() or low[-1, :].any() or low[:, 0].any() or low[:, -1].any():
+    win = np.ascontiguousarray(img[y0 : r + h + 1, x0 : c + h + 1], dtype=np.float64)
+    t50, t10 = g.base + 0.5 * (g.peak - g.base), g.base + 0.1 * (g.peak - g.base)
+    # The core the centroid lies in (or, between two pixels, the nearest core pixel's): the
+    # centroid's own pixel when it is a core pixel (then the nearest), else the nearest one.
+    ny, nx = r - y0, c - x0
+    if not win[ny, nx] >= t50:
+        yy, xx = np.nonzero(win >= t50)
+        if not len(yy):
+            return None
+        near = int(np.argmin((yy + y0 - y) ** 2 + (xx + x0 - x) ** 2))
+        ny, nx = int(yy[near]), int(xx[near])
+    a50, a10, edge = _connected_areas(win, t50, t10, ny, nx)
+    if edge:
         return None  # joined to a lid, the sclera or another spot: not this spot's edge alone
-    return (int(np.count_nonzero(low)) - a50) / (2.0 * math.pi * math.log(5.0))
+    return (a10 - a50) / (2.0 * math.pi * math.log(5.0))
+
+
+@njit(cache=True, nogil=True)
+def _connected_areas(win, t50, t10, ny, nx):
+    """(a₅₀, a₁₀, at the edge) for :func:`_spot_shape`: the pixel counts of the 8-connected
+    regions of ``win`` (float64) ≥ ``t50`` and ≥ ``t10`` holding pixel (``ny``, ``nx``) (which
+    is ≥ t50), and whether the second touches the window's edge (a flood fill each)."""
+    rows, cols = win.shape
+    out = np.zeros(3, np.int64)
+    stack = np.empty(rows * cols, np.int64)
+    for pass_, t in enumerate((t50, t10)):
+        seen = np.zeros((rows, cols), np.bool_)
+        seen[ny, nx] = True
+        stack[0] = ny * cols + nx
+        top, n, edge = 1, 0, False
+        while top:
+            top -= 1
+            i, j = divmod(stack[top], cols)
+            n += 1
+            if i == 0 or j == 0 or i == rows - 1 or j == cols - 1:
+                edge = True
+            for di in (-1, 0, 1):
+                for dj in (-1, 0, 1):
+                    u, v = i + di, j + dj
+                    if 0 <= u < rows and 0 <= v < cols and not seen[u, v] and win[u, v] >= t:
+                        seen[u, v] = True
+                        stack[top] = u * cols + v
+                        top += 1
+        out[pass_] = n
+        if pass_ == 1:
+            out[2] = edge
+    return out[0], out[1], bool(out[2])
 
 
 def _unlike_the_others(img: np.ndarray, glints: list[Glint], params) -> list[tuple[int, str]]:
@@ -1797,6 +1830,22 @@ def _off_the_others(glints: list[Glint], led_azimuths_deg, pattern, params) -> t
     rows_y = np.column_stack([np.zeros(len(m)), np.ones(len(m)), p[:, 1]])
     ata = rows_x.T @ rows_x + rows_y.T @ rows_y
     atb = rows_x.T @ c[:, 0] + rows_y.T @ c[:, 1]
+    # A bound first (the common case: every glint where the others put it). With all glints
+    # fitted (residual e_j, hat block H_jj), glint j's distance from the others' prediction is
+    # |(I − H_jj)⁻¹ e_j| ≤ |e_j| / (1 − tr H_jj) (H_jj is positive semi-definite: its largest
+    # eigenvalue ≤ its trace), and the allowed distance ≥ √(2 q) × the floor (σ̂² ≥ 0, h ≥ 0):
+    # when every glint's bound is under that, none is beyond and the loop is skipped.
+    if abs(np.linalg.det(ata)) > 1e-12:
+        inv_all = np.linalg.inv(ata)
+        beta = inv_all @ atb
+        e = c - (beta[:2] + beta[2] * p)
+        tr = np.einsum("ij,jk,ik->i", rows_x, inv_all, rows_x) + np.einsum(
+            "ij,jk,ik->i", rows_y, inv_all, rows_y
+        )
+        if np.all(tr < 1.0):
+            bound = np.hypot(e[:, 0], e[:, 1]) / (1.0 - tr)
+            if float(bound.max()) < math.sqrt(2.0 * q * floor2):
+                return None
     for j in range(len(m)):
         ax, ay = rows_x[j], rows_y[j]
         mat = ata - np.outer(ax, ax) - np.outer(ay, ay)
