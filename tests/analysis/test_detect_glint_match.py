@@ -27,13 +27,14 @@ def _ring(centre=CENTRE, r=30.0, leds=LEDS) -> list[tuple[float, float]]:
     ]
 
 
-def _eye(spots, seed=0) -> np.ndarray:
-    """The eye picture (module doc) with ``spots`` (x, y, amplitude DN, σ px) added."""
+def _eye(spots, seed=0, pupil_r=22.0) -> np.ndarray:
+    """The eye picture (module doc; its pupil's radius ``pupil_r`` px) with ``spots`` (x, y,
+    amplitude DN, σ px) added."""
     y, x = np.mgrid[0:360, 0:480].astype(float)
     r = np.hypot(x - CENTRE[0], y - CENTRE[1])
     img = np.where(((x - CENTRE[0]) / 170) ** 2 + ((y - CENTRE[1]) / 90) ** 2 < 1, 190.0, 160.0)
     img = np.where(r < 70, 100.0, img)
-    img = np.where(r < 22, 20.0, img)
+    img = np.where(r < pupil_r, 20.0, img)
     for sx, sy, amp, sig in spots:
         img += amp * np.exp(-((x - sx) ** 2 + (y - sy) ** 2) / (2 * sig**2))
     img += np.random.default_rng(seed).normal(0, 3.0, img.shape)

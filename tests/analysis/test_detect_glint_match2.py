@@ -14,6 +14,7 @@ import pytest
 
 from eyelume.analysis.tracking import detect
 from eyelume.analysis.tracking.detect import DetectParams, Glint, _off_the_others
+from tests.analysis.test_detect_glint_match import _eye as _match_eye
 
 CENTRE = (200.6, 150.2)
 LEDS = (0.0, 90.0, 180.0, 270.0)
@@ -27,16 +28,9 @@ def _at(azimuth_deg: float, r: float = RING, centre=CENTRE) -> tuple[float, floa
 
 
 def _eye(spots, seed=0) -> np.ndarray:
-    """The eye picture (module doc) with ``spots`` (x, y, amplitude DN, σ px) added."""
-    y, x = np.mgrid[0:360, 0:480].astype(float)
-    r = np.hypot(x - CENTRE[0], y - CENTRE[1])
-    img = np.where(((x - CENTRE[0]) / 170) ** 2 + ((y - CENTRE[1]) / 90) ** 2 < 1, 190.0, 160.0)
-    img = np.where(r < 70, 100.0, img)
-    img = np.where(r < 30, 20.0, img)
-    for sx, sy, amp, sig in spots:
-        img += amp * np.exp(-((x - sx) ** 2 + (y - sy) ** 2) / (2 * sig**2))
-    img += np.random.default_rng(seed).normal(0, 3.0, img.shape)
-    return np.clip(np.round(img), 0, 255).astype(np.uint8)
+    """The eye picture (module doc: a 30 px pupil) with ``spots`` (x, y, amplitude DN, σ px)
+    added (test_detect_glint_match's picture)."""
+    return _match_eye(spots, seed, pupil_r=30.0)
 
 
 @pytest.mark.parametrize(
