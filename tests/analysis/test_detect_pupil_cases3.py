@@ -138,8 +138,15 @@ def test_bloom_beside_a_small_pupil_is_named(pa, gsig):
     """Four 3000 DN glints (σ 1.5–2 px, blooming to ~6 px) 6 px outside a 20–24 px pupil:
     filled with the pupil's dark they join its blob, whose outline then lies mostly on them.
     Refused naming the glints. Before: "no pupil: the dark blob has no sharp edge"."""
-    img = eye(pupil=20.0, iris=110.0, pa=pa, iris_r=70.0, gamp=3000.0, gsig=gsig,
-              glint_frac=(pa + 6.0) / pa)
+    img = eye(
+        pupil=20.0,
+        iris=110.0,
+        pa=pa,
+        iris_r=70.0,
+        gamp=3000.0,
+        gsig=gsig,
+        glint_frac=(pa + 6.0) / pa,
+    )
     d = detect(img, led_azimuths_deg=LEDS)
     if d.ok:  # found after all: then right
         assert math.dist(d.pupil.centre_px, (320.0, 200.0)) < 0.5
