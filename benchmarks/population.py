@@ -99,7 +99,11 @@ The detector's fit (4b44aaf): ``fit_spot`` with the residual's analytic Jacobian
 and every fit of the detection tests gives the same answer): ``--frames 3 --set
 run.indirect=cache`` 3.5 against 5.4 CPU-s a frame (a concurrent one-thread pair at load
 19–22, 11:42–11:50 UTC; per frame 4.9, 2.8, 2.8 against 5.6, 5.1, 5.6; the same detections and
-glints): ≈ 1 306 s for 50 people, ≈ 4× the target.
+glints): ≈ 1 306 s for 50 people, ≈ 4× the target. At the end of session 22 (75c86e2, with
+the detector's stray and no-skirt checks; one run, 13:02–13:06 UTC, load 2–4 as the CI ended, not
+a pair): 2.8 CPU-s a frame (3.2, 2.6, 2.6), ≈ 1 041 s, and person 0's frame (−10°, −5°) detected
+with the cache (5 of 5 glints: the sixth candidate that shifted the match is no longer matched) —
+one seed, not yet the evidence to make the cache the default.
 
 Tried and dropped (session 22): one camera set where the frame's own pilot predicts it meets
 the target (``fast_run._pilot``'s 4 sets of 1 × 1 on 2048 skin pixels; the light paths of two
