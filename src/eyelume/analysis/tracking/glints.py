@@ -68,6 +68,8 @@ import numpy as np
 from numba import njit
 from scipy.optimize import linear_sum_assignment
 
+from .pupil import immerkaer_abs
+
 __all__ = [
     "find_glints",
     "glint_smoothing",
@@ -305,16 +307,7 @@ def _coarse_noise(sub: np.ndarray, lags=(2, 4)) -> float:
     for k in lags:
         if rows <= 2 * k or cols <= 2 * k:
             continue
-
-        def at(dr: int, dc: int, k=k) -> np.ndarray:
-            return sub[k + dr * k : rows - k + dr * k, k + dc * k : cols - k + dc * k]
-
-        r = (
-            4 * at(0, 0)
-            - 2 * (at(-1, 0) + at(1, 0) + at(0, -1) + at(0, 1))
-            + (at(-1, -1) + at(-1, 1) + at(1, -1) + at(1, 1))
-        )
-        out = max(out, 1.4826 * float(np.median(np.abs(r))) / 6.0)
+        out = max(out, 1.4826 * float(np.median(immerkaer_abs(sub, k))) / 6.0)
     return out
 
 

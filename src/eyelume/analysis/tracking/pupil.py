@@ -772,17 +772,29 @@ def noise_sigma(u8: np.ndarray) -> float:
     if u8.dtype.kind in "iu" and u8.itemsize <= 2:
         # Integer pictures: |M * I| in integers (exact) by one compiled pass, its median counted.
         return 1.4826 * median(_immerkaer_abs(u8, k)) / 6.0
-    wide = np.float32  # others in float32
+    return 1.4826 * median(immerkaer_abs(u8, 1, k)) / 6.0  # others in float32
 
-    def at(dr: int, dc: int) -> np.ndarray:  # every k-th pixel's neighbour (dr, dc)
-        return u8[1 + dr : rows - 1 + dr : k, 1 + dc : cols - 1 + dc : k].astype(wide)
+
+def immerkaer_abs(img: np.ndarray, lag: int = 1, step: int = 1) -> np.ndarray:
+    """|M * I| of Immerkær's mask (:func:`noise_sigma`) with its taps ``lag`` px apart, at every
+    ``step``-th pixel each way at least ``lag`` px inside ``img`` (rows, cols; any real dtype),
+    in float32: a 2-D array ((rows − 2 lag) / step, (cols − 2 lag) / step), rounded up. Lag 1
+    is :func:`noise_sigma`'s; wider lags see the low-frequency noise a JPEG keeps
+    (:func:`~.glints._coarse_noise`). The caller checks ``img`` is over 2 lag px each way."""
+    rows, cols = img.shape
+
+    def at(dr: int, dc: int) -> np.ndarray:  # every step-th pixel's neighbour (dr, dc) lags off
+        return img[
+            lag + dr * lag : rows - lag + dr * lag : step,
+            lag + dc * lag : cols - lag + dc * lag : step,
+        ].astype(np.float32, copy=False)
 
     r = (
         4 * at(0, 0)
         - 2 * (at(-1, 0) + at(1, 0) + at(0, -1) + at(0, 1))
         + (at(-1, -1) + at(-1, 1) + at(1, -1) + at(1, 1))
     )
-    return 1.4826 * median(np.abs(r)) / 6.0
+    return np.abs(r)
 
 
 @njit(cache=True, nogil=True)
