@@ -464,6 +464,8 @@ def _faint_blob(c, hats, sub, noise, width_px, max_area, params) -> dict | None:
     d_own = cv2.distanceTransform(cv2.bitwise_not(own), cv2.DIST_L2, 3)
     base, peak, wgt, spread = _skirt(hat[wy0:wy1, wx0:wx1], own, d_own, d_own, False, float(r))
     cx, cy = bx + 0.5 * (bw - 1), by + 0.5 * (bh - 1)
+    if peak - base < params.glint_min_snr * noise:
+        return None  # (already under the bar: the local σ below can only raise it)
     req = math.sqrt(area / math.pi)
     noise = max(noise, _ring_noise(hat, above, cx, cy, req + r, req + r + _RING_PX))
     tot = float(wgt.sum())
@@ -806,6 +808,8 @@ def _blob(c, approx_area, above, bright, img, limits, params) -> dict | None:
     has_others = cv2.countNonZero(others) > 0
     d_oth = cv2.distanceTransform(cv2.bitwise_not(others), cv2.DIST_L2, 3) if has_others else d_own
     base, peak, wgt, spread = _skirt(raw, own, d_own, d_oth, has_others, float(m))
+    if peak - base < rise:
+        return None  # (already under the bar: the local σ below can only raise it)
     req = math.sqrt(area / math.pi)
     cx, cy = bx + 0.5 * (bw - 1), by + 0.5 * (bh - 1)
     local = _ring_noise_off(img, bright, cx, cy, req + m, req + m + _RING_PX, m)
@@ -932,14 +936,155 @@ _SECTORS = 8  # of a blob's surround, for _ring_noise
 def _ring_noise_off(img, bright, cx, cy, r_in, r_out, m):  # noqa: PLR0913
     """:func:`_ring_noise` about a blob of :func:`glint_blobs` with the other bright blobs
     (``bright``, uint8, the picture's shape, the blob's own pixels too) and their skirts
-    (``m`` px around them) left out: a neighbouring glint's skirt is no noise."""
+    (``m`` px around them) left out: a neighbouring glint's skirt is no noise.
+
+    The skirts are ``bright`` dilated by a disc 2 ⌈m⌉ + 1 px across (OpenCV's elliptical
+    element) on the window holding the ring; the dilation is looked up at the ring's pixels
+    only (:func:`_ring_noise_near`: the same pixels left out as ``cv2.dilate`` of the window,
+    without dilating all of it)."""
     rows, cols = img.shape
     x0, x1 = max(0, int(cx - r_out) - 1), min(cols, int(cx + r_out) + 3)
     y0, y1 = max(0, int(cy - r_out) - 1), min(rows, int(cy + r_out) + 3)
     k = 2 * int(math.ceil(m)) + 1
-    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-    near = cv2.dilate(np.ascontiguousarray(bright[y0:y1, x0:x1]), disc)
-    return _ring_noise(np.ascontiguousarray(img[y0:y1, x0:x1]), near, cx - x0, cy - y0, r_in, r_out)
+    runs = _DISC_RUNS.get(k)
+    if runs is None:
+        runs = _DISC_RUNS[k] = _element_runs(cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
+    return _ring_noise_near(
+        img, bright, (x0, y0, x1, y1), runs, (cx - x0, cy - y0, float(r_in), float(r_out))
+    )
+
+
+def _element_runs(disc: np.ndarray) -> np.ndarray:
+    """(k, 2) int64: each row's first and last column of a structuring element (uint8 k × k)
+    whose rows are each one run (OpenCV's ellipses are); an empty row (k, −1). ValueError for
+    any other element."""
+    k = disc.shape[0]
+    runs = np.empty((k, 2), np.int64)
+    for a in range(k):
+        on = np.flatnonzero(disc[a])
+        if on.size and on[-1] - on[0] + 1 != on.size:
+            raise ValueError("a structuring element's row is not one run")
+        runs[a] = (on[0], on[-1]) if on.size else (k, -1)
+    return runs
+
+
+_DISC_RUNS: dict[int, np.ndarray] = {}  # _ring_noise_off's elliptical elements' rows, by size
+
+
+@njit(cache=True, nogil=True)
+def _ring_noise_near(img, bright, box, runs, ring):
+    """:func:`_ring_noise` on the window ``box`` = (x0, y0, x1, y1) of ``img``, its ``others``
+    ``bright`` (uint8, ``img``'s shape) dilated within the window by a k × k element anchored at
+    its centre (``runs``: its rows' first and last columns, :func:`_element_runs`) — as
+    ``cv2.dilate`` of the window's crop, whose border adds nothing: dst(y, x) is set when
+    src(y + a − k // 2, x + b − k // 2) is for any (a, b) of the element — worked out at the
+    ring's pixels only, from each window row's running count of bright pixels; ``ring`` =
+    (cx, cy, r_in, r_out) in the window's pixels."""
+    x0, y0, x1, y1 = box
+    cx, cy, r_in, r_out = ring
+    h, w = y1 - y0, x1 - x0
+    k = runs.shape[0]
+    half = k // 2
+    count = np.zeros((h, w + 1), np.int64)  # count[y, x]: bright pixels of row y left of x
+    for y in range(h):
+        for x in range(w):
+            count[y, x + 1] = count[y, x] + (bright[y0 + y, x0 + x] != 0)
+    rx0, rx1 = max(0, int(cx - r_out)), min(w, int(cx + r_out) + 2)
+    ry0, ry1 = max(0, int(cy - r_out)), min(h, int(cy + r_out) + 2)
+    cap = max((rx1 - rx0) * (ry1 - ry0), 1)
+    vals = np.empty(cap, np.float64)
+    sect = np.empty(cap, np.int64)
+    n = 0
+    for i in range(ry0, ry1):
+        for j in range(rx0, rx1):
+            d2 = (i - cy) ** 2 + (j - cx) ** 2
+            if not (r_in * r_in < d2 <= r_out * r_out):
+                continue
+            hit = False
+            for a in range(k):
+                sy = i + a - half
+                if 0 <= sy < h and runs[a, 0] <= runs[a, 1]:
+                    lo = max(0, j + runs[a, 0] - half)
+                    hi = min(w, j + runs[a, 1] - half + 1)
+                    if lo < hi and count[sy, hi] > count[sy, lo]:
+                        hit = True
+                        break
+            if not hit:
+                sect[n] = _sector(i - cy, j - cx)
+                vals[n] = np.float64(img[y0 + i, x0 + j])
+                n += 1
+    return _sector_sigma(vals, sect, n)
+
+
+@njit(cache=True, nogil=True)
+def _sector(dy, dx):
+    """The sector (0 … 7) of direction (dx, dy): ⌊(atan2(dy, dx) + π) / 2π × 8⌋, at most 7.
+    Clear of the sectors' edges (the axes and diagonals: the angle over 1e-9 rad from each,
+    where the float arithmetic's errors are ~1e-15) by the signs of dx, dy and |dx| − |dy|;
+    on and near them by the formula itself (what _ring_noise always used)."""
+    ax, ay = abs(dx), abs(dy)
+    if min(ax, ay, abs(ax - ay)) > 1e-9 * (ax + ay):
+        if dy < 0:
+            if dx < 0:
+                return 0 if ax > ay else 1
+            return 2 if ay > ax else 3
+        if dx > 0:
+            return 4 if ay < ax else 5
+        return 6 if ay > ax else 7
+    ang = math.atan2(dy, dx)
+    return min(int((ang + math.pi) / (2.0 * math.pi) * _SECTORS), _SECTORS - 1)
+
+
+@njit(cache=True, nogil=True)
+def _sector_sigma(vals, sect, n):
+    """:func:`_ring_noise`'s σ from the ring's first ``n`` pixels ``vals`` and their sectors
+    ``sect`` (0 … ``_SECTORS`` − 1): in each sector with ≥ 4 pixels 1.4826 × the median
+    absolute deviation from its median; the median of those (0 when none). The pixels are put
+    in per-sector runs in one pass (a sector's median is its values', in any order)."""
+    count = np.zeros(_SECTORS + 1, np.int64)
+    for t in range(n):
+        count[sect[t] + 1] += 1
+    for k in range(_SECTORS):
+        count[k + 1] += count[k]  # count[k]: where sector k's run starts
+    fill = count[:_SECTORS].copy()
+    runs = np.empty(max(n, 1), np.float64)
+    for t in range(n):
+        runs[fill[sect[t]]] = vals[t]
+        fill[sect[t]] += 1
+    sig = np.empty(_SECTORS, np.float64)
+    dev = np.empty(max(n, 1), np.float64)
+    ns = 0
+    for k in range(_SECTORS):
+        if count[k + 1] - count[k] >= 4:
+            v = runs[count[k] : count[k + 1]]
+            med = _sorted_median(v)
+            d = dev[: v.size]
+            for t in range(v.size):
+                d[t] = abs(v[t] - med)
+            sig[ns] = 1.4826 * _sorted_median(d)
+            ns += 1
+    if ns == 0:
+        return 0.0
+    return np.sort(sig[:ns])[(ns - 1) // 2]
+
+
+@njit(cache=True, nogil=True)
+def _sorted_median(v):
+    """The median of ``v`` (float64, 1-D, not empty), sorted in place (insertion sort: a
+    sector's few dozen pixels): the middle value, or the mean of the middle two as
+    ``np.median`` takes it ((a + b) / 2) — the same float."""
+    n = v.size
+    for i in range(1, n):
+        x = v[i]
+        j = i - 1
+        while j >= 0 and v[j] > x:
+            v[j + 1] = v[j]
+            j -= 1
+        v[j + 1] = x
+    h = n >> 1
+    if n & 1:
+        return v[h]
+    return (v[h - 1] + v[h]) / 2
 
 
 @njit(cache=True, nogil=True)
@@ -969,21 +1114,10 @@ def _ring_noise(img, others, cx, cy, r_in, r_out):
         for j in range(x0, x1):
             d2 = (i - cy) ** 2 + (j - cx) ** 2
             if r_in * r_in < d2 <= r_out * r_out and others[i, j] == 0:
-                a = math.atan2(i - cy, j - cx)
-                sect[n] = min(int((a + math.pi) / (2.0 * math.pi) * _SECTORS), _SECTORS - 1)
+                sect[n] = _sector(i - cy, j - cx)
                 vals[n] = np.float64(img[i, j])
                 n += 1
-    sig = np.empty(_SECTORS, np.float64)
-    ns = 0
-    for k in range(_SECTORS):
-        v = vals[:n][sect[:n] == k]
-        if v.size >= 4:
-            med = np.median(v)
-            sig[ns] = 1.4826 * np.median(np.abs(v - med))
-            ns += 1
-    if ns == 0:
-        return 0.0
-    return np.sort(sig[:ns])[(ns - 1) // 2]
+    return _sector_sigma(vals, sect, n)
 
 
 def default_max_angle(led_azimuths_deg: Sequence[float]) -> float:
