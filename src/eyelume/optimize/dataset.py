@@ -92,6 +92,7 @@ from pydantic import Field, field_validator, model_validator
 from eyelume.errors import EyelumeError, GeometryError, SceneError, StoreError
 from eyelume.json_files import dumps, write_json
 from eyelume.optimize.render_budget import (  # noqa: F401 - the dataset's budget names
+    NO_EYE_PLANE,
     PILOT_COLS,
     PILOT_SAMPLES,
     SENSOR_NOISE_MARGIN,
@@ -502,10 +503,9 @@ def picture_scene(b: _Bases, plan: PicturePlan) -> tuple[Scene, dict | None]:
     return apply_overrides(sc, {**gaze, **_NO_EYE_PLANE}), entry
 
 
-#: A picture's scene has an eye-plane receiver of one bin: the fast render computes the eye
-#: plane's direct irradiance apart from the picture (0.3–0.7 s a picture on 21 × 15 bins), which
-#: no label uses; the picture is the same bit for bit (tests/optimize/test_dataset.py).
-_NO_EYE_PLANE = {"eye_plane.cols": 1, "eye_plane.rows": 1}
+#: A picture's scene has an eye-plane receiver of one bin (:data:`~eyelume.optimize.
+#: render_budget.NO_EYE_PLANE`): no label uses the eye plane.
+_NO_EYE_PLANE = NO_EYE_PLANE
 
 
 @dataclass

@@ -51,7 +51,7 @@ from eyelume.detectors.sensor import digitize
 from eyelume.errors import SceneError
 from eyelume.estimators.interrupt import PartialRun, run_unit
 from eyelume.optimize.delta_study import PAPER_CHOICE, with_placement
-from eyelume.optimize.render_budget import MAX_SAMPLES_PER_PIXEL, noise_options
+from eyelume.optimize.render_budget import MAX_SAMPLES_PER_PIXEL, NO_EYE_PLANE, noise_options
 from eyelume.render import RenderOptions, render
 from eyelume.scene.io import apply_overrides
 from eyelume.scene.model import Scene
@@ -101,7 +101,9 @@ def render_frame(  # noqa: PLR0913 - the frame, its budget, and whether to keep 
     the optical gaze needed lies beyond the eye's ±30°. ``keep_picture``: the frame keeps the
     digital picture and the LEDs' layout (``Frame.picture``) for :func:`reanalyse_frame`."""
     gh, gv = optical_gaze_for(scene, h, v)
-    sc = apply_overrides(scene, {"eye.gaze_horizontal_deg": gh, "eye.gaze_vertical_deg": gv})
+    # the eye plane's receiver shrunk to one bin: no frame reads it (NO_EYE_PLANE)
+    gaze = {"eye.gaze_horizontal_deg": gh, "eye.gaze_vertical_deg": gv}
+    sc = apply_overrides(scene, {**gaze, **NO_EYE_PLANE})
     cs = compile_scene(sc)
     if rel_error is None:
         opts = RenderOptions(estimator="fast", samples_per_pixel=samples, seed=seed)
