@@ -5,7 +5,9 @@ table of a design question answered end to end.
     python benchmarks/design_850_940.py --people 4      # fewer
     python benchmarks/design_850_940.py --stop-at 23:20 # stop at that UTC time: the people done
     python benchmarks/design_850_940.py --set sensor.exposure_ms=1   # any scene field, both λ
-    python benchmarks/design_850_940.py --keep DIR      # also save every frame's picture, truth
+    python benchmarks/design_850_940.py --keep DIR      # also save every frame's picture, truth;
+                                                        # run again: the people kept there are
+                                                        # read, not rendered (resume)
     python benchmarks/design_850_940.py --redetect DIR  # detection again on them, no render
                                                         # (the same --people and --set)
 
@@ -45,6 +47,13 @@ Per wavelength it reports:
   the corneal IR margin of the irradiance summed over the 8 LEDs, and the retinal thermal margin
   of the worst LED with the burn-hazard weight R(λ) at the wavelength. The margins are the
   headset's (nominal eye position), the same for every person.
+
+With ``--keep DIR`` the run can be stopped and started again: ``DIR/run.json`` records what
+the people's frames depend on (scene, population seed, render seed, render noise, ``--set``),
+and a (person, wavelength) whose ``.npz`` and ``.json`` are in ``DIR`` is read from there
+instead of rendered (its figures, CPU included, are the run's that made it). A ``DIR`` made
+with other settings is refused (one line, exit 2). The people may so come from several
+sessions' code; ``--redetect DIR`` analyses every kept picture again with one detector.
 
 People run on ``--workers`` processes (the study's executor,
 :func:`eyelume.optimize.runner.run_tasks`; each (person, wavelength) a task, a pure function of
@@ -176,6 +185,73 @@ def redetect_person(stem: Path, person) -> dict:
     )
     old = meta["result"]
     return person_result(res, old["wall_s"], old["cpu_s"])
+
+
+def _run_settings(a, noise, overrides: dict) -> dict:
+    """What a kept person's frames depend on (``DIR/run.json``)."""
+    return {
+        "scene": a.scene,
+        "population_seed": a.population_seed,
+        "seed": a.seed,
+        "render_noise": noise,
+        "overrides": overrides,
+        "sun": SUN,
+        "filters_nm": {f"{w:.0f}": list(FILTERS[w]) for w in WAVELENGTHS},
+    }
+
+
+def _kept_settings(folder: Path, settings: dict) -> None:
+    """Write ``folder/run.json`` or check that the one there matches ``settings`` (one line,
+    exit 2, when it does not: a resumed run must not mix people rendered otherwise)."""
+    path = folder / "run.json"
+    want = json.loads(json.dumps(settings, default=C._jsonable))
+    if path.exists():
+        try:
+            have = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            print(f"error: --keep {folder}: run.json unreadable ({exc})", file=sys.stderr)
+            sys.exit(2)
+        if have != want:
+            diff = sorted(k for k in set(have) | set(want) if have.get(k) != want.get(k))
+            print(
+                f"error: --keep {folder}: its people were rendered with other settings ("
+                + "; ".join(f"{k} {have.get(k)!r}, now {want.get(k)!r}" for k in diff)
+                + "); use another folder",
+                file=sys.stderr,
+            )
+            sys.exit(2)
+        return
+    folder.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(want, indent=1), encoding="utf-8")
+
+
+def _kept_result(folder: Path, k: int, w: float) -> dict | None:
+    """The result of (person ``k``, wavelength ``w``) kept in ``folder``, or None."""
+    stem = folder / f"person{k:03d}_{w:.0f}nm"
+    if not (stem.with_suffix(".npz").exists() and stem.with_suffix(".json").exists()):
+        return None
+    try:
+        return json.loads(stem.with_suffix(".json").read_text(encoding="utf-8"))["result"]
+    except (OSError, ValueError, KeyError):
+        return None  # a half-written file: render that person again
+
+
+def _resumed(a, noise, overrides: dict) -> dict:
+    """The (person, wavelength) results already kept in ``--keep``'s folder (resume), after
+    checking its settings (:func:`_kept_settings`); empty without ``--keep`` or with
+    ``--redetect``."""
+    done: dict = {}
+    if not a.keep or a.redetect:
+        return done
+    _kept_settings(Path(a.keep), _run_settings(a, noise, overrides))
+    for k in range(a.people):
+        for w in WAVELENGTHS:
+            kept = _kept_result(Path(a.keep), k, w)
+            if kept is not None:
+                done[(k, w)] = kept
+    if done:
+        print(f"   {len(done)} (person, wavelength) read from {a.keep}", flush=True)
+    return done
 
 
 def person_result(res, wall_s: float, cpu_s: float) -> dict:
@@ -318,12 +394,14 @@ def main() -> None:
         sys.exit(2)
     people = {w: sample_people(scenes[w], a.people, a.population_seed) for w in WAVELENGTHS}
     safety = {w: eye_safety(scenes[w]) for w in WAVELENGTHS}
+    done = _resumed(a, noise, overrides)
+    resumed = list(done)
     tasks = (
         ((k, w), (people[w][k], a.seed, noise, a.keep, (k, w)))
         for k in range(a.people)
         for w in WAVELENGTHS
+        if (k, w) not in done
     )
-    done: dict = {}
     t0 = time.perf_counter()
 
     def commit(tag, result) -> None:
@@ -373,6 +451,7 @@ def main() -> None:
         "sun": SUN,
         "overrides": overrides,
         "kept_in": a.keep,
+        "resumed": len(resumed),
         "redetected_from": a.redetect,
         "filters_nm": {f"{w:.0f}": FILTERS[w] for w in WAVELENGTHS},
         "table": table,
