@@ -126,3 +126,16 @@ def test_in_bright_run_matches_its_definition():
         assert in_bright_run(img, blob, level, noise) == want
         runs += want
     assert 50 < runs < 1450  # both answers are exercised
+
+
+def test_distinct_points_counts_as_numpy_unique():
+    from eyelume.analysis.tracking.glints import _distinct_points
+
+    rng = np.random.default_rng(3)
+    for _ in range(300):
+        cols = int(rng.integers(5, 700))
+        n = int(rng.integers(0, 60))
+        xy = np.column_stack([rng.integers(0, cols, n), rng.integers(0, 50, n)]).astype(np.int32)
+        xy = np.concatenate([xy, xy[: n // 3]])  # outlines revisit their points
+        want = len(np.unique(xy[:, 1].astype(np.int64) * cols + xy[:, 0]))
+        assert _distinct_points(xy, cols) == want

@@ -706,8 +706,7 @@ def glint_blobs(
                 # Unclosed, each point of the outline is a pixel of the blob: more distinct
                 # points than the largest area wanted, it is left out before its mask is drawn
                 # (most of glints_near's blobs are: lit skin, lashes' gaps).
-                xy = c.reshape(-1, 2).astype(np.int64)
-                if len(np.unique(xy[:, 1] * cols + xy[:, 0])) > wanted[0]:
+                if _distinct_points(c.reshape(-1, 2), cols) > wanted[0]:
                     continue
             b = _blob(c, approx_area, above, others, img, (max_area, rise, noise, wanted), params)
             if b is not None:
@@ -717,6 +716,23 @@ def glint_blobs(
         bright = np.zeros_like(bright)
         cv2.drawContours(bright, kept, -1, 255, thickness=-1)
     return blobs, bright
+
+
+@njit(cache=True, nogil=True)
+def _distinct_points(xy, cols):
+    """How many distinct (x, y) rows the outline ``xy`` ((n, 2) int, OpenCV's points) holds in
+    a picture ``cols`` wide: ``len(np.unique(y × cols + x))``, by a sort of those keys."""
+    n = xy.shape[0]
+    if n == 0:
+        return 0
+    keys = np.empty(n, np.int64)
+    for i in range(n):
+        keys[i] = np.int64(xy[i, 1]) * cols + np.int64(xy[i, 0])
+    keys.sort()
+    count = 1
+    for i in range(1, n):
+        count += keys[i] != keys[i - 1]
+    return count
 
 
 def _bright_mask(u8: np.ndarray, floor8: int, params):
