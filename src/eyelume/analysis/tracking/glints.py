@@ -504,46 +504,93 @@ def in_bright_run(img: np.ndarray, blob: dict, level: float, noise: float = 0.0)
     that level it runs on along its strip of lid, 16-25 px, out of any glint's skirt. Callers
     give ``level`` above the blob's own threshold and ``noise`` a multiple of the pixel noise
     σ that the noise cannot tell from the peak (``detect``: ``glint_min_snr`` σ)."""
-    rows, cols = img.shape
     x, y = blob["centre_px"]
     r = math.sqrt(max(blob["area_px"], 1.0) / math.pi)
     h = int(math.ceil(r)) + 3
-    c, w = int(round(x)), int(round(y))
+    thr = max(blob["base"] + level * (blob["peak"] - blob["base"]), blob["peak"] - noise)
+    # (NumPy compares a float array with a Python float in the array's precision: the
+    # region's test, ``win >= thr``, was made so; the edge and seed tests in float64.)
+    thr_a = float(img.dtype.type(thr)) if img.dtype.kind == "f" else thr
+    return _bright_run(img, (x, y), (int(round(x)), int(round(y))), r, h, thr, thr_a)
+
+
+@njit(cache=True, nogil=True)
+def _bright_run(img, xy, cw, r, h, thr, thr_a):
+    """:func:`in_bright_run`'s test, compiled: the square of half-side ``h`` about the pixel
+    ``cw`` = (column, row) nearest ``xy`` = (x, y) (Python's round), cut by the picture's edge;
+    False when no pixel on its uncut edges is ≥ ``thr``; the seed, the brightest pixel within
+    ``r`` + ½ px of (x, y) (the first in row order), False when none or under ``thr``; then
+    whether the 8-connected region of the square's pixels ≥ ``thr_a`` (``thr`` as the
+    picture's dtype compares it) holding the seed reaches an uncut edge (a flood fill: the
+    seed's label of ``cv2.connectedComponents``)."""
+    rows, cols = img.shape
+    x, y = xy
+    c, w = cw
     x0, y0, x1, y1 = c - h, w - h, c + h + 1, w + h + 1
     if x1 <= 0 or y1 <= 0 or x0 >= cols or y0 >= rows:
         return False
-    # Cut by the picture's edge: the region stops there, which is no proof of a spot, but
-    # nothing beyond can be read — judged on what is inside.
-    wy0, wx0 = max(0, y0), max(0, x0)
-    win = img[wy0 : min(rows, y1), wx0 : min(cols, x1)]
-    thr = max(blob["base"] + level * (blob["peak"] - blob["base"]), blob["peak"] - noise)
-    edges = [win[:, 0]] if x0 >= 0 else []
-    edges += [win[:, -1]] if x1 <= cols else []
-    edges += [win[0, :]] if y0 >= 0 else []
-    edges += [win[-1, :]] if y1 <= rows else []
-    if not any(float(e.max()) >= thr for e in edges):
-        return False  # nothing at that level on the square's edge (most glints: ~5 µs)
-    # The seed: the brightest pixel within r + ½ px of the centroid — the blob's own (a square
-    # of the blob's size can hold a brighter neighbour glint: paper2005's 87 × 65 picture has
-    # glints 4 px apart).
-    best, seed = -math.inf, None
+    box = (max(0, x0), max(0, y0), min(cols, x1), min(rows, y1))
+    uncut = (x0 >= 0, x1 <= cols, y0 >= 0, y1 <= rows)  # left, right, top, bottom
+    if not _edge_at(img, box, uncut, thr):
+        return False  # nothing at that level on the square's edge (most glints)
+    best = -np.inf
+    sy, sx = -1, -1
     k = int(math.ceil(r + 0.5))
-    for yy in range(max(wy0, w - k), min(rows, w + k + 1)):
-        for xx in range(max(wx0, c - k), min(cols, c + k + 1)):
-            v = float(img[yy, xx])
+    for yy in range(max(box[1], w - k), min(rows, w + k + 1)):
+        for xx in range(max(box[0], c - k), min(cols, c + k + 1)):
+            v = np.float64(img[yy, xx])
             if (xx - x) ** 2 + (yy - y) ** 2 <= (r + 0.5) ** 2 and v > best:
-                best, seed = v, (yy - wy0, xx - wx0)
-    if seed is None or best < thr:
+                best, sy, sx = v, yy, xx
+    if sy < 0 or best < thr:
         return False
-    above = (win >= thr).astype(np.uint8)
-    _, lab = cv2.connectedComponents(above, connectivity=8)
-    own = lab == lab[seed]
-    return bool(
-        (x0 >= 0 and own[:, 0].any())
-        or (x1 <= cols and own[:, -1].any())
-        or (y0 >= 0 and own[0, :].any())
-        or (y1 <= rows and own[-1, :].any())
-    )
+    # (the seed is in the region: ≥ thr, so ≥ thr rounded to the picture's float type)
+    return _fill_reaches(img, box, uncut, (sy, sx), thr_a)
+
+
+@njit(cache=True, nogil=True)
+def _edge_at(img, box, uncut, thr):
+    """Whether a pixel of ``img`` on an uncut edge of ``box`` = (x0, y0, x1, y1) is ≥ ``thr``
+    (float64); ``uncut`` = (left, right, top, bottom)."""
+    wx0, wy0, wx1, wy1 = box
+    left, right, top, bottom = uncut
+    for yy in range(wy0, wy1):
+        if left and np.float64(img[yy, wx0]) >= thr:
+            return True
+        if right and np.float64(img[yy, wx1 - 1]) >= thr:
+            return True
+    for xx in range(wx0, wx1):
+        if top and np.float64(img[wy0, xx]) >= thr:
+            return True
+        if bottom and np.float64(img[wy1 - 1, xx]) >= thr:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _fill_reaches(img, box, uncut, seed, thr):
+    """Whether the 8-connected region of ``box``'s pixels ≥ ``thr`` holding ``seed`` (row,
+    column; in it) reaches an uncut edge of the box (as :func:`_edge_at`'s)."""
+    wx0, wy0, wx1, wy1 = box
+    left, right, top, bottom = uncut
+    hh, ww = wy1 - wy0, wx1 - wx0
+    seen = np.zeros((hh, ww), np.uint8)
+    stack = np.empty(hh * ww, np.int64)
+    seen[seed[0] - wy0, seed[1] - wx0] = 1
+    stack[0] = (seed[0] - wy0) * ww + (seed[1] - wx0)
+    n = 1
+    while n:
+        n -= 1
+        i, j = stack[n] // ww, stack[n] % ww
+        edge_x = (left and j == 0) or (right and j == ww - 1)
+        if edge_x or (top and i == 0) or (bottom and i == hh - 1):
+            return True
+        for ii in range(max(0, i - 1), min(hh, i + 2)):
+            for jj in range(max(0, j - 1), min(ww, j + 2)):
+                if seen[ii, jj] == 0 and np.float64(img[wy0 + ii, wx0 + jj]) >= thr:
+                    seen[ii, jj] = 1
+                    stack[n] = ii * ww + jj
+                    n += 1
+    return False
 
 
 @functools.lru_cache(maxsize=16)
@@ -659,8 +706,7 @@ def glint_blobs(
                 # Unclosed, each point of the outline is a pixel of the blob: more distinct
                 # points than the largest area wanted, it is left out before its mask is drawn
                 # (most of glints_near's blobs are: lit skin, lashes' gaps).
-                xy = c.reshape(-1, 2).astype(np.int64)
-                if len(np.unique(xy[:, 1] * cols + xy[:, 0])) > wanted[0]:
+                if _distinct_points(c.reshape(-1, 2), cols) > wanted[0]:
                     continue
             b = _blob(c, approx_area, above, others, img, (max_area, rise, noise, wanted), params)
             if b is not None:
@@ -670,6 +716,23 @@ def glint_blobs(
         bright = np.zeros_like(bright)
         cv2.drawContours(bright, kept, -1, 255, thickness=-1)
     return blobs, bright
+
+
+@njit(cache=True, nogil=True)
+def _distinct_points(xy, cols):
+    """How many distinct (x, y) rows the outline ``xy`` ((n, 2) int, OpenCV's points) holds in
+    a picture ``cols`` wide: ``len(np.unique(y × cols + x))``, by a sort of those keys."""
+    n = xy.shape[0]
+    if n == 0:
+        return 0
+    keys = np.empty(n, np.int64)
+    for i in range(n):
+        keys[i] = np.int64(xy[i, 1]) * cols + np.int64(xy[i, 0])
+    keys.sort()
+    count = 1
+    for i in range(1, n):
+        count += keys[i] != keys[i - 1]
+    return count
 
 
 def _bright_mask(u8: np.ndarray, floor8: int, params):
