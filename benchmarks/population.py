@@ -155,7 +155,10 @@ shadowed by the lid and lashes. Started from each LED's roots solved on a grid o
 and interpolated: 2.39 traces at 1 mm, 2.06 at 0.25 mm (14 ms to build a frame), 2.01 at
 0.125 mm — 7.3 against 4.9 µs an iris point at 0.25 mm, the irradiance the same to 3e-5 (the
 solver's tolerance; a looser one, 1e-3 mm, takes 1.26 traces but moves a connection by up to
-4e-3). On branch ``perf23-cornea-starts`` (0506391), not merged: its own test passes, but
+4e-3). A concurrent one-thread pair of a 1 × 1 camera set over person 0's (0°, −5°) picture
+with the cache (15:11 UTC, load 22–24): iris 19.85 against 18.24 µs a sample, the whole set
+0.766 against 0.746 CPU-s (−2.6 %; the grid 18 ms). On branch ``perf23-cornea-starts``
+(0506391), not merged: its own test passes, but
 ``tests/estimators/test_fast.py::test_rel_error_on_a_picture_without_skin_is_judged_by_every_lit_pixel``
 fails — the run judges a picture whose glint light is spread uniformly over its pixel
 (``render._run_control``), the result spreads it from its place, and the iris's change of
