@@ -132,6 +132,44 @@ identical, but the eyelashes' change by +2.1 % and −1.9 % of their mean (its s
 0.56 %) and the periorbital skin's by −1.1 % and +0.5 % (0.6 %): the eye's turn changes the
 light they receive, a bias beyond the cache's own noise for the lashes. Across vertical gaze
 (the lids follow it) only 4 217 stay in place and the brow's change by −13 %.
+
+Session 23 (2.6 GHz host, load 8–9 from other work): where a frame's CPU goes now (person 1 at
+(0°, −5°), 2 sets, ``--set run.indirect=cache``, cProfile with process time): camera sets 1.56
+CPU-s (0.79 a 1 × 1 set over the 400 × 400 picture, of which the iris's 18 419 pixels 0.36:
+19.4 µs a sample), light paths 0.43, the cache 0.13, the eye plane's direct irradiance 0.10,
+the regions' map 0.06, the detector ~0.9 (its scipy fits). The eye plane is read by no frame:
+tracking frames and their pilot now render with a one-bin receiver
+(``render_budget.NO_EYE_PLANE``, the dataset's rule; the picture bit-identical). A concurrent
+one-thread pair (ad52770 against c44a22c, 14:29–14:32 UTC, load ~9): ``--frames 3 --set
+run.indirect=cache`` 3.7, 3.1, 3.1 against 3.6, 3.0, 3.0 CPU-s a frame (pilots 0.5, 0.3, 0.3
+against 0.3, 0.2, 0.2), 3.3 against 3.2 (≈ 1 232 against ≈ 1 195 s for 50 people), the same
+samples (3, 2, 2) and detections (5/5, 7/7, 7/8 glints).
+
+The iris's light through the cornea (person 0 at (0°, −5°), its 18 227 iris chief-ray points ×
+8 LEDs, one thread): Newton's method takes 3.31 traces a connection from the straight-line
+guess (its miss a median 0.8 mm; after one step 8e-3 mm, after two 1.5e-6 mm), 6.6–7.3 µs an
+iris point, and the path check (``_path_is_clear``: three nearest-hit searches a connection)
+about as much again (13.8 µs with it; the whole NEE 11.7–12.1 µs an iris point); 6 % of the
+connections fail in the iteration, 5–50 % of the found ones (by LED: the upper ones) are
+shadowed by the lid and lashes. Started from each LED's roots solved on a grid over the iris
+and interpolated: 2.39 traces at 1 mm, 2.06 at 0.25 mm (14 ms to build a frame), 2.01 at
+0.125 mm — 7.3 against 4.9 µs an iris point at 0.25 mm, the irradiance the same to 3e-5 (the
+solver's tolerance; a looser one, 1e-3 mm, takes 1.26 traces but moves a connection by up to
+4e-3). A concurrent one-thread pair of a 1 × 1 camera set over person 0's (0°, −5°) picture
+with the cache (15:11 UTC, load 22–24): iris 19.85 against 18.24 µs a sample, the whole set
+0.766 against 0.746 CPU-s (−2.6 %; the grid 18 ms). On branch ``perf23-cornea-starts``
+(0506391), not merged: its own test passes, but
+``tests/estimators/test_fast.py::test_rel_error_on_a_picture_without_skin_is_judged_by_every_lit_pixel``
+fails — the run judges a picture whose glint light is spread uniformly over its pixel
+(``render._run_control``), the result spreads it from its place, and the iris's change of
+~1e-6 moves the median pixel onto one where the two differ (0.0118355 against 0.0118379).
+
+The cache as the default (session 23, c44a22c code, sensor budget): person 0's frame
+(−10°, −5°) detected with the cache at seeds 1, 2, 3 (5 of 5 glints, as with paths); over
+person 0 (0°, −5°), person 1 (0°, −5°) and person 2 (10°, −5°) at seeds 1–3, 8 of 9 frames
+detected with the cache, 9 of 9 with paths — person 0 (0°, −5°) at seed 2 lost with the cache
+(6 of 8 glints, LEDs 0 and 2, at 3 samples per pixel) and detected with paths (7 of 8, at 5):
+the cache stays opt-in.
 """
 
 from __future__ import annotations
