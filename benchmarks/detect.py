@@ -161,6 +161,26 @@ Figures at 3e241d3 (03:00 UTC, load 1.05, another benchmark on the other core,
 ``NUMBA_NUM_THREADS=1 python benchmarks/detect.py --repeats 100 --real``): synthetic 640 × 400
 3.52 ms CPU median (best 3.31), 640 × 480 3.90; openeds 3.48 / 3.95 ms median frame / slowest
 (best calls 3.30 / 3.82); itmo 1.81 / 2.06.
+
+Session 23 (spd23; answers identical on 1045 (picture, LEDs) pairs: the 255 realdata pictures,
+cases21/22's pictures with and without their LEDs, renders and JPEG/stray variants, synthetic 640 ×
+480 / 400): session 22 added ~0.3–0.5 ms a 640 × 400 frame (the glints' local ring noise, ~11 calls
+a frame at ~18 µs, the stray checks, the pupil's core checks). Cut: the ring noise compiled end to
+end (the other blobs' dilation looked up at the ring's pixels, sectors by sign tests, per-sector
+runs with in-place medians: 18 → 8 µs a call) and skipped for a blob already under the bar;
+``in_bright_run`` compiled (a flood fill for ``cv2.connectedComponents``: 0.28 → 0.04 ms a frame on
+the slowest openeds frame); ``np.percentile`` in the core checks by ``pupil.float_percentiles``
+(NumPy's floats to the bit, 30 → 8–13 µs a call); the glints' wanted-area check's ``np.unique``
+compiled. Concurrent one-thread pair against ad52770 (3 rounds × 60 calls per frame, load 15),
+median CPU ms per call old / new: synthetic 640 × 400 7.84 / 7.23, openeds 7.74 / 6.99, 6.98 / 6.32,
+6.71 / 5.96; with the last cut too (bc6265b, load 19–26, the test suite running) 8.38 / 7.64, 8.16 /
+7.24, 7.40 / 6.67, 7.16 / 6.72 (×0.89–0.94: a loaded machine's figures, ~1.5 × a quiet one's; on
+ad52770's quiet 5.01 ms slowest openeds frame ×0.89 would be ~4.45 ms — not measured quiet). Where a
+frame goes now (the slowest openeds frame, one process, CPU, load ~10; each step's own clock): the
+pupil 3.2 ms (the candidates' fit 1.5: robust fit 0.6, full-resolution blob 0.3; the core checks
+0.55, whose interior and 5 × 5 box averages are worked out twice, by ``_smoothed_bright_core`` and
+``darker_core``; the working picture 0.5; the ladder 0.5), the glints 1.4 (Gaussian 0.26, bright
+masks 0.37, blobs 0.6), the one-pixel search 0.4.
 """
 
 from __future__ import annotations
