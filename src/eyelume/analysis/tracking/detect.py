@@ -1497,7 +1497,9 @@ def _rival_patterns(  # noqa: PLR0913 - the glints, their LEDs, the layout, the 
 ):
     """Step 5b, with glints left over after matching: the matching checked against the whole
     patterns the glints fit (:func:`~.glints.pattern_fits`, tolerance s |p_k| sin(max_ang / 2),
-    :func:`_pattern_misfit`'s). Returns (leds, errors, warnings).
+    :func:`_pattern_misfit`'s). Returns (leds, errors, warnings, undecided): ``undecided`` the
+    indices of the glints at an LED's place that the fit could not tell apart (that LED left
+    without a glint; no strays for :func:`_some_missing`: they were judged here).
 
     Matching each glint by its direction (or nearest place) alone can mix two patterns: a
     spectacle lens reflects the LEDs too — a shifted copy of the glints, as bright — and two
@@ -1523,7 +1525,7 @@ def _rival_patterns(  # noqa: PLR0913 - the glints, their LEDs, the layout, the 
     sin_half = math.sin(math.radians(0.5 * max_ang))
     cands = _candidate_fits(glints, centres, leds, p_all, sin_half, params)
     if not cands:
-        return leds, [], []
+        return leds, [], [], set()
     families: list[list[dict]] = []
     for f in cands:  # by residual: each family's first is its best fit
         for fam in families:
@@ -1540,7 +1542,7 @@ def _rival_patterns(  # noqa: PLR0913 - the glints, their LEDs, the layout, the 
         families = mine
     family, error = _pick_family(families, pupil)
     if error:
-        return leds, [error], []
+        return leds, [error], [], set()
     return _contested(centres, list(family[0]["leds"]), family, p_all)
 
 
@@ -1626,7 +1628,8 @@ def _contested(centres, chosen, family, p_all):
     ``family`` takes a different glint than ``chosen`` (the family's first), the glints are
     compared with where the fit of ``chosen``'s other glints puts k's: the nearest is kept when
     the others are farther by more than 3 × that fit's residual σ (per coordinate, 2m − 3
-    degrees of freedom for m glints), else none (a warning). Returns (leds, [], warnings)."""
+    degrees of freedom for m glints), else none (a warning). Returns (leds, [], warnings,
+    undecided: the indices of the glints of the LEDs left so)."""
     first = list(chosen)
     contested = sorted(
         {
@@ -1638,6 +1641,7 @@ def _contested(centres, chosen, family, p_all):
     )
     g = np.asarray(centres, float)
     warnings = []
+    undecided: set[int] = set()
     for k in contested:
         cands = {first.index(k)} | {f["leds"].index(k) for f in family if k in f["leds"]}
         chosen = [None if kk == k else kk for kk in chosen]
@@ -1655,12 +1659,13 @@ def _contested(centres, chosen, family, p_all):
                     chosen[dists[0][1]] = k
                 continue
         spots = ", ".join(f"({g[j][0]:.1f}, {g[j][1]:.1f})" for j in sorted(cands))
+        undecided |= cands
         warnings.append(
             f"warning: LED {k}'s glint left out: {len(cands)} glints fit the pattern at its "
             f"place ({spots}) and the other glints' fit (residual {sigma:.2f} px) does not "
             "tell which"
         )
-    return chosen, [], warnings
+    return chosen, [], warnings, undecided
 
 
 def _two_patterns(families, dist, count: int) -> str:
@@ -1895,7 +1900,7 @@ def _match_glints(  # noqa: PLR0913 - the glints, the LEDs, the pupil, the pictu
     ):
         leds, ambiguous, between = strong
     before = list(leds)
-    leds, rival, notes = _rival_patterns(
+    leds, rival, notes, undecided = _rival_patterns(
         glints, centres, leds, led_azimuths_deg, pattern, max_ang, pupil, params
     )
     if leds != before:
@@ -1913,8 +1918,11 @@ def _match_glints(  # noqa: PLR0913 - the glints, the LEDs, the pupil, the pictu
         return [*notes, stray], missing
     if not missing:
         return notes + _all_matched(glints, led_azimuths_deg, pattern, max_ang, params), []
+    # The glints the pattern's fit could not tell apart at an LED's place were judged there (the
+    # LED left out, a warning): no strays making the rest of the matching uncertain (the sun's
+    # glint beside an LED's in design frames refused the 7 others' frame).
     lost, missing = _some_missing(glints, missing, led_azimuths_deg, pattern, max_ang, params,
-                                  ambiguous, between, skip)  # fmt: skip
+                                  ambiguous, between, skip | undecided)  # fmt: skip
     return notes + lost, missing
 
 
