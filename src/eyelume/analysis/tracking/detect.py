@@ -98,6 +98,7 @@ import numpy as np
 from numba import njit
 
 from eyelume.analysis.tracking.glints import (
+    block_or_blur,
     broad_glints_near,
     default_max_angle,
     faint_glints_near,
@@ -110,6 +111,7 @@ from eyelume.analysis.tracking.glints import (
     match_pattern,
     pattern_fit,
     pattern_fits,
+    spot_sigma,
 )
 from eyelume.analysis.tracking.pupil import (
     Ellipse,
@@ -327,6 +329,10 @@ class DetectParams:
         centroid in that test (½ px: a spot one or two pixels across is placed to about its
         pixel when its own bias — clipping, a pupil edge or a missing pixel under it — does
         not show in the other glints' scatter).
+    glint_skirt_p : with ≥ 3 glints matched, a spot with no blur skirt is taken for a block of
+        stuck or hot pixels — its LED left without a glint, a warning — only when a block fits
+        it better than a Gaussian of the other glints' width by more than chance allows at
+        this false-alarm rate (0.1 %; :func:`_block_not_blur`).
     pattern_min_scale : with ``led_pattern_px`` given, the fitted pattern's scale must be within
         [this, 1 / this] of the prediction (0.5: a guess — the glints' spread changes with gaze
         and with the eye's distance by far less than 2×; strays beside the pupil do not keep it).
@@ -401,6 +407,7 @@ class DetectParams:
     pattern_min_scale: float = 0.5
     glint_max_flux_ratio: float = 3.0
     glint_off_fit_p: float = 0.01
+    glint_skirt_p: float = 0.001
     glint_centroid_floor_px: float = 0.5
 
 
@@ -981,7 +988,7 @@ def _glint_cap(pupil, params, reach: float = 1.0) -> float:
 
 
 def _bright_blobs_near(  # noqa: PLR0913 - the picture, its scale, the pupil, the reach
-    img, value_range, noise, found, pupil, floor, params, n_leds=None, reach=1.0
+    img, value_range, noise, found, pupil, floor, params, n_leds=None, reach=1.0, cap=None
 ) -> list[dict]:
     """Step 5 (start): the bright blobs that can be the cornea's glints on this pupil, from
     ``found`` = (blobs, bright mask) of step 2 — within ``glint_search_radius`` × its major
@@ -991,7 +998,8 @@ def _bright_blobs_near(  # noqa: PLR0913 - the picture, its scale, the pupil, th
     picture, those the smoothing lost there (:func:`~.glints.glints_near`: glints under a
     pixel across, or a 3σ square that σ's smoothing dims by a quarter) — ≤ max(2, (3σ)²) px,
     their peak within 2 % of the picture's top — whose centre is off
-    step 2's mask. ``reach`` scales the search radius (:func:`_wider_look`).
+    step 2's mask. ``reach`` scales the search radius (:func:`_wider_look`); ``cap`` (px)
+    replaces the size cap (:func:`_glint_cap`) when given.
 
     The peak test is the pixel test of step 2 against the blob's background (the median
     around it, :func:`~.glints.glint_blobs`) instead of the box mean, which next to a dark
@@ -1002,7 +1010,7 @@ def _bright_blobs_near(  # noqa: PLR0913 - the picture, its scale, the pupil, th
     cx, cy = pupil.centre_px
     top = value_range[1]
     r_max = reach * params.glint_search_radius * pupil.axes_px[0]
-    cap = _glint_cap(pupil, params, reach)
+    cap = _glint_cap(pupil, params, reach) if cap is None else cap
 
     # A glint is an isolated spot: at its peak's level it stops within its skirt. A gap between
     # dark lashes on a saturated lid runs on along its strip of lid at that level
@@ -1173,12 +1181,45 @@ def _wider_look(  # noqa: PLR0913 - the picture, its scale, the pupil, the LEDs
     across, the cornea's visible disc ~12 mm, so glints lie up to 3 diameters of a 2 mm pupil
     from its centre (a 9 px pupil with glints 25 px out: all four lost), out of the radius
     that keeps a large pupil's strays away (lit lashes' gaps 160 px from a 60 px pupil). Out
-    there a blob is taken only as part of a whole pattern: strays seldom complete one."""
+    there a blob is taken only as part of a whole pattern: strays seldom complete one.
+
+    Nor does a glint's size shrink with the pupil: step 2's blobs over the size cap
+    (:func:`_glint_cap`, ½ the pupil's area on this look) are tried too when that gives no
+    answer — taken only when, with the others, they give every LED a glint fitting the
+    pattern and the matched glints' areas are alike (the largest ≤ ``glint_max_flux_ratio`` ×
+    the smallest: one ring's LEDs make like glints, :func:`_too_bright`): a 7 px pupil with
+    four saturated glints of σ 2.6 px (86-89 px each, its cap 58) had none ("glint lost")."""
     # Step 2's blobs only (no floor: glints_near's search for glints the smoothing lost, 1.3 ms
     # of a 640 × 400 frame, is not run again for every frame with an LED left without one).
+    n_leds = len(led_azimuths_deg)
     blobs = _blobs_near_pupil(
-        img, value_range, noise, found, pupil, None, params, len(led_azimuths_deg), reach=2.0
+        img, value_range, noise, found, pupil, None, params, n_leds, reach=2.0
     )
+    got = _whole_pattern(img, value_range, noise, blobs, pupil, led_azimuths_deg, pattern,
+                         params, invalid)  # fmt: skip
+    if got is not None:
+        return got
+    big = _bright_blobs_near(
+        img, value_range, noise, found, pupil, None, params, n_leds, reach=2.0, cap=math.inf
+    )
+    cap = _glint_cap(pupil, params, 2.0)
+    if not any(b["area_px"] > cap for b in big):
+        return None
+    got = _whole_pattern(img, value_range, noise, big, pupil, led_azimuths_deg, pattern,
+                         params, invalid)  # fmt: skip
+    if got is None:
+        return None
+    areas = [g.area_px for g in got[0] if g.led is not None]
+    if max(areas) > params.glint_max_flux_ratio * min(areas):
+        return None
+    return got
+
+
+def _whole_pattern(  # noqa: PLR0913 - the picture, its scale, the blobs, the pupil, the LEDs
+    img, value_range, noise, blobs, pupil, led_azimuths_deg, pattern, params, invalid
+):
+    """:func:`_wider_look`'s test of ``blobs``: (glints, specks, messages, LEDs without a
+    glint) when every LED gets a glint and they fit the LEDs' pattern, else None."""
     kept, _ = _glints_off_missing(blobs, invalid, img, value_range, noise, params)
     glints, specks = _split_specks(kept, params)
     lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil, img)
@@ -1778,20 +1819,27 @@ def _unlike_the_others(img: np.ndarray, glints: list[Glint], params) -> list[tup
       to 1/10 of its rise) is under ¼ of the narrowest other glint's (less than half as wide)
       when those are ≥ 1 px² — a point source's image has the optics' blur whatever its
       brightness or clipping, and a block of stuck or hot pixels has none (a 2 × 2 block at
-      230 DN where LED 1's glint was absent, beside glints of σ 1.4 px, matched to LED 1).
-      With sharper optics (the others' edges under 1 px) a block and a glint differ by less
-      than the pixel grid shows: not judged."""
+      230 DN where LED 1's glint was absent, beside glints of σ 1.4 px, matched to LED 1);
+    - a block, not a blurred spot (:func:`_block_not_blur`): a spot whose edge lies within a
+      pixel (σ² of :func:`_spot_shape` under ¼ px²) when the others' edges cannot be read that
+      way (their fall to 1/10 joins the pupil's edge or the iris beside them) or are under
+      1 px²: judged by how much better it fits a block with no blur than a Gaussian of the
+      other glints' own width, against the picture's noise (stuck blocks of 2–9 px at
+      200–255 DN in pictures blurred by σ 0.8 px, 4.5 px inside the pupil's edge, were
+      matched). With sharper optics the two models differ by less than the noise shows and
+      the spot is kept."""
     m = [i for i, g in enumerate(glints) if g.led is not None]
     if len(m) < 3:
         return []
     shapes = {i: _spot_shape(img, glints[i]) for i in m}
     out = []
+    widths: dict = {}  # (_block_not_blur's: the glints' widths and the picture's top, once)
     for i in m:
         own = shapes[i]
         edges = [shapes[j] for j in m if j != i and shapes[j] is not None]
-        if own is None or len(edges) < 2:
+        if own is None:
             continue
-        if min(edges) >= 1.0 and own < 0.25 * min(edges):
+        if len(edges) >= 2 and min(edges) >= 1.0 and own < 0.25 * min(edges):
             out.append(
                 (
                     i,
@@ -1800,7 +1848,105 @@ def _unlike_the_others(img: np.ndarray, glints: list[Glint], params) -> list[tup
                     "(stuck or hot pixels, not the optics' image of an LED)",
                 )
             )
+        elif own < _SHARP_EDGE_PX2:
+            why = _block_not_blur(img, glints, i, [j for j in m if j != i], params, widths)
+            if why:
+                out.append((i, why))
     return out
+
+
+#: :func:`_unlike_the_others`: a spot whose edge (:func:`_spot_shape`'s σ²) is under this
+#: (px²) falls within one pixel — a uniform pixel's own spread is 1/12 px² — and is judged
+#: against the other glints' profile (:func:`_block_not_blur`); a glint blurred by the
+#: optics by ½ px or more is never (a first, cheap look that leaves most frames alone).
+_SHARP_EDGE_PX2 = 0.25
+
+
+def _block_not_blur(  # noqa: PLR0913 - the picture, the glints, which, the memo
+    img: np.ndarray, glints: list[Glint], i: int, others: list[int], params, memo: dict
+) -> str:
+    """Why glint ``i``'s spot in ``img`` is a block of stuck or hot pixels rather than the
+    optics' image of an LED like the glints ``others`` (indices), or "" (kept).
+
+    Each glint's Gaussian σ is read from its skirt (:func:`~.glints.spot_sigma`); the others'
+    narrowest, σₒ (≥ 2 of them read), is what a glint's skirt must show. A spot is fitted as a
+    block (its core pixels free, the rest one background) and as a point source's Gaussian
+    spot (:func:`~.glints.block_or_blur`), χ² from the pixel noise σ of the 33 × 33 px around
+    the spot (Immerkær's, :func:`~.pupil.noise_sigma`): Δ = χ²_glint − χ²_block. A blurred
+    spot leaves the block model its skirt (Δ ≪ 0); a block's hard edge leaves the glint model
+    a skirt it does not have (Δ ≫ 0). The block model spends n_core − 1 more parameters; were
+    the spot a glint of σₒ, the block could win by chance only as χ² with that many degrees
+    of freedom: the spot is a block when its Δ at σₒ is beyond that χ²'s upper
+    ``glint_skirt_p`` quantile — and no other glint read is, by the same test at its own σ.
+    Where the glints themselves are that sharp, or unlike a Gaussian with noise the
+    background's σ misstates (a render's glints: their shot noise, one-pixel spots), the test
+    says nothing of the spot and it is kept. So too a spot over ``glint_max_flux_ratio`` ×
+    the others' median area: one ring's LEDs make like glints (:func:`_too_bright`), and a
+    spot that large is no point source's image like theirs, which the Gaussian model is
+    (renders: a glint of 72-107 px beside others of 2-7 px, its edge sharp, was taken for a
+    block). ``memo`` (a dict, empty at first) keeps the picture's
+    top and noise and the glints' widths and Δ between calls for one frame."""
+    from scipy.special import chdtri  # (only on this rare path)
+
+    if glints[i].area_px > params.glint_max_flux_ratio * float(
+        np.median([glints[j].area_px for j in others])
+    ):
+        return ""
+    read = [j for j in others if _glint_width(img, glints, j, memo) is not None]
+    noise = _glint_noise(img, glints, i, memo)
+    if len(read) < 2 or not noise > 0:
+        return ""
+    sigma = min(_glint_width(img, glints, j, memo) for j in read)
+    got = block_or_blur(img, _as_spot(glints[i]), sigma, memo["top"], noise)
+    if got is None or got[0] <= float(chdtri(got[1], params.glint_skirt_p)):
+        return ""
+    for j in read:
+        key = ("delta", j)
+        if key not in memo:
+            own = block_or_blur(
+                img, _as_spot(glints[j]), _glint_width(img, glints, j, memo), memo["top"],
+                _glint_noise(img, glints, j, memo),
+            )  # fmt: skip
+            memo[key] = (
+                None if own is None else float(own[0] - chdtri(own[1], params.glint_skirt_p))
+            )
+        if memo[key] is None or not memo[key] <= 0:
+            return ""
+    return (
+        f"its edge is sharper than a Gaussian spot of the other glints' σ {sigma:.2f} px "
+        f"allows (a block of no blur fits it better by χ² {got[0]:.0f}, noise σ {noise:.2g}), "
+        "while the others fit theirs: no blur skirt (stuck or hot "
+        "pixels, not the optics' image of an LED)"
+    )
+
+
+def _as_spot(g: Glint) -> dict:
+    """Glint ``g`` as the spot dict of :func:`~.glints.spot_sigma`."""
+    return {"centre_px": g.centre_px, "area_px": g.area_px, "peak": g.peak, "base": g.base}
+
+
+def _glint_noise(img: np.ndarray, glints: list[Glint], j: int, memo: dict) -> float:
+    """The pixel noise σ (Immerkær's, :func:`~.pupil.noise_sigma`) of the 33 × 33 px of
+    ``img`` about glint ``j``, kept in ``memo`` (:func:`_block_not_blur`; also the picture's
+    top, ``memo["top"]``)."""
+    if "top" not in memo:
+        memo["top"] = float(np.max(img))
+    key = ("noise", j)
+    if key not in memo:
+        x, y = glints[j].centre_px
+        c, r = int(round(x)), int(round(y))
+        near = img[max(0, r - 16) : r + 17, max(0, c - 16) : c + 17]
+        memo[key] = noise_sigma(np.ascontiguousarray(near, dtype=np.float32))
+    return memo[key]
+
+
+def _glint_width(img: np.ndarray, glints: list[Glint], j: int, memo: dict) -> float | None:
+    """Glint ``j``'s Gaussian σ px (:func:`~.glints.spot_sigma`), kept in ``memo``."""
+    key = ("sigma", j)
+    if key not in memo:
+        noise = _glint_noise(img, glints, j, memo)
+        memo[key] = spot_sigma(img, _as_spot(glints[j]), memo["top"], noise)
+    return memo[key]
 
 
 def _off_the_others(glints: list[Glint], led_azimuths_deg, pattern, params) -> tuple | None:

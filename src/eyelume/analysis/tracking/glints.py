@@ -77,6 +77,8 @@ __all__ = [
     "faint_glints_near",
     "broad_glints_near",
     "fit_spot",
+    "spot_sigma",
+    "block_or_blur",
     "in_bright_run",
     "glint_blobs",
     "glint_threshold",
@@ -440,6 +442,139 @@ def fit_spot(img: np.ndarray, noise: float, blob: dict, params, min_half: int = 
         "base": base,
         "fit_rms": rms,
     }
+
+
+def _disc(img: np.ndarray, centre, radius: float, core: float | None = None):
+    """The pixels of ``img`` within ``radius`` px of ``centre`` (x, y) px: (values float64,
+    their squared distances px², both 1-D), or None when fewer than 9 lie in the picture.
+    With ``core`` (a level), a third array: whether each pixel is in the 8-connected region
+    ≥ ``core`` holding the brightest pixel within 1.5 px of the centre (the spot's core, not
+    a brighter neighbour's — the iris beside a glint on the pupil)."""
+    rows, cols = img.shape
+    x, y = centre
+    k = int(math.ceil(radius))
+    c, r = int(round(x)), int(round(y))
+    x0, y0, x1, y1 = max(0, c - k), max(0, r - k), min(cols, c + k + 1), min(rows, r + k + 1)
+    if x1 <= x0 or y1 <= y0:
+        return None
+    win = img[y0:y1, x0:x1].astype(np.float64)
+    d2 = (np.arange(x0, x1)[None, :] - x) ** 2 + (np.arange(y0, y1)[:, None] - y) ** 2
+    inside = d2 <= radius * radius
+    if int(inside.sum()) < 9:
+        return None
+    if core is None:
+        return win[inside], d2[inside]
+    above = ((win >= core) & inside).astype(np.uint8)
+    _, lab = cv2.connectedComponents(above, connectivity=8)
+    seed = np.where(d2 <= 2.25, win, -np.inf)
+    k = np.unravel_index(int(np.argmax(seed)), seed.shape)
+    own = (lab == lab[k]) & (above > 0) if above[k] else np.zeros_like(inside)
+    return win[inside], d2[inside], own[inside]
+
+
+def spot_sigma(img: np.ndarray, spot: dict, top: float, noise: float) -> float | None:
+    """The Gaussian σ (px) of a spot's profile in ``img`` (rows, cols; input units), read from
+    its unclipped skirt: ``spot`` a dict with centre_px (x, y) px, area_px, peak and base
+    (input units, as :func:`glint_blobs`' blobs or ``detect``'s glints); ``top`` the picture's
+    saturation level (pixels at it are clipped, left out; ``inf``: none); ``noise`` the pixel
+    σ. The core's radius r₅₀ (√(n / π), n the pixels rising ≥ ½ the spot's rise within its
+    equivalent radius + 1 px) sets the disc read: r₅₀ + 2 px, where a Gaussian of σ ≤ 2 px has
+    fallen from ½ to ~1/10 of its rise and whatever lies beside the spot (the pupil's edge a
+    few px away, the iris) mostly does not reach. Its pixels rising v = I − base by 4 ×
+    ``noise`` to 90 % of the rise and under ``top`` give ln v = ln A − d² / 2σ² (d from the
+    centre), fitted by least squares weighted by v² (ln v's variance is σₙ² / v²), then again
+    without the pixels more than 3 ``noise`` over the first fit (something else's light): a
+    clipped spot's skirt holds its width, its plateau none. Sampled at pixel centres, so σ²
+    includes the pixel's own 1/12 px². None when fewer than 3 pixels qualify or the profile
+    does not fall (slope ≥ 0). Raises nothing."""
+    if spot.get("base") is None or not spot["peak"] > spot["base"]:
+        return None
+    rise = spot["peak"] - spot["base"]
+    got = _disc(img, spot["centre_px"], math.sqrt(spot["area_px"] / math.pi) + 1.0)
+    if got is None:
+        return None
+    r50 = math.sqrt(float((got[0] >= spot["base"] + 0.5 * rise).sum()) / math.pi)
+    got = _disc(img, spot["centre_px"], r50 + 2.0)
+    if got is None:
+        return None
+    val, d2 = got
+    v = val - spot["base"]
+    use = (v >= max(4.0 * noise, 1e-12)) & (v <= 0.9 * rise) & (val < top)
+    slope = None
+    for _ in range(2):
+        if int(use.sum()) < 3:
+            return None
+        vv, dd = v[use], d2[use]
+        w = vv * vv
+        lv = np.log(vv)
+        sw, sx, sy = w.sum(), (w * dd).sum(), (w * lv).sum()
+        sxx, sxy = (w * dd * dd).sum(), (w * dd * lv).sum()
+        den = sw * sxx - sx * sx
+        if not den > 0:
+            return None
+        slope = (sw * sxy - sx * sy) / den
+        if not slope < 0:
+            return None
+        icpt = (sy - slope * sx) / sw
+        use = use & (v - np.exp(icpt + slope * d2) <= 3.0 * noise)
+    return math.sqrt(-0.5 / slope)
+
+
+def block_or_blur(  # noqa: PLR0913 - the picture, the spot, the others' width, clip, noise
+    img: np.ndarray, spot: dict, sigma: float, top: float, noise: float
+) -> tuple[float, int] | None:
+    """How much better a spot fits a block of pixels with no blur than a Gaussian spot of σ
+    ``sigma`` px: (Δ = χ²_glint − χ²_block, the block's extra free parameters). ``spot`` a dict
+    as :func:`spot_sigma`'s, ``img`` (rows, cols, input units), ``top`` the saturation level
+    (``inf``: none), ``noise`` the pixel σ (> 0). Over the disc of radius √(area / π) + 2
+    ``sigma`` + 1 px about the spot's centre — out to where a Gaussian of that σ has fallen to
+    the noise — the block model takes each core pixel (≥ half the spot's rise over its base,
+    8-connected to its top) at its own value and every other pixel at one background B (their
+    mean); the glint model is min(B' + A exp(−d² / 2σ²), ``top``) about the spot's centre, A
+    and B' fitted (least squares). χ² = Σ residual² / ``noise``². Pixels over the core's level
+    not joined to it (the iris beside a glint on the pupil) are left out of both; the rest of
+    anything else in the disc (the pupil's edge) costs both models alike. None when the disc
+    is cut to under 9 pixels, the spot has no rise, or no pixel lies outside its core. Raises
+    nothing."""
+    from scipy.optimize import least_squares  # (only on this rare path)
+
+    if spot.get("base") is None or not spot["peak"] > spot["base"] or not noise > 0:
+        return None
+    got = _disc(
+        img,
+        spot["centre_px"],
+        math.sqrt(spot["area_px"] / math.pi) + 2.0 * sigma + 1.0,
+        spot["base"] + 0.5 * (spot["peak"] - spot["base"]),
+    )
+    if got is None:
+        return None
+    val, d2, core = got
+    # Pixels over the core's level not joined to it are another thing's light (the iris
+    # beside a glint on the pupil): neither model's.
+    keep = core | (val < spot["base"] + 0.5 * (spot["peak"] - spot["base"]))
+    val, d2, core = val[keep], d2[keep], core[keep]
+    n_core = int(core.sum())
+    if n_core == 0 or n_core == val.size:
+        return None
+    rest = val[~core]
+    chi_block = float(((rest - rest.mean()) ** 2).sum()) / noise**2
+    g = np.exp(-0.5 * d2 / sigma**2)
+
+    # Unclipped (no pixel at the top), the glint model is linear in A and B': solved directly.
+    mat = np.column_stack([g, np.ones_like(g)])
+    sol = np.linalg.lstsq(mat, val, rcond=None)[0]
+    if float(val.max()) >= top or float(sol[0] * g.max() + sol[1]) > top:
+
+        def resid(q):
+            return np.minimum(q[1] + q[0] * g, top) - val
+
+        a0 = float(max(spot["peak"] - spot["base"], noise))
+        fit = least_squares(resid, [a0, float(spot["base"])], max_nfev=200)
+        rss = float(2.0 * fit.cost)
+    else:
+        rss = float(((mat @ sol - val) ** 2).sum())
+    chi_glint = rss / noise**2
+    return chi_glint - chi_block, max(1, n_core - 1)
 
 
 def _faint_blob(c, hats, sub, noise, width_px, max_area, params) -> dict | None:  # noqa: PLR0913
