@@ -1021,7 +1021,16 @@ def _fill_thin_missing(u8: np.ndarray, invalid: np.ndarray, inv8: np.ndarray, ho
     valid = (1 - inv8).astype(np.float32)
     num = cv2.boxFilter(u8.astype(np.float32) * valid, -1, (5, 5), normalize=False)
     den = cv2.boxFilter(valid, -1, (5, 5), normalize=False)
-    fill = thin.astype(bool) & (den > 0)
+    # (only where valid pixels lie on two opposite sides within 2 px, across the strip: a
+    # missing border one pixel wide round a few valid ones is no strip through the picture)
+    ok = valid > 0
+    pad = np.pad(ok, 2)
+    rows, cols = ok.shape
+    up = pad[1 : rows + 1, 2:-2] | pad[0:rows, 2:-2]
+    down = pad[3 : rows + 3, 2:-2] | pad[4 : rows + 4, 2:-2]
+    left = pad[2:-2, 1 : cols + 1] | pad[2:-2, 0:cols]
+    right = pad[2:-2, 3 : cols + 3] | pad[2:-2, 4 : cols + 4]
+    fill = thin.astype(bool) & (den > 0) & ((up & down) | (left & right))
     if not fill.any():
         return holes
     u8[fill] = np.rint(num[fill] / den[fill]).astype(np.uint8)
