@@ -73,9 +73,7 @@ def _assert_pupil_right(d, truth) -> None:
     cx, cy = _truth_ellipse_centre(truth)
     err = math.hypot(d.pupil.centre_px[0] - cx, d.pupil.centre_px[1] - cy)
     assert err <= TOL_PX, (d.pupil, (cx, cy), err)
-    # The pupil, not the iris (2.5× its size): the major axis within 15 % of the truth's (the
-    # detected axes are those of the edge's ¼ iso-line, narrower by ~1 px for the optics'
-    # blur, 3–6 % of these pupils).
+    # The pupil, not the iris (2.5× its size): the major axis within 15 % of the truth's.
     edge = np.asarray(truth["pupil"]["edge_px"], np.float32)
     major = max(cv2.fitEllipse(edge)[1])
     assert abs(d.pupil.axes_px[0] / major - 1.0) < 0.15, (d.pupil.axes_px, major)

@@ -415,9 +415,12 @@ class DetectParams:
 class Pupil:
     """The fitted pupil ellipse (pixel convention in the module doc).
 
-    centre_px : (x, y) sub-pixel centre. axes_px : (major, minor) full lengths of the edge
-    iso-line (``DetectParams.edge_fraction``; a blur narrows it a little). angle_deg : the
-    major axis from +x toward +y, [0, 180). area_px : pixels of the closed dark blob. threshold :
+    centre_px : (x, y) sub-pixel centre. axes_px : (major, minor) full lengths, px, of the
+    pupil's edge: the fitted iso-line (``DetectParams.edge_fraction``, on the edge's dark side)
+    grown by twice the edge's measured offset beyond it (:func:`~.pupil.edge_offset`: the
+    median edge profile's mass-preserving step, its half level under a symmetric blur).
+    angle_deg : the major axis from +x toward +y, [0, 180). area_px : pixels of the closed
+    dark blob. threshold :
     the pupil threshold in the input's units (pixels ≤ it are dark). boundary_support : fraction
     of the fitted ellipse's outline backed by real edge points. fit_residual_px : RMS distance of
     those points to the ellipse.
@@ -715,6 +718,16 @@ def _pupil_result(fit, params) -> tuple[Pupil | None, list[str], object]:
             f"(limit {limit:.2f} px)"
         )
     return pupil, errors, fit
+
+
+def _edge_axes(pupil: Pupil | None, fit) -> Pupil | None:
+    """The pupil with its edge's axes: the fitted ¼ iso-line's grown by twice the edge's
+    offset beyond it (:func:`~.pupil.edge_offset`). The glints are looked for about the
+    iso-line (their reach and caps scale with its axes, as they were set on it)."""
+    if pupil is None or not fit.edge_offset_px:
+        return pupil
+    grow = 2.0 * fit.edge_offset_px
+    return dataclasses.replace(pupil, axes_px=(pupil.axes_px[0] + grow, pupil.axes_px[1] + grow))
 
 
 def _straight_arc(fit, params) -> tuple | None:
@@ -2294,7 +2307,7 @@ def detect(
     return Detection(
         ok=not errors,
         failures=errors + warnings,
-        pupil=pupil,
+        pupil=_edge_axes(pupil, fit),
         glints=glints,
         timings_ms=timings,
         glint_threshold=tg_value,

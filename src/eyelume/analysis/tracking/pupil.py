@@ -73,9 +73,9 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    the iris does not lift it). Under a symmetric blur every such iso-line is an ellipse with
    the pupil's centre, whatever the threshold; a per-profile level keeps an unevenly lit iris
    from shifting it, and a low fraction reads the edge on the quiet dark side, where the
-   iris's shading and texture and the glints' skirts weigh least. The axes are those of that
-   iso-line: narrower than the sharp pupil's by 2 × 0.674 σ for a Gaussian blur of σ
-   (Φ⁻¹(¾) = 0.674).
+   iris's shading and texture and the glints' skirts weigh least. That iso-line is narrower
+   than the sharp pupil by 2 × 0.674 σ for a Gaussian blur of σ (Φ⁻¹(¾) = 0.674): the axes
+   answered are grown by twice the edge's offset beyond it (step 8).
    A pupil under 30 px across is refined a second time from the first fit.
 6. **Robust fit** (:func:`_robust_fit`): ``cv2.fitEllipse`` on the edge points; when more than
    5 % lie off it, the best of fits to contiguous runs of the outline, so an eyelid's edge or a
@@ -86,6 +86,18 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
 7. **Support** (:func:`support_of`): the fraction of the ellipse's outline backed by inlier
    edge points and its longest unbacked arc: a lid or the border hides one long arc, a ragged
    real edge leaves short gaps.
+8. **Edge profile** (:func:`find_pupil`, :func:`edge_profile`): the median of the picture's
+   profiles along the answered fit's normals. When it shows a dark iris ring inside the fit
+   (:func:`_ring_inside`: a shelf between a darker inside and the fitted edge — a dilated
+   pupil hugged by a 5–12 px dark iris, which the ladder's reduced picture does not resolve),
+   the pupil inside is thresholded halfway between the two levels and fitted
+   (:func:`_inside_ring`), else refused as merged with the iris. The fit's edge offset
+   (:func:`edge_offset`): how far the edge's mass-preserving step (its half level under a
+   symmetric blur) lies beyond the ¼ iso-line; ``detect`` reports the axes grown by twice it.
+
+Missing pixels in strips ≤ 2 px thin (a dead row, a scratch) take the mean of the valid pixels
+around them in the working picture (:func:`_fill_thin_missing`): they hide no pupil, but left
+bright they would cut one in two.
 
 Coordinates: OpenCV's — pixel (column c, row r) has its centre at (x, y) = (c, r); ellipse
 angles in degrees from +x toward +y (down the picture, clockwise as displayed).
@@ -279,6 +291,9 @@ class PupilFit:
     stable_from: int = -1
     #: the first seed of that chain (:attr:`Candidate.first`)
     first: tuple[int, int] = (-1, -1)
+    #: how far (px, + outward) the pupil's edge lies beyond ``ellipse``, the ¼ iso-line
+    #: (:func:`edge_offset`): the pupil's axes are the ellipse's grown by twice it
+    edge_offset_px: float = 0.0
 
     def __bool__(self) -> bool:
         return self.ellipse is not None
@@ -1017,6 +1032,43 @@ def _fill_holes_dark(u8: np.ndarray, invalid: np.ndarray, params) -> np.ndarray 
         if holes is None:
             holes = np.zeros_like(invalid, dtype=bool)
         holes[y0:y1, x0:x1] |= hole > 0
+    return _fill_thin_missing(u8, invalid, inv8, holes)
+
+
+def _fill_thin_missing(u8: np.ndarray, invalid: np.ndarray, inv8: np.ndarray, holes):
+    """Fill the missing pixels of strips ≤ 2 px thin (those a 3 × 3 opening of ``invalid``
+    removes: a dead row or column, a scratch), wherever they run, with the mean of the valid
+    pixels in the 5 × 5 px around each (in place), and return ``holes`` with them added.
+
+    Such a strip hides no pupil — both its sides are seen — but left bright it cuts one: a
+    NaN row 10 px under the centre of a 60 px pupil split its blob, and the larger half's fit
+    was refused as "cut or hidden" (40 % of its outline backed). Filled, the pupil's blob is
+    whole; its outline points next to the strip are still left out (:func:`edge_points`), as
+    missing pixels neither back nor contradict the fit."""
+    thin = inv8 & ~cv2.morphologyEx(inv8, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    if holes is not None:
+        thin[holes] = 0
+    if not thin.any():
+        return holes
+    valid = (1 - inv8).astype(np.float32)
+    num = cv2.boxFilter(u8.astype(np.float32) * valid, -1, (5, 5), normalize=False)
+    den = cv2.boxFilter(valid, -1, (5, 5), normalize=False)
+    # (only where valid pixels lie on two opposite sides within 2 px, across the strip: a
+    # missing border one pixel wide round a few valid ones is no strip through the picture)
+    ok = valid > 0
+    pad = np.pad(ok, 2)
+    rows, cols = ok.shape
+    up = pad[1 : rows + 1, 2:-2] | pad[0:rows, 2:-2]
+    down = pad[3 : rows + 3, 2:-2] | pad[4 : rows + 4, 2:-2]
+    left = pad[2:-2, 1 : cols + 1] | pad[2:-2, 0:cols]
+    right = pad[2:-2, 3 : cols + 3] | pad[2:-2, 4 : cols + 4]
+    fill = thin.astype(bool) & (den > 0) & ((up & down) | (left & right))
+    if not fill.any():
+        return holes
+    u8[fill] = np.rint(num[fill] / den[fill]).astype(np.uint8)
+    if holes is None:
+        holes = np.zeros_like(invalid, dtype=bool)
+    holes |= fill
     return holes
 
 
@@ -2957,10 +3009,109 @@ def find_pupil(
     :class:`PupilFit` with ``ellipse`` None and the first candidate's refusal. ``sharp``: an
     optional function giving more glints (uint8 0/255) for :func:`_small_pupil` — those of
     the unsmoothed picture, one pixel each on a small sensor, which would notch a small
-    pupil's blob. ``scale``: :func:`work_picture`'s, when known."""
+    pupil's blob. ``scale``: :func:`work_picture`'s, when known.
+
+    The fit's median edge profile (:func:`edge_profile`) then gives the edge's offset beyond
+    it (:func:`edge_offset`, ``edge_offset_px``) — or, when it shows a dark iris ring inside
+    the fit (:func:`_ring_inside`), the pupil inside that ring (:func:`_inside_ring`)."""
     wp = work_picture(img, invalid, bright, params, scale)
     if not wp:
         return PupilFit(None, reason=wp.reason)
+    fit = _find_pupil(img, invalid, bright, params, sharp, wp)
+    if not fit or fit.inliers is None:
+        return fit
+    prof = edge_profile(img, fit.ellipse, *fit.inliers, bright, invalid)
+    if prof is None:
+        return fit
+    ring = _ring_inside(prof, wp, params)
+    if ring:
+        fit = _inside_ring(img, wp, fit, ring, bright, params)
+        if not fit:
+            return fit
+        prof = edge_profile(img, fit.ellipse, *fit.inliers, bright, invalid)
+        if prof is None:
+            return fit
+    fit.edge_offset_px = edge_offset(prof, fit.ellipse, params.edge_fraction)
+    return fit
+
+
+def _ring_inside(prof: EdgeProfile, wp: WorkPicture, params) -> tuple[float, float] | None:
+    """(the pupil's level, the ring's level), input units, when the fit's median edge profile
+    ``prof`` shows a ring inside the fitted outline, between a darker inside and the fitted
+    edge, else None: a dilated pupil hugged by a dark iris 5–12 px wide (pupil 18, iris
+    35–55, sclera 190 DN), which the ladder's reduced, smoothed picture (σ 1 px there, f px
+    here) does not resolve — its blob takes the ring, and the edge read ¼ of the way from the
+    pupil to the sclera is the iris's outline.
+
+    The fitted edge's line spread (:func:`_edge_span`'s peak) falls on its dark side to a
+    valley, and further in rises again — a second edge (a single blurred edge's spread falls
+    to the noise) — both peaks over 4 × the valley (resolved edges, a flat shelf between
+    them); the ring is the profile's level at the valley,
+    over the inner half of the profile's inside (the pupil) by ``pupil_min_contrast_sigma``
+    standard errors of a difference of two medians over the profiles (1.2533 σ √(2 / N), σ
+    the picture's pixel noise) and by
+    ``pupil_min_contrast`` of the range, as a pupil's step to its surround must be
+    (:func:`blob_contrast`)."""
+    m = prof.m
+    g = _spread(m)
+    span = _edge_span(g, prof.at)
+    if span is None:
+        return None
+    lo = span[1]
+    while lo > 0 and g[lo - 1] < g[lo]:  # down the edge's dark flank to its valley
+        lo -= 1
+    inner = prof.at // 2
+    if lo <= inner:
+        return None
+    # Two edges resolved, a shelf between: the spread at the valley under ¼ of either edge's
+    # peak (a ring 5–12 px wide at a blur of 0.8 px: ≤ 0.23 of the pupil's rise, ≤ 0.05 of the
+    # fitted edge's; a blurred render's 20 px ramp, bumpy where the iris's texture is, dips
+    # to ½ of its bumps and ⅓ of its peak).
+    dip = 4.0 * max(float(g[lo]), 0.0)
+    if not (g[inner:lo].max() > dip and g[span[1]] > dip):
+        return None
+    shelf, pupil = float(m[lo]), median(m[:inner])
+    rng = wp.hi - wp.lo
+    step = shelf - pupil
+    if step < params.pupil_min_contrast * rng:  # (first: the noise is worked out on demand)
+        return None
+    err = 1.2533 * wp.noise * rng / 255.0 * math.sqrt(2.0 / prof.count)
+    if step < params.pupil_min_contrast_sigma * err:
+        return None
+    return pupil, shelf
+
+
+def _inside_ring(img, wp: WorkPicture, fit: PupilFit, ring, bright, params) -> PupilFit:
+    """The pupil inside a fit whose edge profile shows a dark iris ring (:func:`_ring_inside`;
+    ``ring`` = (pupil level, ring level), input units): the picture thresholded halfway between
+    the two (:func:`full_res_blob`, seeded at the fit's centre) and fitted (:func:`fit_blob`),
+    taken when whole (``_whole``); else a refusal naming the ring."""
+    e = fit.ellipse
+    pupil, shelf = ring
+    level = 255.0 * (0.5 * (pupil + shelf) - wp.lo) / (wp.hi - wp.lo)
+    r = max(e.a, e.b)
+    rows, cols = wp.u8.shape
+    cx, cy = min(max(int(round(e.cx)), 0), cols - 1), min(max(int(round(e.cy)), 0), rows - 1)
+    x0, y0 = max(0, int(e.cx - r)), max(0, int(e.cy - r))
+    box = (x0, y0, min(cols, int(e.cx + r) + 1) - x0, min(rows, int(e.cy + r) + 1) - y0)
+    cand = Candidate(level, int(math.pi * e.a * e.b), box, (cx, cy))
+    blob = full_res_blob(wp, cand, 1, bright, params, img)
+    inner = fit_blob(img, wp, blob, bright, params) if blob else PupilFit(None, reason=blob.reason)
+    if inner and _whole(inner, params):
+        return inner
+    why = inner.reason if not inner else "its fit is not whole"
+    major, minor, _ = e.major_minor_angle
+    return PupilFit(
+        None,
+        reason=f"pupil merged with iris: the fitted blob at ({e.cx:.0f}, {e.cy:.0f}) px "
+        f"({major:.0f} × {minor:.0f} px) holds a darker disc (level {pupil:.4g}) inside a "
+        f"ring at {shelf:.4g} along its outline: a dark iris ring round the pupil; the pupil "
+        f"inside it: {why}",
+    )
+
+
+def _find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params, sharp, wp) -> PupilFit:
+    """:func:`find_pupil`'s fit (steps 2–7) on its working picture ``wp``."""
     reduced = _reduced(wp, params)
     if reduced[1] is not None and reduced[1].all():
         # Nothing valid is left on the ladder's picture (reduced f×, its missing pixels grown
@@ -3031,3 +3182,158 @@ def find_pupil(
             f"blob inside was refused: {reasons[0]}",
         )
     return PupilFit(None, reason=reasons[0])
+
+
+# --- The edge's profile: a dark iris ring inside the fit, and the edge's offset ---------------
+
+#: :func:`edge_profile`'s sample step along the normals, px
+_EDGE_STEP = 0.25
+#: :func:`edge_profile`'s most profiles (evenly spaced over the backed outline)
+_EDGE_PROFILES = 256
+#: :func:`_spread`'s binomial kernel (9 taps, σ 0.35 px at :data:`_EDGE_STEP`)
+_SPREAD_KERNEL = np.array([1.0, 8.0, 28.0, 56.0, 70.0, 56.0, 28.0, 8.0, 1.0]) / 256.0
+
+
+@dataclass(frozen=True)
+class EdgeProfile:
+    """The median of the picture's profiles along a fitted ellipse's outward normals
+    (:func:`edge_profile`): ``s`` (px, + outward, 0 on the ellipse) and ``m`` (input units),
+    over ``count`` profiles; ``at`` the index of s = 0."""
+
+    s: np.ndarray
+    m: np.ndarray
+    count: int
+    at: int
+
+
+def edge_profile(img: np.ndarray, e: Ellipse, x, y, bright, invalid) -> EdgeProfile | None:
+    """The median profile across the edge of the ellipse ``e``, sampled every
+    :data:`_EDGE_STEP` px along its normals at the eccentric anomalies of the edge points (x, y)
+    (px arrays; at most :data:`_EDGE_PROFILES` of them, evenly spaced): inward 0.6 × its smaller
+    semi-axis (≤ 24 px: not across the pupil), outward its larger one (≤ 24 px). A sample
+    counts when it lies in the picture, off the glints (``bright``, uint8 0/255, grown by 2
+    px: their skirts) and off the missing pixels (``invalid``, bool or None); the profile
+    ends, each way, before a sample that fewer than 5 profiles keep (``count``: the fewest any
+    sample keeps). None when fewer than 5 keep the sample on the ellipse. The median of a few
+    dozen to a few hundred profiles is quiet and ignores a minority crossing a lash or the
+    iris's texture."""
+    rows, cols = img.shape
+    s_, q_ = e.local(np.asarray(x, float), np.asarray(y, float))
+    anom = np.arctan2(q_ / e.b, s_ / e.a)
+    if len(anom) > _EDGE_PROFILES:
+        anom = anom[np.linspace(0, len(anom) - 1, _EDGE_PROFILES).astype(np.intp)]
+    c, sn = math.cos(e.theta), math.sin(e.theta)
+    ea, eb = e.a * np.cos(anom), e.b * np.sin(anom)
+    px, py = e.cx + ea * c - eb * sn, e.cy + ea * sn + eb * c
+    nx, ny = e.outward_normal(px, py)
+    reach_in = max(1.0, min(0.6 * min(e.a, e.b), 24.0))
+    reach_out = max(2.0, min(max(e.a, e.b), 24.0))
+    at = int(math.ceil(reach_in / _EDGE_STEP))
+    s = (np.arange(at + int(math.ceil(reach_out / _EDGE_STEP)) + 1) - at) * _EDGE_STEP
+    mx = (px[:, None] + nx[:, None] * s[None, :]).astype(np.float32)
+    my = (py[:, None] + ny[:, None] * s[None, :]).astype(np.float32)
+    x0 = max(0, int(math.floor(float(mx.min()))) - 1)
+    y0 = max(0, int(math.floor(float(my.min()))) - 1)
+    x1 = min(cols, int(math.ceil(float(mx.max()))) + 2)
+    y1 = min(rows, int(math.ceil(float(my.max()))) + 2)
+    if x1 - x0 < 2 or y1 - y0 < 2:
+        return None
+    mx -= x0
+    my -= y0
+    # Samples off the picture, on the glints (grown by 2 px: their skirts) or on missing
+    # pixels do not count; each sample's median is over the profiles that keep it there, and
+    # the profile ends, each way, before a sample fewer than 5 profiles keep.
+    off = (mx < 0) | (my < 0) | (mx > x1 - x0 - 1) | (my > y1 - y0 - 1)
+    bad = bright[y0:y1, x0:x1] > 0
+    if invalid is not None:
+        bad = bad | invalid[y0:y1, x0:x1]
+    if bad.any():
+        grown = cv2.dilate(bad.astype(np.uint8), _disc(5))
+        off |= cv2.remap(grown, mx, my, cv2.INTER_NEAREST, borderMode=cv2.BORDER_REPLICATE) > 0
+    sub = img[y0:y1, x0:x1].astype(np.float32)
+    prof = cv2.remap(sub, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    kept = len(prof) - off.sum(axis=0)
+    if kept[at] < 5:
+        return None
+    first, last = at, at
+    while first > 0 and kept[first - 1] >= 5:
+        first -= 1
+    while last + 1 < len(s) and kept[last + 1] >= 5:
+        last += 1
+    prof = prof[:, first : last + 1]
+    if off.any():
+        prof[off[:, first : last + 1]] = np.nan
+        m = np.nanmedian(prof, axis=0)
+    else:
+        m = np.median(prof, axis=0)
+    count = int(kept[first : last + 1].min())
+    return EdgeProfile(s[first : last + 1], m.astype(np.float64), count, at - first)
+
+
+def _spread(m: np.ndarray) -> np.ndarray:
+    """The line spread of a median profile: its derivative (per px), smoothed by
+    :data:`_SPREAD_KERNEL` so that the noise left in the median makes no local extremes on an
+    edge's flanks."""
+    g = np.gradient(m, _EDGE_STEP)
+    return np.convolve(np.pad(g, 4, mode="edge"), _SPREAD_KERNEL, "valid")
+
+
+def _edge_span(g: np.ndarray, i: int) -> tuple[int, int, int] | None:
+    """(dark end, peak, bright end) indices of the edge whose line spread ``g`` rises from
+    index ``i`` (the fitted ¼ iso-line, on the edge's dark flank): up to its peak, then each way
+    down to 5 % of the peak or to a local minimum under ½ of it (where a next edge begins: a
+    dark iris ring's step to the sclera 5 px out, whose spread falls to 0.3 of the pupil's
+    between them at a blur of 0.8 px). None without a rise."""
+    n = len(g)
+    while i + 1 < n and g[i + 1] > g[i]:
+        i += 1
+    while i > 0 and g[i - 1] > g[i]:
+        i -= 1
+    peak = g[i]
+    if not peak > 0:
+        return None
+    hi = i
+    while hi + 1 < n and g[hi] > 0.05 * peak and not (g[hi + 1] > g[hi] and g[hi] < 0.5 * peak):
+        hi += 1
+    lo = i
+    while lo > 0 and g[lo] > 0.05 * peak and not (g[lo - 1] > g[lo] and g[lo] < 0.5 * peak):
+        lo -= 1
+    return lo, i, hi
+
+
+def edge_offset(prof: EdgeProfile, e: Ellipse, fraction: float) -> float:
+    """How far (px, + outward) the pupil's edge lies beyond the fitted ellipse ``e``, the
+    iso-line at ``fraction`` (``edge_fraction``, ¼) of the way up the edge (module doc, step
+    5), from its median profile ``prof`` (:func:`edge_profile`); 0.0 when the profile shows no
+    edge or not the one the fit read.
+
+    The edge is the profile's mass-preserving step (for a symmetric blur, its half level)
+    over its edge's line spread (:func:`_edge_span`): the step whose sharp disc holds as much
+    light as the profile does over that ring (radius √(a b) + s), so a blurred disc's own
+    shrinking (σ² / 2R for a Gaussian σ) is undone too. A blur of σ moves the ¼ iso-line
+    0.674 σ inside the edge (Φ⁻¹(¾)): 2 px on a 60 px pupil at σ 1.5, in the axes a
+    pupillometry user reads; the centre does not move (module doc, step 5)."""
+    s, m = prof.s, prof.m
+    span = _edge_span(_spread(m), prof.at)
+    if span is None:
+        return 0.0
+    lo, _, hi = span
+    m_lo, m_hi = m[lo], m[hi]
+    if not m_hi > m_lo:
+        return 0.0
+    # The span is the edge the fit read only if the fit's line sits about its own fraction up
+    # it (within a factor 2: the fit's outer level is capped, this one is the median's): where
+    # the pupil's edge runs into a brighter edge without a dip between them (a small render's
+    # dark iris ramping into the lid), the walk climbs on to that one, and the edge's offset
+    # cannot be read: 0.
+    up = (m[prof.at] - m_lo) / (m_hi - m_lo)
+    if not 0.5 * fraction <= up <= 2.0 * fraction:
+        return 0.0
+    # (m_hi − m_lo)((ρ + s_hi)² − r²) / 2 = ∫ (m − m_lo) r dr over [ρ + s_lo, ρ + s_hi]
+    # (trapezoids), ρ = √(a b)
+    rho = math.sqrt(e.a * e.b)
+    r = rho + s[lo : hi + 1]
+    f = (m[lo : hi + 1] - m_lo) * r
+    mass = float(np.sum(0.5 * (f[1:] + f[:-1]))) * _EDGE_STEP
+    r2 = (rho + s[hi]) ** 2 - 2.0 * mass / (m_hi - m_lo)
+    return math.sqrt(r2) - rho if r2 > 0 else 0.0
