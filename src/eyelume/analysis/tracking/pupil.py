@@ -3262,8 +3262,13 @@ def edge_profile(img: np.ndarray, e: Ellipse, x, y, bright, invalid) -> EdgeProf
         last += 1
     prof = prof[:, first : last + 1]
     if off.any():
+        # np.nanmedian's value (the mean of the two middle kept values, in float32) without its
+        # masked-array path (~1.7 ms a frame): NaNs sort last, each column's middle by its count.
         prof[off[:, first : last + 1]] = np.nan
-        m = np.nanmedian(prof, axis=0)
+        srt = np.sort(prof, axis=0)
+        n = kept[first : last + 1]
+        cols_ = np.arange(srt.shape[1])
+        m = (srt[(n - 1) // 2, cols_] + srt[n // 2, cols_]) * np.float32(0.5)
     else:
         m = np.median(prof, axis=0)
     count = int(kept[first : last + 1].min())
