@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import math
 
-import cv2
 import numpy as np
 import pytest
 
 from eyelume.analysis.tracking import detect
+from tests.analysis.test_detect_glint_match import _eye as _match_eye
 
 CENTRE = (200.6, 150.2)
 LEDS = (0.0, 90.0, 180.0, 270.0)
@@ -30,20 +30,10 @@ def _at(azimuth_deg: float, r: float = RING) -> tuple[float, float]:
 
 
 def _eye(spots, blur: float, seed: int = 0, stuck=(), pupil_r: float = 30.0) -> np.ndarray:
-    """The eye picture (module doc; its pupil's radius ``pupil_r`` px) with ``spots`` (x, y,
-    amplitude DN, σ px), blurred by ``blur`` px (0: none), noise added, rounded to 8 bits;
-    then ``stuck`` (x0, y0, w, h, DN) blocks set."""
-    y, x = np.mgrid[0:360, 0:480].astype(float)
-    r = np.hypot(x - CENTRE[0], y - CENTRE[1])
-    img = np.where(((x - CENTRE[0]) / 170) ** 2 + ((y - CENTRE[1]) / 90) ** 2 < 1, 190.0, 160.0)
-    img = np.where(r < 70, 100.0, img)
-    img = np.where(r < pupil_r, 20.0, img)
-    for sx, sy, amp, sig in spots:
-        img += amp * np.exp(-((x - sx) ** 2 + (y - sy) ** 2) / (2 * sig**2))
-    if blur > 0:
-        img = cv2.GaussianBlur(img, (0, 0), blur)
-    img += np.random.default_rng(seed).normal(0, 3.0, img.shape)
-    out = np.clip(np.round(img), 0, 255).astype(np.uint8)
+    """The eye picture (module doc; test_detect_glint_match's, its pupil's radius ``pupil_r``
+    px) with ``spots`` (x, y, amplitude DN, σ px), blurred by ``blur`` px (0: none), noise
+    added, rounded to 8 bits; then ``stuck`` (x0, y0, w, h, DN) blocks set."""
+    out = _match_eye(spots, seed, pupil_r=pupil_r, blur=blur)
     for x0, y0, w, h, v in stuck:
         out[y0 : y0 + h, x0 : x0 + w] = v
     return out

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 
 from eyelume.analysis.tracking import detect
@@ -27,9 +28,9 @@ def _ring(centre=CENTRE, r=30.0, leds=LEDS) -> list[tuple[float, float]]:
     ]
 
 
-def _eye(spots, seed=0, pupil_r=22.0) -> np.ndarray:
+def _eye(spots, seed=0, pupil_r=22.0, blur: float = 0.0) -> np.ndarray:
     """The eye picture (module doc; its pupil's radius ``pupil_r`` px) with ``spots`` (x, y,
-    amplitude DN, σ px) added."""
+    amplitude DN, σ px) added, blurred by ``blur`` px before the noise (0: none)."""
     y, x = np.mgrid[0:360, 0:480].astype(float)
     r = np.hypot(x - CENTRE[0], y - CENTRE[1])
     img = np.where(((x - CENTRE[0]) / 170) ** 2 + ((y - CENTRE[1]) / 90) ** 2 < 1, 190.0, 160.0)
@@ -37,6 +38,8 @@ def _eye(spots, seed=0, pupil_r=22.0) -> np.ndarray:
     img = np.where(r < pupil_r, 20.0, img)
     for sx, sy, amp, sig in spots:
         img += amp * np.exp(-((x - sx) ** 2 + (y - sy) ** 2) / (2 * sig**2))
+    if blur > 0:
+        img = cv2.GaussianBlur(img, (0, 0), blur)
     img += np.random.default_rng(seed).normal(0, 3.0, img.shape)
     return np.clip(np.round(img), 0, 255).astype(np.uint8)
 
