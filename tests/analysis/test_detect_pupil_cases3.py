@@ -39,6 +39,7 @@ def eye(  # noqa: PLR0913 - each option is one aspect of the made-up eye
     pupil=20.0,
     iris=30.0,
     iris_r=80.0,
+    iris_c=None,
     gamp=400.0,
     gsig=1.3,
     glint_frac=0.85,
@@ -46,15 +47,17 @@ def eye(  # noqa: PLR0913 - each option is one aspect of the made-up eye
     noise=3.0,
     seed=5,
 ):
-    """The frame (uint8; see the module doc)."""
+    """The frame (uint8; see the module doc; the iris centred at ``iris_c``, default the
+    pupil's centre)."""
     rng = np.random.default_rng(seed)
     pb = pa if pb is None else pb
+    icx, icy = (cx, cy) if iris_c is None else iris_c
     xx = ((np.arange(W * S) + 0.5) / S - 0.5)[None, :]
     yy = ((np.arange(H * S) + 0.5) / S - 0.5)[:, None]
     img = np.full((H * S, W * S), 150.0)
     opening = ((xx - 320.0) / 220.0) ** 2 + ((yy - 200.0) / 120.0) ** 2 < 1
     img = np.where(opening, 190.0, img)
-    img = np.where((np.hypot(xx - cx, yy - cy) < iris_r) & opening, iris, img)
+    img = np.where((np.hypot(xx - icx, yy - icy) < iris_r) & opening, iris, img)
     c, s = math.cos(math.radians(pang)), math.sin(math.radians(pang))
     u, v = (xx - cx) * c + (yy - cy) * s, -(xx - cx) * s + (yy - cy) * c
     img = np.where(((u / pa) ** 2 + (v / pb) ** 2 < 1) & opening, pupil, img)

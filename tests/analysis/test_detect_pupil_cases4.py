@@ -19,11 +19,11 @@ from __future__ import annotations
 
 import math
 
-import cv2
 import numpy as np
 import pytest
 
 from eyelume.analysis.tracking import detect
+from tests.analysis.test_detect_pupil_cases3 import eye as cases3_eye
 
 H, W, S = 400, 640, 4
 LEDS = (0, 90, 180, 270)
@@ -44,30 +44,13 @@ def eye(  # noqa: PLR0913 - each option is one aspect of the made-up eye
     noise=3.0,
     seed=5,
 ):
-    """The frame (uint8; see the module doc)."""
-    rng = np.random.default_rng(seed)
-    pb = pa if pb is None else pb
-    iris_r = max(2.4 * max(pa, pb), max(pa, pb) + 25) if iris_r is None else iris_r
-    icx, icy = (cx, cy) if iris_c is None else iris_c
-    xx = ((np.arange(W * S) + 0.5) / S - 0.5)[None, :]
-    yy = ((np.arange(H * S) + 0.5) / S - 0.5)[:, None]
-    img = np.full((H * S, W * S), 150.0)
-    opening = ((xx - 320.0) / 220.0) ** 2 + ((yy - 200.0) / 120.0) ** 2 < 1
-    img = np.where(opening, 190.0, img)
-    img = np.where((np.hypot(xx - icx, yy - icy) < iris_r) & opening, iris, img)
-    c, s = math.cos(math.radians(pang)), math.sin(math.radians(pang))
-    u, v = (xx - cx) * c + (yy - cy) * s, -(xx - cx) * s + (yy - cy) * c
-    img = np.where(((u / pa) ** 2 + (v / pb) ** 2 < 1) & opening, pupil, img)
-    img = cv2.resize(img, (W, H), interpolation=cv2.INTER_AREA)
-    yl, xl = np.mgrid[0:H, 0:W].astype(float)
-    for a in LEDS:
-        gx = cx + 0.85 * pa * math.cos(math.radians(a))
-        gy = cy - 0.85 * pa * math.sin(math.radians(a))
-        img += gamp * np.exp(-((xl - gx) ** 2 + (yl - gy) ** 2) / (2 * 1.3**2))
-    if blur:
-        img = cv2.GaussianBlur(img, (0, 0), blur)
-    img = img + rng.normal(0, noise, img.shape)
-    return np.clip(np.rint(img), 0, 255).astype(np.uint8)
+    """The frame (uint8; see the module doc): test_detect_pupil_cases3's eye with a brighter
+    iris whose radius defaults to max(2.4 × the pupil's larger semi-axis, it + 25 px)."""
+    big = max(pa, pa if pb is None else pb)
+    iris_r = max(2.4 * big, big + 25) if iris_r is None else iris_r
+    return cases3_eye(cx=cx, cy=cy, pa=pa, pb=pb, pang=pang, pupil=pupil, iris=iris,
+                      iris_r=iris_r, iris_c=iris_c, gamp=gamp, blur=blur, noise=noise,
+                      seed=seed)  # fmt: skip
 
 
 def _axes_off(d, pa, pb=None):
