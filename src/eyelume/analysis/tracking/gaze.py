@@ -219,7 +219,7 @@ def glint_offsets(glints_xy: np.ndarray) -> np.ndarray:
     that shares a found glint with the others.
 
     >>> g = np.array([[[0., 0.], [2., 0.], [1., 3.]], [[5., 5.], [np.nan, np.nan], [6., 8.]]])
-    >>> glint_offsets(g).round(6).tolist()
+    >>> (glint_offsets(g).round(6) + 0.0).tolist()  # + 0.0: a least-squares −0.0 prints as 0.0
     [[-1.0, -1.0], [1.0, -1.0], [0.0, 2.0]]
     """
     g = np.asarray(glints_xy, dtype=float).reshape(-1, np.shape(glints_xy)[-2], 2)
