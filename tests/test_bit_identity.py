@@ -60,9 +60,10 @@ def assert_variance_matches(var, ref_var, ref_image, err_msg: str = "") -> None:
     np.testing.assert_array_equal(np.isfinite(var), finite, err_msg=err_msg)
     tol = 1e-9 * np.abs(ref_var) + 1e-14 * ref_image**2
     bad = finite & ~(np.abs(var - ref_var) <= tol)
+    worst = float(np.max(np.abs(var - ref_var)[bad] / tol[bad])) if bad.any() else 0.0
     assert not bad.any(), (
-        f"{err_msg}: {int(bad.sum())} of {bad.size} pixels off by more than 1e-9 var + 1e-14 image²,"
-        f" the worst {np.max(np.abs(var - ref_var)[bad] / tol[bad]):.3g} × that"
+        f"{err_msg}: {int(bad.sum())} of {bad.size} pixels off by more than"
+        f" 1e-9 var + 1e-14 image², the worst {worst:.3g} × that"
     )
 
 

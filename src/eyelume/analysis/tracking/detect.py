@@ -1563,7 +1563,8 @@ def _rival_patterns(  # noqa: PLR0913 - the glints, their LEDs, the layout, the 
     candidates: the matching made, when it fits the pattern and has ≥ 3 glints, and the fits
     with at least as many glints (only those with the most when it does not fit), the best
     fitting (least residual) first. Candidates
-    sharing < 2 glint–LED pairs are different patterns: the one whose centre t lies nearest
+    sharing < 2 glint–LED pairs are different patterns: one fitting far better than every other
+    (:func:`_pick_family`) is taken; else the one whose centre t lies nearest
     the pupil's centre is taken when the other's is ≥ 2 × as far and farther by more than the
     pupil's semi-major axis (the LEDs' glints lie on the cornea around the pupil, their
     pattern's centre off the pupil's by the pupil–glint vector; a reflection's place is set by
@@ -1639,12 +1640,33 @@ def _candidate_fits(glints, centres, leds, p_all, sin_half: float, params) -> li
     return sorted(cands, key=lambda f: f["rms"])
 
 
+#: :func:`_pick_family`: a pattern fit whose residual (rms, px) exceeds this many times
+#: another's (and this many times the floor below) is a chance set of glints, not a copy of
+#: the LEDs' pattern.
+RIVAL_RMS_RATIO = 3.0
+#: ... the floor (px): centroid noise and the cornea's distortion of the pattern leave a true
+#: pattern's fit this far off. Measured over the detection tests (tests/analysis, 40 rival
+#: checks): the LEDs' glints fit their pattern at 0.005–0.5 px rms in drawn pictures and up to
+#: 1.86 px on vr-offaxis renders (8 LEDs seen off-axis, gaze 20°, −20°); chance sets of a stray
+#: and two of the LEDs' glints at 8.0–10.9 px. 1.5 px puts the bar (4.5 px) 2.4 × above the
+#: worst true fit and 1.8 × below the best chance one.
+RIVAL_RMS_FLOOR_PX = 1.5
+
+
 def _pick_family(families: list[list[dict]], pupil) -> tuple[list[dict], str]:
-    """:func:`_rival_patterns`: the one pattern, or the one nearest the pupil's centre when the
-    other's centre is ≥ 2 × as far and farther by more than the pupil's semi-major axis; else
-    ([], the refusal)."""
+    """:func:`_rival_patterns`: the one pattern; or the one whose best fit's residual r is so
+    much the least that every other's exceeds RIVAL_RMS_RATIO × max(r, RIVAL_RMS_FLOOR_PX) (a
+    reflection of the LEDs in spectacles copies the pattern about as well as the cornea does;
+    three glints that fit it only within the tolerance, 8 px off, are a stray and two of the
+    LEDs' glints); or the one nearest the pupil's centre when the other's centre is ≥ 2 × as far
+    and farther by more than the pupil's semi-major axis; else ([], the refusal)."""
     if len(families) == 1:
         return families[0], ""
+    rms = [float(fam[0]["rms"]) for fam in families]
+    best = int(np.argmin(rms))
+    bar = RIVAL_RMS_RATIO * max(rms[best], RIVAL_RMS_FLOOR_PX)
+    if all(r > bar for i, r in enumerate(rms) if i != best):
+        return families[best], ""
     top = min(len(_pairs(fam[0])) for fam in families)
     if pupil is None:
         return [], _two_patterns(families, None, top)
