@@ -3286,84 +3286,6 @@ def _shift_maps(mx, my, x0, y0, w, h):
     return off
 
 
-@njit(cache=True, nogil=True)
-def _select(buf, n, k):
-    """The k-th smallest of buf[:n] (float32, reordered in place; no NaN), by Hoare's
-    selection; buf[k + 1 : n] are then ≥ it."""
-    lo, hi = 0, n - 1
-    while hi > lo:
-        pivot = buf[(lo + hi) // 2]
-        i, j = lo, hi
-        while i <= j:
-            while buf[i] < pivot:
-                i += 1
-            while buf[j] > pivot:
-                j -= 1
-            if i <= j:
-                t = buf[i]
-                buf[i] = buf[j]
-                buf[j] = t
-                i += 1
-                j -= 1
-        if k <= j:
-            hi = j
-        elif k >= i:
-            lo = i
-        else:
-            break
-    return buf[k]
-
-
-@njit(cache=True, nogil=True)
-def _middle(buf, c, exact_one):
-    """The median of buf[:c] (float32, reordered; no NaN): the mean of its two middle values
-    in float32 (NumPy's float32 ``np.median``/``np.nanmedian``, the same float) — for an odd c
-    the middle value itself when ``exact_one`` (``np.median``'s mean of one value), else its
-    mean with itself (as a NaN-masked sort's two middle indices, equal, give it)."""
-    lo = _select(buf, c, (c - 1) // 2)
-    if c % 2 == 0:
-        hi = buf[c // 2]
-        for i in range(c // 2 + 1, c):
-            hi = min(hi, buf[i])
-        return (lo + hi) * np.float32(0.5)
-    return lo if exact_one else (lo + lo) * np.float32(0.5)
-
-
-@njit(cache=True, nogil=True)
-def _median_profiles(prof, off, at):
-    """:func:`edge_profile`'s median: per sample (column of ``prof``, float32), how many
-    profiles keep it (``off`` False), the run (first, last) of samples about ``at`` each kept
-    by ≥ 5 (first −1 when ``at``'s is not), and each of those samples' median over the
-    profiles that keep it (:func:`_middle`, float32; ``np.median`` of the columns when no
-    sample is off, else the NaN-masked sort's mean of the two middle values)."""
-    n, k = prof.shape
-    kept = np.empty(k, np.int64)
-    for j in range(k):
-        c = 0
-        for i in range(n):
-            c += not off[i, j]
-        kept[j] = c
-    none_off = kept.min() == n
-    m = np.empty(0, np.float32)
-    if kept[at] < 5:
-        return kept, -1, -1, m
-    first, last = at, at
-    while first > 0 and kept[first - 1] >= 5:
-        first -= 1
-    while last + 1 < k and kept[last + 1] >= 5:
-        last += 1
-    m = np.empty(last - first + 1, np.float32)
-    buf = np.empty(n, np.float32)
-    for j in range(first, last + 1):
-        c = 0
-        for i in range(n):
-            if not off[i, j]:
-                buf[c] = prof[i, j]
-                c += 1
-        m[j - first] = _middle(buf, c, none_off)
-    return kept, first, last, m
-
-
 def edge_profile(img: np.ndarray, e: Ellipse, x, y, bright, invalid) -> EdgeProfile | None:
     """The median profile across the edge of the ellipse ``e``, sampled every
     :data:`_EDGE_STEP` px along its normals at the eccentric anomalies of the edge points (x, y)
@@ -3408,9 +3330,26 @@ def edge_profile(img: np.ndarray, e: Ellipse, x, y, bright, invalid) -> EdgeProf
         off |= cv2.remap(grown, mx, my, cv2.INTER_NEAREST, borderMode=cv2.BORDER_REPLICATE) > 0
     sub = img[y0:y1, x0:x1].astype(np.float32)
     prof = cv2.remap(sub, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    kept, first, last, m = _median_profiles(prof, off, at)
-    if first < 0:
+    kept = len(prof) - off.sum(axis=0)
+    if kept[at] < 5:
         return None
+    first, last = at, at
+    while first > 0 and kept[first - 1] >= 5:
+        first -= 1
+    while last + 1 < len(s) and kept[last + 1] >= 5:
+        last += 1
+    prof = prof[:, first : last + 1]
+    if off.any():
+        # np.nanmedian's value (the mean of the two middle kept values, in float32) without its
+        # masked-array path (~1.7 ms a frame): NaNs sort last, each column's middle by its count.
+        # (NumPy's SIMD sort of the whole columns beats a compiled selection per column, 4×.)
+        prof[off[:, first : last + 1]] = np.nan
+        srt = np.sort(prof, axis=0)
+        n = kept[first : last + 1]
+        cols_ = np.arange(srt.shape[1])
+        m = (srt[(n - 1) // 2, cols_] + srt[n // 2, cols_]) * np.float32(0.5)
+    else:
+        m = np.median(prof, axis=0)
     count = int(kept[first : last + 1].min())
     m = m.astype(np.float64)
     return EdgeProfile(s[first : last + 1], m, count, at - first, _spread(m))
