@@ -200,7 +200,11 @@ pairs against 0b498a2 (4 rounds × 25–30 calls a frame), median CPU ms per cal
 5.5–6: synthetic 640 × 400 12.69 / 12.52, openeds 12.55 / 11.67, 11.55 / 10.78, 11.08 / 9.95
 (edge_profile's medians then compiled as a selection per column, since dropped); load ~20: 12.81
 / 11.84, 11.94 / 12.40, 11.74 / 10.12, 11.71 / 9.72 — figures 2–2.5 × a quiet machine's,
-ratios 0.83–1.04, noise of the same size as the gain. Tried and dropped: the kept profiles'
+ratios 0.83–1.04, noise of the same size as the gain; as committed (e525d68), 20 rounds × 25
+calls a frame, load 8–9: synthetic 640 × 400 13.34 / 12.49 (best call 8.67 / 7.98), openeds
+000160 12.87 / 12.99 (8.03 / 7.89), 000170 11.81 / 11.24, 000180 11.63 / 11.01 (median ratios
+0.94, 1.01, 0.95, 0.95): ~5 % on a 640 × 400 frame, not enough for issue 13's 5 ms on the
+slowest openeds frame. Tried and dropped: the kept profiles'
 medians by a compiled Hoare selection per column (exact) — 4 × slower than NumPy's SIMD sort
 of whole columns (0.82 against 0.23 ms on 256 × 193 samples).
 """
