@@ -181,6 +181,32 @@ pupil 3.2 ms (the candidates' fit 1.5: robust fit 0.6, full-resolution blob 0.3;
 0.55, whose interior and 5 × 5 box averages are worked out twice, by ``_smoothed_bright_core`` and
 ``darker_core``; the working picture 0.5; the ladder 0.5), the glints 1.4 (Gaussian 0.26, bright
 masks 0.37, blobs 0.6), the one-pixel search 0.4.
+
+Session 25 (spd25; answers identical, ``repr`` of every ``Detection`` but its timings, on 357
+(picture, LEDs) pairs: the 255 realdata pictures (openeds with and without 4 LEDs), the
+synthetic 640 × 480 / 400 frames, 16 ``draw_eye`` sets × 3 LED cases, 12 of
+``test_detect_pupil_cases3``'s eyes and 10 of ``test_detect_glint_match``'s, each with and
+without LEDs, and a NaN, a tiny and a flat picture). Cut: ``pupil.edge_profile``'s sample
+points (the float32 maps, their extent, the shift into the window and the off-window test)
+compiled in two passes instead of six NumPy temporaries, and its line spread worked out once
+(``EdgeProfile.g``; ``_ring_inside`` and ``edge_offset`` each made it again, ``np.pad``'s ~20 µs
+by a concatenate); old and new ``edge_profile`` identical on 240 cases (the frames' own and
+random ellipses, with and without glints and missing pixels), one process, alternated, median
+CPU ms old/new (load ~11): synthetic 640 × 400 1.51 / 1.01, openeds 0.99 / 0.67, 1.27 / 0.84,
+1.11 / 0.80. ``pupil._Interior``: ``darker_core`` and ``_smoothed_bright_core`` take one fit's
+interior, float32 window and 5 × 5 px averages from one holder instead of each building them:
+``_inner_core`` 1.32 / 1.06, 0.67 / 0.50, 0.67 / 0.53, 0.62 / 0.50 ms. Concurrent one-thread
+pairs against 0b498a2 (4 rounds × 25–30 calls a frame), median CPU ms per call main / new: load
+5.5–6: synthetic 640 × 400 12.69 / 12.52, openeds 12.55 / 11.67, 11.55 / 10.78, 11.08 / 9.95
+(edge_profile's medians then compiled as a selection per column, since dropped); load ~20: 12.81
+/ 11.84, 11.94 / 12.40, 11.74 / 10.12, 11.71 / 9.72 — figures 2–2.5 × a quiet machine's,
+ratios 0.83–1.04, noise of the same size as the gain; as committed (e525d68), 20 rounds × 25
+calls a frame, load 8–9: synthetic 640 × 400 13.34 / 12.49 (best call 8.67 / 7.98), openeds
+000160 12.87 / 12.99 (8.03 / 7.89), 000170 11.81 / 11.24, 000180 11.63 / 11.01 (median ratios
+0.94, 1.01, 0.95, 0.95): ~5 % on a 640 × 400 frame, not enough for issue 13's 5 ms on the
+slowest openeds frame. Tried and dropped: the kept profiles'
+medians by a compiled Hoare selection per column (exact) — 4 × slower than NumPy's SIMD sort
+of whole columns (0.82 against 0.23 ms on 256 × 193 samples).
 """
 
 from __future__ import annotations

@@ -2345,7 +2345,32 @@ def _interior(wp: WorkPicture, e: Ellipse, bright: np.ndarray, params, shape):
     return box, inside
 
 
-def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params) -> str:
+class _Interior:
+    """A fit's interior as :func:`darker_core` and :func:`_smoothed_bright_core` judge it, each
+    part worked out once, when first asked for (both judge the same pixels): ``interior``
+    (:func:`_interior`'s box and mask, or None), ``win`` (the input over that box, float32)
+    and ``averaged`` (:func:`_box_averages` of ``win`` at :data:`_CORE_BOX` px, or None)."""
+
+    def __init__(self, img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params):
+        self._img, self._wp, self._e, self._bright, self._params = img, wp, e, bright, params
+
+    @cached_property
+    def interior(self):
+        return _interior(self._wp, self._e, self._bright, self._params, self._img.shape)
+
+    @cached_property
+    def win(self) -> np.ndarray:
+        x0, x1, y0, y1 = self.interior[0]
+        return self._img[y0:y1, x0:x1].astype(np.float32)
+
+    @cached_property
+    def averaged(self):
+        return _box_averages(self.win, self.interior[1], self._params)
+
+
+def darker_core(
+    img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params, parts=None
+) -> str:
     """Why a fitted ellipse holds a darker core (an iris with the pupil inside it), or "".
 
     Over the pixels inside 0.9 × the ellipse (off glints grown by their margin and missing
@@ -2358,8 +2383,10 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     median ignores; ≥ 1 for an integer picture, whose percentiles move in whole steps). A real
     pupil is uniform to its noise: its 5th percentile is a couple of σ under its median. When
     this finds no core, the interior averaged over 5 × 5 px is looked at again
-    (:func:`_smoothed_core`: a pupil only a few σ of the pixel noise darker than its iris)."""
-    interior = _interior(wp, e, bright, params, img.shape)
+    (:func:`_smoothed_core`: a pupil only a few σ of the pixel noise darker than its iris).
+    ``parts``: the fit's :class:`_Interior`, when the caller has one (made here otherwise)."""
+    parts = _Interior(img, wp, e, bright, params) if parts is None else parts
+    interior = parts.interior
     if interior is None:
         return ""
     box, inside = interior
@@ -2368,12 +2395,12 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     black = wp.lo
     m, p = median_and_percentile(vals, params.core_quantile)
     # On the input (the working picture's glints are filled flat, which would hide noise).
-    win = img[y0:y1, x0:x1].astype(np.float32)
+    win = parts.win
     if p - black > params.core_max_fraction * (m - black):
         # no core at the black level, whatever the noise (its estimate is not worked out);
         # perhaps one a few σ above it, which only the averaged interior shows, or one too
         # small to move the 5th percentile
-        return _smoothed_core(win, inside, e, params) or _small_core(
+        return _smoothed_core(win, inside, e, params, parts) or _small_core(
             win, inside, e, (black, x0, y0, m, wp.hi - wp.lo), img.dtype.kind in "iu", params
         )
     lap = np.abs(cv2.filter2D(win, cv2.CV_32F, _IMMERKAER, borderType=cv2.BORDER_REFLECT)[inside])
@@ -2398,7 +2425,7 @@ def darker_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
             f"against its median's {m - black:.3g} ({(m - p) / noise:.0f} σ of the noise): the "
             "pupil inside an iris (or a dark fold) it was not told from"
         )
-    return _smoothed_core(win, inside, e, params) or _small_core(
+    return _smoothed_core(win, inside, e, params, parts) or _small_core(
         win, inside, e, (black, x0, y0, m, wp.hi - wp.lo), img.dtype.kind in "iu", params
     )
 
@@ -2423,7 +2450,7 @@ def _box_averages(win: np.ndarray, inside: np.ndarray, params, k: int = _CORE_BO
     return vals, avg, whole
 
 
-def _smoothed_core(win: np.ndarray, inside: np.ndarray, e: Ellipse, params) -> str:
+def _smoothed_core(win: np.ndarray, inside: np.ndarray, e: Ellipse, params, parts=None) -> str:
     """The darker core of :func:`darker_core` looked for again on the interior averaged over
     :data:`_CORE_BOX` × :data:`_CORE_BOX` boxes, or "": a pupil only a few σ of the pixel
     noise darker than its iris (pupil 18, iris 22–28 DN at σ 3: 24 of 24 such pictures were
@@ -2442,9 +2469,11 @@ def _smoothed_core(win: np.ndarray, inside: np.ndarray, e: Ellipse, params) -> s
     :data:`_CORE_BOX`: a pupil in that iris keeps its level in most of its boxes, and white
     noise falls k×. A pupil 10 DN under its iris at σ 6
     (134 px iris, 52 × 44 px pupil) is 7.6 σ under at 5 × 5 px and was answered as the iris;
-    at 11 × 11 px it is 16 σ. Shading does not fall with the box, and widens σ with it."""
+    at 11 × 11 px it is 16 σ. Shading does not fall with the box, and widens σ with it.
+    ``parts``: the :class:`_Interior` ``win`` and ``inside`` are from, whose
+    :data:`_CORE_BOX` px averages are taken from it (worked out once a fit), or None."""
     k = _CORE_BOX
-    found = _averaged_core(win, inside, params, k)
+    found = _averaged_core(win, inside, params, k, parts)
     if found is None:
         return ""
     m, p, sigma = found
@@ -2468,12 +2497,16 @@ def _smoothed_core(win: np.ndarray, inside: np.ndarray, e: Ellipse, params) -> s
     )
 
 
-def _averaged_core(win: np.ndarray, inside: np.ndarray, params, k: int):
+def _averaged_core(win: np.ndarray, inside: np.ndarray, params, k: int, parts=None):
     """:func:`_smoothed_core`'s first test on the interior averaged over k × k px boxes:
     (median, ``core_quantile`` percentile, σ of the brighter half) when that percentile is
     within ``core_max_fraction`` of the way from the 1st percentile to the median (a darker
-    mode apart from the rest), else None. The caller judges the depth."""
-    averaged = _box_averages(win, inside, params, k)
+    mode apart from the rest), else None. The caller judges the depth. ``parts``: as
+    :func:`_smoothed_core`'s."""
+    if parts is not None and k == _CORE_BOX:
+        averaged = parts.averaged
+    else:
+        averaged = _box_averages(win, inside, params, k)
     if averaged is None:
         return None
     vals = averaged[0]
@@ -2788,7 +2821,7 @@ def bright_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, params) -> str:
 
 
 def _smoothed_bright_core(
-    img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params
+    img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray, params, parts=None
 ) -> str:
     """:func:`bright_core` for a lit pupil only a little brighter than its iris, or "".
 
@@ -2805,14 +2838,13 @@ def _smoothed_bright_core(
     it is a lit pupil when the piece brighter than (m + q) / 2 nearest the centre has its
     centroid inside half the ellipse, fills ≥ ½ of its box and is larger than any glint (as
     :func:`bright_core`). A dark pupil is uniform to its noise: its 95th percentile is
-    ~1.6 σ over its median."""
-    interior = _interior(wp, e, bright, params, img.shape)
-    if interior is None:
+    ~1.6 σ over its median. ``parts``: as :func:`darker_core`'s."""
+    parts = _Interior(img, wp, e, bright, params) if parts is None else parts
+    if parts.interior is None:
         return ""
-    box, inside = interior
-    x0, x1, y0, y1 = box
+    box = parts.interior[0]
     k = _CORE_BOX
-    averaged = _box_averages(img[y0:y1, x0:x1].astype(np.float32), inside, params)
+    averaged = parts.averaged
     if averaged is None:
         return ""
     vals, avg, whole = averaged
@@ -2865,10 +2897,14 @@ def _inner_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     """Why a whole fit is not the pupil for what it holds, or "": a bright core larger than any
     glint (:func:`bright_core`: "no dark pupil: bright-pupil image?") or a darker core
     (:func:`darker_core`)."""
-    lit = bright_core(img, wp, e, params) or _smoothed_bright_core(img, wp, e, bright, params)
+    lit = bright_core(img, wp, e, params)
     if lit:
         return f"no dark pupil: bright-pupil image? ({lit})"
-    return darker_core(img, wp, e, bright, params)
+    parts = _Interior(img, wp, e, bright, params)
+    lit = _smoothed_bright_core(img, wp, e, bright, params, parts)
+    if lit:
+        return f"no dark pupil: bright-pupil image? ({lit})"
+    return darker_core(img, wp, e, bright, params, parts)
 
 
 def _finer(img: np.ndarray, wp: WorkPicture, reduced, f: int, bright: np.ndarray, params):
@@ -3059,8 +3095,7 @@ def _ring_inside(prof: EdgeProfile, wp: WorkPicture, params) -> tuple[float, flo
     the picture's pixel noise) and by
     ``pupil_min_contrast`` of the range, as a pupil's step to its surround must be
     (:func:`blob_contrast`)."""
-    m = prof.m
-    g = _spread(m)
+    m, g = prof.m, prof.g
     span = _edge_span(g, prof.at)
     if span is None:
         return None
@@ -3205,12 +3240,57 @@ _SPREAD_KERNEL = np.array([1.0, 8.0, 28.0, 56.0, 70.0, 56.0, 28.0, 8.0, 1.0]) / 
 class EdgeProfile:
     """The median of the picture's profiles along a fitted ellipse's outward normals
     (:func:`edge_profile`): ``s`` (px, + outward, 0 on the ellipse) and ``m`` (input units),
-    over ``count`` profiles; ``at`` the index of s = 0."""
+    over ``count`` profiles; ``at`` the index of s = 0; ``g`` its line spread
+    (:func:`_spread` of ``m``, per px), worked out once for :func:`_ring_inside` and
+    :func:`edge_offset`."""
 
     s: np.ndarray
     m: np.ndarray
     count: int
     at: int
+    g: np.ndarray
+
+
+@njit(cache=True, nogil=True)
+def _normal_maps(px, py, nx, ny, s):
+    """:func:`edge_profile`'s sample points: (px + nx s, py + ny s) for each profile (row) and
+    step s (column), worked out in float64 and rounded to float32 (NumPy's broadcast
+    ``(px[:, None] + nx[:, None] * s[None, :]).astype(np.float32)``, the same floats), and
+    their (least x, least y, largest x, largest y)."""
+    n, k = px.size, s.size
+    mx = np.empty((n, k), np.float32)
+    my = np.empty((n, k), np.float32)
+    lo_x, lo_y = np.float32(np.inf), np.float32(np.inf)
+    hi_x, hi_y = np.float32(-np.inf), np.float32(-np.inf)
+    for i in range(n):
+        for j in range(k):
+            vx = np.float32(px[i] + nx[i] * s[j])
+            vy = np.float32(py[i] + ny[i] * s[j])
+            mx[i, j] = vx
+            my[i, j] = vy
+            lo_x = min(lo_x, vx)
+            hi_x = max(hi_x, vx)
+            lo_y = min(lo_y, vy)
+            hi_y = max(hi_y, vy)
+    return mx, my, (lo_x, lo_y, hi_x, hi_y)
+
+
+@njit(cache=True, nogil=True)
+def _shift_maps(mx, my, x0, y0, w, h):
+    """``mx`` −= x0 and ``my`` −= y0 in place (float32) and the samples off the w × h window
+    (bool): :func:`edge_profile`'s points in its window."""
+    n, k = mx.shape
+    off = np.empty((n, k), np.bool_)
+    fx0, fy0 = np.float32(x0), np.float32(y0)
+    wx, hy = np.float32(w - 1), np.float32(h - 1)
+    for i in range(n):
+        for j in range(k):
+            vx = mx[i, j] - fx0
+            vy = my[i, j] - fy0
+            mx[i, j] = vx
+            my[i, j] = vy
+            off[i, j] = vx < 0 or vy < 0 or vx > wx or vy > hy
+    return off
 
 
 def edge_profile(img: np.ndarray, e: Ellipse, x, y, bright, invalid) -> EdgeProfile | None:
@@ -3237,20 +3317,18 @@ def edge_profile(img: np.ndarray, e: Ellipse, x, y, bright, invalid) -> EdgeProf
     reach_out = max(2.0, min(max(e.a, e.b), 24.0))
     at = int(math.ceil(reach_in / _EDGE_STEP))
     s = (np.arange(at + int(math.ceil(reach_out / _EDGE_STEP)) + 1) - at) * _EDGE_STEP
-    mx = (px[:, None] + nx[:, None] * s[None, :]).astype(np.float32)
-    my = (py[:, None] + ny[:, None] * s[None, :]).astype(np.float32)
-    x0 = max(0, int(math.floor(float(mx.min()))) - 1)
-    y0 = max(0, int(math.floor(float(my.min()))) - 1)
-    x1 = min(cols, int(math.ceil(float(mx.max()))) + 2)
-    y1 = min(rows, int(math.ceil(float(my.max()))) + 2)
+    # The sample points (float32, as cv2.remap takes them) and their extent
+    mx, my, lims = _normal_maps(px, py, nx, ny, s)
+    x0 = max(0, int(math.floor(float(lims[0]))) - 1)
+    y0 = max(0, int(math.floor(float(lims[1]))) - 1)
+    x1 = min(cols, int(math.ceil(float(lims[2]))) + 2)
+    y1 = min(rows, int(math.ceil(float(lims[3]))) + 2)
     if x1 - x0 < 2 or y1 - y0 < 2:
         return None
-    mx -= x0
-    my -= y0
     # Samples off the picture, on the glints (grown by 2 px: their skirts) or on missing
     # pixels do not count; each sample's median is over the profiles that keep it there, and
     # the profile ends, each way, before a sample fewer than 5 profiles keep.
-    off = (mx < 0) | (my < 0) | (mx > x1 - x0 - 1) | (my > y1 - y0 - 1)
+    off = _shift_maps(mx, my, x0, y0, x1 - x0, y1 - y0)
     bad = bright[y0:y1, x0:x1] > 0
     if invalid is not None:
         bad = bad | invalid[y0:y1, x0:x1]
@@ -3271,6 +3349,7 @@ def edge_profile(img: np.ndarray, e: Ellipse, x, y, bright, invalid) -> EdgeProf
     if off.any():
         # np.nanmedian's value (the mean of the two middle kept values, in float32) without its
         # masked-array path (~1.7 ms a frame): NaNs sort last, each column's middle by its count.
+        # (NumPy's SIMD sort of the whole columns beats a compiled selection per column, 4×.)
         prof[off[:, first : last + 1]] = np.nan
         srt = np.sort(prof, axis=0)
         n = kept[first : last + 1]
@@ -3279,7 +3358,8 @@ def edge_profile(img: np.ndarray, e: Ellipse, x, y, bright, invalid) -> EdgeProf
     else:
         m = np.median(prof, axis=0)
     count = int(kept[first : last + 1].min())
-    return EdgeProfile(s[first : last + 1], m.astype(np.float64), count, at - first)
+    m = m.astype(np.float64)
+    return EdgeProfile(s[first : last + 1], m, count, at - first, _spread(m))
 
 
 def _spread(m: np.ndarray) -> np.ndarray:
@@ -3287,7 +3367,9 @@ def _spread(m: np.ndarray) -> np.ndarray:
     :data:`_SPREAD_KERNEL` so that the noise left in the median makes no local extremes on an
     edge's flanks."""
     g = np.gradient(m, _EDGE_STEP)
-    return np.convolve(np.pad(g, 4, mode="edge"), _SPREAD_KERNEL, "valid")
+    # (np.pad(g, 4, mode="edge")'s values, without its general path: ~20 µs a call)
+    padded = np.concatenate((np.full(4, g[0]), g, np.full(4, g[-1])))
+    return np.convolve(padded, _SPREAD_KERNEL, "valid")
 
 
 def _edge_span(g: np.ndarray, i: int) -> tuple[int, int, int] | None:
@@ -3326,7 +3408,7 @@ def edge_offset(prof: EdgeProfile, e: Ellipse, fraction: float) -> float:
     0.674 σ inside the edge (Φ⁻¹(¾)): 2 px on a 60 px pupil at σ 1.5, in the axes a
     pupillometry user reads; the centre does not move (module doc, step 5)."""
     s, m = prof.s, prof.m
-    span = _edge_span(_spread(m), prof.at)
+    span = _edge_span(prof.g, prof.at)
     if span is None:
         return 0.0
     lo, _, hi = span
