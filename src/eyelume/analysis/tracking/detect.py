@@ -418,7 +418,7 @@ class Pupil:
     centre_px : (x, y) sub-pixel centre. axes_px : (major, minor) full lengths, px, of the
     pupil's edge: the fitted iso-line (``DetectParams.edge_fraction``, on the edge's dark side)
     grown by twice the edge's measured offset beyond it (:func:`~.pupil.edge_offset`: the
-    median edge profile's mass-preserving step, its half level under a symmetric blur).
+    step of a blurred step-and-iris model fitted to the median edge profile).
     angle_deg : the major axis from +x toward +y, [0, 180). area_px : pixels of the closed
     dark blob. threshold :
     the pupil threshold in the input's units (pixels ≤ it are dark). boundary_support : fraction

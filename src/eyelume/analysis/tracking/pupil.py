@@ -92,8 +92,10 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    pupil hugged by a 5–12 px dark iris, which the ladder's reduced picture does not resolve),
    the pupil inside is thresholded halfway between the two levels and fitted
    (:func:`_inside_ring`), else refused as merged with the iris. The fit's edge offset
-   (:func:`edge_offset`): how far the edge's mass-preserving step (its half level under a
-   symmetric blur) lies beyond the ¼ iso-line; ``detect`` reports the axes grown by twice it.
+   (:func:`edge_offset`): how far the step of a blurred step-and-iris model fitted to the
+   profile (the pupil's level, a step, and an iris going on with its own slope and curvature,
+   under a Gaussian blur) lies beyond the ¼ iso-line; ``detect`` reports the axes grown by
+   twice it.
 
 Missing pixels in strips ≤ 2 px thin (a dead row, a scratch) take the mean of the valid pixels
 around them in the working picture (:func:`_fill_thin_missing`): they hide no pupil, but left
@@ -3401,25 +3403,62 @@ def edge_offset(prof: EdgeProfile, e: Ellipse, fraction: float) -> float:
     5), from its median profile ``prof`` (:func:`edge_profile`); 0.0 when the profile shows no
     edge or not the one the fit read.
 
-    The edge is the profile's mass-preserving step (for a symmetric blur, its half level)
-    over its edge's line spread (:func:`_edge_span`): the step whose sharp disc holds as much
-    light as the profile does over that ring (radius √(a b) + s), so a blurred disc's own
-    shrinking (σ² / 2R for a Gaussian σ) is undone too. A blur of σ moves the ¼ iso-line
-    0.674 σ inside the edge (Φ⁻¹(¾)): 2 px on a 60 px pupil at σ 1.5, in the axes a
-    pupillometry user reads; the centre does not move (module doc, step 5)."""
+    The edge is the step of a model fitted to the profile about its edge's line spread
+    (:func:`_edge_span`; :func:`_step_fit`): a step at s = e from the pupil's level p to an
+    iris that goes on as a quadratic in (s − e), blurred by a Gaussian of σ,
+
+        m(s) = p + G_σ * [H(s − e) (q + k (s − e) + c (s − e)²)],
+
+    least squares over p, q, k, c (linear) and e, σ; the fitted e plus σ² / 2(ρ + e), ρ =
+    √(a b) (a blurred disc of radius R crosses its half level σ² / 2R inside R). A blur of σ
+    moves the ¼ iso-line 0.674 σ inside the edge (Φ⁻¹(¾)): 2 px on a 60 px pupil at σ 1.5,
+    in the axes a pupillometry user reads; the centre does not move (module doc, step 5). The
+    iris's own slope and curvature are the model's: an iris that brightens gradually away
+    from the pupil (26–45 DN at its edge rising to 110 over 4–40 px) does not move the edge
+    out, as the half level of the whole rise did (3.4–13 px on the axes). Where the iris
+    rises over a few σ of the blur (1 − exp(−d / τ), τ ≲ 5 σ), its rise and the step's
+    blur are one shape and the edge cannot be told from the profile
+    (tests/analysis/test_detect_pupil_gradual_iris.py). Where the fit is not this edge's, the
+    former half level (:func:`_half_level_offset`)."""
     s, m = prof.s, prof.m
-    span = _edge_span(prof.g, prof.at)
+    g = prof.g
+    span = _edge_span(g, prof.at)
     if span is None:
         return 0.0
+    lo, pk, hi = span
+    if not m[hi] > m[lo]:
+        return 0.0
+    # The window: 2 px of the pupil's level before the span's dark end, and beyond the peak
+    # twice the span's dark flank (≈ 2.4 σ: the step's blur out to ≈ 5 σ) and 1 px more. The
+    # step is looked for from ½ px before the dark end to 1 px past the peak; a fit at either
+    # end of that, or at the largest blur tried, is not this edge's: the half level then.
+    flank = s[pk] - s[lo]
+    a = max(0, lo - int(round(2.0 / _EDGE_STEP)))
+    b = min(len(s), pk + int(math.ceil((2.0 * flank + 1.0) / _EDGE_STEP)) + 1)
+    if b > hi + 1 and g[hi:b].max() > g[pk]:
+        # a stronger edge within the window beyond the span (a dark iris ring's step to the
+        # sclera 5 px out), which the model's quadratic does not follow: the half level
+        return _half_level_offset(prof, e, fraction, span)
+    e_lo, e_hi, sig_hi = float(s[lo]) - 0.5, float(s[pk]) + 1.0, max(1.0, flank)
+    edge, sig, _ = _step_fit(s[a:b], m[a:b], e_lo, e_hi, sig_hi)
+    rho = math.sqrt(e.a * e.b)
+    if not (e_lo < edge < e_hi and sig < 2.0 * sig_hi and rho + edge > 0):
+        return _half_level_offset(prof, e, fraction, span)
+    return edge + sig * sig / (2.0 * (rho + edge))
+
+
+def _half_level_offset(prof: EdgeProfile, e: Ellipse, fraction: float, span) -> float:
+    """:func:`edge_offset` where its model's fit is not this edge's (at an end of its search
+    window, or its blur as wide as the window: a defocused render's 15–20 px rise, bumpy
+    where the iris's texture is, whose spread peaks early): the profile's mass-preserving step
+    over the whole span (:func:`_edge_span`) — the step whose sharp disc holds as much light
+    as the profile does over that ring (radius √(a b) + s), for a symmetric blur its half
+    level; 0.0 when the fit's line does not sit about its own ``fraction`` up the span
+    (within a factor 2): the walk climbed on to a brighter edge beyond. (Sessions 22–24's
+    offset everywhere; on a gradual iris it reads the half level of the whole rise, far out.)"""
+    s, m = prof.s, prof.m
     lo, _, hi = span
     m_lo, m_hi = m[lo], m[hi]
-    if not m_hi > m_lo:
-        return 0.0
-    # The span is the edge the fit read only if the fit's line sits about its own fraction up
-    # it (within a factor 2: the fit's outer level is capped, this one is the median's): where
-    # the pupil's edge runs into a brighter edge without a dip between them (a small render's
-    # dark iris ramping into the lid), the walk climbs on to that one, and the edge's offset
-    # cannot be read: 0.
     up = (m[prof.at] - m_lo) / (m_hi - m_lo)
     if not 0.5 * fraction <= up <= 2.0 * fraction:
         return 0.0
@@ -3431,3 +3470,91 @@ def edge_offset(prof: EdgeProfile, e: Ellipse, fraction: float) -> float:
     mass = float(np.sum(0.5 * (f[1:] + f[:-1]))) * _EDGE_STEP
     r2 = (rho + s[hi]) ** 2 - 2.0 * mass / (m_hi - m_lo)
     return math.sqrt(r2) - rho if r2 > 0 else 0.0
+
+
+@njit(cache=True, nogil=True)
+def _step_sse(s, m, e, sig, every=1):
+    """The least-squares residual (sum of squares) of :func:`edge_offset`'s model at step
+    ``e`` and blur ``sig`` (px) over every ``every``-th sample, p, q, k, c solved from the
+    4 × 4 normal equations."""
+    ata = np.zeros((4, 4))
+    atb = np.zeros(4)
+    mm = 0.0
+    col = np.empty(4)
+    r2 = 1.0 / math.sqrt(2.0)
+    r2pi = 1.0 / math.sqrt(2.0 * math.pi)
+    for i in range(0, s.size, every):
+        x = (s[i] - e) / sig
+        big = 0.5 * math.erfc(-x * r2)
+        small = math.exp(-0.5 * x * x) * r2pi
+        col[0] = 1.0
+        col[1] = big
+        col[2] = sig * (x * big + small)
+        col[3] = sig * sig * ((x * x + 1.0) * big + x * small)
+        for j in range(4):
+            atb[j] += col[j] * m[i]
+            for k in range(j + 1):
+                ata[j, k] += col[j] * col[k]
+        mm += m[i] * m[i]
+    return mm - _explained(ata, atb)
+
+
+@njit(cache=True, nogil=True)
+def _explained(ata, atb):
+    """|L⁻¹ b|², L L' = A (Cholesky): the sum of squares a least-squares fit with normal
+    matrix A = ``ata`` (4 × 4) and right side b = ``atb`` explains; the residual is |m|² less
+    it (A's lower triangle is read). A ridge of 1e-9 of the diagonal keeps A positive
+    definite where a column vanishes over the window; −inf (a residual of +inf) if it is
+    not."""
+    low = np.zeros((4, 4))
+    for j in range(4):
+        d = ata[j, j] * (1.0 + 1e-9) + 1e-12
+        for k in range(j):
+            d -= low[j, k] * low[j, k]
+        if not d > 0:
+            return -np.inf
+        low[j, j] = math.sqrt(d)
+        for i in range(j + 1, 4):
+            v = ata[i, j]
+            for k in range(j):
+                v -= low[i, k] * low[j, k]
+            low[i, j] = v / low[j, j]
+    z = np.zeros(4)
+    fit = 0.0
+    for j in range(4):
+        v = atb[j]
+        for k in range(j):
+            v -= low[j, k] * z[k]
+        z[j] = v / low[j, j]
+        fit += z[j] * z[j]
+    return fit
+
+
+@njit(cache=True, nogil=True)
+def _step_fit(s, m, e_lo, e_hi, sig_hi):
+    """(e, σ), px, of :func:`edge_offset`'s blurred step fitted to the profile ``m`` at ``s``:
+    the least residual over e in [e_lo, e_hi] every 0.25 px and σ in [0.2, 2 ``sig_hi``] px
+    every factor 1.25 (on every third sample), then about the best within ± 0.3 px every
+    0.1 px and σ × 1.08^±3, ± 0.075 px every 0.025 px and σ × 1.02^±3, and ± 0.018 px every
+    0.006 px and σ × 1.005^±3."""
+    best, be, bs = np.inf, e_lo, 1.0
+    ns = int(math.ceil(math.log(2.0 * sig_hi / 0.2) / math.log(1.25))) + 1
+    ne = int(math.ceil((e_hi - e_lo) / 0.25)) + 1
+    for i in range(ns):  # (every third sample, 0.75 px apart: the coarse search)
+        sig = 0.2 * 1.25**i
+        for j in range(ne):
+            e = e_lo + 0.25 * j
+            r = _step_sse(s, m, e, sig, 3)
+            if r < best:
+                best, be, bs = r, e, sig
+    for de, fs, every in ((0.1, 1.08, 1), (0.025, 1.02, 1), (0.006, 1.005, 1)):
+        best = np.inf
+        e0, s0 = be, bs
+        for i in range(-3, 4):
+            sig = s0 * fs**i
+            for j in range(-3, 4):
+                e = e0 + de * j
+                r = _step_sse(s, m, e, sig, every)
+                if r < best:
+                    best, be, bs = r, e, sig
+    return be, bs, best
