@@ -107,6 +107,7 @@ from eyelume.analysis.tracking.glints import (
     glint_smoothing,
     glints_near,
     in_bright_run,
+    jpeg_dc_step,
     match_leds,
     match_pattern,
     pattern_fit,
@@ -932,20 +933,32 @@ def _sharp_glints(img, value_range, noise, floor, params):
 
 
 def _blobs_near_pupil(  # noqa: PLR0913 - the picture, its scale, the pupil, the reach
-    img, value_range, noise, found, pupil, floor, params, n_leds=None, reach=1.0
+    img, value_range, noise, found, pupil, floor, params, n_leds=None, reach=1.0, jpeg_step=0.0
 ) -> list[dict]:
     """Step 5 (start): the bright blobs near the pupil (:func:`_bright_blobs_near`) and, with
     LEDs given and fewer blobs than LEDs among them, the unsaturated glints that stand out of
     their own background but not toward the picture's top (:func:`~.glints.faint_glints_near`,
     with a disc a quarter of the pupil's major axis across, ≥ 5 px: a glint is narrower, the
-    iris beside the pupil broader), within the bright ones' size cap and not where one is."""
+    iris beside the pupil broader), within the bright ones' size cap and not where one is.
+    ``jpeg_step`` > 0 (DN, a JPEG's picture: :func:`~.glints.jpeg_dc_step`): that search is
+    made whatever the bright blobs' count (the coding's ringing along the sclera's edges makes
+    as many bright specks as LEDs, and the glints were never looked for: matched 94–231 px
+    off), with the noise raised to the blocks' quantisation σ, step / √12 (a block one step
+    over its neighbours stays under the top-hat's threshold, 4 σ), too-big blobs re-cut
+    (``recut``) and the glints centred by :func:`_add_jpeg_glints`."""
     near = _bright_blobs_near(img, value_range, noise, found, pupil, floor, params, n_leds, reach)
-    if n_leds is None or len(near) >= n_leds:
+    if n_leds is None or (len(near) >= n_leds and not jpeg_step):
         return near
     r_max = reach * params.glint_search_radius * pupil.axes_px[0]
     width = max(5, int(round(pupil.axes_px[0] / 4.0)) | 1)
     cap = min(_glint_cap(pupil, params, reach), width * width)
-    for b in faint_glints_near(img, noise, pupil.centre_px, r_max, width, cap, params):
+    faint_noise = max(noise, jpeg_step / math.sqrt(12.0))
+    faint = faint_glints_near(
+        img, faint_noise, pupil.centre_px, r_max, width, cap, params, recut=jpeg_step > 0
+    )
+    if jpeg_step:
+        _add_jpeg_glints(img, noise, faint, near, params)
+    for b in faint if not jpeg_step else ():
         if all(math.dist(t["centre_px"], b["centre_px"]) > 1.5 for t in near):
             near.append(_fitted_centre(img, noise, b, params))
     if len(near) < n_leds and not any(b["peak"] >= value_range[1] for b in near):
@@ -984,6 +997,81 @@ def _fitted_centre(img, noise: float, blob: dict, params) -> dict:
     if math.dist(fitted["centre_px"], blob["centre_px"]) > r:
         return blob
     return {**blob, "centre_px": fitted["centre_px"]}
+
+
+def _add_jpeg_glints(img, noise: float, faint: list[dict], near: list[dict], params) -> None:
+    """A JPEG's unsaturated glints (``faint``, :func:`~.glints.faint_glints_near`) added to
+    ``near`` (in place), centred first — two blobs of one glint (the re-cut's pieces) end on
+    its one spot, and one within 1.5 px of a blob taken is that blob. The strong ones (rising
+    ≥ ``glint_strong_frac`` of the most any blob rises, the only ones :func:`_match_glints`
+    matches in a JPEG) by :func:`_fitted_centre` when its fit holds (a glint 5 px from the
+    pupil's edge, whose core's window reaches the iris: 0.3 px fitted, 2.6 px by its core at
+    q75), else by :func:`_core_centre`; the weak ones (the coding's specks, ~100 a frame: a fit
+    each took seconds) by :func:`_core_centre`."""
+    rises = [b["peak"] - b["base"] for b in [*near, *faint]]
+    top = max(rises, default=0.0)
+    for b in faint:
+        c = b
+        if b["peak"] - b["base"] >= params.glint_strong_frac * top:
+            c = _fitted_centre(img, noise, b, params)
+        if c is b:
+            c = _core_centre(img, noise, b, params)
+        if all(math.dist(t["centre_px"], c["centre_px"]) > 1.5 for t in near):
+            near.append(c)
+
+
+def _core_centre(img, noise: float, blob: dict, params) -> dict:
+    """A JPEG's unsaturated glint (:func:`_blobs_near_pupil` with ``jpeg_step``) centred on its
+    core instead of its top-hat blob: the coding's ringing about the glint and along the
+    pupil's edge rises over the blob's threshold and joins it (areas 150–180 px against
+    30–70 for the glint alone), pulling its centroid 1.7–3.6 px (q15–55). The core: the pixels
+    at least half the spot's rise (peak − the blob's base) over the base, joined to its
+    brightest pixel within the blob's equivalent radius + 2 px of its centroid; their area A
+    gives the spot's σ = √(A / (2 ln 2 π)) (a Gaussian's half-height disc). The centre is the
+    centroid of max(I − B, 0) within R = max(2, 2.5 σ) px of the brightest pixel, B the median
+    of the ring R + 1 … R + 3 px out, taken again about that centroid (rounded). On single
+    glints of σ 1.2–1.6 px, blurred by 0.8, 110–180 DN over a flat 28 DN, noise 2–3.5 DN,
+    coded at q15–90 (300 each), this centroid at R = 4 px was ≤ 0.46 px from the truth
+    (95th percentile 0.30 at q15, 0.14 at q70). Falls back on the blob when the core is
+    empty, runs off the picture, or its centre lies farther than the blob's equivalent radius
+    + 2 px from the blob's (something brighter beside it)."""
+    rows, cols = img.shape
+    x, y = blob["centre_px"]
+    r_eq = math.sqrt(blob["area_px"] / math.pi) + 2.0
+    h = int(math.ceil(r_eq))
+    x0, y0 = max(0, int(round(x)) - h), max(0, int(round(y)) - h)
+    x1, y1 = min(cols, int(round(x)) + h + 1), min(rows, int(round(y)) + h + 1)
+    win = np.asarray(img[y0:y1, x0:x1], np.float64)
+    if win.size == 0:
+        return blob
+    yy, xx = np.mgrid[y0:y1, x0:x1]
+    inner = np.hypot(xx - x, yy - y) <= max(1.5, r_eq - 2.0)
+    py, px = np.unravel_index(int(np.argmax(np.where(inner, win, -np.inf))), win.shape)
+    base = float(blob["base"])
+    half = (win >= base + 0.5 * (float(win[py, px]) - base)).astype(np.uint8)
+    _, lab = cv2.connectedComponents(half, connectivity=8)
+    area = int(np.count_nonzero(lab == lab[py, px]))
+    sigma = math.sqrt(area / (2.0 * math.log(2.0) * math.pi))
+    r_c = max(2.0, 2.5 * sigma)
+    cx, cy = float(px + x0), float(py + y0)
+    for _ in range(2):
+        m = int(math.ceil(r_c)) + 3
+        ix, iy = int(round(cx)), int(round(cy))
+        if ix - m < 0 or iy - m < 0 or ix + m >= cols or iy + m >= rows:
+            return blob
+        w = np.asarray(img[iy - m : iy + m + 1, ix - m : ix + m + 1], np.float64)
+        yy, xx = np.mgrid[-m : m + 1, -m : m + 1]
+        d = np.hypot(xx, yy)
+        b = float(np.median(w[(d > r_c + 1.0) & (d <= r_c + 3.0)]))
+        wgt = np.where(d <= r_c, np.maximum(w - b, 0.0), 0.0)
+        tot = float(wgt.sum())
+        if not tot > 0:
+            return blob
+        cx = ix + float((wgt * xx).sum()) / tot
+        cy = iy + float((wgt * yy).sum()) / tot
+    if math.dist((cx, cy), (x, y)) > r_eq:
+        return blob  # (not this blob's spot: something brighter beside it)
+    return {**blob, "centre_px": (cx, cy)}
 
 
 def _glint_cap(pupil, params, reach: float = 1.0) -> float:
@@ -1094,13 +1182,13 @@ def _bright_blobs_near(  # noqa: PLR0913 - the picture, its scale, the pupil, th
 
 
 def _match_or_look_wider(  # noqa: PLR0913 - the glints, the LEDs, the pupil, the second look
-    glints, specks, led_azimuths_deg, pattern, params, wider, pupil=None, img=None
+    glints, specks, led_azimuths_deg, pattern, params, wider, pupil=None, img=None, jpeg=False
 ):
     """Step 5b: :func:`_match_glints` on ``glints`` (``pupil``: the :class:`Pupil` or None); with
     an LED left without a glint and ``wider`` given (a callable: :func:`_wider_look` bound to
     the frame), its answer when it has one. Returns (glints, specks, messages, LEDs without a
-    glint)."""
-    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil, img)
+    glint; ``jpeg``: see :func:`_match_glints`)."""
+    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil, img, jpeg)
     if missing and wider is not None:
         again = wider()
         if again is not None:
@@ -1183,7 +1271,17 @@ def _glints_off_missing(  # noqa: PLR0913 - the blobs, the mask, the picture, it
 
 
 def _wider_look(  # noqa: PLR0913 - the picture, its scale, the pupil, the LEDs
-    img, value_range, noise, found, pupil, floor, led_azimuths_deg, pattern, params, invalid=None
+    img,
+    value_range,
+    noise,
+    found,
+    pupil,
+    floor,
+    led_azimuths_deg,
+    pattern,
+    params,
+    invalid=None,
+    jpeg_step=0.0,
 ):
     """Step 5 again, out to twice ``glint_search_radius`` × the pupil's major axis, for a frame
     whose LEDs were not all given a glint: the glints, specks and LEDs left without one when
@@ -1206,10 +1304,11 @@ def _wider_look(  # noqa: PLR0913 - the picture, its scale, the pupil, the LEDs
     # of a 640 × 400 frame, is not run again for every frame with an LED left without one).
     n_leds = len(led_azimuths_deg)
     blobs = _blobs_near_pupil(
-        img, value_range, noise, found, pupil, None, params, n_leds, reach=2.0
-    )
+        img, value_range, noise, found, pupil, None, params, n_leds, reach=2.0,
+        jpeg_step=jpeg_step,
+    )  # fmt: skip
     got = _whole_pattern(img, value_range, noise, blobs, pupil, led_azimuths_deg, pattern,
-                         params, invalid)  # fmt: skip
+                         params, invalid, jpeg_step > 0)  # fmt: skip
     if got is not None:
         return got
     big = _bright_blobs_near(
@@ -1219,7 +1318,7 @@ def _wider_look(  # noqa: PLR0913 - the picture, its scale, the pupil, the LEDs
     if not any(b["area_px"] > cap for b in big):
         return None
     got = _whole_pattern(img, value_range, noise, big, pupil, led_azimuths_deg, pattern,
-                         params, invalid)  # fmt: skip
+                         params, invalid, jpeg_step > 0)  # fmt: skip
     if got is None:
         return None
     areas = [g.area_px for g in got[0] if g.led is not None]
@@ -1229,13 +1328,13 @@ def _wider_look(  # noqa: PLR0913 - the picture, its scale, the pupil, the LEDs
 
 
 def _whole_pattern(  # noqa: PLR0913 - the picture, its scale, the blobs, the pupil, the LEDs
-    img, value_range, noise, blobs, pupil, led_azimuths_deg, pattern, params, invalid
+    img, value_range, noise, blobs, pupil, led_azimuths_deg, pattern, params, invalid, jpeg=False
 ):
     """:func:`_wider_look`'s test of ``blobs``: (glints, specks, messages, LEDs without a
     glint) when every LED gets a glint and they fit the LEDs' pattern, else None."""
     kept, _ = _glints_off_missing(blobs, invalid, img, value_range, noise, params)
     glints, specks = _split_specks(kept, params)
-    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil, img)
+    lost, missing = _match_glints(glints, led_azimuths_deg, params, pattern, pupil, img, jpeg)
     if missing or lost:
         return None
     max_ang = params.match_max_angle_deg
@@ -1292,6 +1391,21 @@ def _brightest_glint_flux(every: list[Glint], params) -> float:
     tops = [g for g in tops if g.peak - g.base >= params.glint_level * rise_top]
     most = max((g.flux / g.area_px for g in tops), default=0.0)
     return max((g.flux for g in tops if g.flux / g.area_px >= 0.5 * most), default=0.0)
+
+
+def _jpeg_fragments(glints: list[Glint], specks: list[Glint], params) -> list[Glint]:
+    """The specks of a JPEG's picture that can be pieces of a glint (:func:`_broken_glints`):
+    those rising ≥ ``glint_strong_frac`` of the most a glint rises over its background — the
+    weaker ones are the coding's specks (:func:`_match_glints`), its ringing about the glint
+    and along the pupil's edge, which do not move the glint's core (:func:`_core_centre`);
+    counted, they refused 5 of 48 pictures of ``test_detect_glint_jpeg25.py`` as broken up."""
+    rises = [g.peak - g.base for g in glints if g.led is not None and g.base is not None]
+    if not rises:
+        return specks
+    top = max(rises)
+    return [
+        s for s in specks if s.base is None or s.peak - s.base >= params.glint_strong_frac * top
+    ]
 
 
 def _broken_glints(glints: list[Glint], specks: list[Glint], params) -> list[str]:
@@ -2052,8 +2166,24 @@ def _off_the_others(glints: list[Glint], led_azimuths_deg, pattern, params) -> t
     return worst
 
 
+def _strong_only(glints: list[Glint], params) -> list[Glint] | None:
+    """:func:`_match_glints`'s glints of a JPEG: those rising ≥ ``glint_strong_frac`` of the
+    strongest one's rise over their own background, the others' LEDs cleared — or None when
+    all are that strong."""
+    rise = [g.peak - g.base if g.base is not None else math.inf for g in glints]
+    if len(glints) < 2:
+        return None
+    top = max(rise)
+    strong = [g for g, r in zip(glints, rise, strict=True) if r >= params.glint_strong_frac * top]
+    if len(strong) == len(glints):
+        return None
+    for g in glints:
+        g.led = None
+    return strong
+
+
 def _match_glints(  # noqa: PLR0913 - the glints, the LEDs, the pupil, the picture
-    glints: list[Glint], led_azimuths_deg, params, pattern=None, pupil=None, img=None
+    glints: list[Glint], led_azimuths_deg, params, pattern=None, pupil=None, img=None, jpeg=False
 ) -> tuple[list[str], list[int]]:
     """Step 5b: each glint's LED (in place, :func:`_assign_leds`, or with ``pattern`` and ≥ 3
     glints :func:`~.glints.match_pattern` when it matches as many); the messages and the LEDs
@@ -2068,7 +2198,19 @@ def _match_glints(  # noqa: PLR0913 - the glints, the LEDs, the pupil, the pictu
     picture, or None: not judged) is not a point source's image like the others' — no blur
     skirt (:func:`_unlike_the_others`); one lying farther from where the
     other matched glints put its LED's glint than their scatter allows
-    (:func:`_off_the_others`: a stray) is unmatched and the frame refused."""
+    (:func:`_off_the_others`: a stray) is unmatched and the frame refused.
+
+    ``jpeg`` (a JPEG's picture, :func:`~.glints.jpeg_dc_step`): only the glints rising ≥
+    ``glint_strong_frac`` of the strongest one's rise over their own background are matched
+    (the others stay unmatched): the coding's specks — blocks a quantum or two over their
+    neighbours, ringing along the pupil's and the lids' edges — rise 10–25 DN where unsaturated
+    glints dimmer than the sclera rise 110–180 over the pupil, and, matched by direction or
+    where the strong glints' pattern puts an LED (within 10 px), they were answered ``ok``
+    1.2–98 px from the glint (``test_detect_glint_jpeg25.py``'s pictures at
+    q25–45)."""
+    strong = _strong_only(glints, params) if jpeg else None
+    if strong is not None:
+        return _match_glints(strong, led_azimuths_deg, params, pattern, pupil, img)
     n_led = len(led_azimuths_deg)
     centres = np.array([g.centre_px for g in glints]).reshape(-1, 2)
     max_ang = params.match_max_angle_deg
@@ -2285,10 +2427,12 @@ def detect(
     timings["pupil"] = 1e3 * (t3 - t2)
     n_leds = None if led_azimuths_deg is None else len(led_azimuths_deg)
     near = blobs
+    jpeg_step = jpeg_dc_step(image) if n_leds and pupil is not None else 0.0
     if pupil is not None:
         near = _blobs_near_pupil(
-            img, (lo, hi), noise, (blobs, bright), pupil, tg_value, params, n_leds
-        )
+            img, (lo, hi), noise, (blobs, bright), pupil, tg_value, params, n_leds,
+            jpeg_step=jpeg_step,
+        )  # fmt: skip
     near, missing_notes = _glints_off_missing(near, invalid, img, (lo, hi), noise, params)
     glints, specks = _split_specks(near, params)
     missing_leds: list[int] = []
@@ -2296,33 +2440,25 @@ def detect(
     if n_leds:
         wider = None if pupil is None else functools.partial(
             _wider_look, img, (lo, hi), noise, (blobs, bright), pupil, tg_value,
-            led_azimuths_deg, led_pattern_px, params, invalid,
+            led_azimuths_deg, led_pattern_px, params, invalid, jpeg_step,
         )  # fmt: skip
         glints, specks, lost, missing_leds = _match_or_look_wider(
-            glints, specks, led_azimuths_deg, led_pattern_px, params, wider, pupil, img
-        )
+            glints, specks, led_azimuths_deg, led_pattern_px, params, wider, pupil, img,
+            jpeg_step > 0,
+        )  # fmt: skip
         errors += [m for m in lost if not m.startswith("warning: ")]
         lost_note = [m for m in lost if m.startswith("warning: ")]
     glints.sort(key=lambda g: (g.led is None, g.led if g.led is not None else 0, -g.peak))
-    errors += _broken_glints(glints, specks, params)
+    errors += _broken_glints(
+        glints, _jpeg_fragments(glints, specks, params) if jpeg_step else specks, params
+    )
     warnings = (
         pupil_notes
         + lost_note
         + _glint_warnings(glints, fit, led_azimuths_deg, params)
         + missing_notes
     )
-    if n_hot:
-        warnings.append(f"warning: {n_hot} isolated hot pixel(s) replaced by their neighbours")
-    if n_filled:
-        warnings.append(
-            f"warning: {n_filled} missing pixel(s) in small enclosed holes (≤ {HOLE_MAX_PX} px) "
-            "filled from their surround (cv2.inpaint)"
-        )
-    if n_black:
-        warnings.append(
-            f"warning: a black border ({n_black} px at the picture's darkest value, touching its "
-            "edge) is left out as missing pixels"
-        )
+    warnings += _frame_notes(n_hot, n_filled, n_black, jpeg_step)
     t4 = time.perf_counter()
     timings["match"] = 1e3 * (t4 - t3)
     timings["total"] = 1e3 * (t4 - t_start)
@@ -2335,6 +2471,31 @@ def detect(
         glint_threshold=tg_value,
         missing_leds=missing_leds,
     )
+
+
+def _frame_notes(n_hot: int, n_filled: int, n_black: int, jpeg_step: float) -> list[str]:
+    """The warnings about the picture itself: hot pixels mended, holes filled, a black border
+    left out, a JPEG's coding (:func:`~.glints.jpeg_dc_step`, DN)."""
+    notes: list[str] = []
+    if jpeg_step:
+        notes.append(
+            f"warning: a JPEG's picture (8 × 8 blocks whose levels are {jpeg_step:g} DN apart): "
+            "glints looked for on the pupil too, centred on their cores, and only those rising "
+            "≥ half the strongest one's rise matched (the coding's blocks and ringing are specks)"
+        )
+    if n_hot:
+        notes.append(f"warning: {n_hot} isolated hot pixel(s) replaced by their neighbours")
+    if n_filled:
+        notes.append(
+            f"warning: {n_filled} missing pixel(s) in small enclosed holes (≤ {HOLE_MAX_PX} px) "
+            "filled from their surround (cv2.inpaint)"
+        )
+    if n_black:
+        notes.append(
+            f"warning: a black border ({n_black} px at the picture's darkest value, touching its "
+            "edge) is left out as missing pixels"
+        )
+    return notes
 
 
 def enlargement_factor(image: np.ndarray, min_side: int = 8) -> int:

@@ -81,6 +81,7 @@ __all__ = [
     "block_or_blur",
     "in_bright_run",
     "glint_blobs",
+    "jpeg_dc_step",
     "glint_threshold",
     "saturated_floor",
     "match_leds",
@@ -173,6 +174,108 @@ def find_glints(img: np.ndarray, value_range, noise: float, params):
     return blobs, bright, lo + (tg8 + 0.5) / 255.0 * (hi - lo)
 
 
+#: :func:`jpeg_dc_step`'s bar on the 8 × 8 grid's steps (standard errors over those elsewhere)
+_GRID_Z = 5.0
+#: :func:`jpeg_dc_step`'s least quantiser step it reports (DC units, i.e. 8 × DN of a block's
+#: mean): below 6 the lattice test is weak — a random mean lies within its ±2 of a multiple of
+#: 5 with probability 0.8 — and the step (≤ 0.6 DN) is under any camera's noise.
+_MIN_DC_Q = 6
+
+
+@njit(cache=True, nogil=True)
+def _grid_steps(img):
+    """:func:`jpeg_dc_step`'s step statistics over every 8th row (x steps) and column (y steps),
+    from the 4th: (count, Σ|d|, Σd²) of the steps across the 8 × 8 grid's lines, then of the
+    others (float64)."""
+    rows, cols = img.shape
+    r8, c8 = rows // 8 * 8, cols // 8 * 8
+    n_a = s_a = q_a = n_w = s_w = q_w = 0.0
+    for i in range(3, r8, 8):
+        for j in range(c8 - 1):
+            d = abs(np.float64(img[i, j + 1]) - np.float64(img[i, j]))
+            if j % 8 == 7:
+                n_a += 1.0
+                s_a += d
+                q_a += d * d
+            else:
+                n_w += 1.0
+                s_w += d
+                q_w += d * d
+    for j in range(3, c8, 8):
+        for i in range(r8 - 1):
+            d = abs(np.float64(img[i + 1, j]) - np.float64(img[i, j]))
+            if i % 8 == 7:
+                n_a += 1.0
+                s_a += d
+                q_a += d * d
+            else:
+                n_w += 1.0
+                s_w += d
+                q_w += d * d
+    return n_a, s_a, q_a, n_w, s_w, q_w
+
+
+def jpeg_dc_step(image: np.ndarray) -> float:
+    """The step (DN) between the levels a JPEG's 8 × 8 blocks could take — its quantiser of the
+    DC coefficient Q₀₀ over 8 — when ``image`` (2-D uint8) was decoded from a baseline JPEG
+    with its block grid at pixel (0, 0), else 0.
+
+    JPEG codes each 8 × 8 block by its DCT, F₀₀ = Σ (f − 128) / 8 quantised to a multiple of
+    Q₀₀ (ITU-T T.81, A.3.3 and F.1.1.4; the IJG's table at quality q: 16 × (5000/q or 200 − 2q)
+    / 100, e.g. 53 at q15, 14 at q55, 8 at q75). Two tests:
+
+    * the block grid: the mean |step| between neighbouring pixels across the grid's lines (x
+      or y ≡ 0 mod 8) exceeds the mean elsewhere by > ``_GRID_Z`` (5) standard errors (every
+      8th row and column; a camera's or a render's picture has no grid: the two means differ
+      by chance only, 5 σ at odds ~3 × 10⁻⁷);
+    * the lattice: the blocks' sums / 8 − 1024 (F₀₀ as decoded) lie within ±2 (a block with
+      any AC: 64 rounding errors of σ 0.29, their sum / 8 of σ 0.29) or ±4 (a flat block: its
+      64 pixels rounded alike, ±0.5 × 8) of a multiple of Q — for ≥ 90 % of the blocks with no
+      clipped pixel (0 or 255) and ≥ 90 % of those not flat; the largest Q from 255 down to
+      ``_MIN_DC_Q`` (6) that fits is taken (a multiple of the true Q fits only by chance).
+
+    Exact on the IJG's (OpenCV's) coding at q5–80 of ``test_detect_glint_jpeg25.py``'s
+    pictures; 0 for a PNG of the same picture, for q ≳ 82 (Q ≤ 5) and for a nearest-neighbour
+    enlargement by 2, 4 or 8 (steps only on the grid's lines, but every 2 × 2 square one
+    value, which no JPEG's decoded blocks are: refused by that test). A JPEG cropped off its
+    grid is not recognised (0)."""
+    img = np.asarray(image)
+    if img.dtype != np.uint8 or img.ndim != 2:
+        return 0.0
+    rows, cols = img.shape
+    r8, c8 = rows // 8 * 8, cols // 8 * 8
+    if r8 < 16 or c8 < 16:
+        return 0.0
+    n_a, s_a, q_a, n_w, s_w, q_w = _grid_steps(np.ascontiguousarray(img))
+    m_a, m_w = s_a / n_a, s_w / n_w
+    se = math.sqrt((q_a / n_a - m_a * m_a) / n_a + (q_w / n_w - m_w * m_w) / n_w)
+    if not (se > 0 and m_a - m_w > _GRID_Z * se):
+        return 0.0
+    if np.array_equal(img[0 : rows - 1 : 2], img[1::2]) and np.array_equal(
+        img[:, 0 : cols - 1 : 2], img[:, 1::2]
+    ):
+        return 0.0  # every 2 × 2 square one value: enlarged by 2, 4 or 8 (its grid is not a JPEG's)
+    f = img[:r8, :c8].astype(np.int16)
+    b = f.reshape(r8 // 8, 8, c8 // 8, 8)
+    lo, hi = b.min(axis=(1, 3)), b.max(axis=(1, 3))
+    keep = (lo > 0) & (hi < 255)
+    if np.count_nonzero(keep) < 64:
+        return 0.0
+    dc = b.sum(axis=(1, 3), dtype=np.int64)[keep] / 8.0 - 1024.0
+    textured = (hi > lo)[keep]
+    tol = np.where(textured, 2.0, 4.0)
+    # A sample of ≤ 256 blocks finds the candidates (all Q at once); each is confirmed on all.
+    step = max(1, dc.size // 256)
+    s_dc, s_tol = dc[::step], tol[::step]
+    qs = np.arange(255, _MIN_DC_Q - 1, -1, dtype=np.float64)[:, None]
+    near = (np.abs(s_dc - qs * np.round(s_dc / qs)) <= s_tol).mean(axis=1) >= 0.9
+    for q in qs[near, 0]:
+        hit = np.abs(dc - q * np.round(dc / q)) <= tol
+        if hit.mean() >= 0.9 and (not textured.any() or hit[textured].mean() >= 0.9):
+            return float(q) / 8.0
+    return 0.0
+
+
 def glints_near(  # noqa: PLR0913 - the picture, its scale, the place, what to return
     img: np.ndarray,
     value_range,
@@ -238,6 +341,7 @@ def faint_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
     width_px: int,
     max_area: float,
     params,
+    recut: bool = False,
 ) -> list[dict]:
     """Glint blobs (dicts, as :func:`glint_blobs`: centre_px, area_px, peak, flux, base) within
     ``radius`` px of ``centre`` (x, y) px that need not be near the top of the picture: an
@@ -262,7 +366,12 @@ def faint_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
     rise on h. ``noise`` is raised to the window's σ read at coarser lags
     (:func:`_coarse_noise`) and, blob by blob, to its surround's (:func:`_ring_noise`): a
     JPEG's noise, which second differences miss; each blob dict carries the σ it was judged
-    by (``noise``)."""
+    by (``noise``).
+
+    ``recut`` (a JPEG's picture, :func:`jpeg_dc_step`): a blob that is no glint at that
+    threshold is cut again at 2, 4, … 32 × it (:func:`_recut`): the coding's ringing along the
+    pupil's edge rises over the threshold and joins a glint 18 px inside it into one blob too
+    wide for a glint (q25: 43 × 20 px), whose core, ≥ 100 DN over the pupil, is the glint."""
     rows, cols = img.shape
     if not noise > 0:
         return []
@@ -282,17 +391,48 @@ def faint_glints_near(  # noqa: PLR0913 - the picture, its noise, the place, the
         return []
     hat = hat.astype(np.float64)
     out = []
+    levels: dict[float, np.ndarray] = {}
     for c, h in zip(contours, hier[0], strict=True):
-        b = (
-            None
-            if h[3] != -1
-            else _faint_blob(c, (hat, above), sub, noise, width_px, max_area, params)
-        )
-        if b is None:
+        if h[3] != -1:
             continue
-        x, y = b["centre_px"][0] + x0, b["centre_px"][1] + y0
-        if math.hypot(x - cx, y - cy) <= radius:
-            out.append({**b, "centre_px": (x, y)})
+        b = _faint_blob(c, (hat, above), sub, noise, width_px, max_area, params)
+        found = [b] if b is not None else []
+        if recut and b is None:
+            found = _recut(c, (hat, levels), sub, noise, width_px, max_area, params)
+        for b in found:
+            x, y = b["centre_px"][0] + x0, b["centre_px"][1] + y0
+            if math.hypot(x - cx, y - cy) <= radius:
+                out.append({**b, "centre_px": (x, y)})
+    return out
+
+
+def _recut(c, hats, sub, noise, width_px, max_area, params) -> list[dict]:  # noqa: PLR0913
+    """:func:`faint_glints_near`'s blob with outline ``c`` cut again at 2, 4, 8, 16 and 32 ×
+    its threshold (½ ``glint_min_snr`` × ``noise`` on the top-hat): the pieces that are glints
+    there (:func:`_faint_blob`, judged on that level's mask), each taken at the lowest level
+    where it is one (a piece within 1.5 px of one taken is the same spot). ``hats`` = (the
+    top-hat, a dict of the levels' masks over the window, filled as needed)."""
+    hat, levels = hats
+    rows, cols = hat.shape
+    bx, by, bw, bh = cv2.boundingRect(c)
+    own = np.zeros((bh, bw), np.uint8)
+    cv2.drawContours(own, [c], 0, 255, thickness=-1, offset=(-bx, -by))
+    out: list[dict] = []
+    for f in (2.0, 4.0, 8.0, 16.0, 32.0):
+        t = f * 0.5 * params.glint_min_snr * noise
+        if t not in levels:
+            levels[t] = cv2.compare(hat, t, cv2.CMP_GE)
+        above = levels[t]
+        piece = cv2.bitwise_and(above[by : by + bh, bx : bx + bw], own)
+        if not cv2.countNonZero(piece):
+            break
+        parts, _ = cv2.findContours(
+            piece, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE, offset=(bx, by)
+        )
+        for p in parts:
+            b = _faint_blob(p, (hat, above), sub, noise, width_px, max_area, params)
+            if b is not None and all(math.dist(o["centre_px"], b["centre_px"]) > 1.5 for o in out):
+                out.append(b)
     return out
 
 
