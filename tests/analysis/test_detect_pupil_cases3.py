@@ -46,9 +46,12 @@ def eye(  # noqa: PLR0913 - each option is one aspect of the made-up eye
     blur=0.8,
     noise=3.0,
     seed=5,
+    iris_level=None,
 ):
     """The frame (uint8; see the module doc; the iris centred at ``iris_c``, default the
-    pupil's centre)."""
+    pupil's centre). ``iris_level``: a function of d, the distance (px, array) from the pupil's
+    ellipse along its normalised radius, (ρ − 1) √(a b) (0 inside), giving the iris's level
+    there instead of the flat ``iris`` (tests/analysis/test_detect_pupil_gradual_iris.py)."""
     rng = np.random.default_rng(seed)
     pb = pa if pb is None else pb
     icx, icy = (cx, cy) if iris_c is None else iris_c
@@ -57,10 +60,13 @@ def eye(  # noqa: PLR0913 - each option is one aspect of the made-up eye
     img = np.full((H * S, W * S), 150.0)
     opening = ((xx - 320.0) / 220.0) ** 2 + ((yy - 200.0) / 120.0) ** 2 < 1
     img = np.where(opening, 190.0, img)
-    img = np.where((np.hypot(xx - icx, yy - icy) < iris_r) & opening, iris, img)
     c, s = math.cos(math.radians(pang)), math.sin(math.radians(pang))
     u, v = (xx - cx) * c + (yy - cy) * s, -(xx - cx) * s + (yy - cy) * c
-    img = np.where(((u / pa) ** 2 + (v / pb) ** 2 < 1) & opening, pupil, img)
+    rho2 = (u / pa) ** 2 + (v / pb) ** 2
+    if iris_level is not None:
+        iris = iris_level(np.maximum(np.sqrt(rho2) - 1.0, 0.0) * math.sqrt(pa * pb))
+    img = np.where((np.hypot(xx - icx, yy - icy) < iris_r) & opening, iris, img)
+    img = np.where((rho2 < 1) & opening, pupil, img)
     img = cv2.resize(img, (W, H), interpolation=cv2.INTER_AREA)
     yl, xl = np.mgrid[0:H, 0:W].astype(float)
     for a in LEDS:
