@@ -183,10 +183,8 @@ _MIN_DC_Q = 6
 
 
 @njit(cache=True, nogil=True)
-def _grid_steps(img):
-    """:func:`jpeg_dc_step`'s step statistics over every 8th row (x steps) and column (y steps),
-    from the 4th: (count, Σ|d|, Σd²) of the steps across the 8 × 8 grid's lines, then of the
-    others (float64)."""
+def _row_grid_steps(img):
+    """:func:`_grid_steps` along every 8th row of ``img``, from the 4th (x steps)."""
     rows, cols = img.shape
     r8, c8 = rows // 8 * 8, cols // 8 * 8
     n_a = s_a = q_a = n_w = s_w = q_w = 0.0
@@ -201,18 +199,15 @@ def _grid_steps(img):
                 n_w += 1.0
                 s_w += d
                 q_w += d * d
-    for j in range(3, c8, 8):
-        for i in range(r8 - 1):
-            d = abs(np.float64(img[i + 1, j]) - np.float64(img[i, j]))
-            if i % 8 == 7:
-                n_a += 1.0
-                s_a += d
-                q_a += d * d
-            else:
-                n_w += 1.0
-                s_w += d
-                q_w += d * d
     return n_a, s_a, q_a, n_w, s_w, q_w
+
+
+def _grid_steps(img):
+    """:func:`jpeg_dc_step`'s step statistics over every 8th row (x steps) and column (y steps),
+    from the 4th: (count, Σ|d|, Σd²) of the steps across the 8 × 8 grid's lines, then of the
+    others (float64; whole numbers for integer pictures, so exact in either order)."""
+    x, y = _row_grid_steps(img), _row_grid_steps(img.T)
+    return tuple(a + b for a, b in zip(x, y, strict=True))
 
 
 def jpeg_dc_step(image: np.ndarray) -> float:
