@@ -958,9 +958,10 @@ def _blobs_near_pupil(  # noqa: PLR0913 - the picture, its scale, the pupil, the
     )
     if jpeg_step:
         _add_jpeg_glints(img, noise, faint, near, params)
-    for b in faint if not jpeg_step else ():
-        if all(math.dist(t["centre_px"], b["centre_px"]) > 1.5 for t in near):
-            near.append(_fitted_centre(img, noise, b, params))
+    else:
+        for b in faint:
+            if all(math.dist(t["centre_px"], b["centre_px"]) > 1.5 for t in near):
+                near.append(_fitted_centre(img, noise, b, params))
     if len(near) < n_leds and not any(b["peak"] >= value_range[1] for b in near):
         # A defocused picture's glints are broad unsaturated bumps, wider than that disc
         # (:func:`~.glints.broad_glints_near`): looked for with wider discs, up to the pupil's
