@@ -98,6 +98,49 @@ def test_bright_pupil_a_little_over_its_iris_is_refused_by_name(pupil, iris, see
     assert d.failures[0].startswith("no dark pupil: bright-pupil image?"), d.failures
 
 
+def _blurred(img, blur):
+    return cv2.GaussianBlur(img, (0, 0), blur) if blur else img
+
+
+SMALL_LIT = [  # (iris, pupil over it, pupil radius, noise σ, blur σ): DN, DN, px, DN, px
+    (70.0, 20.0, 15.0, 3.0, 0.0),
+    (110.0, 10.0, 15.0, 3.0, 0.0),
+    (40.0, 10.0, 15.0, 3.0, 1.5),
+    (110.0, 30.0, 15.0, 1.5, 1.5),
+    (70.0, 20.0, 30.0, 1.5, 1.5),
+    (40.0, 30.0, 30.0, 1.5, 1.5),
+    (40.0, 10.0, 45.0, 1.5, 1.5),
+]
+
+
+@pytest.mark.parametrize(("iris", "over", "radius", "noise", "blur"), SMALL_LIT)
+def test_small_or_blurred_lit_pupil_over_its_iris_is_refused_by_name(
+    iris, over, radius, noise, blur
+):
+    """A lit pupil 10-30 DN over its iris, 15 px in radius (4 % of the 85 px iris's
+    interior: too few pixels to move its 95th percentile) or blurred by σ 1.5 px (an 8-bit
+    iris rounded to one value, whose averages have no spread): 46 of 108 such pictures were
+    answered `ok` with the iris (170 px) as the pupil; now refused by name
+    (:func:`eyelume.analysis.tracking.pupil._small_bright_core`, and an integer floor on the
+    averages' σ)."""
+    img = _blurred(eye(pupil=iris + over, iris=iris, pupil_r=radius, noise=noise), blur)
+    d = detect(u8(img), led_azimuths_deg=[0, 90, 180, 270])
+    assert not d.ok and d.pupil is None, (d.failures, d.pupil)
+    assert d.failures[0].startswith("no dark pupil: bright-pupil image?"), d.failures
+
+
+@pytest.mark.parametrize(("iris", "radius", "blur"), [(40.0, 15.0, 1.5), (110.0, 15.0, 0.0)])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_small_dark_pupil_with_the_same_looks_is_found(iris, radius, blur, seed):
+    """The control: the same pupils dark (20 DN) are found, centred within 0.25 px (as
+    above): the lit-core test asks for a flat top brighter than the interior's median, which
+    a dark pupil's glints (left out with their margin) and noise do not make."""
+    img = _blurred(eye(pupil=20.0, iris=iris, pupil_r=radius, noise=3.0, seed=seed), blur)
+    d = detect(u8(img), led_azimuths_deg=[0, 90, 180, 270])
+    assert d.pupil is not None, d.failures
+    assert np.hypot(*np.subtract(d.pupil.centre_px, CENTRE)) < 0.25
+
+
 @pytest.mark.parametrize("quality", [12, 25])
 def test_dark_pupil_in_a_jpeg_is_not_taken_for_a_bright_one(quality):
     """The control: a dark pupil whose glints a JPEG smears into its interior (ringing a few DN
