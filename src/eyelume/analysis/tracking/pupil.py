@@ -2964,6 +2964,44 @@ def _inner_core(img: np.ndarray, wp: WorkPicture, e: Ellipse, bright: np.ndarray
     return darker_core(img, wp, e, bright, params, parts)
 
 
+def _darker_first(img, wp: WorkPicture, got, fit: PupilFit | None, bright, params):
+    """``fit``, or the finer ladder's (:func:`_finer`) when a darker chain gave none
+    (:func:`_darker_start`; ``got`` = (the reduced picture, the chains, f)).
+
+    A chain of a pupil's size that began in the ladder's first levels, far darker than the
+    fitted blob, and gave no fit: it never settled (it joined the iris one or two levels up)
+    or its stable blob, higher up, was the iris (refused as not compact). A pupil at the
+    black level in a dark iris, beside bright skin and sunlit lashes that set the levels'
+    spacing (vr-offaxis at 940 nm in sunlight: a lash's shadow on the lid fitted whole
+    instead, 130–160 px off). The finer ladder over that dark end (as for a first pass with
+    nothing whole) is tried first: its whole fit is the darkest stable blob that the first
+    ladder, finer, would have chosen — unless it lies off every glint of a picture that has
+    some, as in :func:`_fit_chosen` (a mole on the skin darker than the pupil, passed over
+    there, is the finer ladder's darkest)."""
+    reduced, chains, f = got
+    if fit is None or not _darker_start(chains, fit, wp, params):
+        return fit
+    again = _finer(img, wp, reduced, f, bright, params)
+    if again is None or _off_the_glints(again.ellipse, bright):
+        return fit
+    return again
+
+
+def _darker_start(chains: list[list[Candidate]], fit: PupilFit, wp, params) -> bool:
+    """Whether another chain than ``fit``'s (:attr:`PupilFit.first`) starts within the ladder's
+    first ``ladder_fine_span`` levels — the span :func:`_finer` walks again — and darker than
+    the fitted blob's threshold by ``pupil_min_contrast_sigma`` σ of the picture's noise
+    (levels and σ in the working picture's 8-bit units)."""
+    if params.ladder_fine <= 1 or not math.isfinite(fit.threshold) or wp.hi <= wp.lo:
+        return False
+    level = 255.0 * (fit.threshold - wp.lo) / (wp.hi - wp.lo)
+    top = level - params.pupil_min_contrast_sigma * wp.noise
+    return any(
+        ch[0].index < params.ladder_fine_span and ch[0].level < top and ch[0].seed != fit.first
+        for ch in chains
+    )
+
+
 def _finer(img: np.ndarray, wp: WorkPicture, reduced, f: int, bright: np.ndarray, params):
     """:func:`find_pupil`'s second pass, the ladder's dark end again ``ladder_fine`` × finer:
     its fit when whole by the stricter ``ladder_fine_support`` with no darker core, else None."""
@@ -3226,6 +3264,7 @@ def _find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params, sharp, wp)
     picks = choose(chains, f, tiny, wp, params, img)
     reasons: list[str] = []
     fit = _fit_chosen(img, wp, (reduced, picks, f), bright, params, reasons)
+    fit = _darker_first(img, wp, (reduced, chains, f), fit, bright, params)
     # A whole fit with a darker core inside is an iris holding the pupil (a cut one is
     # refused as cut already, and a lid inside its ellipse would look like a core).
     whole = fit is not None and _whole(fit, params)
