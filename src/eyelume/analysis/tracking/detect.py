@@ -1897,6 +1897,56 @@ def _too_bright(glints: list[Glint], params) -> list[tuple[int, float]]:
     return out
 
 
+#: :func:`_lit_patches`: how many times the other matched glints' median equivalent area a
+#: blob no brighter than they are must have to be called a lit patch (:func:`_lit_patches`)
+_PATCH_AREA_RATIO = 3.0
+
+
+def _equivalent_area(g: Glint) -> float:
+    """A glint's light over its rise, flux / (peak − base) (px²): 2πσ² for a Gaussian spot of
+    σ, 2πσ² (1 + ln(P/C)) for one of peak P clipped at C."""
+    return g.flux / max(g.peak - g.base, 1e-12)
+
+
+def _lit_patches(glints: list[Glint]) -> list[tuple[int, float, float]]:
+    """Matched glints that are a lit patch, not an LED's image — (index, its equivalent area,
+    the other matched glints' median) each; none unless ≥ 3 are matched with a known
+    background.
+
+    The ring's glints are images of like point sources through the same optics: their
+    equivalent areas (:func:`_equivalent_area`) differ only by the point spread's change over
+    a few mm of the cornea and by clipping — up to 1 + ln 2.3 = 1.8 × between glints whose
+    light differs by the 2.3 × of :func:`_too_bright`'s renders, and a glint no brighter
+    (rise no higher) than the others' median is no more clipped than they are. A blob no
+    brighter than that median whose equivalent area is over :data:`_PATCH_AREA_RATIO` × the
+    others' median is a spread patch: in the 850/940 nm design run's frames (vr-offaxis, the
+    sun on; 1 263 matched glints of 90 frames), pieces of bright sclera pinched between the
+    dark iris and a shadow, matched to LEDs whose glints are off the cornea and answered
+    ``ok`` (their "glints" 8–50 px from any), have 6–22 ×; the glints within 1.5 px of the
+    truth at most 1.47 ×. (Medians, not extremes: two patches in one frame would each hide
+    the other.) A brighter blob is left to :func:`_too_bright`, and so is a clipped one — its
+    peak within 2 % of its rise of the matched glints' highest, the picture's top when they
+    saturate: its rise is the clip level's, not its own, and its equivalent area its light
+    over that level, which for spots clipped alike is the ratio of their light, not of their
+    spread (eyetrackvr at (20°, 10°): four one-pixel glints at 254 of 255, LED 3's holding
+    2.9 × the others' light, 3.2 × their equivalent area). In the design frames every
+    clipped patch (peak 1017 DN) was beside an unclipped one of the same frame."""
+    m = [(i, g) for i, g in enumerate(glints) if g.led is not None and g.base is not None]
+    if len(m) < 3:
+        return []
+    eq = {i: _equivalent_area(g) for i, g in m}
+    highest = max(g.peak for _, g in m)
+    out = []
+    for i, g in m:
+        if g.peak >= highest - 0.02 * (highest - g.base):
+            continue
+        typical = float(np.median([eq[j] for j, _ in m if j != i]))
+        rise = float(np.median([o.peak - o.base for j, o in m if j != i]))
+        if eq[i] > _PATCH_AREA_RATIO * typical and g.peak - g.base <= rise:
+            out.append((i, eq[i], typical))
+    return out
+
+
 def _spot_shape(img: np.ndarray, g: Glint) -> float | None:
     """The width of glint ``g``'s spot edge in ``img`` as a Gaussian's σ² (px²), from the area
     a₅₀ of its core — the pixels connected to its centre rising ≥ ½ of its rise P − B over
@@ -2256,11 +2306,12 @@ def _leave_out(  # noqa: PLR0913 - the glints, the LEDs, the picture, the notes
     """:func:`_match_glints`'s matched glints that are not their LED's, unmatched in place:
     far brighter than the others (:func:`_too_bright`) or unlike the others' spots
     (:func:`_unlike_the_others`; ``img`` the picture, None: not judged) — a warning each
-    appended to ``notes``, their LEDs left without a glint — or a stray off the others' fit
-    (:func:`_off_the_others`). Returns the indices of the first kinds (blobs at an LED's
-    place, no strays) and the error for a stray ("" none): a stray taken for a glint means
-    strays are about, and what is left of the matching is not trusted (design frames: with
-    the stray left out, a second one, also matched, passed the pattern checks)."""
+    appended to ``notes``, their LEDs left without a glint — or a stray: a lit patch
+    (:func:`_lit_patches`) or a glint off the others' fit (:func:`_off_the_others`). Returns
+    the indices of the first kinds (blobs at an LED's place, no strays) and the error for a
+    stray ("" none): a stray taken for a glint means strays are about, and what is left of
+    the matching is not trusted (design frames: with the stray left out, a second one, also
+    matched, passed the pattern checks)."""
     bright = _too_bright(glints, params)
     for i, ratio in bright:
         x, y = glints[i].centre_px
@@ -2272,6 +2323,19 @@ def _leave_out(  # noqa: PLR0913 - the glints, the LEDs, the picture, the notes
         )
         glints[i].led = None
     skip = {i for i, _ in bright}
+    patches = _lit_patches(glints)
+    if patches:  # a stray matched: strays are about, the rest of the matching is not trusted
+        i, area, typical = patches[0]
+        x, y = glints[i].centre_px
+        k = glints[i].led
+        for j, _, _ in patches:
+            glints[j].led = None
+        return skip, (
+            f"glint lost: the blob at ({x:.1f}, {y:.1f}) matched to LED {k} spreads its light "
+            f"over {area:.1f} px² (flux over rise), over {_PATCH_AREA_RATIO:g} × the other "
+            f"matched glints' median {typical:.1f} px², and is no brighter: a lit patch (sclera "
+            "or skin between dark shadows) taken for a glint — the matching is uncertain"
+        )
     for i, why in [] if img is None else _unlike_the_others(img, glints, params):
         x, y = glints[i].centre_px
         notes.append(
