@@ -3648,9 +3648,9 @@ def _explained(ata, atb):
 @njit(cache=True, nogil=True)
 def _on_step_grid(s, e_lo) -> bool:
     """Whether the samples ``s`` and ``e_lo`` are whole multiples of :data:`_EDGE_STEP`, a
-    power of two (then every s − e of :func:`_step_fit`'s coarse search is one, exact in
-    binary)."""
-    if math.log2(_EDGE_STEP) != round(math.log2(_EDGE_STEP)):
+    power of two dividing the coarse search's 0.25 px (then every s − e of :func:`_step_fit`'s
+    coarse search is one, exact in binary)."""
+    if math.log2(_EDGE_STEP) != round(math.log2(_EDGE_STEP)) or _EDGE_STEP > 0.25:
         return False
     for v in s:
         if v / _EDGE_STEP != round(v / _EDGE_STEP):
@@ -3688,7 +3688,7 @@ def _step_fit(s, m, e_lo, e_hi, sig_hi):
     none = np.empty((0, 3))
     # On the profile's grid (as edge_profile's samples and edge_offset's e_lo are: multiples of
     # _EDGE_STEP, exact in binary) every s − e of the coarse search is k × _EDGE_STEP exactly,
-    # so Φ and φ are tabulated once per σ over those k: the same numbers, ~10 × fewer erfc.
+    # so Φ and φ are tabulated once per σ over those k: the same numbers, ~6 × fewer erfc.
     grid = _on_step_grid(s, e_lo)
     for i in range(ns):  # (every third sample, 0.75 px apart: the coarse search)
         sig = 0.2 * 1.25**i
