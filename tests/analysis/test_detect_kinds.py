@@ -320,7 +320,11 @@ def test_track_nan_pixels_are_missing_and_bad_inputs_are_one_line(tmp_path):
     np.save(tmp_path / "empty.npy", np.zeros((0,)))
     np.save(tmp_path / "text.npy", np.array(["a", "b"]))
     (tmp_path / "junk.png").write_bytes(b"not a picture")
+    # finite but beyond float32's squares (a new user's picture × 1e303: RuntimeWarnings, then
+    # "cannot convert float NaN to integer" before session 27)
+    np.save(tmp_path / "huge.npy", closeup(seed=5).astype(np.float64) * 1e303)
     cases = [
+        (["huge.npy"], "rescale"),
         (["allnan.npy"], "no valid pixel"),
         (["empty.npy"], "empty"),
         (["text.npy"], "numeric"),

@@ -639,6 +639,24 @@ def _valid_noise(img: np.ndarray, invalid: np.ndarray | None) -> float:
     return 1.4826 * float(np.median(vals)) / 6.0
 
 
+#: :func:`_prepare`: the largest pixel magnitude a float picture may hold — √ of float32's
+#: largest value (1.8e19): the noise and fit steps square differences of pixel values in float32
+_FLOAT_LIMIT = float(np.sqrt(np.finfo(np.float32).max))
+
+
+def _check_magnitude(img: np.ndarray) -> None:
+    """Raise ValueError when a float picture's largest magnitude is over :data:`_FLOAT_LIMIT`."""
+    if img.dtype.kind != "f":
+        return
+    big = float(np.abs(img).max())
+    if big > _FLOAT_LIMIT:
+        raise ValueError(
+            f"the picture's values reach {big:.3g}: detection squares pixel differences in "
+            f"float32, which overflows beyond {_FLOAT_LIMIT:.3g} (√ of float32's largest); "
+            "rescale the picture"
+        )
+
+
 def _prepare(image: np.ndarray, valid: np.ndarray | None, q: float):
     """Step 1: the picture as a contiguous array (uint8/uint16/int16/float32 kept, other reals
     converted), its small enclosed non-finite holes filled (:func:`_fill_holes`), its invalid
@@ -648,7 +666,8 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None, q: float):
     (min, max, ``q``-th percentile), which needs no pixel left out nor mended; else None).
     (The glints' 8-bit picture is made by :func:`~.glints.find_glints`, from the smoothed
     picture when it smooths.)
-    Raises ValueError for a picture that is not 2-D, empty, or has no valid pixel."""
+    Raises ValueError for a picture that is not 2-D, empty, has no valid pixel, or holds
+    values beyond :data:`_FLOAT_LIMIT`."""
     img = np.asarray(image)
     if img.ndim != 2:
         raise ValueError(f"detect needs a 2-D grey picture, got shape {img.shape}")
@@ -667,6 +686,7 @@ def _prepare(image: np.ndarray, valid: np.ndarray | None, q: float):
         if invalid.all():
             raise ValueError("the picture has no valid pixel (all NaN/inf or masked out)")
         img[invalid] = img[~invalid].min()
+    _check_magnitude(img)
     black = _black_border(img)
     n_black = 0
     if black is not None and not (invalid is not None and (invalid | black).all()):

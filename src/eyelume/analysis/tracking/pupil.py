@@ -2977,14 +2977,41 @@ def _darker_first(img, wp: WorkPicture, got, fit: PupilFit | None, bright, param
     nothing whole) is tried first: its whole fit is the darkest stable blob that the first
     ladder, finer, would have chosen — unless it lies off every glint of a picture that has
     some, as in :func:`_fit_chosen` (a mole on the skin darker than the pupil, passed over
-    there, is the finer ladder's darkest)."""
+    there, is the finer ladder's darkest), or has none about it where ``fit`` has (a dark
+    spot beside the pupil the glints are about; :func:`_glints_about`)."""
     reduced, chains, f = got
     if fit is None or not _darker_start(chains, fit, wp, f, params):
         return fit
     again = _finer(img, wp, reduced, f, bright, params)
     if again is None or _off_the_glints(again.ellipse, bright):
         return fit
+    if (
+        _whole(fit, params)
+        and fit.residual_px <= _residual_limit(fit.ellipse, params)
+        and _glints_about(fit.ellipse, bright)
+        and not _glints_about(again.ellipse, bright)
+    ):
+        # a dark spot beside a pupil that fits well and that the glints are about (a 10 DN
+        # disc 60 px across on the skin or the iris of the tests' picture, 100–160 px from its
+        # pupil): not taken
+        return fit
     return again
+
+
+def _residual_limit(e: Ellipse, params) -> float:
+    """``detect``'s limit on a fit's RMS residual (px): ``max_fit_residual_px`` or
+    ``max_fit_residual_frac`` of the smaller semi-axis, whichever is larger."""
+    return max(params.max_fit_residual_px, params.max_fit_residual_frac * min(e.a, e.b))
+
+
+def _glints_about(e: Ellipse, bright: np.ndarray) -> bool:
+    """Whether a glint pixel of ``bright`` (uint8 0/255) lies within 1.5 × the ellipse's larger
+    semi-axis of its centre (a square window): on the pupil or at its edge."""
+    rows, cols = bright.shape
+    r = 1.5 * max(e.a, e.b)
+    x0, x1 = max(0, int(e.cx - r)), min(cols, int(e.cx + r) + 1)
+    y0, y1 = max(0, int(e.cy - r)), min(rows, int(e.cy + r) + 1)
+    return x1 > x0 and y1 > y0 and cv2.countNonZero(bright[y0:y1, x0:x1]) > 0
 
 
 #: :func:`_darker_start`: the least share of the fitted blob's area a darker chain's largest
