@@ -33,6 +33,7 @@ LAYERS = {
     "optimize": 7,
     "report": 8,
     "cli": 9,
+    "__main__": 9,  # `python -m eyelume`: the CLI itself
 }
 
 #: report/ reads stored results and draws; it never traces a ray, directly or not.
