@@ -3004,11 +3004,11 @@ def _residual_limit(e: Ellipse, params) -> float:
     return max(params.max_fit_residual_px, params.max_fit_residual_frac * min(e.a, e.b))
 
 
-def _glints_about(e: Ellipse, bright: np.ndarray) -> bool:
-    """Whether a glint pixel of ``bright`` (uint8 0/255) lies within 1.5 × the ellipse's larger
-    semi-axis of its centre (a square window): on the pupil or at its edge."""
+def _glints_about(e: Ellipse, bright: np.ndarray, reach: float = 1.5) -> bool:
+    """Whether a glint pixel of ``bright`` (uint8 0/255) lies within ``reach`` × the ellipse's
+    larger semi-axis of its centre (a square window); 1.5: on the pupil or at its edge."""
     rows, cols = bright.shape
-    r = 1.5 * max(e.a, e.b)
+    r = reach * max(e.a, e.b)
     x0, x1 = max(0, int(e.cx - r)), min(cols, int(e.cx + r) + 1)
     y0, y1 = max(0, int(e.cy - r)), min(rows, int(e.cy + r) + 1)
     return x1 > x0 and y1 > y0 and cv2.countNonZero(bright[y0:y1, x0:x1]) > 0
@@ -3133,13 +3133,7 @@ def _off_the_glints(e: Ellipse, bright: np.ndarray) -> bool:
     """Whether the picture has glints (``bright``, uint8 0/255) but none within
     :data:`_GLINT_REACH` × the ellipse's larger semi-axis of its centre (a square window): a
     dark spot off the eye (a mole on the skin), not the pupil the lights shine beside."""
-    rows, cols = bright.shape
-    r = _GLINT_REACH * max(e.a, e.b)
-    x0, x1 = max(0, int(e.cx - r)), min(cols, int(e.cx + r) + 1)
-    y0, y1 = max(0, int(e.cy - r)), min(rows, int(e.cy + r) + 1)
-    if x1 > x0 and y1 > y0 and cv2.countNonZero(bright[y0:y1, x0:x1]):
-        return False
-    return cv2.countNonZero(bright) > 0
+    return not _glints_about(e, bright, _GLINT_REACH) and cv2.countNonZero(bright) > 0
 
 
 def _fit_chosen(img, wp: WorkPicture, got, bright, params, reasons: list[str]):
