@@ -3609,10 +3609,11 @@ def _step_sse(s, m, e, sig, every, tab):
     4 × 4 normal equations. ``tab``: :func:`_step_table`'s Φ(x) and φ(x) for this ``sig``
     on the samples' grid (``s`` − ``e`` a multiple of :data:`_EDGE_STEP`), or empty: computed
     here."""
-    ata = np.zeros((4, 4))
-    atb = np.zeros(4)
+    # The normal equations' lower triangle and right side in scalars (registers: as arrays
+    # they were stored and loaded at every sample), each sum taken in the samples' order.
+    a00 = a10 = a11 = a20 = a21 = a22 = a30 = a31 = a32 = a33 = 0.0
+    b0 = b1 = b2 = b3 = 0.0
     mm = 0.0
-    col = np.empty(4)
     r2 = 1.0 / math.sqrt(2.0)
     r2pi = 1.0 / math.sqrt(2.0 * math.pi)
     for i in range(0, s.size, every):
@@ -3623,15 +3624,32 @@ def _step_sse(s, m, e, sig, every, tab):
         else:
             big = 0.5 * math.erfc(-x * r2)
             small = math.exp(-0.5 * x * x) * r2pi
-        col[0] = 1.0
-        col[1] = big
-        col[2] = sig * (x * big + small)
-        col[3] = sig * sig * ((x * x + 1.0) * big + x * small)
-        for j in range(4):
-            atb[j] += col[j] * m[i]
-            for k in range(j + 1):
-                ata[j, k] += col[j] * col[k]
-        mm += m[i] * m[i]
+        c0 = 1.0
+        c1 = big
+        c2 = sig * (x * big + small)
+        c3 = sig * sig * ((x * x + 1.0) * big + x * small)
+        mi = m[i]
+        b0 += c0 * mi
+        b1 += c1 * mi
+        b2 += c2 * mi
+        b3 += c3 * mi
+        a00 += c0 * c0
+        a10 += c1 * c0
+        a11 += c1 * c1
+        a20 += c2 * c0
+        a21 += c2 * c1
+        a22 += c2 * c2
+        a30 += c3 * c0
+        a31 += c3 * c1
+        a32 += c3 * c2
+        a33 += c3 * c3
+        mm += mi * mi
+    ata = np.zeros((4, 4))
+    ata[0, 0], ata[1, 0], ata[1, 1] = a00, a10, a11
+    ata[2, 0], ata[2, 1], ata[2, 2] = a20, a21, a22
+    ata[3, 0], ata[3, 1], ata[3, 2], ata[3, 3] = a30, a31, a32, a33
+    atb = np.empty(4)
+    atb[0], atb[1], atb[2], atb[3] = b0, b1, b2, b3
     return mm - _explained(ata, atb)
 
 
