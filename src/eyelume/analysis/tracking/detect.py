@@ -45,8 +45,9 @@ Pipeline (each step's choices are explained in :mod:`.pupil` and :mod:`.glints`)
    top-hat (:func:`~.glints.faint_glints_near`) and, still fewer, defocused ones with wider
    discs (:func:`~.glints.broad_glints_near`); match to LEDs, strongest first
    (:func:`_match_glints`, :func:`_strong_first`), and with an LED left without one look
-   again out to twice as far (:func:`_wider_look`: a small pupil); 6. warnings
-   (:func:`_glint_warnings`).
+   again out to twice as far (:func:`_wider_look`: a small pupil); a saturated glint whose
+   skirt reaches the pupil's outline centred again over the edge's median profile as its
+   background (:func:`_edge_backed_glints`); 6. warnings (:func:`_glint_warnings`).
 
 Which failures make ``ok`` False
 --------------------------------
@@ -59,14 +60,15 @@ that is not an ellipse (RMS residual of its edge points above max(``max_fit_resi
 ``max_fit_residual_frac`` × the semi-minor axis)); too few glints (LED azimuths given and
 fewer than ``min_matched_glints`` (2; all of them with a single LED) matched to an LED, or, with
 an LED missing, fewer than ``min_glints_when_missing`` (3), a glint left unmatched, or matched
-glints that do not fit the LEDs' pattern); a matched glint broken up into specks (its centre
-uncertain). Messages
+glints that do not fit the LEDs' pattern); a matched glint broken up into specks or weaker
+unmatched glints beside it (its centre uncertain). Messages
 starting ``"warning: "`` leave ``ok`` True: LEDs without a glint when enough others have one
 (listed in ``Detection.missing_leds`` too: on a headset with 6–8 LEDs around an eye seen off its
 axis some glints routinely fall off the cornea or under a lid; the gaze models use the matched
 glints only), an eyelid's edge left out of the pupil's fit (:func:`_straight_arc`; the centre
 is the refit's), a glint on the pupil's edge (its outline points there were dropped, so the
-centre stands, but that glint's centroid may be biased), a glint matched to no LED, no glints
+centre stands; a saturated one is centred over the edge's profile, an unsaturated one's
+centroid may be biased), a glint matched to no LED, no glints
 when no LEDs were given.
 
 When ``ok`` is False ``pupil`` may still hold the rejected candidate, for diagnosis: use its
@@ -1429,19 +1431,31 @@ def _jpeg_fragments(glints: list[Glint], specks: list[Glint], params) -> list[Gl
     ]
 
 
-def _broken_glints(glints: list[Glint], specks: list[Glint], params) -> list[str]:
+def _broken_glints(
+    glints: list[Glint], specks: list[Glint], params, unmatched: bool = True
+) -> list[str]:
     """Step 5c: a matched glint with more than ``glint_max_fragment_frac`` of its light in specks
     within 2 r + 4 px of it (r its equivalent radius) is broken up — the sparse samples of a
     noisy picture (a Monte Carlo render with few samples, a short exposure) — and its centroid
-    is uncertain by more than the detector's precision: an error, not a number to trust."""
+    is uncertain by more than the detector's precision: an error, not a number to trust.
+    With ``unmatched``, glints matched to no LED and weaker than it count there too: a fragment
+    large enough to be listed as a glint of its own (a defocused 640 × 480 render's irradiance
+    picture at 8 samples per pixel: a glint of 171 px with a 13 px piece 12.6 px off holding
+    14 % of its light, the glint's centroid 2.2 px from the truth, was answered ``ok``). Not
+    for a JPEG's picture, whose glints are centred on their cores and whose coding specks
+    about them are listed as glints (``test_detect_glint_jpeg25.py``: 3 of its pictures
+    refused so)."""
     out = []
     for i, g in enumerate(glints):
         if g.led is None or g.flux <= 0:
             continue
         reach = 2.0 * math.sqrt(g.area_px / math.pi) + 4.0
+        pieces = specks
+        if unmatched:
+            pieces = [*specks, *(u for u in glints if u.led is None and u.flux < g.flux)]
         near = sum(
             s.flux
-            for s in specks
+            for s in pieces
             if math.hypot(s.centre_px[0] - g.centre_px[0], s.centre_px[1] - g.centre_px[1]) <= reach
         )
         if near > params.glint_max_fragment_frac * g.flux:
@@ -2418,8 +2432,131 @@ def _some_missing(  # noqa: PLR0913 - the matching and its notes
     ], missing
 
 
-def _glint_warnings(glints, fit, led_azimuths_deg, params) -> list[str]:
-    """Step 6: warnings that leave ``ok`` alone (unmatched glints, none, glints on the edge)."""
+#: :func:`_edge_backed_glints`' skirt beyond a glint's equivalent radius, px
+_EDGE_GLINT_SKIRT_PX = 4.0
+#: :func:`_edge_backed_glints`' largest one-sided excess about a glint over the edge profile,
+#: × the edge's step
+_EDGE_GLINT_DIPOLE = 0.2
+#: the width of the ring outside its region where that excess is read, px
+_EDGE_GLINT_RING_PX = 3.0
+
+
+def _on_edge(g: Glint, d: float, params) -> bool:
+    """Whether glint ``g``, whose centroid is ``d`` px (absolute) from the fitted pupil
+    outline, is "on the pupil edge": within its equivalent radius + ``glint_edge_margin_px``."""
+    return d < math.sqrt(g.area_px / math.pi) + params.glint_edge_margin_px
+
+
+def _edge_backed_glints(
+    img: np.ndarray, invalid, glints: list[Glint], fit, params
+) -> tuple[list[Glint], set[int]]:
+    """The clipped glints whose centroid's region reaches the pupil's fitted outline centred
+    again over the edge's own profile as their background, the others as they are; and the
+    indices of those centred again.
+
+    A glint's centroid weighs its pixels by their light above one background level, the
+    median of its surround (:func:`~.glints._blob`). On the pupil's edge the background under
+    it is a blurred step — the dark pupil on one side, the iris on the other — and one level
+    leaves the iris side's pixels weighted and clips the spot there wider: the centroid moves
+    toward the iris, 0.4–1.1 px for glints of σ 1.5–4 px on the edge of a 112 px pupil
+    (tests/analysis/test_detect_glint_edge.py). Here the background at each pixel is the
+    pupil fit's median edge profile (:func:`~.pupil.edge_profile`; glints left out of it) at
+    the pixel's signed distance to the fitted outline (:func:`~.pupil.sampson_distance`;
+    the profile's end values beyond its reach):
+
+        B(x, y) = m(d(x, y)),   w = max(I − B, 0),   centre = Σ w p / Σ w
+
+    over the pixels within r + :data:`_EDGE_GLINT_SKIRT_PX` of the glint's centroid (r its
+    equivalent radius) that are nearer to it than to any other glint's, for each glint whose
+    region reaches within 1 px of the outline, and whose surround the profile describes: the
+    picture's excess over it on a 3 px ring outside the region, projected on the direction
+    from the glint and averaged (a dipole), under :data:`_EDGE_GLINT_DIPOLE` (⅕) of the
+    edge's step (the profile's range) — else a lid or a lash on one side, which the median
+    over the outline does not hold, would move the glint (1.2 px on a test picture with a
+    lid across a glint's side). (A skirt of 4 px: on the test pictures' glints
+    of σ 1.5–4 px on the edge ≤ 0.14 px from the truth, 0.21 with 3 px, 0.34 with 2; on
+    paper2005's 640 × 480 renders, whose glints are 20 px defocused discs, the saturated
+    ones ≤ 0.37 px where they were ≤ 0.91 — ``_blob``'s skirt of r px took in 10 px of iris
+    texture there and moved them to 0.75.) Only for a clipped glint: ≥ 3 pixels within r of
+    its centroid at the picture's largest valid value (``invalid``: bool or None), a
+    saturated top, where the spot's shape is not read and the skirt carries its position.
+    Not for a glint of a pixel or two, which a 4 px skirt would drown in the background's
+    residuals (eyetrackvr's one-pixel glints beside a 9 px pupil moved 2.5 px), nor for an
+    unclipped one, whose fit (a defocused glint's Gaussian over a plane) or centroid is left
+    as found (a Monte Carlo render's scatter of samples is not helped by it: paper2005 at 640
+    × 480, 8 samples per pixel, moved ≤ 0.1 px). The glint's flux and base are left as
+    found."""
+    prof = getattr(fit, "edge_profile", None)
+    if prof is None or not glints:
+        return glints, set()
+    e = fit.ellipse
+    xy = np.array([g.centre_px for g in glints], np.float64)
+    dist = np.abs(sampson_distance(e, xy[:, 0], xy[:, 1]))
+    out = list(glints)
+    centred: set[int] = set()
+    clip = None
+    for i, g in enumerate(glints):
+        if not dist[i] < math.sqrt(g.area_px / math.pi) + _EDGE_GLINT_SKIRT_PX + 1.0:
+            continue  # its region does not reach the outline
+        if clip is None:  # the picture's clipping level: its largest valid value
+            clip = float(img.max() if invalid is None else img[~invalid].max())
+        others = [o.centre_px for j, o in enumerate(glints) if j != i]
+        centre = _edge_backed_centre(img, clip, g, others, e, prof)
+        if centre is not None:
+            out[i] = dataclasses.replace(g, centre_px=centre)
+            centred.add(i)
+    return out, centred
+
+
+def _edge_backed_centre(img, clip: float, g: Glint, others, e, prof) -> tuple | None:
+    """:func:`_edge_backed_glints`' centroid of glint ``g`` (``others``: the other glints'
+    centres; ``clip`` the picture's clipping level; ``e`` the fitted outline and ``prof`` its
+    :class:`~.pupil.EdgeProfile`), or None where it does not apply there."""
+    rows, cols = img.shape
+    r = math.sqrt(g.area_px / math.pi)
+    reach = r + _EDGE_GLINT_SKIRT_PX
+    cx, cy = g.centre_px
+    half = reach + _EDGE_GLINT_RING_PX  # the window holds the ring outside the region
+    x0, y0 = max(0, int(math.floor(cx - half))), max(0, int(math.floor(cy - half)))
+    x1, y1 = min(cols, int(math.ceil(cx + half)) + 1), min(rows, int(math.ceil(cy + half)) + 1)
+    if x1 - x0 < 3 or y1 - y0 < 3:
+        return None
+    win = img[y0:y1, x0:x1].astype(np.float64)
+    yy, xx = np.mgrid[y0:y1, x0:x1].astype(np.float64)
+    d2 = (xx - cx) ** 2 + (yy - cy) ** 2
+    mine = np.ones(d2.shape, bool)  # nearer to this glint than to any other
+    for ox, oy in others:
+        mine &= d2 < (xx - ox) ** 2 + (yy - oy) ** 2
+    region = mine & (d2 <= reach * reach)
+    if np.count_nonzero(region & (d2 <= r * r) & (win >= clip)) < 3:
+        return None  # not clipped (or a glint of a pixel or two: nothing of it to weigh)
+    bg = np.interp(sampson_distance(e, xx, yy), prof.s, prof.m)
+    # The profile must be this place's background, evenly about the glint: on the ring just
+    # outside the region, the picture's excess over it, projected on the direction from the
+    # glint (its dipole: a lid's skin or a lash on one side, which the median over the outline
+    # does not hold), under a fifth of the edge's step. (A lid across a glint's side: 0.66 of
+    # it, the glint moved 1.2 px off; the glint's own skirt and the iris's shading: ≤ 0.08 on
+    # the test pictures and paper2005's renders.)
+    ring = mine & (d2 > reach * reach) & (d2 <= (reach + _EDGE_GLINT_RING_PX) ** 2)
+    if not ring.any():
+        return None
+    res = (win - bg)[ring]
+    ux, uy = (xx - cx)[ring], (yy - cy)[ring]
+    nn = np.hypot(ux, uy)
+    dipole = math.hypot(float((res * ux / nn).mean()), float((res * uy / nn).mean()))
+    if dipole > _EDGE_GLINT_DIPOLE * float(prof.m.max() - prof.m.min()):
+        return None
+    w = np.where(region, np.maximum(win - bg, 0.0), 0.0)
+    tot = float(w.sum())
+    if not tot > 0:
+        return None
+    return float((w * xx).sum() / tot), float((w * yy).sum() / tot)
+
+
+def _glint_warnings(glints, fit, led_azimuths_deg, params, centred=frozenset()) -> list[str]:
+    """Step 6: warnings that leave ``ok`` alone (unmatched glints, none, glints on the edge;
+    ``centred``: the indices of those centred over the edge's profile,
+    :func:`_edge_backed_glints`)."""
     warnings = []
     if led_azimuths_deg is not None:
         warnings += [
@@ -2432,10 +2569,15 @@ def _glint_warnings(glints, fit, led_azimuths_deg, params) -> list[str]:
         xy = np.array([g.centre_px for g in glints], np.float64)
         dist = np.abs(sampson_distance(fit.ellipse, xy[:, 0], xy[:, 1])).tolist()
         for i, (g, d) in enumerate(zip(glints, dist, strict=True)):
-            if d < math.sqrt(g.area_px / math.pi) + params.glint_edge_margin_px:
+            if _on_edge(g, d, params):
                 warnings.append(
                     f"warning: glint {i} on the pupil edge ({d:.1f} px from the fitted "
-                    "outline): the outline under it was left out; its centroid may be biased"
+                    "outline): the outline under it was left out; "
+                    + (
+                        "centred over the edge's profile as its background"
+                        if i in centred
+                        else "its centroid may be biased"
+                    )
                 )
     return warnings
 
@@ -2534,13 +2676,17 @@ def detect(
         errors += [m for m in lost if not m.startswith("warning: ")]
         lost_note = [m for m in lost if m.startswith("warning: ")]
     glints.sort(key=lambda g: (g.led is None, g.led if g.led is not None else 0, -g.peak))
+    glints, centred = _edge_backed_glints(img, invalid, glints, fit, params)
     errors += _broken_glints(
-        glints, _jpeg_fragments(glints, specks, params) if jpeg_step else specks, params
+        glints,
+        _jpeg_fragments(glints, specks, params) if jpeg_step else specks,
+        params,
+        unmatched=not jpeg_step,
     )
     warnings = (
         pupil_notes
         + lost_note
-        + _glint_warnings(glints, fit, led_azimuths_deg, params)
+        + _glint_warnings(glints, fit, led_azimuths_deg, params, centred)
         + missing_notes
     )
     warnings += _frame_notes(n_hot, n_filled, n_black, jpeg_step)

@@ -296,6 +296,9 @@ class PupilFit:
     #: how far (px, + outward) the pupil's edge lies beyond ``ellipse``, the ¼ iso-line
     #: (:func:`edge_offset`): the pupil's axes are the ellipse's grown by twice it
     edge_offset_px: float = 0.0
+    #: the median profile across ``ellipse``'s outline (:func:`edge_profile`) the offset was
+    #: read from, or None: ``detect`` takes it as the background under glints on the edge
+    edge_profile: EdgeProfile | None = None
 
     def __bool__(self) -> bool:
         return self.ellipse is not None
@@ -3206,6 +3209,7 @@ def find_pupil(
         if prof is None:
             return fit
     fit.edge_offset_px = edge_offset(prof, fit.ellipse, params.edge_fraction)
+    fit.edge_profile = prof
     return fit
 
 
