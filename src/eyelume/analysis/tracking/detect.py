@@ -60,8 +60,8 @@ that is not an ellipse (RMS residual of its edge points above max(``max_fit_resi
 ``max_fit_residual_frac`` × the semi-minor axis)); too few glints (LED azimuths given and
 fewer than ``min_matched_glints`` (2; all of them with a single LED) matched to an LED, or, with
 an LED missing, fewer than ``min_glints_when_missing`` (3), a glint left unmatched, or matched
-glints that do not fit the LEDs' pattern); a matched glint broken up into specks or weaker
-unmatched glints beside it (its centre uncertain). Messages
+glints that do not fit the LEDs' pattern); a matched glint broken up into specks (its centre
+uncertain). Messages
 starting ``"warning: "`` leave ``ok`` True: LEDs without a glint when enough others have one
 (listed in ``Detection.missing_leds`` too: on a headset with 6–8 LEDs around an eye seen off its
 axis some glints routinely fall off the cornea or under a lid; the gaze models use the matched
@@ -1431,31 +1431,19 @@ def _jpeg_fragments(glints: list[Glint], specks: list[Glint], params) -> list[Gl
     ]
 
 
-def _broken_glints(
-    glints: list[Glint], specks: list[Glint], params, unmatched: bool = True
-) -> list[str]:
+def _broken_glints(glints: list[Glint], specks: list[Glint], params) -> list[str]:
     """Step 5c: a matched glint with more than ``glint_max_fragment_frac`` of its light in specks
     within 2 r + 4 px of it (r its equivalent radius) is broken up — the sparse samples of a
     noisy picture (a Monte Carlo render with few samples, a short exposure) — and its centroid
-    is uncertain by more than the detector's precision: an error, not a number to trust.
-    With ``unmatched``, glints matched to no LED and weaker than it count there too: a fragment
-    large enough to be listed as a glint of its own (a defocused 640 × 480 render's irradiance
-    picture at 8 samples per pixel: a glint of 171 px with a 13 px piece 12.6 px off holding
-    14 % of its light, the glint's centroid 2.2 px from the truth, was answered ``ok``). Not
-    for a JPEG's picture, whose glints are centred on their cores and whose coding specks
-    about them are listed as glints (``test_detect_glint_jpeg25.py``: 3 of its pictures
-    refused so)."""
+    is uncertain by more than the detector's precision: an error, not a number to trust."""
     out = []
     for i, g in enumerate(glints):
         if g.led is None or g.flux <= 0:
             continue
         reach = 2.0 * math.sqrt(g.area_px / math.pi) + 4.0
-        pieces = specks
-        if unmatched:
-            pieces = [*specks, *(u for u in glints if u.led is None and u.flux < g.flux)]
         near = sum(
             s.flux
-            for s in pieces
+            for s in specks
             if math.hypot(s.centre_px[0] - g.centre_px[0], s.centre_px[1] - g.centre_px[1]) <= reach
         )
         if near > params.glint_max_fragment_frac * g.flux:
@@ -2439,6 +2427,9 @@ _EDGE_GLINT_SKIRT_PX = 4.0
 _EDGE_GLINT_DIPOLE = 0.2
 #: the width of the ring outside its region where that excess is read, px
 _EDGE_GLINT_RING_PX = 3.0
+#: :func:`_edge_backed_glints`' largest iris step about a glint, × the clip's height over the
+#: pupil's level
+_EDGE_GLINT_STEP_SHARE = 0.3
 
 
 def _on_edge(g: Glint, d: float, params) -> bool:
@@ -2458,22 +2449,28 @@ def _edge_backed_glints(
     median of its surround (:func:`~.glints._blob`). On the pupil's edge the background under
     it is a blurred step — the dark pupil on one side, the iris on the other — and one level
     leaves the iris side's pixels weighted and clips the spot there wider: the centroid moves
-    toward the iris, 0.4–1.1 px for glints of σ 1.5–4 px on the edge of a 112 px pupil
-    (tests/analysis/test_detect_glint_edge.py). Here the background at each pixel is the
-    pupil fit's median edge profile (:func:`~.pupil.edge_profile`; glints left out of it) at
-    the pixel's signed distance to the fitted outline (:func:`~.pupil.sampson_distance`;
-    the profile's end values beyond its reach):
+    toward the iris, 0.23–1.24 px for glints of σ 1.5–4 px on the edge of a 112 × 96 px
+    pupil (tests/analysis/test_detect_glint_edge.py). Here the background at each pixel is
+    the pupil fit's median edge profile m (:func:`~.pupil.edge_profile`; glints left out of
+    it) at the pixel's signed distance d to the fitted outline
+    (:func:`~.pupil.sampson_distance`; m's end values beyond its reach), its step from the
+    pupil's level m₀ = min m scaled to the iris about this glint:
 
-        B(x, y) = m(d(x, y)),   w = max(I − B, 0),   centre = Σ w p / Σ w
+        B(x, y) = m₀ + k (m(d(x, y)) − m₀),   w = max(I − B, 0),   centre = Σ w p / Σ w
 
     over the pixels within r + :data:`_EDGE_GLINT_SKIRT_PX` of the glint's centroid (r its
-    equivalent radius) that are nearer to it than to any other glint's, for each glint whose
-    region reaches within 1 px of the outline, and whose surround the profile describes: the
-    picture's excess over it on a 3 px ring outside the region, projected on the direction
-    from the glint and averaged (a dipole), under :data:`_EDGE_GLINT_DIPOLE` (⅕) of the
-    edge's step (the profile's range) — else a lid or a lash on one side, which the median
-    over the outline does not hold, would move the glint (1.2 px on a test picture with a
-    lid across a glint's side). (A skirt of 4 px: on the test pictures' glints
+    equivalent radius) that are nearer to it than to any other glint's, k fitted by least
+    squares to the picture on a :data:`_EDGE_GLINT_RING_PX` ring just outside them (an iris
+    lit unevenly, ± 44 DN at 160 of 255, had moved glints 0.95–1.21 px with k = 1). For each
+    glint whose region reaches within 1 px of the outline and where three checks pass:
+    the iris's step k (max m − m₀) is positive and ≤ :data:`_EDGE_GLINT_STEP_SHARE` (0.3) of
+    the clip's height over m₀ (a clipped top is weighed by clip − B, which a bright iris
+    shrinks on its side: irides at 160–200 of 255, 0.61–0.77 of it, pulled glints 0.4–0.7 px
+    toward the pupil; the tests' picture 0.14); and the picture's excess over B on the ring,
+    projected on the direction from the glint and averaged (a dipole), is under
+    :data:`_EDGE_GLINT_DIPOLE` (⅕) of the step — else a lid or a lash on one side, which the
+    median over the outline does not hold, would move the glint (1.2 px on a test picture
+    with a lid across a glint's side). (A skirt of 4 px: on the test pictures' glints
     of σ 1.5–4 px on the edge ≤ 0.14 px from the truth, 0.21 with 3 px, 0.34 with 2; on
     paper2005's 640 × 480 renders, whose glints are 20 px defocused discs, the saturated
     ones ≤ 0.37 px where they were ≤ 0.91 — ``_blob``'s skirt of r px took in 10 px of iris
@@ -2530,21 +2527,37 @@ def _edge_backed_centre(img, clip: float, g: Glint, others, e, prof) -> tuple | 
     region = mine & (d2 <= reach * reach)
     if np.count_nonzero(region & (d2 <= r * r) & (win >= clip)) < 3:
         return None  # not clipped (or a glint of a pixel or two: nothing of it to weigh)
-    bg = np.interp(sampson_distance(e, xx, yy), prof.s, prof.m)
-    # The profile must be this place's background, evenly about the glint: on the ring just
-    # outside the region, the picture's excess over it, projected on the direction from the
-    # glint (its dipole: a lid's skin or a lash on one side, which the median over the outline
-    # does not hold), under a fifth of the edge's step. (A lid across a glint's side: 0.66 of
-    # it, the glint moved 1.2 px off; the glint's own skirt and the iris's shading: ≤ 0.08 on
-    # the test pictures and paper2005's renders.)
+    # The background: the profile's step from the pupil's level m₀ scaled to the iris about
+    # this glint, B = m₀ + k (m(d) − m₀), k fitted (least squares) on a ring just outside the
+    # region (the light on the iris falls off across the eye: ±30–44 DN on an iris at 160 of
+    # 255 moved glints 0.8–1.2 px with k = 1).
     ring = mine & (d2 > reach * reach) & (d2 <= (reach + _EDGE_GLINT_RING_PX) ** 2)
     if not ring.any():
         return None
+    m0 = float(prof.m.min())
+    u = np.interp(sampson_distance(e, xx, yy), prof.s, prof.m) - m0
+    uu = float((u[ring] ** 2).sum())
+    if not uu > 0:
+        return None
+    k = float((u[ring] * (win[ring] - m0)).sum()) / uu
+    step = k * float(prof.m.max() - m0)
+    # The clipped top is weighed by clip − B, which a bright iris shrinks on its side: only
+    # where the iris's step is a small part of the room to the clip (on the tests' pictures
+    # 0.14; iris at 160–200 of 255, 0.61–0.77, pulled glints 0.4–0.7 px toward the pupil)
+    if not 0.0 < step <= _EDGE_GLINT_STEP_SHARE * (clip - m0):
+        return None
+    bg = m0 + k * u
+    # The profile must be this place's background, evenly about the glint: on the ring, the
+    # picture's excess over it projected on the direction from the glint (its dipole: a lid's
+    # skin or a lash on one side, which the median over the outline does not hold), under a
+    # fifth of the step. (A lid across a glint's side: 0.66 of it, the glint moved 1.2 px
+    # off; the glint's own skirt and the iris's shading: ≤ 0.08 on the test pictures and
+    # paper2005's renders.)
     res = (win - bg)[ring]
     ux, uy = (xx - cx)[ring], (yy - cy)[ring]
     nn = np.hypot(ux, uy)
     dipole = math.hypot(float((res * ux / nn).mean()), float((res * uy / nn).mean()))
-    if dipole > _EDGE_GLINT_DIPOLE * float(prof.m.max() - prof.m.min()):
+    if dipole > _EDGE_GLINT_DIPOLE * step:
         return None
     w = np.where(region, np.maximum(win - bg, 0.0), 0.0)
     tot = float(w.sum())
@@ -2678,10 +2691,7 @@ def detect(
     glints.sort(key=lambda g: (g.led is None, g.led if g.led is not None else 0, -g.peak))
     glints, centred = _edge_backed_glints(img, invalid, glints, fit, params)
     errors += _broken_glints(
-        glints,
-        _jpeg_fragments(glints, specks, params) if jpeg_step else specks,
-        params,
-        unmatched=not jpeg_step,
+        glints, _jpeg_fragments(glints, specks, params) if jpeg_step else specks, params
     )
     warnings = (
         pupil_notes
