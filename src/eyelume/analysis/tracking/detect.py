@@ -2470,11 +2470,12 @@ def _edge_backed_glints(
     projected on the direction from the glint and averaged (a dipole), is under
     :data:`_EDGE_GLINT_DIPOLE` (⅕) of the step — else a lid or a lash on one side, which the
     median over the outline does not hold, would move the glint (1.2 px on a test picture
-    with a lid across a glint's side). (A skirt of 4 px: on the test pictures' glints
-    of σ 1.5–4 px on the edge ≤ 0.14 px from the truth, 0.21 with 3 px, 0.34 with 2; on
-    paper2005's 640 × 480 renders, whose glints are 20 px defocused discs, the saturated
-    ones ≤ 0.37 px where they were ≤ 0.91 — ``_blob``'s skirt of r px took in 10 px of iris
-    texture there and moved them to 0.75.) Only for a clipped glint: ≥ 3 pixels within r of
+    with a lid across a glint's side). (A skirt of 4 px, chosen with k = 1 and without the
+    step's check: on round pupils' glints of σ 1.5–4 px on the edge ≤ 0.14 px from the
+    truth, 0.21 with 3 px, 0.34 with 2; on paper2005's 640 × 480 renders, whose glints are
+    20 px defocused discs, the saturated ones ≤ 0.37 px where they were ≤ 0.91 — ``_blob``'s
+    skirt of r px took in 10 px of iris texture there and moved them to 0.75. As it stands:
+    ≤ 0.12 px and ≤ 0.28 px.) Only for a clipped glint: ≥ 3 pixels within r of
     its centroid at the picture's largest valid value (``invalid``: bool or None), a
     saturated top, where the spot's shape is not read and the skirt carries its position.
     Not for a glint of a pixel or two, which a 4 px skirt would drown in the background's
