@@ -2439,7 +2439,7 @@ def _on_edge(g: Glint, d: float, params) -> bool:
 
 
 def _edge_backed_glints(
-    img: np.ndarray, invalid, glints: list[Glint], fit, params
+    img: np.ndarray, clip: float, glints: list[Glint], fit, params
 ) -> tuple[list[Glint], set[int]]:
     """The clipped glints whose centroid's region reaches the pupil's fitted outline centred
     again over the edge's own profile as their background, the others as they are; and the
@@ -2476,8 +2476,9 @@ def _edge_backed_glints(
     20 px defocused discs, the saturated ones ≤ 0.37 px where they were ≤ 0.91 — ``_blob``'s
     skirt of r px took in 10 px of iris texture there and moved them to 0.75. As it stands:
     ≤ 0.12 px and ≤ 0.28 px.) Only for a clipped glint: ≥ 3 pixels within r of
-    its centroid at the picture's largest valid value (``invalid``: bool or None), a
-    saturated top, where the spot's shape is not read and the skirt carries its position.
+    its centroid at the picture's largest valid value (``clip``: :func:`_prepare`'s range's
+    top; its missing pixels hold the darkest valid value), a saturated top, where the spot's
+    shape is not read and the skirt carries its position.
     Not for a glint of a pixel or two, which a 4 px skirt would drown in the background's
     residuals (eyetrackvr's one-pixel glints beside a 9 px pupil moved 2.5 px), nor for an
     unclipped one, whose fit (a defocused glint's Gaussian over a plane) or centroid is left
@@ -2492,12 +2493,9 @@ def _edge_backed_glints(
     dist = np.abs(sampson_distance(e, xy[:, 0], xy[:, 1]))
     out = list(glints)
     centred: set[int] = set()
-    clip = None
     for i, g in enumerate(glints):
         if not dist[i] < math.sqrt(g.area_px / math.pi) + _EDGE_GLINT_SKIRT_PX + 1.0:
             continue  # its region does not reach the outline
-        if clip is None:  # the picture's clipping level: its largest valid value
-            clip = float(img.max() if invalid is None else img[~invalid].max())
         others = [o.centre_px for j, o in enumerate(glints) if j != i]
         centre = _edge_backed_centre(img, clip, g, others, e, prof)
         if centre is not None:
@@ -2690,7 +2688,7 @@ def detect(
         errors += [m for m in lost if not m.startswith("warning: ")]
         lost_note = [m for m in lost if m.startswith("warning: ")]
     glints.sort(key=lambda g: (g.led is None, g.led if g.led is not None else 0, -g.peak))
-    glints, centred = _edge_backed_glints(img, invalid, glints, fit, params)
+    glints, centred = _edge_backed_glints(img, hi, glints, fit, params)
     errors += _broken_glints(
         glints, _jpeg_fragments(glints, specks, params) if jpeg_step else specks, params
     )
