@@ -118,6 +118,7 @@ from eyelume.analysis.tracking.glints import (
 )
 from eyelume.analysis.tracking.pupil import (
     Ellipse,
+    _residual_limit,
     _stride,
     find_pupil,
     noise_sigma,
@@ -734,7 +735,7 @@ def _pupil_result(fit, params) -> tuple[Pupil | None, list[str], object]:
             f"{dr.get('glint', 0)} on glints, {dr.get('outlier', 0)} off the ellipse "
             "(e.g. an eyelid's edge)"
         )
-    limit = max(params.max_fit_residual_px, params.max_fit_residual_frac * 0.5 * minor)
+    limit = _residual_limit(fit.ellipse, params)
     if fit.residual_px > limit:
         errors.append(
             f"pupil outline is not an ellipse: RMS residual {fit.residual_px:.2f} px "

@@ -3002,8 +3002,10 @@ def _darker_first(img, wp: WorkPicture, got, fit: PupilFit | None, bright, param
 
 
 def _residual_limit(e: Ellipse, params) -> float:
-    """``detect``'s limit on a fit's RMS residual (px): ``max_fit_residual_px`` or
-    ``max_fit_residual_frac`` of the smaller semi-axis, whichever is larger."""
+    """The limit on a fit's RMS residual (px) beyond which its outline is not an ellipse
+    (``detect._pupil_result``'s refusal, :func:`_darker_first`'s well-fitting fit):
+    ``max_fit_residual_px`` or ``max_fit_residual_frac`` of the smaller semi-axis, whichever
+    is larger."""
     return max(params.max_fit_residual_px, params.max_fit_residual_frac * min(e.a, e.b))
 
 
