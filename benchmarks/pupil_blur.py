@@ -31,11 +31,15 @@ implies (0.674 × the RMS blur along the outward normal, fitted as an offset per
 averaged as cos/sin moments: the first Fourier terms of the offset round the outline are the
 centre's shift). Appends a JSON line to ``benchmarks/results/pupil_blur.jsonl``.
 
-Measured (session 29, 067f6e8): at (−20°, 10°) the centroid stays within 0.13 px of the
+Measured (session 29, 067f6e8): at (−20°, 10°) the centroid stays within 0.14 px of the
 chief ray's image at every point (mean over the outline 0.02 px), while the RMS blur runs
-from 4.8 px on one side to 7.6 px on the other: the truth is the blur's centroid, and the ¼
-iso-line is pulled ~0.6–1 px off it — what the detector answers (0.57–0.58 px on two 64
-sample-per-pixel renders of that gaze, seeds 21 and 22; 1.02 px at 8 samples, seed 14).
+from 4.8 px on one side to 7.6 px on the other: the truth is the blur's centroid, and for a
+uniform iris the ¼ iso-line's centre moves (+0.70, +0.35) px. The detector answers
+(+0.54, +0.21) and (+0.56, +0.11) px on two 64 sample-per-pixel renders of that gaze (seeds
+21, 22; 1.02 px at 8 samples, seed 14) and 0.21 px on the same gaze at f/16 (``--set
+lens.f_number=16`` for the render): the blur, meeting the iris's radiance (brightest at the
+pupil's margin, falling 10–45 % over 24 px by side), moves every iso-line of the picture
+(``docs/detection_history.md``, session 29).
 """
 
 from __future__ import annotations
