@@ -48,7 +48,9 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    picture's glints within 6 of its radii (a mole on the skin darker than the pupil), the
    ladder is walked again past their chains (it stops once the darkest chain has settled, and
    a lash over the sclera may be that chain) and a whole fit with glints beside it is taken
-   (:func:`_fit_chosen`).
+   (:func:`_fit_chosen`); a whole fit with none within 3 of its radii (a black spot on the skin
+   or in the iris, darker than the pupil, 4–6 of its radii from the glints) gives way to
+   another chosen candidate whose whole fit has the glints about it.
 4. **Full-resolution blob** (:func:`full_res_blob`): the picture (σ 1 px Gaussian) thresholded
    at the chosen level around the blob; glints touching it joined; a closing with an
    elliptical element of ≈ 0.15 × its diameter (odd, ≥ 3) fills what is left of a glint's
@@ -3132,6 +3134,15 @@ def _core_answer(img, wp: WorkPicture, e: Ellipse, core: str, bright, params) ->
 #: How far from a pupil its glints may lie, in its larger semi-axes: corneal reflections fall
 #: on the cornea, whose visible disc (the iris, ~12 mm across) is ≤ 6 × the least pupil (2 mm).
 _GLINT_REACH = 6.0
+#: :func:`_fit_chosen`'s reach, in larger semi-axes: a whole fit with no glint within it (a
+#: square window, as :func:`_glints_about`) gives way to another chosen candidate with glints
+#: about it. A guess between the tests' pictures (glints 0.5 semi-axes from the pupil's
+#: centre; the nearest 3.7–6.4 semi-axes from the dark spots' centres of
+#: tests/analysis/test_detect_pupil_dark_spot.py) and :data:`_GLINT_REACH`'s 6 (a 2 mm
+#: pupil's glints may lie 6 mm out: past 3 such a pupil is kept unless another dark blob with
+#: glints about it was chosen too); no answer changed on session 29's 316 pictures (the 255
+#: real ones among them).
+_AWAY_REACH = 3.0
 
 
 def _off_the_glints(e: Ellipse, bright: np.ndarray) -> bool:
@@ -3152,30 +3163,70 @@ def _fit_chosen(img, wp: WorkPicture, got, bright, params, reasons: list[str]):
     candidate. And when the fit lies off every glint of a picture that has some
     (:func:`_off_the_glints`: a mole on the skin darker than the pupil), the first of the
     other candidates and of those walked past whose fit is whole, holds no core and has
-    glints beside it replaces it."""
+    glints beside it replaces it. A whole fit in reach of the glints but with none within
+    :data:`_AWAY_REACH` of its semi-axes gives way, the same way, to the first other chosen
+    candidate (not those walked past) whose fit has glints about it (:func:`_glints_about`)."""
     reduced, picks, f = got
     if not picks:
         return None
     fit = _fit_candidates(img, wp, picks, f, bright, params, reasons)
-    if fit is not None and not _off_the_glints(fit.ellipse, bright):
+    # ``away``: a whole fit in reach of the glints (not :func:`_off_the_glints`) with none within
+    # :data:`_AWAY_REACH` × its larger semi-axis — a dark spot a few of its own sizes from the
+    # eye, darker than the pupil (a black disc 80 px across on the skin of the tests' picture,
+    # 260 px from its pupil; one 36–40 px across in the iris, 90 px away) — gives way to the
+    # first other chosen candidate whose blob has glints about it (:func:`_glints_about`,
+    # within 1.5 × its half-size; its box, before any fit: a small pupil with its glints
+    # further out costs no fit) and whose whole fit has them about it and holds no core.
+    off = fit is not None and _off_the_glints(fit.ellipse, bright)
+    away = (
+        fit is not None
+        and not off
+        and _whole(fit, params)
+        and not _glints_about(fit.ellipse, bright, _AWAY_REACH)
+    )
+    if fit is not None and not off and not away:
         return fit
     passed = frozenset(c.first for c in picks)
-    chains, f2, _ = ladder(wp, params, reduced, passed=passed)
-    more = choose(chains, f2, ([], tuple), wp, params)
-    more = [c for c in more or [] if c.first not in passed]
     if fit is None:
+        chains, f2, _ = ladder(wp, params, reduced, passed=passed)
+        more = choose(chains, f2, ([], tuple), wp, params)
+        more = [c for c in more or [] if c.first not in passed]
         return _fit_candidates(img, wp, more, f2, bright, params, []) if more else None
-    others = [(c, f) for c in picks if c.first != fit.first] + [(c, f2) for c in more]
-    for cand, fc in others[: params.max_candidates]:
+
+    def others():
+        yield from ((c, f) for c in picks if c.first != fit.first)
+        if away:  # (the other picks only: the second walk costs ~1 ms on a small pupil whose
+            return  # glints lie further out, the commoner case, and found nothing there)
+        chains, f2, _ = ladder(wp, params, reduced, passed=passed)
+        more = choose(chains, f2, ([], tuple), wp, params)
+        yield from ((c, f2) for c in more or [] if c.first not in passed)
+
+    tried = 0
+    for cand, fc in others():
+        if tried >= params.max_candidates:
+            break
+        if away and not _box_glints_about(cand, fc, bright):
+            continue
+        tried += 1
         alt = _fit_candidates(img, wp, [cand], fc, bright, params, [])
         if (
             alt is not None
             and _whole(alt, params)
             and not _off_the_glints(alt.ellipse, bright)
+            and (not away or _glints_about(alt.ellipse, bright))
             and not _inner_core(img, wp, alt.ellipse, bright, params)
         ):
             return alt
     return fit
+
+
+def _box_glints_about(c: Candidate, f: int, bright: np.ndarray) -> bool:
+    """:func:`_glints_about` for a candidate's blob before its fit: a glint pixel within 1.5 ×
+    half its box's larger side of the box's centre (the box, on the ladder's grid reduced by
+    ``f``, taken to full resolution)."""
+    x, y, w, h = c.bbox
+    e = Ellipse(f * (x + 0.5 * w), f * (y + 0.5 * h), 0.5 * f * max(w, h), 0.5 * f * max(w, h), 0.0)
+    return _glints_about(e, bright)
 
 
 def find_pupil(
