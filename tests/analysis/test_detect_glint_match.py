@@ -14,7 +14,7 @@ import numpy as np
 
 from eyelume.analysis.tracking import detect
 from eyelume.analysis.tracking.detect import DetectParams, Glint, _match_glints, _split_specks
-from eyelume.analysis.tracking.glints import pattern_fits
+from eyelume.analysis.tracking.glints import _one_each, pattern_fit, pattern_fits
 
 CENTRE = (200.6, 150.2)
 LEDS = (0.0, 90.0, 180.0, 270.0)
@@ -133,6 +133,80 @@ def test_a_lit_patch_does_not_make_the_glints_specks():
              "base": 688.0}  # fmt: skip
     kept, specks = _split_specks([*glints, patch], DetectParams())
     assert len(kept) == 6 and not specks, (kept, specks)
+
+
+def _pattern_fits_each(g, p, tol_frac, min_count=3):
+    """:func:`pattern_fits` as it was before session 29: every hypothesis' distances as one
+    (H, k, n) array, every kept hypothesis refitted (its reference)."""
+    n, k = len(g), len(p)
+    if n < min_count or k < min_count:
+        return []
+    ii, jj = np.nonzero(~np.eye(n, dtype=bool))
+    aa, bb = np.nonzero(np.triu(~np.eye(k, dtype=bool)))
+    dg = (g[ii] - g[jj])[:, None, :]
+    dp = (p[aa] - p[bb])[None, :, :]
+    s = (dg * dp).sum(axis=2) / (dp * dp).sum(axis=2)
+    t = 0.5 * (g[ii] + g[jj])[:, None, :] - s[:, :, None] * 0.5 * (p[aa] + p[bb])[None, :, :]
+    good = s > 0
+    s, t = s[good], t[good]
+    if not len(s):
+        return []
+    norm = np.hypot(*p.T)
+    seen = {}
+    for _ in range(2):
+        q = t[:, None, :] + s[:, None, None] * p[None, :, :]
+        dist = np.hypot(*(g[None, None, :, :] - q[:, :, None, :]).transpose(3, 0, 1, 2))
+        best = dist.argmin(axis=2)
+        near = np.take_along_axis(dist, best[:, :, None], axis=2)[:, :, 0]
+        inside = near <= tol_frac * s[:, None] * norm[None, :]
+        keep = np.flatnonzero(inside.sum(axis=1) >= min_count)
+        if not len(keep):
+            return []
+        t2, s2 = [], []
+        for h in keep:
+            leds = _one_each(best[h], near[h], inside[h], n)
+            pairs = [(j, kk) for j, kk in enumerate(leds) if kk is not None]
+            if len(pairs) < min_count:
+                continue
+            sol = pattern_fit(g[[j for j, _ in pairs]], p[[kk for _, kk in pairs]])
+            if not (sol[2] > 0 and np.isfinite(sol).all()):
+                continue
+            t2.append(sol[:2])
+            s2.append(sol[2])
+            key = tuple(-1 if kk is None else kk for kk in leds)
+            if key not in seen:
+                res = g[[j for j, _ in pairs]] - (sol[:2] + sol[2] * p[[kk for _, kk in pairs]])
+                seen[key] = (leds, len(pairs), tuple(sol[:2]), float(sol[2]),
+                             float(np.sqrt((res**2).sum(axis=1).mean())))  # fmt: skip
+        if not t2:
+            break
+        t, s = np.array(t2), np.array(s2)
+    return sorted(seen.values(), key=lambda f: (-f[1], f[4]))
+
+
+def test_pattern_fits_as_every_hypothesis_fitted():
+    """Each matching fitted once (session 29: 8 LEDs and 15-25 glints gave 10^4 hypotheses,
+    most of them repeats) gives the very fits, in the very order, of every hypothesis fitted:
+    rings of 3-8 LEDs or distorted layouts, glints lost, strays, duplicates and whole-pixel
+    centres (ties)."""
+    rng = np.random.default_rng(29)
+    for _ in range(40):
+        k = int(rng.choice([3, 4, 6, 8]))
+        az = np.radians(np.arange(k) * 360.0 / k)
+        p = np.column_stack([np.cos(az), -np.sin(az)])
+        if rng.random() < 0.3:
+            p = p * rng.uniform(5, 30) + rng.normal(0, 2, p.shape)
+        c, r = rng.uniform(100, 300, 2), rng.uniform(8, 40)
+        g = c + r * p / np.hypot(*p.T)[:, None] + rng.normal(0, 0.3, p.shape)
+        g = np.vstack([g[rng.random(k) < 0.85], c + rng.uniform(-2 * r, 2 * r, (6, 2))])
+        if rng.random() < 0.3:
+            g = np.round(g)
+        if rng.random() < 0.2:
+            g = np.vstack([g, g[:2]])
+        tol = math.sin(math.radians(rng.uniform(5, 45)))
+        got = [(f["leds"], f["count"], tuple(f["t"]), f["s"], f["rms"])
+               for f in pattern_fits(g, p, tol)]  # fmt: skip
+        assert got == _pattern_fits_each(g, p, tol)
 
 
 def test_pattern_fits_finds_each_whole_pattern():

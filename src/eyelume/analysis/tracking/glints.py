@@ -1665,29 +1665,34 @@ def pattern_fits(
         return []
     norm = np.hypot(*p.T)
     seen: dict[tuple, dict] = {}
+    # Many hypotheses give one matching (each glint pair of a pattern, each LED pair): its
+    # least-squares fit is made once (None: fewer than min_count pairs, or no fit). A matching's
+    # fit is the same numbers whichever hypothesis gave it, so a second round's hypothesis is
+    # each distinct fit once, in the order first found (a repeat adds nothing to ``seen``).
+    fitted: dict[tuple, np.ndarray | None] = {}
     for _ in range(2):
-        q = t[:, None, :] + s[:, None, None] * p[None, :, :]  # (H, k, 2)
-        dist = np.hypot(*(g[None, None, :, :] - q[:, :, None, :]).transpose(3, 0, 1, 2))
-        best = dist.argmin(axis=2)  # (H, k): each LED's nearest glint
-        near = np.take_along_axis(dist, best[:, :, None], axis=2)[:, :, 0]
+        best, near = _nearest_glints(g, p, t, s)  # (H, k): each LED's nearest glint, its distance
         inside = near <= tol_frac * s[:, None] * norm[None, :]
         count = inside.sum(axis=1)
         keep = np.flatnonzero(count >= min_count)
         if not len(keep):
             return []
         t2, s2 = [], []
+        taken = set()
         for h in keep:
             leds = _one_each(best[h], near[h], inside[h], n)
-            pairs = [(j, kk) for j, kk in enumerate(leds) if kk is not None]
-            if len(pairs) < min_count:
+            key = tuple(-1 if kk is None else kk for kk in leds)
+            if key in fitted:
+                sol = fitted[key]
+            else:
+                sol = fitted[key] = _matching_fit(g, p, leds, min_count)
+            if sol is None or key in taken:
                 continue
-            sol = pattern_fit(g[[j for j, _ in pairs]], p[[kk for _, kk in pairs]])
-            if not (sol[2] > 0 and np.isfinite(sol).all()):
-                continue
+            taken.add(key)
             t2.append(sol[:2])
             s2.append(sol[2])
-            key = tuple(-1 if kk is None else kk for kk in leds)
             if key not in seen:
+                pairs = [(j, kk) for j, kk in enumerate(leds) if kk is not None]
                 res = g[[j for j, _ in pairs]] - (sol[:2] + sol[2] * p[[kk for _, kk in pairs]])
                 seen[key] = {
                     "leds": leds,
@@ -1700,6 +1705,49 @@ def pattern_fits(
             break
         t, s = np.array(t2), np.array(s2)
     return sorted(seen.values(), key=lambda f: (-f["count"], f["rms"]))
+
+
+def _matching_fit(g: np.ndarray, p: np.ndarray, leds, min_count: int) -> np.ndarray | None:
+    """:func:`pattern_fits`' refit of one matching ``leds`` (per glint its LED or None):
+    :func:`pattern_fit`'s (t_x, t_y, s) on its pairs, or None when they are fewer than
+    ``min_count`` or the fit is not a finite positive scale."""
+    pairs = [(j, kk) for j, kk in enumerate(leds) if kk is not None]
+    if len(pairs) < min_count:
+        return None
+    sol = pattern_fit(g[[j for j, _ in pairs]], p[[kk for _, kk in pairs]])
+    if not (sol[2] > 0 and np.isfinite(sol).all()):
+        return None
+    return sol
+
+
+@njit(cache=True, nogil=True)
+def _nearest_glints(g, p, t, s):
+    """:func:`pattern_fits`' nearest glint to each hypothesis' LED places: for hypothesis h
+    (shift ``t[h]`` (2,), scale ``s[h]``) and LED kk (``p[kk]``), the index of the glint of
+    ``g`` (n, 2) nearest t + s p_kk and its distance ((H, k) int64 and float64) — the first of
+    equally near ones, as ``np.argmin`` over the distances ``np.hypot(g − q)`` takes it (the
+    same libm hypot; a NaN distance is the nearest, as argmin's), without the (H, k, n)
+    arrays (H runs to 10⁴–10⁵ with 8 LEDs and a few dozen glints)."""
+    nh, k, n = s.shape[0], p.shape[0], g.shape[0]
+    best = np.zeros((nh, k), np.int64)
+    near = np.empty((nh, k))
+    for h in range(nh):
+        for kk in range(k):
+            qx = t[h, 0] + s[h] * p[kk, 0]
+            qy = t[h, 1] + s[h] * p[kk, 1]
+            bj = 0
+            bd = math.hypot(g[0, 0] - qx, g[0, 1] - qy)
+            if bd == bd:
+                for j in range(1, n):
+                    d = math.hypot(g[j, 0] - qx, g[j, 1] - qy)
+                    if d < bd:
+                        bj, bd = j, d
+                    elif d != d:
+                        bj, bd = j, d
+                        break
+            best[h, kk] = bj
+            near[h, kk] = bd
+    return best, near
 
 
 def _one_each(best, near, inside, n: int) -> list[int | None]:
