@@ -725,6 +725,12 @@ def _faint_blob(c, hats, sub, noise, width_px, max_area, params) -> dict | None:
     r = max(2, int(math.ceil(math.sqrt(cv2.contourArea(c) / math.pi + 1.0))))
     wx0, wy0 = max(0, bx - r - 2), max(0, by - r - 2)
     wx1, wy1 = min(cols, bx + bw + r + 2), min(rows, by + bh + r + 2)
+    if _value_range(hat[wy0:wy1, wx0:wx1]) < params.glint_min_snr * noise:
+        # The peak (on the blob, in the window) over the base (a median of the window's
+        # values, or its least) is at most the window's range: under the bar, the blob is no
+        # glint, told without its mask and skirt (a noisy picture's top-hat holds 10^4 specks:
+        # 8 LEDs' glints merged into a ring were looked for over the whole picture, 0.3-0.8 s).
+        return None
     own = np.zeros((wy1 - wy0, wx1 - wx0), np.uint8)
     cv2.drawContours(own, [c], 0, 255, thickness=-1, offset=(-wx0, -wy0))
     area = cv2.countNonZero(own)
@@ -755,6 +761,18 @@ def _faint_blob(c, hats, sub, noise, width_px, max_area, params) -> dict | None:
         "base": top - (peak - base),
         "noise": noise,
     }
+
+
+@njit(cache=True, nogil=True)
+def _value_range(win):
+    """The largest less the least value of ``win`` (2-D float, not empty); NaN when it holds
+    a NaN."""
+    lo = hi = win[0, 0]
+    for v in win.ravel():
+        if v != v:
+            return np.nan
+        lo, hi = min(lo, v), max(hi, v)
+    return hi - lo
 
 
 def in_bright_run(img: np.ndarray, blob: dict, level: float, noise: float = 0.0) -> bool:
