@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from eyelume.analysis.tracking.detect import _rows_above
-from eyelume.analysis.tracking.glints import _value_range
+from eyelume.analysis.tracking.glints import _rows_over, _value_range
 
 
 def _random_pictures(dtype, count=300, seed=29):
@@ -38,6 +38,19 @@ def test_rows_above_as_the_mask_its_row_sums_and_find_non_zero(dtype):
             assert found.dtype == expected.dtype and np.array_equal(found, expected)
         else:
             assert found.shape == (0, 2)
+
+
+def test_rows_over_as_the_mask_and_its_sums():
+    """glints._bright_mask's rows above the floor and the first and last column of those
+    pixels: the comparison mask's row and column sums' non-zero entries."""
+    for img, t in _random_pictures(np.uint8):
+        above = cv2.compare(img, float(t), cv2.CMP_GT)
+        rows = np.flatnonzero(cv2.reduce(above, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel())
+        cols = np.flatnonzero(cv2.reduce(above, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel())
+        hit, first, last = _rows_over(img, t)
+        assert np.array_equal(hit, rows)
+        if len(rows):
+            assert (first, last) == (cols[0], cols[-1])
 
 
 def test_value_range_is_the_largest_less_the_least():

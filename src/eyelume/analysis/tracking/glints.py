@@ -1046,23 +1046,17 @@ def _bright_mask(u8: np.ndarray, floor8: int, params):
     if k is None:
         k = int(round(min(rows, cols) / 160.0))
         k = k if k % 2 else k + 1
-    lv = params.glint_level
-    # u8 ≥ local and u8 > floor8, i.e. u8 ≥ max(local, floor8 + 1): one comparison, with
-    # local = addWeighted(box mean, 1 − level, ·, 0, 255 level) and the max taken by a look-up
-    # table over the box mean's 256 values, made by the same two OpenCV calls (the same bytes
-    # as on the whole picture, without two full-picture passes).
-    levels = np.arange(256, dtype=np.uint8).reshape(1, 256)
-    lut = cv2.max(cv2.addWeighted(levels, 1.0 - lv, levels, 0.0, 255.0 * lv), float(floor8 + 1))
+    lut = _local_floor(params.glint_level, floor8)
     above = np.zeros_like(u8)
-    over = cv2.compare(u8, float(floor8), cv2.CMP_GT)
-    # The rows and the columns holding any pixel above the floor (their sums, 32-bit): their
-    # box, as cv2.boundingRect finds it, at half its cost; the rows, where the pixels are.
-    hit = np.flatnonzero(cv2.reduce(over, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel())
+    # The rows holding any pixel above the floor and the first and last column of those
+    # pixels: their box, as cv2.boundingRect finds it; the rows, where the pixels are (one
+    # compiled pass, each row's maximum, instead of a comparison mask and its row and column
+    # sums: ~1/5 of their time).
+    hit, first_col, last_col = _rows_over(u8, floor8)
     if not len(hit):
         return above, (above if k <= 1 else np.zeros_like(u8)), (0, 0, 0, 0)
-    hit_cols = np.flatnonzero(cv2.reduce(over, 0, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel())
-    bx, by = int(hit_cols[0]), int(hit[0])
-    bw, bh = int(hit_cols[-1]) + 1 - bx, int(hit[-1]) + 1 - by
+    bx, by = first_col, int(hit[0])
+    bw, bh = last_col + 1 - bx, int(hit[-1]) + 1 - by
     r = w // 2
     wx0, wy0 = max(0, bx - r), max(0, by - r)
     wx1, wy1 = min(cols, bx + bw + r), min(rows, by + bh + r)
@@ -1097,6 +1091,49 @@ def _bright_mask(u8: np.ndarray, floor8: int, params):
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
     bright[y0:y1, x0:x1] = cv2.morphologyEx(above[y0:y1, x0:x1], cv2.MORPH_CLOSE, disc)
     return above, bright, box
+
+
+@functools.lru_cache(maxsize=64)
+def _local_floor(level: float, floor8: int) -> np.ndarray:
+    """:func:`_bright_mask`'s least glint value for each box mean m = 0 … 255 ((1, 256) uint8,
+    read-only), made once per (level, floor): u8 ≥ local and u8 > floor8, i.e. u8 ≥
+    max(local, floor8 + 1) — one comparison, with local = addWeighted(box mean, 1 − level, ·,
+    0, 255 level) and the max taken by this look-up table over the box mean's 256 values, made
+    by the same two OpenCV calls (the same bytes as on the whole picture, without two
+    full-picture passes)."""
+    levels = np.arange(256, dtype=np.uint8).reshape(1, 256)
+    lut = cv2.max(cv2.addWeighted(levels, 1.0 - level, levels, 0.0, 255.0 * level), floor8 + 1.0)
+    lut.flags.writeable = False
+    return lut
+
+
+@njit(cache=True, nogil=True)
+def _rows_over(u8, floor8):
+    """The rows of ``u8`` (2-D uint8) holding any value above ``floor8`` (ascending int64, as
+    ``np.flatnonzero`` of the rows' counts) and the least and the greatest column of those
+    values (``cols`` and −1 when there are none)."""
+    rows, cols = u8.shape
+    hit = np.empty(rows, np.int64)
+    n = 0
+    first, last = cols, -1
+    for r in range(rows):
+        row = u8[r]
+        top = np.uint8(0)
+        for c in range(cols):  # (a select, not max(): the loop is vectorised)
+            v = row[c]
+            top = v if v > top else top
+        if top > floor8:
+            hit[n] = r
+            n += 1
+            c = 0
+            while row[c] <= floor8:
+                c += 1
+            first = min(first, c)
+            c = cols - 1
+            while row[c] <= floor8:
+                c -= 1
+            last = max(last, c)
+    return hit[:n], first, last
 
 
 @njit(cache=True, nogil=True)
