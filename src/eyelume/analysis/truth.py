@@ -306,6 +306,28 @@ def _view(cs: CompiledScene, cam: CameraTables) -> _View:
     )
 
 
+#: :func:`_scan_start`'s grid over the picture (columns, rows)
+_SCAN = (41, 31)
+
+
+def _scan_start(v: _View, point: np.ndarray) -> np.ndarray | None:
+    """The sensor point (mm) of a :data:`_SCAN` grid over the picture whose chief ray, refracted
+    by the cornea, passes nearest ``point`` (measured across the eye's axis), or None when no
+    ray of the grid passes the cornea: a start for :meth:`_View.image_of` where the paraxial
+    guess's ray misses the cornea."""
+    cs = v.cs
+    half_w, half_h = cs.picture.width_mm / 2, cs.picture.height_mm / 2
+    best, start = math.inf, None
+    for xs in np.linspace(-half_w, half_w, _SCAN[0]):
+        for ys in np.linspace(-half_h, half_h, _SCAN[1]):
+            ray = _chief_ray(cs, v.cam, xs, ys)
+            ray = None if ray is None else _through_cornea(cs, v.cornea, *ray)
+            miss = _miss(ray, point, v.axis, v.e1, v.e2)
+            if miss is not None and miss @ miss < best:
+                best, start = float(miss @ miss), np.array([xs, ys])
+    return start
+
+
 def _pupil_truth(v: _View, pupil_c: np.ndarray) -> dict:
     """The apparent pupil: its centre's and 72 edge points' pixels, the share visible.
 
@@ -313,7 +335,10 @@ def _pupil_truth(v: _View, pupil_c: np.ndarray) -> dict:
     chief ray misses the cornea — an eye turned far from an off-axis camera (vr-offaxis at
     (−30°, 20°): 45 of the 72 edge points and the centre, whose chief rays all pass the
     cornea); those start again from a neighbour's image, going round the outline both ways,
-    and the centre from the mean of the edge's images."""
+    and the centre from the mean of the edge's images. Where no start converged at all
+    (glasses-frame at (−30°, 0°)), the centre starts from the ray of a coarse scan of the
+    picture that passes nearest it (:func:`_scan_start`), and the edge from the centre's
+    image (from that ray where the centre itself lies past the cornea's rim)."""
     cs, eye = v.cs, v.cs.scene.eye
     r = eye.pupil_diameter_mm / 2
     points = [
@@ -321,12 +346,20 @@ def _pupil_truth(v: _View, pupil_c: np.ndarray) -> dict:
         for a in 2 * np.pi * np.arange(_EDGE_POINTS) / _EDGE_POINTS
     ]
     found = [v.image_of(point) for point in points]
+    sc = v.image_of(pupil_c)
+    if sc is None and not any(s is not None for s in found):
+        # not one start converged (glasses-frame at (−30°, 0°): the whole pupil seen through
+        # the cornea, its chief rays a few of a coarse scan's): from the scan's ray nearest
+        # the centre, and the edge from the centre's image
+        start = _scan_start(v, pupil_c)
+        sc = None if start is None else v.image_of(pupil_c, start)
+        if start is not None:  # (the centre itself may lie past the rim: from the scan's ray)
+            found = [v.image_of(point, start if sc is None else sc) for point in points]
     for order in (range(_EDGE_POINTS), range(_EDGE_POINTS - 1, -1, -1)):
         for k in order:
             prev = found[(k - order.step) % _EDGE_POINTS]
             if found[k] is None and prev is not None:
                 found[k] = v.image_of(points[k], prev)
-    sc = v.image_of(pupil_c)
     images = [s for s in found if s is not None]
     if sc is None and images:
         sc = v.image_of(pupil_c, np.mean(images, axis=0))
