@@ -49,7 +49,7 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    ladder is walked again past their chains (it stops once the darkest chain has settled, and
    a lash over the sclera may be that chain) and a whole fit with glints beside it is taken
    (:func:`_fit_chosen`); a whole fit with none within 3 of its radii (a black spot on the skin
-   or in the iris, darker than the pupil, 4–6 of its radii from the glints) gives way to
+   or in the iris, darker than the pupil, 3.7–6.4 of its radii from the glints) gives way to
    another chosen candidate whose whole fit has the glints about it.
 4. **Full-resolution blob** (:func:`full_res_blob`): the picture (σ 1 px Gaussian) thresholded
    at the chosen level around the blob; glints touching it joined; a closing with an
