@@ -306,6 +306,18 @@ def _view(cs: CompiledScene, cam: CameraTables) -> _View:
     )
 
 
+def _from_neighbours(found: list, solve) -> None:
+    """Fill the unsolved entries (None) of ``found`` — the sensor points (mm) of points round a
+    closed outline, in order — by ``solve(k, guess)`` (a sensor point or None) from the
+    neighbour's solution, going round the outline forward and then backward, in place."""
+    n = len(found)
+    for order in (range(n), range(n - 1, -1, -1)):
+        for k in order:
+            prev = found[(k - order.step) % n]
+            if found[k] is None and prev is not None:
+                found[k] = solve(k, prev)
+
+
 #: :func:`_scan_start`'s grid over the picture (columns, rows)
 _SCAN = (41, 31)
 
@@ -355,11 +367,7 @@ def _pupil_truth(v: _View, pupil_c: np.ndarray) -> dict:
         sc = None if start is None else v.image_of(pupil_c, start)
         if start is not None:  # (the centre itself may lie past the rim: from the scan's ray)
             found = [v.image_of(point, start if sc is None else sc) for point in points]
-    for order in (range(_EDGE_POINTS), range(_EDGE_POINTS - 1, -1, -1)):
-        for k in order:
-            prev = found[(k - order.step) % _EDGE_POINTS]
-            if found[k] is None and prev is not None:
-                found[k] = v.image_of(points[k], prev)
+    _from_neighbours(found, lambda k, guess: v.image_of(points[k], guess))
     images = [s for s in found if s is not None]
     if sc is None and images:
         sc = v.image_of(pupil_c, np.mean(images, axis=0))
@@ -460,13 +468,7 @@ def _iris_truth(v: _View) -> dict:
     found = [_direct_image(v, p, toward) for p in points]
     # Newton may not converge from the straight guesses through a folded view: start those
     # from a neighbour's solution, going round the circle both ways
-    for order in (range(_EDGE_POINTS), range(_EDGE_POINTS - 1, -1, -1)):
-        for k in order:
-            prev = (
-                found[(k - 1) % _EDGE_POINTS] if order.step > 0 else found[(k + 1) % _EDGE_POINTS]
-            )
-            if found[k] is None and prev is not None:
-                found[k] = _direct_image(v, points[k], toward, prev)
+    _from_neighbours(found, lambda k, guess: _direct_image(v, points[k], toward, guess))
     limbus, seen = [], 0
     for s, point in zip(found, points, strict=True):
         if s is not None:

@@ -3188,18 +3188,15 @@ def _fit_chosen(img, wp: WorkPicture, got, bright, params, reasons: list[str]):
         return fit
     passed = frozenset(c.first for c in picks)
     if fit is None:
-        chains, f2, _ = ladder(wp, params, reduced, passed=passed)
-        more = choose(chains, f2, ([], tuple), wp, params)
-        more = [c for c in more or [] if c.first not in passed]
+        more, f2 = _walked_past(wp, params, reduced, passed)
         return _fit_candidates(img, wp, more, f2, bright, params, []) if more else None
 
     def others():
         yield from ((c, f) for c in picks if c.first != fit.first)
         if away:  # (the other picks only: the second walk costs ~1 ms on a small pupil whose
             return  # glints lie further out, the commoner case, and found nothing there)
-        chains, f2, _ = ladder(wp, params, reduced, passed=passed)
-        more = choose(chains, f2, ([], tuple), wp, params)
-        yield from ((c, f2) for c in more or [] if c.first not in passed)
+        more, f2 = _walked_past(wp, params, reduced, passed)
+        yield from ((c, f2) for c in more)
 
     tried = 0
     for cand, fc in others():
@@ -3218,6 +3215,14 @@ def _fit_chosen(img, wp: WorkPicture, got, bright, params, reasons: list[str]):
         ):
             return alt
     return fit
+
+
+def _walked_past(wp: WorkPicture, params, reduced, passed: frozenset) -> tuple[list, int]:
+    """:func:`_fit_chosen`'s second walk: the ladder again past the chains ``passed`` (their
+    first seeds) and the new candidates it chooses, with its reduction f."""
+    chains, f2, _ = ladder(wp, params, reduced, passed=passed)
+    more = choose(chains, f2, ([], tuple), wp, params)
+    return [c for c in more or [] if c.first not in passed], f2
 
 
 def _box_glints_about(c: Candidate, f: int, bright: np.ndarray) -> bool:
