@@ -32,9 +32,10 @@ CENTRE = (321.3, 237.6)
 LEDS = (0.0, 90.0, 180.0, 270.0)
 
 
-def eye(spot=None, seed=3) -> np.ndarray:
+def eye(spot=None, seed=3, axes=(56.0, 50.0), glint_r=25.0) -> np.ndarray:
     """The picture (uint16, see the module doc); ``spot`` = (x, y, radius px, level DN) of a
-    dark disc drawn over the skin or iris, or None."""
+    dark disc drawn over the skin or iris, or None; ``axes`` the pupil's semi-axes (px),
+    ``glint_r`` the glints' distance from its centre (px)."""
     s, shift = 4, 8
     rows, cols = SHAPE
     canvas = np.full((rows * s, cols * s), 500.0, np.float32)
@@ -47,7 +48,9 @@ def eye(spot=None, seed=3) -> np.ndarray:
 
     centre = (fine(CENTRE[0]), fine(CENTRE[1]))
     cv2.circle(canvas, centre, size(125.0), 170.0, -1, cv2.LINE_8, shift)
-    cv2.ellipse(canvas, centre, (size(56.0), size(50.0)), 20.0, 0, 360, 30.0, -1, cv2.LINE_8, shift)
+    cv2.ellipse(
+        canvas, centre, (size(axes[0]), size(axes[1])), 20.0, 0, 360, 30.0, -1, cv2.LINE_8, shift
+    )
     if spot is not None:
         x, y, r, level = spot
         cv2.circle(canvas, (fine(x), fine(y)), size(r), level, -1, cv2.LINE_8, shift)
@@ -55,8 +58,8 @@ def eye(spot=None, seed=3) -> np.ndarray:
     img = cv2.GaussianBlur(img, (0, 0), 1.5)
     yy, xx = np.mgrid[:rows, :cols]
     for a in LEDS:
-        gx = CENTRE[0] + 25.0 * math.cos(math.radians(a))
-        gy = CENTRE[1] - 25.0 * math.sin(math.radians(a))
+        gx = CENTRE[0] + glint_r * math.cos(math.radians(a))
+        gy = CENTRE[1] - glint_r * math.sin(math.radians(a))
         img += 3.0 * 1023.0 * np.exp(-((xx - gx) ** 2 + (yy - gy) ** 2) / (2 * 2.0**2))
     img += np.random.default_rng(seed).normal(0.0, 8.0, img.shape)
     return np.clip(np.rint(img), 0, 1023).astype(np.uint16)
@@ -95,3 +98,31 @@ def test_without_a_spot_the_pupil_is_found(seed):
     d = detect(eye(None, seed), led_azimuths_deg=LEDS)
     assert d.ok, d.failures
     assert math.dist(d.pupil.centre_px, CENTRE) < 0.5
+
+
+#: (pupil radius px, glints' distance in pupil radii, spot radius px, spot level DN): session
+#: 29's new user's cases — a small pupil whose glints ring it 3.5–4 radii out (past
+#: ``_AWAY_REACH``) and a spot in the iris just past the right-hand glint, lighter than the
+#: pupil (60–100 DN against 30) or smaller and black. Before ``pupil._nearer_the_glints`` the
+#: pupil gave way to the spot (one glint beside it): ``ok``, 58–103 px off.
+SPOT_BY_A_GLINT = [
+    (20.0, 3.5, 25.0, 100.0),
+    (20.0, 4.0, 25.0, 60.0),
+    (15.0, 4.0, 25.0, 60.0),
+    (10.0, 3.5, 25.0, 100.0),
+    (20.0, 3.5, 15.0, 60.0),
+    (15.0, 4.0, 8.0, 0.0),
+]
+
+
+@pytest.mark.parametrize("case", SPOT_BY_A_GLINT)
+def test_spot_beside_one_glint_of_a_wide_ring_is_not_the_pupil(case):
+    """The pupil has no glint within ``_AWAY_REACH`` of its semi-axes, but the glints ring it
+    (their middle is its centre); the spot has one glint at its edge and the rest on one
+    side: the pupil is kept. Tolerance 0.5 px as above (found within 0.15 px)."""
+    pr, k, sr, level = case
+    glint_r = k * pr
+    spot = (CENTRE[0] + glint_r + 0.8 * sr + 3.0, CENTRE[1], sr, level)
+    d = detect(eye(spot, axes=(pr, 0.9 * pr), glint_r=glint_r), led_azimuths_deg=LEDS)
+    assert math.dist(d.pupil.centre_px, CENTRE) < 0.5, (case, d.pupil.centre_px)
+    assert d.ok, d.failures

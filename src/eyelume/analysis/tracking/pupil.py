@@ -3211,10 +3211,34 @@ def _fit_chosen(img, wp: WorkPicture, got, bright, params, reasons: list[str]):
             and _whole(alt, params)
             and not _off_the_glints(alt.ellipse, bright)
             and (not away or _glints_about(alt.ellipse, bright))
+            and (not away or _nearer_the_glints(alt.ellipse, fit.ellipse, bright))
             and not _inner_core(img, wp, alt.ellipse, bright, params)
         ):
             return alt
     return fit
+
+
+def _nearer_the_glints(e: Ellipse, other: Ellipse, bright: np.ndarray) -> bool:
+    """Whether ellipse ``e``'s centre lies nearer than ``other``'s to the glints' middle: the
+    per-axis median of the centroids of ``bright``'s blobs (uint8 0/255, 8-connected) within
+    :data:`_GLINT_REACH` × either's larger semi-axis (square windows). The LEDs' reflections
+    ring the cornea, whose centre the pupil lies near (≲ 2 of its radii at 30° of gaze); a
+    dark spot beside one glint of a ring that lies wider about the pupil (glints 3.5 pupil
+    radii out, a spot 25 px across just past one: session 29's new user) has them all on one
+    side. Pixels: the picture's, x right, y down."""
+    rows, cols = bright.shape
+    mask = np.zeros_like(bright)
+    for el in (e, other):
+        r = _GLINT_REACH * max(el.a, el.b)
+        x0, x1 = max(0, int(el.cx - r)), min(cols, int(el.cx + r) + 1)
+        y0, y1 = max(0, int(el.cy - r)), min(rows, int(el.cy + r) + 1)
+        if x1 > x0 and y1 > y0:
+            mask[y0:y1, x0:x1] = bright[y0:y1, x0:x1]
+    n, _, _, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    if n <= 1:
+        return False
+    mx, my = np.median(centroids[1:], axis=0)
+    return math.hypot(e.cx - mx, e.cy - my) < math.hypot(other.cx - mx, other.cy - my)
 
 
 def _walked_past(wp: WorkPicture, params, reduced, passed: frozenset) -> tuple[list, int]:
