@@ -17,6 +17,10 @@ people; ``openeds``: 3 frames of a VR headset's eye camera) it prints:
   convention, as eyelume's);
 - **median / p95**: the centre error (px) of those found;
 - **wrong**: answers more than 5 px off (the iris, a border, a lash taken as the pupil);
+- **axes**: the median and 90th percentile of the full axes' error (px; major and minor
+  pooled, each against the mask ellipse's ``ell_major_px`` / ``ell_minor_px``) of the answers
+  within 5 px — the pupil's size a pupillometry user reads (the masks are drawn ellipses, good
+  to about a pixel);
 - **ms**: median time per picture;
 - the refusal causes (the failure messages with their numbers blanked, counted).
 
@@ -100,7 +104,8 @@ def _pupil_labs():
 
 
 def run(data: Path) -> dict[str, dict[str, list]]:
-    """Per source: lists of (error or None, ms, cause) per picture for each detector."""
+    """Per source: lists of (error or None, ms, cause, axes' errors or None) per picture for
+    each detector (the axes' errors: |major − ell_major_px|, |minor − ell_minor_px|, px)."""
     rows = list(csv.DictReader((data / "labels.csv").open()))
     pl = _pupil_labs()
     out: dict[str, dict[str, list]] = {}
@@ -111,18 +116,20 @@ def run(data: Path) -> dict[str, dict[str, list]]:
         if img.ndim == 3:
             img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
         truth = np.array([float(r["pupil_x"]), float(r["pupil_y"])])
+        axes = (float(r["ell_major_px"]), float(r["ell_minor_px"]))
         src = out.setdefault(r["source"], {"eyelume": [], "pupil-labs": [], "centre guess": []})
         t0 = time.perf_counter()
         d = detect(img)
         ms = 1e3 * (time.perf_counter() - t0)
         if d.ok and d.pupil is not None:
             err = float(np.hypot(*(np.array(d.pupil.centre_px) - truth)))
-            src["eyelume"].append((err, ms, None))
+            src["eyelume"].append((err, ms, None, _axes_error(d.pupil.axes_px, axes)))
         else:
             errs = [f for f in d.failures if not f.startswith("warning")]
-            src["eyelume"].append((None, ms, _cause(errs[0]) if errs else "no answer"))
+            src["eyelume"].append((None, ms, _cause(errs[0]) if errs else "no answer", None))
         h, w = img.shape[:2]
-        src["centre guess"].append((float(np.hypot(*(np.array([w / 2, h / 2]) - truth))), 0, None))
+        guess = float(np.hypot(*(np.array([w / 2, h / 2]) - truth)))
+        src["centre guess"].append((guess, 0, None, None))
         if pl is not None:
             u8 = img if img.dtype == np.uint8 else cv2.normalize(img, None, 0, 255, 32, cv2.CV_8U)
             t0 = time.perf_counter()
@@ -130,10 +137,17 @@ def run(data: Path) -> dict[str, dict[str, list]]:
             ms = 1e3 * (time.perf_counter() - t0)
             if res["confidence"] >= PL_MIN_CONFIDENCE:
                 err = float(np.hypot(*(np.array(res["ellipse"]["center"]) - truth)))
-                src["pupil-labs"].append((err, ms, None))
+                src["pupil-labs"].append((err, ms, None, _axes_error(res["ellipse"]["axes"], axes)))
             else:
-                src["pupil-labs"].append((None, ms, f"confidence < {PL_MIN_CONFIDENCE}"))
+                src["pupil-labs"].append((None, ms, f"confidence < {PL_MIN_CONFIDENCE}", None))
     return out
+
+
+def _axes_error(found, truth) -> tuple[float, float]:
+    """|major − major'|, |minor − minor'| (px) of a found ellipse's full axes (any order)
+    against the annotation's."""
+    big, small = max(found), min(found)
+    return abs(big - truth[0]), abs(small - truth[1])
 
 
 def summary_rows(results: dict[str, dict[str, list]]) -> list[dict]:
@@ -145,7 +159,8 @@ def summary_rows(results: dict[str, dict[str, list]]) -> list[dict]:
             if not rec:
                 continue
             n = len(rec)
-            errs = [e for e, _, _ in rec if e is not None]
+            errs = [r_[0] for r_ in rec if r_[0] is not None]
+            ax = [a for r_ in rec if r_[0] is not None and r_[0] <= 5.0 and r_[3] for a in r_[3]]
             rows.append(
                 {
                     "source": src,
@@ -156,8 +171,12 @@ def summary_rows(results: dict[str, dict[str, list]]) -> list[dict]:
                     "median_px": statistics.median(errs) if errs else None,
                     "p95_px": float(np.percentile(errs, 95)) if errs else None,
                     "wrong": sum(e > 5.0 for e in errs),
-                    "ms": statistics.median(t for _, t, _ in rec),
-                    "refusals": dict(Counter(c for _, _, c in rec if c is not None).most_common()),
+                    "axes_median_px": statistics.median(ax) if ax else None,
+                    "axes_p90_px": float(np.percentile(ax, 90)) if ax else None,
+                    "ms": statistics.median(r_[1] for r_ in rec),
+                    "refusals": dict(
+                        Counter(r_[2] for r_ in rec if r_[2] is not None).most_common()
+                    ),
                 }
             )
     return rows
@@ -191,14 +210,15 @@ def _fmt(v, spec: str) -> str:
 
 def table(rows: list[dict]) -> str:
     head = f"{'source':8} {'detector':21} {'n':>4} {'found':>6} {'≤5 px':>6} {'median':>7} "
-    head += f"{'p95':>7} {'wrong':>6} {'ms':>6}"
+    head += f"{'p95':>7} {'wrong':>6} {'axes':>11} {'ms':>6}"
     lines = [head, "-" * len(head)]
     causes = []
     for r in sorted(rows, key=lambda r: r["source"]):
         lines.append(
             f"{r['source']:8} {r['detector']:21} {r['n']:4d} {r['found_pct']:5.1f}% "
             f"{r['within5_pct']:5.1f}% {_fmt(r['median_px'], '7.2f')} {_fmt(r['p95_px'], '7.2f')} "
-            f"{r['wrong']:6d} {r['ms']:6.1f}"
+            f"{r['wrong']:6d} {_fmt(r.get('axes_median_px'), '5.2f')}/"
+            f"{_fmt(r.get('axes_p90_px'), '5.2f')} {r['ms']:6.1f}"
         )
         if r["detector"] == "eyelume":
             causes.append(f"{r['source']}: eyelume refusals ({sum(r['refusals'].values())}):")
