@@ -124,6 +124,21 @@ a whole-table nearest-hit search (bit-identical pictures): 17.65 against 17.61 �
 sample, no gain (the Newton solves are the cost: 6.4 of 10.6 µs at 4000 iris points, 3–4 Newton
 steps for most LEDs).
 
+Session 30 (95216e0, the AMD EPYC host, load 0.2–1): ``--frames 3 --set run.indirect=cache``
+4.2 CPU-s a frame (4.6, 4.6, 3.5 at 3, 2, 2 samples per pixel; ≈ 1 579 s for 50 people, ≈ 5×
+the target). Where a camera sample goes on the preset's own eye (``render`` at 8 samples per
+pixel with the cache, one thread, the camera pass 8.0–8.2 CPU-s; measured by removing one part
+at a time in a scratch copy of ``estimators/fast.py`` and ``cornea_nee.py``, not a script
+here): aiming the samples through the lens 0.25 CPU-s; the first vertex's NEE to the 8 LEDs
+(``direct_irradiance_within``) ~2.0 CPU-s (25 %); the iris's light through the cornea
+(``irradiance_through_cornea``, a fifth of the pixels) ~2.7 CPU-s (34 %), ~1.9 of it
+``_path_is_clear``'s three whole-table searches per LED (against session 22's "Newton solves
+are the cost", measured on 4000 iris points outside a render); the rest (the hit searches,
+the cornea's reflected branch, the iris's continuation rays, the cache's reads) ~3.3 CPU-s.
+Drawing one LED per skin vertex by its unshadowed irradiance (``sampled_irradiance``) instead
+of all 8 saved nothing a sample and asked 51–77 samples per pixel instead of 2–3 to reach the
+sensor's noise (the LEDs' shadows): dropped.
+
 Measured, not tried (session 22): one cache per person and vertical gaze, read by the frames
 that differ only in the horizontal one (10 of a person's 15 caches saved, ~0.29 of 0.44
 CPU-s a frame). Person 0, the same cache seed at (−10°, −5°), (0°, −5°), (10°, −5°): of
