@@ -2472,6 +2472,10 @@ _EDGE_GLINT_SKIRT_PX = 4.0
 _EDGE_GLINT_DIPOLE = 0.2
 #: the width of the ring outside its region where that excess is read, px
 _EDGE_GLINT_RING_PX = 3.0
+#: :func:`_edge_backed_centre`: the least equivalent radius (px) of an unclipped glint centred
+#: over the edge's profile, and how often its region is centred again on its centroid
+_EDGE_GLINT_MIN_R = 1.5
+_EDGE_GLINT_RECENTRE = 5
 #: :func:`_edge_backed_glints`' largest iris step about a glint, × the clip's height over the
 #: pupil's level
 _EDGE_GLINT_STEP_SHARE = 0.3
@@ -2486,9 +2490,9 @@ def _on_edge(g: Glint, d: float, params) -> bool:
 def _edge_backed_glints(
     img: np.ndarray, clip: float, glints: list[Glint], fit, params
 ) -> tuple[list[Glint], set[int]]:
-    """The clipped glints whose centroid's region reaches the pupil's fitted outline centred
-    again over the edge's own profile as their background, the others as they are; and the
-    indices of those centred again.
+    """The glints (clipped, or unclipped and not of a pixel or two) whose centroid's region
+    reaches the pupil's fitted outline centred again over the edge's own profile as their
+    background, the others as they are; and the indices of those centred again.
 
     A glint's centroid weighs its pixels by their light above one background level, the
     median of its surround (:func:`~.glints._blob`). On the pupil's edge the background under
@@ -2520,16 +2524,20 @@ def _edge_backed_glints(
     truth, 0.21 with 3 px, 0.34 with 2; on paper2005's 640 × 480 renders, whose glints are
     20 px defocused discs, the saturated ones ≤ 0.37 px where they were ≤ 0.91 — ``_blob``'s
     skirt of r px took in 10 px of iris texture there and moved them to 0.75. As it stands:
-    ≤ 0.12 px and ≤ 0.28 px.) Only for a clipped glint: ≥ 3 pixels within r of
-    its centroid at the picture's largest valid value (``clip``: :func:`_prepare`'s range's
-    top; its missing pixels hold the darkest valid value), a saturated top, where the spot's
-    shape is not read and the skirt carries its position.
-    Not for a glint of a pixel or two, which a 4 px skirt would drown in the background's
-    residuals (eyetrackvr's one-pixel glints beside a 9 px pupil moved 2.5 px), nor for an
-    unclipped one, whose fit (a defocused glint's Gaussian over a plane) or centroid is left
-    as found (a Monte Carlo render's scatter of samples is not helped by it: paper2005 at 640
-    × 480, 8 samples per pixel, moved ≤ 0.1 px). The glint's flux and base are left as
-    found."""
+    ≤ 0.12 px and ≤ 0.28 px.) A clipped glint (≥ 3 pixels within r of its centroid at the
+    picture's largest valid value, ``clip``: :func:`_prepare`'s range's top; its missing
+    pixels hold the darkest valid value): a saturated top, where the spot's shape is not read
+    and the skirt carries its position. Since session 30 also an unclipped one of an
+    equivalent radius r ≥ :data:`_EDGE_GLINT_MIN_R` (1.5 px), its region centred again on the
+    centroid until it stays (:func:`_recentred`): its fit (a Gaussian over a plane) or
+    centroid over one level had moved it toward the iris on a sharp edge, 0.6–2.1 px for
+    glints of peak 300 DN and σ 1.5–2.5 px on the tests' oval pupil at a blur of 1 px, now
+    ≤ 0.22 (tests/analysis/test_detect_glint_edge_unsaturated.py); on paper2005's 640 × 480
+    renders (8 and 64 samples per pixel, the counts and the irradiance pictures) the six
+    glints it moved went from 0.44–1.79 to 0.17–0.29 px off the truth. Not for a glint of a
+    pixel or two, which a 4 px skirt would drown in the background's residuals
+    (eyetrackvr's one-pixel glints beside a 9 px pupil moved 2.5 px). The glint's flux and
+    base are left as found."""
     prof = getattr(fit, "edge_profile", None)
     if prof is None or not glints:
         return glints, set()
@@ -2569,8 +2577,9 @@ def _edge_backed_centre(img, clip: float, g: Glint, others, e, prof) -> tuple | 
     for ox, oy in others:
         mine &= d2 < (xx - ox) ** 2 + (yy - oy) ** 2
     region = mine & (d2 <= reach * reach)
-    if np.count_nonzero(region & (d2 <= r * r) & (win >= clip)) < 3:
-        return None  # not clipped (or a glint of a pixel or two: nothing of it to weigh)
+    clipped = np.count_nonzero(region & (d2 <= r * r) & (win >= clip)) >= 3
+    if not clipped and r < _EDGE_GLINT_MIN_R:
+        return None  # a glint of a pixel or two: nothing of it to weigh
     # The background: the profile's step from the pupil's level m₀ scaled to the iris about
     # this glint, B = m₀ + k (m(d) − m₀), k fitted (least squares) on a ring just outside the
     # region (the light on the iris falls off across the eye: ±30–44 DN on an iris at 160 of
@@ -2603,11 +2612,31 @@ def _edge_backed_centre(img, clip: float, g: Glint, others, e, prof) -> tuple | 
     dipole = math.hypot(float((res * ux / nn).mean()), float((res * uy / nn).mean()))
     if dipole > _EDGE_GLINT_DIPOLE * step:
         return None
-    w = np.where(region, np.maximum(win - bg, 0.0), 0.0)
+    excess = np.maximum(win - bg, 0.0)
+    w = np.where(region, excess, 0.0)
     tot = float(w.sum())
     if not tot > 0:
         return None
-    return float((w * xx).sum() / tot), float((w * yy).sum() / tot)
+    px, py = float((w * xx).sum() / tot), float((w * yy).sum() / tot)
+    return (px, py) if clipped else _recentred(excess, mine, xx, yy, px, py, reach)
+
+
+def _recentred(excess, mine, xx, yy, px: float, py: float, reach: float) -> tuple | None:
+    """An unclipped spot's centroid (px) of ``excess`` (its light over the background) over
+    the pixels ``mine`` within ``reach`` of it: the region centred again on the centroid found,
+    until it moves < 0.01 px or :data:`_EDGE_GLINT_RECENTRE` times (its first place was found
+    over a plane); None if the region holds no light."""
+    for _ in range(_EDGE_GLINT_RECENTRE):
+        w = np.where(mine & ((xx - px) ** 2 + (yy - py) ** 2 <= reach * reach), excess, 0.0)
+        tot = float(w.sum())
+        if not tot > 0:
+            return None
+        qx, qy = float((w * xx).sum() / tot), float((w * yy).sum() / tot)
+        moved = math.hypot(qx - px, qy - py)
+        px, py = qx, qy
+        if moved < 0.01:
+            break
+    return px, py
 
 
 def _glint_warnings(glints, fit, led_azimuths_deg, params, centred=frozenset()) -> list[str]:
