@@ -126,3 +126,32 @@ def test_spot_beside_one_glint_of_a_wide_ring_is_not_the_pupil(case):
     d = detect(eye(spot, axes=(pr, 0.9 * pr), glint_r=glint_r), led_azimuths_deg=LEDS)
     assert math.dist(d.pupil.centre_px, CENTRE) < 0.5, (case, d.pupil.centre_px)
     assert d.ok, d.failures
+
+
+#: (spot radius px, spot level DN, where): session 30's new user's small pupil (20 × 18 px at
+#: 30 DN, its glints ringing it 35 px out, 3.5 radii) beside a spot lighter than it but larger,
+#: just past the right-hand glint or on the ring between two glints. The ladder, reducing the
+#: picture 6×, mixes the small pupil with the iris: it looked lighter than the spot, whose
+#: whole fit was answered (`ok`, 35–58 px off). ``pupil._small_beside`` looks again at full
+#: resolution when the glints' middle lies off the fit.
+SPOT_BESIDE_A_SMALL_PUPIL = [
+    (15.0, 60.0, "past"),
+    (25.0, 60.0, "past"),
+    (25.0, 100.0, "past"),
+    (15.0, 60.0, "ring"),
+]
+
+
+@pytest.mark.parametrize("case", SPOT_BESIDE_A_SMALL_PUPIL)
+def test_lighter_spot_beside_a_small_pupil_is_not_the_pupil(case):
+    """Tolerance 0.5 px as above (found within 0.05 px)."""
+    sr, level, where = case
+    ring = 35.0
+    if where == "past":
+        spot = (CENTRE[0] + ring + 0.8 * sr + 3.0, CENTRE[1], sr, level)
+    else:
+        a = math.radians(45.0)
+        spot = (CENTRE[0] + ring * math.cos(a), CENTRE[1] - ring * math.sin(a), sr, level)
+    d = detect(eye(spot, axes=(10.0, 9.0), glint_r=ring), led_azimuths_deg=LEDS)
+    assert math.dist(d.pupil.centre_px, CENTRE) < 0.5, (case, d.pupil.centre_px)
+    assert d.ok, d.failures

@@ -3172,6 +3172,79 @@ def _small_pupil(img: np.ndarray, invalid, bright: np.ndarray, f: int, params) -
     return fit
 
 
+#: :func:`_small_beside`'s gate, in the fit's larger semi-axes: how far the glints' middle may
+#: lie from a whole fit's centre before a small pupil nearer it is looked for (a guess: a
+#: pupil's glints ring the cornea about it; the spots of session 30's new user lay 1.7–3.3)
+_GLINTS_MIDDLE_REACH = 1.5
+
+
+def _small_beside(img, invalid, bright, f: int, fit: PupilFit, params) -> PupilFit | None:
+    """A small pupil (:func:`_small_pupil`) answered instead of a whole fit ``fit``, or None.
+
+    The reduced ladder (f > 1) mixes a pupil a few reduced px across with the iris about it:
+    a 20 px pupil at 30 DN in an iris at 170, reduced 6×, looks lighter than a 30 px spot at
+    60 DN beside it, whose whole fit, with glints about it, was answered (session 30's new
+    user: 25–58 px off, `ok`). Looked for only where the glints' middle (the per-axis median
+    of their blobs' centroids) lies beyond :data:`_GLINTS_MIDDLE_REACH` × the fit's larger
+    semi-axis from its centre; taken only when it is whole, nearer that middle
+    (:func:`_nearer_the_glints`) and darker inside (:func:`_inside_median`, input units) than
+    the fit."""
+    if f <= 1 or not cv2.countNonZero(bright):
+        return None
+    e = fit.ellipse
+    mx, my = _glints_middle(bright, e)
+    if mx is None or math.hypot(e.cx - mx, e.cy - my) <= _GLINTS_MIDDLE_REACH * max(e.a, e.b):
+        return None
+    small = _small_pupil(img, invalid, bright, f, params)
+    if (
+        small is None
+        or not _whole(small, params)
+        or not _nearer_the_glints(small.ellipse, e, bright)
+        or not _inside_median(img, small.ellipse, invalid) < _inside_median(img, e, invalid)
+    ):
+        return None
+    return small
+
+
+def _glints_middle(bright: np.ndarray, e: Ellipse) -> tuple:
+    """The per-axis median (px) of the centroids of ``bright``'s blobs (uint8 0/255,
+    8-connected) within :data:`_GLINT_REACH` × ``e``'s larger semi-axis of its centre (a square
+    window), or (None, None) without one."""
+    rows, cols = bright.shape
+    r = _GLINT_REACH * max(e.a, e.b)
+    x0, x1 = max(0, int(e.cx - r)), min(cols, int(e.cx + r) + 1)
+    y0, y1 = max(0, int(e.cy - r)), min(rows, int(e.cy + r) + 1)
+    if x1 <= x0 or y1 <= y0:
+        return None, None
+    n, _, _, centroids = cv2.connectedComponentsWithStats(
+        np.ascontiguousarray(bright[y0:y1, x0:x1]), connectivity=8
+    )
+    if n <= 1:
+        return None, None
+    mx, my = np.median(centroids[1:], axis=0)
+    return float(mx) + x0, float(my) + y0
+
+
+def _inside_median(img: np.ndarray, e: Ellipse, invalid) -> float:
+    """The median of the picture (input units) over the valid pixels inside ``e`` shrunk to
+    0.7 of its axes (off its blurred edge); +inf where none is."""
+    mask = np.zeros(img.shape, np.uint8)
+    cv2.ellipse(
+        mask,
+        (int(round(e.cx)), int(round(e.cy))),
+        (max(1, int(0.7 * e.a)), max(1, int(0.7 * e.b))),
+        math.degrees(e.theta),
+        0,
+        360,
+        255,
+        -1,
+    )
+    inside = mask > 0
+    if invalid is not None:
+        inside &= ~invalid
+    return float(np.median(img[inside])) if inside.any() else math.inf
+
+
 def _whole(fit: PupilFit, params) -> bool:
     """Whether a fit's outline is backed enough to be trusted (``detect``'s support check)."""
     return fit.support >= params.min_boundary_support and fit.gap <= params.max_boundary_gap
@@ -3465,7 +3538,7 @@ def _find_pupil(img: np.ndarray, invalid, bright: np.ndarray, params, sharp, wp)
     # picture: not tried there.)
     long_arc = whole and fit.gap > 1.0 - params.ladder_fine_support and fit.stable_from <= 1
     if whole and not core and not long_arc:
-        return fit
+        return _small_beside(img, invalid, bright, f, fit, params) or fit
     # Nothing whole (or a long arc as above): the ladder's dark end again, finer; its fit
     # replaces the first only when whole by the stricter measure. The first pass misses a
     # pupil near the black level whose step to the iris it crosses in one or two levels (an
