@@ -447,7 +447,7 @@ def _warm_up_forward(cs) -> float | None:
     check_sensor_spectra(cs.scene)  # a bad QE table: one line before the long compilation
     kernel = getattr(forward, "_trace_batch", None)
     if kernel is not None and kernels_cached((kernel,)) is False:
-        err.print("compiling kernels (first run only; about a minute)…")
+        err.print("compiling kernels (first run only; one to two minutes)…")
     return _interruptible_compile(warm_up_forward, cs)
 
 
@@ -475,7 +475,7 @@ def _warm_up(cs) -> float:
 
     check_sensor_spectra(cs.scene)  # a bad QE table: one line before the long compilation
     if kernels_cached() is False:
-        err.print("compiling kernels (first run only; about a minute)…")
+        err.print("compiling kernels (first run only; one to two minutes)…")
     return _interruptible_compile(warm_up, cs)
 
 
