@@ -22,47 +22,25 @@ from __future__ import annotations
 
 import math
 
-import cv2
 import numpy as np
 import pytest
 
 from eyelume.analysis.tracking import detect
-
-SHAPE = (480, 640)
-CENTRE = (321.3, 237.6)
-LEDS = (0.0, 90.0, 180.0, 270.0)
+from tests.analysis.test_detect_pupil_dark_spot import CENTRE, LEDS, eye
 
 
 def eye_band(height: float, level: float, seed: int = 3) -> np.ndarray:
-    """The picture (uint16) with the band (module doc) ``height`` px tall at ``level`` DN."""
-    s, shift = 4, 8
-    rows, cols = SHAPE
-    canvas = np.full((rows * s, cols * s), 500.0, np.float32)
+    """The picture (uint16) with the band (module doc) ``height`` px tall at ``level`` DN:
+    :func:`test_detect_pupil_dark_spot.eye` with the band drawn on its finer canvas."""
 
-    def fine(v: float) -> int:
-        return int(round((s * v + (s - 1) / 2) * 2**shift))
+    def band(canvas: np.ndarray, s: int) -> None:
+        y0 = CENTRE[1] - 52.0 - height / 2
+        canvas[
+            int(s * y0) : int(s * (y0 + height)),
+            int(s * (CENTRE[0] - 100)) : int(s * (CENTRE[0] + 100)),
+        ] = level
 
-    def size(v: float) -> int:
-        return int(round(s * v * 2**shift))
-
-    centre = (fine(CENTRE[0]), fine(CENTRE[1]))
-    cv2.circle(canvas, centre, size(125.0), 170.0, -1, cv2.LINE_8, shift)
-    axes = (size(56.0), size(50.0))
-    cv2.ellipse(canvas, centre, axes, 20.0, 0, 360, 30.0, -1, cv2.LINE_8, shift)
-    y0 = CENTRE[1] - 52.0 - height / 2
-    canvas[
-        int(s * y0) : int(s * (y0 + height)),
-        int(s * (CENTRE[0] - 100)) : int(s * (CENTRE[0] + 100)),
-    ] = level
-    img = cv2.resize(canvas, (cols, rows), interpolation=cv2.INTER_AREA).astype(np.float64)
-    img = cv2.GaussianBlur(img, (0, 0), 1.5)
-    yy, xx = np.mgrid[:rows, :cols]
-    for a in LEDS:
-        gx = CENTRE[0] + 25.0 * math.cos(math.radians(a))
-        gy = CENTRE[1] - 25.0 * math.sin(math.radians(a))
-        img += 3.0 * 1023.0 * np.exp(-((xx - gx) ** 2 + (yy - gy) ** 2) / (2 * 2.0**2))
-    img += np.random.default_rng(seed).normal(0.0, 8.0, img.shape)
-    return np.clip(np.rint(img), 0, 1023).astype(np.uint16)
+    return eye(None, seed, mark=band)
 
 
 @pytest.mark.parametrize("height", [10.0, 12.0, 14.0])

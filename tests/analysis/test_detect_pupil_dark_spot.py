@@ -32,10 +32,11 @@ CENTRE = (321.3, 237.6)
 LEDS = (0.0, 90.0, 180.0, 270.0)
 
 
-def eye(spot=None, seed=3, axes=(56.0, 50.0), glint_r=25.0) -> np.ndarray:
+def eye(spot=None, seed=3, axes=(56.0, 50.0), glint_r=25.0, mark=None) -> np.ndarray:
     """The picture (uint16, see the module doc); ``spot`` = (x, y, radius px, level DN) of a
     dark disc drawn over the skin or iris, or None; ``axes`` the pupil's semi-axes (px),
-    ``glint_r`` the glints' distance from its centre (px)."""
+    ``glint_r`` the glints' distance from its centre (px); ``mark``: None or a function
+    (canvas, s) that draws more on the s× finer canvas (float32, DN) after the spot."""
     s, shift = 4, 8
     rows, cols = SHAPE
     canvas = np.full((rows * s, cols * s), 500.0, np.float32)
@@ -54,6 +55,8 @@ def eye(spot=None, seed=3, axes=(56.0, 50.0), glint_r=25.0) -> np.ndarray:
     if spot is not None:
         x, y, r, level = spot
         cv2.circle(canvas, (fine(x), fine(y)), size(r), level, -1, cv2.LINE_8, shift)
+    if mark is not None:
+        mark(canvas, s)
     img = cv2.resize(canvas, (cols, rows), interpolation=cv2.INTER_AREA).astype(np.float64)
     img = cv2.GaussianBlur(img, (0, 0), 1.5)
     yy, xx = np.mgrid[:rows, :cols]
