@@ -3222,14 +3222,20 @@ def _darker_about(img, invalid, bright, middle: tuple, e: Ellipse, level: float)
     y0, y1 = max(0, int(my - r)), min(rows, int(my + r) + 1)
     if x1 <= x0 or y1 <= y0:
         return False
-    yy, xx = np.mgrid[y0:y1, x0:x1]
+    # (a row and a column of coordinates broadcast: the same numbers as over a grid of them)
+    xx = np.arange(x0, x1, dtype=np.float64)[None, :]
+    yy = np.arange(y0, y1, dtype=np.float64)[:, None]
     keep = ((xx - mx) ** 2 + (yy - my) ** 2 <= r * r) & (bright[y0:y1, x0:x1] == 0)
-    s_, q_ = e.local(xx.astype(np.float64), yy.astype(np.float64))
+    s_, q_ = e.local(xx, yy)
     keep &= (s_ / (e.a + 2.0)) ** 2 + (q_ / (e.b + 2.0)) ** 2 > 1.0
     if invalid is not None:
         keep &= ~invalid[y0:y1, x0:x1]
     vals = img[y0:y1, x0:x1][keep]
-    return vals.size > 0 and float(np.percentile(vals, 5)) < level
+    if vals.size == 0:
+        return False
+    # np.percentile(vals, 5)'s value, without its overhead (~0.1 ms)
+    p5 = float_percentiles(vals, 5.0) if vals.dtype.kind == "f" else percentile(vals, 5.0)
+    return float(p5) < level
 
 
 def _glints_middle(bright: np.ndarray, *ellipses: Ellipse) -> tuple:
