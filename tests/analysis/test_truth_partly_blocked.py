@@ -154,3 +154,54 @@ def test_the_rendered_spot_keeps_the_truths_share(truth, ratios):
 def test_the_half_hidden_glint_is_rendered_precisely(ratios):
     # aimed draws: the seeds' ratios within a few per cent of each other (unaimed, 0.2-1.4)
     assert float(ratios[:, 0].std(ddof=1)) < 0.1, ratios[:, 0]
+
+
+def test_a_rim_glint_behind_a_vignetting_stop_is_flagged():
+    """The same person fixating (0°, −5°): LED 0's glint lies at the cornea's rim, where the
+    rays through ~40 % of the stop reflect past the limbus. The rim model's solves at the
+    stop's edge t = (−a, 0) fail there (that ray is vignetted by this off-axis camera), so the
+    glint was never flagged ``at_rim``; solved half-way out, it is, with the share of the stop
+    whose rays reflect off the cap within 0.05 of a direct count: each point of a 12 × 12 grid
+    over the stop solved on its own (Newton, the cap extended past the limbus) and its mirror
+    point's distance from the axis compared with the limbus (a count of 112: ±0.05 is > 2
+    binomial σ, and the model is second order between its five samples)."""
+    import eyelume.analysis.truth as T
+    from eyelume.kernels import geometry as G
+
+    base = apply_overrides(load_scene("vr-offaxis"), PERSON0)
+    gh, gv = optical_gaze_for(base, 0.0, -5.0)
+    cs = compile_scene(
+        apply_overrides(base, {"eye.gaze_horizontal_deg": gh, "eye.gaze_vertical_deg": gv})
+    )
+    g = eye_truth(cs)["glints"][WHOLE]
+    assert g["at_rim"] and g["rim"] is not None
+    share = g["rim"]["aperture_share"]
+    assert 0.2 < share < 0.9
+
+    v = T._view(cs, cs.camera)
+    cam, cornea, led = v.cam, v.cornea, cs.led.points[WHOLE]
+    to_led = led - v.turned(np.array([0.0, 0.0, -cs.scene.eye.surfaces[0].radius_mm]))
+    n = to_led / np.linalg.norm(to_led)
+    e1, e2 = T._basis(n)
+    r_cap = math.sqrt(cs.sf[cornea, G.RMAX2])
+    a = cam.stop_radius
+    start = None
+    on = []
+    for tx, ty in zip(*T._stop_grid(12, 1.0), strict=True):
+
+        def residual(s, t=(a * tx, a * ty)):
+            ray = T._stop_ray(cs, cam, s[0], s[1], *t)
+            ray = None if ray is None else T._off_cornea(cs, cornea, *ray, sf=v.open_sf)
+            return T._miss(ray, led, n, e1, e2)
+
+        if start is None:
+            chief = T._stop_solves(v, led, (n, e1, e2), 0.5 * a, np.zeros(2))
+            start = chief[0][0]
+        s = T._solve(residual, start)
+        if s is None:
+            continue
+        ray = T._stop_ray(cs, cam, *s, a * tx, a * ty)
+        hit = T._off_cornea(cs, cornea, *ray, sf=v.open_sf)
+        on.append(math.hypot(*G.to_local(v.open_sf, cornea, *hit[0])[:2]) <= r_cap)
+    assert len(on) > 100
+    assert abs(float(np.mean(on)) - share) < 0.05, (np.mean(on), share)
