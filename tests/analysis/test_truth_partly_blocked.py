@@ -100,6 +100,14 @@ def test_the_lash_hides_half_the_glint_not_all(truth):
     assert all(e["visible"] and e["partly_blocked"] is None for e in others)
 
 
+def test_the_dataset_label_places_the_glint_at_its_clear_part(scene, truth):
+    from eyelume.analysis.labels import _glints
+
+    got = _glints(compile_scene(scene), truth, None)[HALF]
+    assert got["visible"] and not got["hidden"]
+    assert got["position_px"] == truth["glints"][HALF]["partly_blocked"]["centre_px"]
+
+
 def test_the_compile_aims_at_the_half_hidden_glint(scene):
     aim = compile_scene(scene).camera.glint_aim
     assert aim[HALF, G_P] > 0.0
