@@ -213,3 +213,14 @@ def test_a_rim_glint_behind_a_vignetting_stop_is_flagged():
         on.append(math.hypot(*G.to_local(v.open_sf, cornea, *hit[0])[:2]) <= r_cap)
     assert len(on) > 100
     assert abs(float(np.mean(on)) - share) < 0.05, (np.mean(on), share)
+
+
+def test_a_glint_the_lash_hides_over_the_whole_stop_stays_blocked():
+    """The same person fixating (−15°, 0°): the lash crosses every ray of LED 2's pencil; the
+    glint is not visible and carries no ``partly_blocked`` (a share of 0 is no partial spot)."""
+    base = apply_overrides(load_scene("vr-offaxis"), PERSON0)
+    gh, gv = optical_gaze_for(base, -15.0, 0.0)
+    sc = apply_overrides(base, {"eye.gaze_horizontal_deg": gh, "eye.gaze_vertical_deg": gv})
+    g = eye_truth(compile_scene(sc))["glints"][HALF]
+    assert g["on_cornea"] and not g["visible"]
+    assert g["reason"].startswith("blocked") and g["partly_blocked"] is None

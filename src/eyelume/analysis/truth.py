@@ -570,7 +570,7 @@ def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
     if entry["reason"].startswith("the LED sends no light"):
         return entry
     clear = _aperture_clear(v, k, row, led, (n, g1, g2), s)
-    if clear is not None:
+    if clear is not None and clear["aperture_share"] > 0.0:
         entry["partly_blocked"] = clear
         if not entry["visible"] and clear["aperture_share"] > 0.0:
             # a lash across the chief ray, most of the stop's rays past it: the spot is in the
@@ -710,7 +710,9 @@ def _aperture_clear(v: _View, k: int, row: int, led: np.ndarray, frame, guess) -
     none is clear), ``full_centre_px`` (the whole spot's) and ``bias_px`` (their distance).
     A ray whose reflection falls past the cap (a glint at the cornea's rim) is not clear and
     not blocked: with no ray blocked by something, None (the rim's cut alone is
-    :func:`_rim_glint`'s)."""
+    :func:`_rim_glint`'s); with both, the share and centroid are of the spot both leave. The
+    caller records it as ``partly_blocked`` only when some ray is clear (a glint hidden over
+    the whole stop is just not visible)."""
     cs, cam = v.cs, v.cam
     h = 0.5 * cam.stop_radius
     if h <= 0.0:
