@@ -572,14 +572,15 @@ def _glint_truth(v: _View, k: int, led: np.ndarray, row: int) -> dict:
     clear = _aperture_clear(v, k, row, led, (n, g1, g2), s)
     if clear is not None and clear["aperture_share"] > 0.0:
         entry["partly_blocked"] = clear
-        if not entry["visible"] and clear["aperture_share"] > 0.0:
-            # a lash across the chief ray, most of the stop's rays past it: the spot is in the
+        if not entry["visible"]:
+            # a lash across the chief ray, some of the stop's rays past it: the spot is in the
             # picture, dimmed, its centroid on the clear part
             entry["visible"] = True
             entry["reason"] = (
-                f"partly blocked (an eyelid or its lashes): the chief ray is hidden, but rays "
-                f"through {100 * clear['aperture_share']:.0f} % of the camera's aperture are "
-                f"clear: a dimmed spot at {_fmt_px(clear['centre_px'])} px (see partly_blocked)"
+                f"partly blocked (an eyelid or its lashes, the face or an opaque element): the "
+                f"chief ray is hidden, but rays through {100 * clear['aperture_share']:.0f} % "
+                f"of the camera's aperture are clear: a dimmed spot at "
+                f"{_fmt_px(clear['centre_px'])} px (see partly_blocked)"
             )
     return entry
 
