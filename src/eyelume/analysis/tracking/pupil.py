@@ -814,7 +814,7 @@ def _dark_extension(x, y, e: Ellipse, sigma: float, diam: float, params):
             out = dh[win]
             if (
                 rr <= 0.5 * rms
-                and float(np.median(out)) > max(3.0 * rr, 2.0)
+                and median(out) > max(3.0 * rr, 2.0)
                 and (out > 0).mean() >= 0.8
                 and (best is None or rr < best[0])
             ):
@@ -3289,7 +3289,7 @@ def _inside_median(img: np.ndarray, e: Ellipse, invalid) -> float:
     inside = mask > 0
     if invalid is not None:
         inside &= ~invalid[y0:y1, x0:x1]
-    return float(np.median(img[y0:y1, x0:x1][inside])) if inside.any() else math.inf
+    return median(img[y0:y1, x0:x1][inside]) if inside.any() else math.inf
 
 
 def _whole(fit: PupilFit, params) -> bool:
