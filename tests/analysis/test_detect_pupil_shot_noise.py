@@ -47,3 +47,31 @@ def test_pupil_in_a_dark_iris_of_a_population_render_is_not_the_iris():
     got, want = sorted(d.pupil.axes_px), sorted(2 * np.asarray(truth["semi_axes_px"]))
     assert abs(got[0] - want[0]) < 1.0 and abs(got[1] - want[1]) < 1.0, (d.pupil, want)
     assert d.ok, d.failures
+
+
+#: The same design run's person 1 at 940 nm (dark iris, 2.3 mm pupil), rendered again at
+#: commit 4d274f9 (session 31's keep folder, the same command): its first calibration frame
+#: (−15°, −10°), kept with the same keys as :data:`FIXTURE`.
+SMALL = Path(__file__).parents[1] / "reference" / "population_dark_iris_small_pupil_940nm.npz"
+
+
+def test_small_pupil_7_dn_under_a_dark_iris_is_found_not_the_iris():
+    """Pupil 16 DN, iris 20–26 DN over a 14 DN black level, a 2.3 mm pupil (46 × 28 px) in a
+    203 × 107 px dark iris fitted whole by the ladder. The iris's interior has its 5th
+    percentile in the pupil, 7 DN under its median; the pupil's noise (Immerkær over its
+    pixels, quantised) is 0.74 DN, so the core is 9.4 σ deep. The darker-core test had raised
+    the noise of any integer picture to ≥ 1 DN (its percentiles move in whole steps), which
+    asked 8 DN: the iris was answered ``ok``, its centre 3.3 px off (session 31's design run).
+    The floor is ½ DN now. Fails before: the pupil's axes come out 203 × 107 px."""
+    f = np.load(SMALL)
+    truth = fit_ellipse(f["pupil_edge_px"])
+    d = detect(
+        f["counts"],
+        led_azimuths_deg=list(f["led_azimuths_deg"]),
+        led_pattern_px=f["led_pattern_px"],
+    )
+    assert d.pupil is not None, d.failures
+    assert math.dist(d.pupil.centre_px, truth["center_px"]) < 1.0, (d.pupil, d.failures)
+    got, want = sorted(d.pupil.axes_px), sorted(2 * np.asarray(truth["semi_axes_px"]))
+    assert abs(got[0] - want[0]) < 1.0 and abs(got[1] - want[1]) < 1.0, (d.pupil, want)
+    assert d.ok, d.failures

@@ -2445,7 +2445,7 @@ def darker_core(
     noise σ (Immerkær's estimate over it, as :func:`noise_sigma`, or over its pixels darker than
     (m + p) / 2 when they are fewer σ — shot noise grows with the signal, and a core is judged
     against its own noise; the step between a core and the rest is a thin edge, which that
-    median ignores; ≥ 1 for an integer picture, whose percentiles move in whole steps). A real
+    median ignores; ≥ ½ step for an integer picture, whose percentiles move in whole steps). A real
     pupil is uniform to its noise: its 5th percentile is a couple of σ under its median. When
     this finds no core, the interior averaged over 5 × 5 px is looked at again
     (:func:`_smoothed_core`: a pupil only a few σ of the pixel noise darker than its iris).
@@ -2479,9 +2479,12 @@ def darker_core(
         # the brighter iris's (a population render's pupil 16 DN at σ 0.5 in an iris 27 DN at
         # σ 1.7 with its texture: 11 DN is 6 σ of the iris, 22 σ of the pupil's own).
         noise = min(noise, 1.4826 * median(lap[dark]) / 6.0)
-    # An integer picture's median and percentiles move in whole steps: ≥ 1 step (an 8-bit
-    # close-up's pupil, median 2 DN over black, 5th percentile at it, is uniform).
-    noise = max(noise, 0.5 * (wp.hi - wp.lo) / 255.0, 1.0 if img.dtype.kind in "iu" else 0.0)
+    # An integer picture's median and percentiles move in whole steps: ≥ ½ step, so a core is
+    # ≥ 4 steps deep (an 8-bit close-up's pupil, median 2 DN over black, 5th percentile at it,
+    # is uniform). Not 1 step: a 2.3 mm pupil 16 DN in a dark iris 20–26 DN (its own noise 0.74
+    # DN, the core 7 DN under the median: 9 σ) was then answered with the iris as the pupil
+    # (the 850/940 nm design run at 1 ms; tests/analysis/test_detect_pupil_shot_noise.py).
+    noise = max(noise, 0.5 * (wp.hi - wp.lo) / 255.0, 0.5 if img.dtype.kind in "iu" else 0.0)
     if m - p >= params.core_min_sigma * noise:
         return (
             f"pupil merged with iris: the fitted blob at ({e.cx:.0f}, {e.cy:.0f}) px "
