@@ -17,7 +17,9 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
 2. **Threshold ladder** (:func:`ladder`): the picture reduced to ~80 rows and thresholded at
    levels (P60 − P0.5) / 32 apart from its darkest pixel to its 60th percentile; at each
    level the compact dark blobs off the picture's border and the invalid area are kept (box
-   fill ≥ 0.5, aspect ≤ 3, centroid inside), nested blobs of successive levels form a chain,
+   fill ≥ 0.5, aspect ≤ 3, centroid inside), nested blobs of successive levels form a chain
+   (a level starts its new chains nearest the glints' middle first, else darkest first:
+   where a blob joins several chains, the first started goes on; :func:`_ordered_level`),
    and each blob's stability is MSER's q = (A₊ − A₋) / A over the neighbouring levels (Matas
    et al. 2002). The ladder stops once the darkest chain has settled. When the fits of step
    4–7 give no whole pupil, or a pupil at the black level (stable from the second level) whose
