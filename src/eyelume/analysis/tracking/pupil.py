@@ -1186,6 +1186,10 @@ class Candidate:
     #: the seed of its chain's first blob (set by :func:`choose`): the chain's name for
     #: :func:`ladder`'s ``passed``
     first: tuple[int, int] = (-1, -1)
+    #: its chain's blob before the chain's largest jump in area up to it (≥ :data:`_JUMP` ×),
+    #: or None (set by :func:`choose`): tried when this blob is not compact
+    #: (:func:`_fit_candidates`)
+    before: Candidate | None = None
 
 
 def _level_candidates(lab, stats, cent, min_area, max_area, touch):
@@ -1550,6 +1554,7 @@ def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, 
         if i is not None:
             ch[i].stable_from = next(c.index for c in ch if c.q <= params.ladder_max_growth)
             ch[i].first = ch[0].seed
+            ch[i].before = _before_jump(ch, i)
             picks.append(ch[i])
         else:
             unstable.append(ch[0].level)
@@ -1587,6 +1592,25 @@ def choose(chains: list[list[Candidate]], f: int, tiny: tuple, wp: WorkPicture, 
             "levels)"
         )
     return Refusal("no pupil: no compact dark blob off the picture's border stands out")
+
+
+#: :func:`_before_jump`'s least growth in area from one blob of a chain to the next
+_JUMP = 2.0
+
+
+def _before_jump(ch: list[Candidate], i: int) -> Candidate | None:
+    """The blob of chain ``ch`` before its largest jump in area (≥ :data:`_JUMP` ×) among its
+    blobs up to the picked one ``ch[i]``, or None: where the pupil joins a darker region
+    beside it (a dark iris in a shadow) a level or two up, its chain's stable blob is the two
+    together, not compact, and the pupil alone is the blob before the jump (MSER's q of it
+    is the jump's, > 1: it is never stable; the design run at 850 nm, person 4 (0°, −5°):
+    pupil 16 DN, the shadowed iris 23–27 DN, 3 levels apart in the 8-bit working picture)."""
+    best, at = _JUMP, None
+    for j in range(i):
+        grow = ch[j + 1].area / ch[j].area
+        if grow >= best:
+            best, at = grow, ch[j]
+    return at
 
 
 def _bright_pupil_hint(wp: WorkPicture, f: int, params, img=None) -> str:
@@ -2443,6 +2467,10 @@ def _fit_candidates(img, wp, picks, f: int, bright, params, reasons: list[str]):
     to ``reasons``."""
     for cand in picks[: params.max_candidates]:
         blob = full_res_blob(wp, cand, f, bright, params, img)
+        if not blob and cand.before is not None:
+            # (not compact: perhaps the pupil joined to a region beside it, :func:`_before_jump`)
+            alone = full_res_blob(wp, cand.before, f, bright, params, img)
+            blob = alone if alone else blob
         if not blob:
             reasons.append(blob.reason)
             continue
