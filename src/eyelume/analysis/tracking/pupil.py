@@ -32,9 +32,12 @@ that returns its result or a falsy :class:`Refusal` naming the cause (as scikit-
    picture (:func:`_small_pupil`).
 3. **Choice** (:func:`choose`): chains darkest first; a chain's blob is its first level with
    q ≤ 1 walked on to the local minimum of q — the pupil's area holds while the threshold
-   crosses its edge band, then jumps when it merges with the iris. Refusals: "no pupil (merged
-   with the iris?)" (compact dark blobs, none stable), "pupil too small: N px", "no dark pupil:
-   bright-pupil image?" (no dark blob but a compact bright one of a pupil's size), and "no
+   crosses its edge band, then jumps when it merges with the iris. When that blob is not
+   compact at full resolution, the chain's blob before its largest jump in area is tried
+   (:func:`_before_jump`: the pupil joined to a shadowed iris before it was stable).
+   Refusals: "no pupil (merged with the iris?)" (compact dark blobs, none stable), "pupil too
+   small: N px", "no dark pupil: bright-pupil image?" (no dark blob but a compact bright one
+   of a pupil's size), and "no
    pupil off the picture's border" when a darker pupil-sized region touches the border or the
    missing pixels (a pupil cut by the frame; the blob inside is then not called the pupil;
    when that blob was refused for its own cause, only if darker than it by a pupil's
