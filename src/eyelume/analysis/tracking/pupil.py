@@ -2554,8 +2554,9 @@ def darker_core(
     noise σ (Immerkær's estimate over it, as :func:`noise_sigma`, or over its pixels darker than
     (m + p) / 2 when they are fewer σ — shot noise grows with the signal, and a core is judged
     against its own noise; the step between a core and the rest is a thin edge, which that
-    median ignores; ≥ ½ step for an integer picture, whose percentiles move in whole steps). A real
-    pupil is uniform to its noise: its 5th percentile is a couple of σ under its median. When
+    median ignores; ≥ 1 step for an integer picture with under ½ step of noise, whose
+    percentiles then move by the step, not the noise). A real pupil is uniform to its noise:
+    its 5th percentile is a couple of σ under its median. When
     this finds no core, the interior averaged over 5 × 5 px is looked at again
     (:func:`_smoothed_core`: a pupil only a few σ of the pixel noise darker than its iris).
     ``parts``: the fit's :class:`_Interior`, when the caller has one (made here otherwise)."""
@@ -2588,12 +2589,18 @@ def darker_core(
         # the brighter iris's (a population render's pupil 16 DN at σ 0.5 in an iris 27 DN at
         # σ 1.7 with its texture: 11 DN is 6 σ of the iris, 22 σ of the pupil's own).
         noise = min(noise, 1.4826 * median(lap[dark]) / 6.0)
-    # An integer picture's median and percentiles move in whole steps: ≥ ½ step, so a core is
-    # ≥ 4 steps deep (an 8-bit close-up's pupil, median 2 DN over black, 5th percentile at it,
-    # is uniform). Not 1 step: a 2.3 mm pupil 16 DN in a dark iris 20–26 DN (its own noise 0.74
-    # DN, the core 7 DN under the median: 9 σ) was then answered with the iris as the pupil
-    # (the 850/940 nm design run at 1 ms; tests/analysis/test_detect_pupil_shot_noise.py).
-    noise = max(noise, 0.5 * (wp.hi - wp.lo) / 255.0, 0.5 if img.dtype.kind in "iu" else 0.0)
+    # An integer picture's median and percentiles move in whole steps: where its noise is under
+    # half a step they, not the noise, set how far apart a uniform pupil's median and 5th
+    # percentile can be, and the noise counts as ≥ 1 step (an 8-bit close-up's pupil, median 2
+    # DN over black, 5th percentile at it, is uniform; a uniform pupil at 0.3–0.5 DN of noise
+    # with 14–20 DN of shading across it, or with glints' flare halos inside it, read as a
+    # core 4–8 DN deep: session 32's new user). With ≥ ½ step of noise the percentiles resolve
+    # it: a 2.3 mm pupil 16 DN in a dark iris 20–26 DN (its own noise 0.74 DN, the core 7 DN
+    # under the median: 9 σ) was answered with the iris as the pupil at a 1-step floor (the
+    # 850/940 nm design run at 1 ms; tests/analysis/test_detect_pupil_shot_noise.py).
+    if img.dtype.kind in "iu" and noise < 0.5:
+        noise = 1.0
+    noise = max(noise, 0.5 * (wp.hi - wp.lo) / 255.0)
     if m - p >= params.core_min_sigma * noise:
         return (
             f"pupil merged with iris: the fitted blob at ({e.cx:.0f}, {e.cy:.0f}) px "
