@@ -592,3 +592,16 @@ def test_a_shaded_uniform_pupil_has_no_averaged_core(seed):
     assert darker_core(img, wp, pupil, bright, params) == ""
     d = detect(img)
     assert_pupil(d, tol=0.5)
+
+
+def test_a_uniform_picture_but_for_hot_pixels_says_they_were_mended():
+    """A black picture with one saturated pixel is uniform once the hot pixel is mended (its
+    neighbours' median): the refusal says so, not that every pixel of the input is 0."""
+    img = np.zeros((100, 100), np.uint8)
+    assert detect(img).failures == ["no pupil: the picture is uniform (every pixel 0)"]
+    img[50, 50] = 255
+    d = detect(img)
+    assert not d.ok
+    assert d.failures == [
+        "no pupil: the picture is uniform (every pixel 0 once its 1 hot pixel(s) are mended)"
+    ]

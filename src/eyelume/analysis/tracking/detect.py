@@ -2717,8 +2717,13 @@ def detect(
     img, invalid, lo, hi, (n_hot, noise, n_black, n_filled), scale = prepared
     if hi <= lo:
         timings["total"] = 1e3 * (time.perf_counter() - t_start)
+        mended = f" once its {n_hot} hot pixel(s) are mended" if n_hot else ""
         return Detection(
-            False, [f"no pupil: the picture is uniform (every pixel {lo:.6g})"], None, [], timings
+            False,
+            [f"no pupil: the picture is uniform (every pixel {lo:.6g}{mended})"],
+            None,
+            [],
+            timings,
         )
     t1 = time.perf_counter()
     timings["normalise"] = 1e3 * (t1 - t_start)
