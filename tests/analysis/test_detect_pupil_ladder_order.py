@@ -58,7 +58,7 @@ def _wp(pic, glints):
     bright = np.zeros(pic.shape, np.uint8)
     for x, y in glints:
         bright[y, x] = 255
-    return WorkPicture(pic, None, 0.0, 255.0, bright=bright)
+    return WorkPicture(pic, None, 0.0, 255.0, bright=bright, bright_box=cv2.boundingRect(bright))
 
 
 def test_a_levels_blobs_are_ordered_by_the_glints_middle_else_darkest_first():

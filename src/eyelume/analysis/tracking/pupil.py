@@ -845,6 +845,14 @@ class Refusal:
 _RING_GLINTS = 3
 
 
+def _median_list(v: list[float]) -> float:
+    """The median of a short list of floats (the mean of the middle two for an even count, as
+    ``np.median``)."""
+    v = sorted(v)
+    n = len(v)
+    return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
+
+
 @dataclass(frozen=True)
 class WorkPicture:
     """The 8-bit picture the ladder runs on and what maps it back to the input's units.
@@ -864,8 +872,10 @@ class WorkPicture:
     hi: float
     glint_radius: float = 0.0
     holes: np.ndarray | None = None
-    #: the glint mask (uint8 0/255, the picture's shape) or None: for :attr:`glints_middle`
+    #: the glint mask (uint8 0/255, the picture's shape) or None, and its set pixels' bounding
+    #: box (x, y, w, h; w 0 when none): for :attr:`glints_middle`
     bright: np.ndarray | None = None
+    bright_box: tuple[int, int, int, int] = (0, 0, 0, 0)
 
     @cached_property
     def glints_middle(self) -> tuple[float, float] | None:
@@ -874,18 +884,16 @@ class WorkPicture:
         :data:`_RING_GLINTS` (one or two glints lie on the cornea's edge, not about its
         centre). The LEDs' reflections ring the cornea, whose centre the pupil lies near
         (:func:`_ordered_level`)."""
-        if self.bright is None:
-            return None
-        bx, by, bw, bh = cv2.boundingRect(self.bright)
-        if bw == 0:
+        bx, by, bw, bh = self.bright_box
+        if self.bright is None or bw == 0:
             return None
         n, _, _, cents = cv2.connectedComponentsWithStats(
             np.ascontiguousarray(self.bright[by : by + bh, bx : bx + bw]), connectivity=8
         )
         if n - 1 < _RING_GLINTS:
             return None
-        mx, my = np.median(cents[1:], axis=0)
-        return float(mx) + bx, float(my) + by
+        # (np.median's value, without its overhead on a handful of points)
+        return _median_list(cents[1:, 0].tolist()) + bx, _median_list(cents[1:, 1].tolist()) + by
 
     @cached_property
     def noise(self) -> float:
@@ -1094,7 +1102,7 @@ def work_picture(
     if invalid is not None:
         u8[invalid] = 255
         holes = _fill_holes_dark(u8, invalid, params)
-    return WorkPicture(u8, invalid, float(lo), float(hi), glint_r, holes, bright)
+    return WorkPicture(u8, invalid, float(lo), float(hi), glint_r, holes, bright, (bx, by, bw, bh))
 
 
 def _fill_holes_dark(u8: np.ndarray, invalid: np.ndarray, params) -> np.ndarray | None:
