@@ -1,8 +1,9 @@
 """A pupil joined to a shadowed iris beside it before its ladder chain is stable (issue 13;
 README's Open list since session 27: "a sun shadow's edge on a dark iris fitted, 65 px off").
 
-Where the pupil joins a darker region beside it a level or two up the ladder, its chain's
-stable blob is the two together, refused as not compact, and the pupil alone — the chain's
+Where the pupil joins a dark region beside it (a little lighter) a level or two up the
+ladder, its chain's stable blob is the two together, refused as not compact, and the pupil
+alone — the chain's
 blob before that jump in area — was never tried: MSER's q of it is the jump's, over 1. When a
 chosen blob is not compact, the blob before its chain's largest jump (≥ 2 ×) is now tried
 (:func:`eyelume.analysis.tracking.pupil._before_jump`).

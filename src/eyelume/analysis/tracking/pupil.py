@@ -1611,10 +1611,11 @@ _JUMP = 2.0
 
 def _before_jump(ch: list[Candidate], i: int) -> Candidate | None:
     """The blob of chain ``ch`` before its largest jump in area (≥ :data:`_JUMP` ×) among its
-    blobs up to the picked one ``ch[i]``, or None: where the pupil joins a darker region
-    beside it (a dark iris in a shadow) a level or two up, its chain's stable blob is the two
-    together, not compact, and the pupil alone is the blob before the jump (MSER's q of it
-    is the jump's, > 1: it is never stable; the design run at 850 nm, person 4 (0°, −5°):
+    blobs up to the picked one ``ch[i]``, or None: where the pupil joins a dark region beside
+    it a level or two up (a dark iris in a shadow, a few levels lighter than the pupil), its
+    chain's stable blob is the two together, not compact, and the pupil alone is the blob
+    before the jump (MSER's q of it is the jump's, > 1: it is never stable; the design run at
+    850 nm, person 4 (0°, −5°):
     pupil 16 DN, the shadowed iris 23–27 DN, 3 levels apart in the 8-bit working picture)."""
     best, at = _JUMP, None
     for j in range(i):
