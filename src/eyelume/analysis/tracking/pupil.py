@@ -1616,11 +1616,16 @@ def _before_jump(ch: list[Candidate], i: int) -> Candidate | None:
     chain's stable blob is the two together, not compact, and the pupil alone is the blob
     before the jump (MSER's q of it is the jump's, > 1: it is never stable; the design run at
     850 nm, person 4 (0°, −5°):
-    pupil 16 DN, the shadowed iris 23–27 DN, 3 levels apart in the 8-bit working picture)."""
+    pupil 16 DN, the shadowed iris 23–27 DN, 3 levels apart in the 8-bit working picture).
+    Only blobs of at least :data:`_DARKER_SHARE` of the picked one's area count: a speck that
+    started the chain (2 reduced px against 386: another render of that person at (10°, −5°),
+    a dark spot beside a glint in the iris) is not a pupil the jump hid, and was answered
+    ``ok``, 47 px off."""
     best, at = _JUMP, None
+    least = _DARKER_SHARE * ch[i].area
     for j in range(i):
         grow = ch[j + 1].area / ch[j].area
-        if grow >= best:
+        if grow >= best and ch[j].area >= least:
             best, at = grow, ch[j]
     return at
 
