@@ -33,10 +33,13 @@ import cv2
 import numpy as np
 import pytest
 
-from eyelume.analysis.labels import fit_ellipse
 from eyelume.analysis.tracking import detect
 from eyelume.analysis.tracking.pupil import WorkPicture, _level_candidates, _ordered_level
 from tests.analysis.test_detect import CENTRE, LEDS, draw_eye
+from tests.analysis.test_detect_pupil_shot_noise import (
+    assert_pupil_is_the_truths,
+    detect_kept_frame,
+)
 
 FIXTURE = Path(__file__).parents[1] / "reference" / "population_lid_band_850nm.npz"
 
@@ -91,15 +94,4 @@ def test_a_darker_disc_above_the_pupil_does_not_take_its_chain(radius, level):
 
 
 def test_pupil_below_a_lid_shadowed_band_of_a_population_render_is_not_the_band():
-    f = np.load(FIXTURE)
-    truth = fit_ellipse(f["pupil_edge_px"])
-    d = detect(
-        f["counts"],
-        led_azimuths_deg=list(f["led_azimuths_deg"]),
-        led_pattern_px=f["led_pattern_px"],
-    )
-    assert d.pupil is not None, d.failures
-    assert math.dist(d.pupil.centre_px, truth["center_px"]) < 1.0, (d.pupil, d.failures)
-    got, want = sorted(d.pupil.axes_px), sorted(2 * np.asarray(truth["semi_axes_px"]))
-    assert abs(got[0] - want[0]) < 1.0 and abs(got[1] - want[1]) < 1.0, (d.pupil, want)
-    assert d.ok, d.failures
+    assert_pupil_is_the_truths(*detect_kept_frame(FIXTURE))

@@ -26,7 +26,6 @@ outline).
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +33,7 @@ import pytest
 
 from eyelume.analysis.labels import fit_ellipse
 from eyelume.analysis.tracking import detect
+from tests.analysis.test_detect_pupil_shot_noise import assert_pupil_is_the_truths
 
 FIXTURE = Path(__file__).parents[1] / "reference" / "population_lash_shadow_940nm.npz"
 
@@ -47,8 +47,4 @@ def test_pupil_at_the_black_level_is_not_a_lash_shadow(k):
         led_azimuths_deg=list(f["led_azimuths_deg"]),
         led_pattern_px=f["led_pattern_px"][k],
     )
-    assert d.pupil is not None, d.failures
-    assert math.dist(d.pupil.centre_px, truth["center_px"]) < 1.0, (d.pupil, d.failures)
-    got, want = sorted(d.pupil.axes_px), sorted(2 * np.asarray(truth["semi_axes_px"]))
-    assert abs(got[0] - want[0]) < 1.0 and abs(got[1] - want[1]) < 1.0, (d.pupil, want)
-    assert d.ok, d.failures
+    assert_pupil_is_the_truths(d, truth)

@@ -36,19 +36,31 @@ from eyelume.analysis.tracking import detect
 FIXTURE = Path(__file__).parents[1] / "reference" / "population_dark_iris_940nm.npz"
 
 
-def test_pupil_in_a_dark_iris_of_a_population_render_is_not_the_iris():
-    f = np.load(FIXTURE)
-    truth = fit_ellipse(f["pupil_edge_px"])
+def detect_kept_frame(path: Path):
+    """(the detection, the truth's pupil ellipse) of a kept render ``path`` (.npz: ``counts``,
+    ``led_azimuths_deg``, ``led_pattern_px``, ``pupil_edge_px``), detected as
+    ``evaluate-tracking`` does (the LEDs' azimuths and predicted glint layout passed)."""
+    f = np.load(path)
     d = detect(
         f["counts"],
         led_azimuths_deg=list(f["led_azimuths_deg"]),
         led_pattern_px=f["led_pattern_px"],
     )
+    return d, fit_ellipse(f["pupil_edge_px"])
+
+
+def assert_pupil_is_the_truths(d, truth) -> None:
+    """``d`` is ``ok`` with its pupil's centre and both axes within the issue's 1 px of the
+    truth's ellipse (``fit_ellipse`` of ``truth.json``'s outline)."""
     assert d.pupil is not None, d.failures
     assert math.dist(d.pupil.centre_px, truth["center_px"]) < 1.0, (d.pupil, d.failures)
     got, want = sorted(d.pupil.axes_px), sorted(2 * np.asarray(truth["semi_axes_px"]))
     assert abs(got[0] - want[0]) < 1.0 and abs(got[1] - want[1]) < 1.0, (d.pupil, want)
     assert d.ok, d.failures
+
+
+def test_pupil_in_a_dark_iris_of_a_population_render_is_not_the_iris():
+    assert_pupil_is_the_truths(*detect_kept_frame(FIXTURE))
 
 
 #: The same design run's person 1 at 940 nm (dark iris, 2.3 mm pupil), rendered again at
@@ -65,18 +77,7 @@ def test_small_pupil_7_dn_under_a_dark_iris_is_found_not_the_iris():
     the noise of any integer picture to ≥ 1 DN (its percentiles move in whole steps), which
     asked 8 DN: the iris was answered ``ok``, its centre 3.3 px off (session 31's design run).
     The floor is ½ DN now. Fails before: the pupil's axes come out 203 × 107 px."""
-    f = np.load(SMALL)
-    truth = fit_ellipse(f["pupil_edge_px"])
-    d = detect(
-        f["counts"],
-        led_azimuths_deg=list(f["led_azimuths_deg"]),
-        led_pattern_px=f["led_pattern_px"],
-    )
-    assert d.pupil is not None, d.failures
-    assert math.dist(d.pupil.centre_px, truth["center_px"]) < 1.0, (d.pupil, d.failures)
-    got, want = sorted(d.pupil.axes_px), sorted(2 * np.asarray(truth["semi_axes_px"]))
-    assert abs(got[0] - want[0]) < 1.0 and abs(got[1] - want[1]) < 1.0, (d.pupil, want)
-    assert d.ok, d.failures
+    assert_pupil_is_the_truths(*detect_kept_frame(SMALL))
 
 
 def _low_count_eye(seed: int, shade: float = 0.0, halo: tuple[float, float] | None = None):
