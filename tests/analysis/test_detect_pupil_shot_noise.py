@@ -76,7 +76,8 @@ def test_small_pupil_7_dn_under_a_dark_iris_is_found_not_the_iris():
     pixels, quantised) is 0.74 DN, so the core is 9.4 σ deep. The darker-core test had raised
     the noise of any integer picture to ≥ 1 DN (its percentiles move in whole steps), which
     asked 8 DN: the iris was answered ``ok``, its centre 3.3 px off (session 31's design run).
-    The floor is ½ DN now. Fails before: the pupil's axes come out 203 × 107 px."""
+    Now the floor applies only under ½ DN of noise (479db5c). Fails before: the pupil's axes
+    come out 203 × 107 px."""
     assert_pupil_is_the_truths(*detect_kept_frame(SMALL))
 
 
