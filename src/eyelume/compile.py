@@ -2002,7 +2002,7 @@ def _pupil_plane_hit(sf, si, cornea: int, p: np.ndarray, d: np.ndarray, ep_z: fl
     """Where the ray from ``p`` along unit ``d``, reflected by the anterior cornea (the surface
     alone: whatever lies across the way, a lid or a lash, is not looked for), crosses the
     entrance pupil's plane z = ``ep_z`` toward the camera (x, y; None when it misses the cornea
-    or leaves away from the camera), with the reflection point and direction."""
+    or leaves away from the camera)."""
     t = G.intersect_surface(sf, si, cornea, *p, *d, math.inf)
     if t < 0:
         return None
@@ -2012,7 +2012,7 @@ def _pupil_plane_hit(sf, si, cornea: int, p: np.ndarray, d: np.ndarray, ep_z: fl
     if r[2] <= 1e-9:
         return None
     q = x + (ep_z - x[2]) / r[2] * r
-    return q[:2], x, r
+    return q[:2]
 
 
 def _glint_direction(sf, si, cornea, p, centre, radius, ep_z):
@@ -2029,10 +2029,9 @@ def _glint_direction(sf, si, cornea, p, centre, radius, ep_z):
     d = _unit(x - p)
     h = _GLINT_NEWTON_STEP
     for _ in range(12):
-        hit = _pupil_plane_hit(sf, si, cornea, p, d, ep_z)
-        if hit is None:
+        f = _pupil_plane_hit(sf, si, cornea, p, d, ep_z)
+        if f is None:
             return None
-        f = hit[0]
         e1 = _unit(np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0]))
         e2 = np.cross(d, e1)
         cols = []
@@ -2040,10 +2039,10 @@ def _glint_direction(sf, si, cornea, p, centre, radius, ep_z):
             moved = _pupil_plane_hit(sf, si, cornea, p, _unit(d + h * v), ep_z)
             if moved is None:
                 return None
-            cols.append((moved[0] - f) / h)
+            cols.append((moved - f) / h)
         jac = np.column_stack(cols)
         if float(np.hypot(*f)) < _GLINT_TOLERANCE_MM:
-            return d, jac, hit[1], hit[2]
+            return d, jac
         try:
             step = np.linalg.solve(jac, -f)
         except np.linalg.LinAlgError:
@@ -2090,7 +2089,7 @@ def _glint_aims(
         found = _glint_direction(sf, si, cornea, p, centre, radius, ep_z)
         if found is None:
             continue
-        d, jac, _, _ = found
+        d, jac = found
         sigma_min = float(np.linalg.svd(jac, compute_uv=False)[-1])
         if not sigma_min > 0.0:
             continue
