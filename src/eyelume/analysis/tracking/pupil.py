@@ -845,14 +845,6 @@ class Refusal:
 _RING_GLINTS = 3
 
 
-def _median_list(v: list[float]) -> float:
-    """The median of a short list of floats (the mean of the middle two for an even count, as
-    ``np.median``)."""
-    v = sorted(v)
-    n = len(v)
-    return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
-
-
 @dataclass(frozen=True)
 class WorkPicture:
     """The 8-bit picture the ladder runs on and what maps it back to the input's units.
@@ -892,8 +884,7 @@ class WorkPicture:
         )
         if n - 1 < _RING_GLINTS:
             return None
-        # (np.median's value, without its overhead on a handful of points)
-        return _median_list(cents[1:, 0].tolist()) + bx, _median_list(cents[1:, 1].tolist()) + by
+        return median(cents[1:, 0]) + bx, median(cents[1:, 1]) + by
 
     @cached_property
     def noise(self) -> float:
