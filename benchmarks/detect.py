@@ -6,6 +6,7 @@ Run from the repository root::
     python benchmarks/detect.py --render              # + a paper2005 render (~30 s once)
     python benchmarks/detect.py --frame DIR           # + an existing render's output directory
     python benchmarks/detect.py --real                # + real pictures' sizes (../shared/realdata)
+    python benchmarks/detect.py --population 3        # + 3 vr-offaxis frames of sampled people
 
 :func:`eyelume.analysis.tracking.detect` alone (with the four LED azimuths, so the matching is
 included) on one core (``cv2.setNumThreads(1)``), after ``--warmup`` calls: best, median and
@@ -26,6 +27,14 @@ is stored with the result.
 - ``render``: ``eye_image_digital.npy`` (uint16 DN, 10 bit) of ``eyelume render --set
   sensor.cols=640 --set sensor.rows=480 --samples 8`` (``--render`` makes one in a temporary
   directory; ``--frame DIR`` uses yours); errors against the render's ``truth.json`` when there.
+- ``person-<k>`` (``--population N``): the digital picture (DN, 400 × 400) of a test frame of
+  ``vr-offaxis``'s sampled person k (population seed 1; person k at the k-th test gaze of
+  ``evaluate-tracking --population``: (−10°, −5°), (0°, −5°), (10°, −5°), …), rendered as
+  that command renders it (to the sensor's noise, the irradiance cache on) with its lashes,
+  lids and 8 LEDs, detected with its own LED azimuths and picture pattern; errors against its
+  truth. Not the issue's 640 × 400, but eyelume's own headset frame: the faint blobs near the
+  pupil that its lashes leave (~23 a frame) each take a fit (:func:`~eyelume.analysis.
+  tracking.glints.fit_spot`), which the synthetic frame never asks for.
 - ``real-<source>`` (``--real N``, N = 5 by default): N pictures of each source of
   ``realdata/labels.csv`` (found as ``benchmarks/detect_real.py`` finds it; skipped with a
   message when absent), evenly spread over its rows — the ``itmo`` close-ups (200 × 200, 8 bit)
@@ -284,16 +293,16 @@ def _errors(d, truth: dict | None) -> dict:
     return out
 
 
-def bench(name: str, frame: np.ndarray, truth: dict | None, a) -> dict:
+def bench(name: str, frame: np.ndarray, truth: dict | None, a, leds=LEDS, pattern=None) -> dict:
     for _ in range(a.warmup):
-        detect(frame, led_azimuths_deg=LEDS)
+        detect(frame, led_azimuths_deg=leds, led_pattern_px=pattern)
     stages: list[dict] = []
 
     cpu = []
 
     def one():
         c0 = time.process_time()
-        d = detect(frame, led_azimuths_deg=LEDS)
+        d = detect(frame, led_azimuths_deg=leds, led_pattern_px=pattern)
         cpu.append(1e3 * (time.process_time() - c0))
         stages.append(d.timings_ms)
         return d
@@ -405,6 +414,39 @@ def bench_real(a) -> list[dict]:
     return out
 
 
+def _population_frames(n: int) -> list[tuple]:
+    """``--population N``: N frames of ``vr-offaxis``'s sampled people (population seed 1),
+    each as ``eyelume evaluate-tracking --population`` renders a test frame
+    (:func:`eyelume.optimize.tracking.render_frame`, to the sensor's noise, the irradiance
+    cache on): person k at the k-th test gaze. (name, picture, truth, LED azimuths, the LEDs'
+    picture pattern)."""
+    import eyelume
+    from eyelume.optimize.render_budget import noise_options
+    from eyelume.optimize.tracking import PEOPLE_TEST_H, PEOPLE_TEST_V, render_frame
+    from eyelume.scene.population import sample_people
+
+    scene = eyelume.load_scene("vr-offaxis", {"run.indirect": "cache"})
+    people = sample_people(scene, n, 1)
+    gazes = [(h, v) for v in PEOPLE_TEST_V for h in PEOPLE_TEST_H]
+    out = []
+    for k, person in enumerate(people):
+        h, v = gazes[k % len(gazes)]
+        target, _ = noise_options(person.scene, "sensor", 0)
+        print(f"   rendering vr-offaxis person {k} at gaze ({h:+.0f}°, {v:+.0f}°) …", flush=True)
+        f = render_frame(person.scene, h, v, 2, 0, target, keep_picture=True)
+        pic = f.picture
+        truth = {
+            "pupil": {"centre_px": f.truth["pupil"]["centre_px"]},
+            "glints": [g for g in f.truth["glints"] if g.get("visible")],
+        }
+        pattern = pic["led_pattern_px"]
+        out.append((
+            f"person-{k}", np.asarray(pic["counts"]), truth, list(pic["led_azimuths_deg"]),
+            None if pattern is None else np.asarray(pattern),
+        ))  # fmt: skip
+    return out
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--repeats", type=int, default=50)
@@ -421,6 +463,13 @@ def main() -> None:
         help="also time N real pictures of each realdata source (default 5; aggregates only)",
     )
     p.add_argument("--data", type=Path, help="the realdata folder (default ../shared/realdata)")
+    p.add_argument(
+        "--population",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also render and time N vr-offaxis frames of sampled people (~5 s a render)",
+    )
     a = p.parse_args()
 
     cv2.setNumThreads(1)
@@ -444,6 +493,9 @@ def main() -> None:
         frames.append(("render", np.load(npy), truth))
 
     records = [bench(name, frame, truth, a) for name, frame, truth in frames]
+    if a.population > 0:
+        for name, frame, truth, leds, pattern in _population_frames(a.population):
+            records.append(bench(name, frame, truth, a, leds, pattern))
     if a.real > 0:
         records += bench_real(a)
     if tmp is not None:
