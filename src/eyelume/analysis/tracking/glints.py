@@ -526,7 +526,7 @@ def fit_spot(img: np.ndarray, noise: float, blob: dict, params, min_half: int = 
     None) and tolerances 1e-8 (``least_squares``' defaults): the same iterations as
     ``least_squares(method="lm")`` (SciPy ≥ 1.16) without its wrappers' ~20 µs a call. On
     session 31's 150 design-run frames (vr-offaxis, 850/940 nm; 3 395 fits, ~23 a frame:
-    faint blobs near the pupil, lashes' gaps among them) it took 9.0 CPU-s against 23.5 with
+    faint blobs near the pupil, lashes' gaps among them) it took 2.6 CPU-s against 23.5 with
     ``least_squares``' default trust-region method (TRF: 40–100 evaluations a fit, and the
     cap reached by most of the blobs that are no spot), the frames' answers the same but one
     refusal's wording."""
