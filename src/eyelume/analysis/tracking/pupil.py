@@ -3933,7 +3933,11 @@ def edge_offset(prof: EdgeProfile, e: Ellipse, fraction: float) -> float:
     former half level (:func:`_half_level_offset`) — also where the fitted step lies within
     :data:`_EDGE_FOOT` σ of the line spread's dark end: a defocused camera's pillbox blur makes
     a near-linear ramp that the model fits as well with a sharp step at its foot and the iris
-    rising over it (axes 15–21 px short; tests/analysis/test_detect_pupil_pillbox.py)."""
+    rising over it (axes 15–21 px short; tests/analysis/test_detect_pupil_pillbox.py). The
+    half level reads the edge's span run on across shallow dips of a long ramp's noisy line
+    spread (:func:`_ramp_foot`, :func:`_ramp_top`; the model's window keeps the span as
+    found: joined, it let the model fit a small early rise of real close-ups' edges as the
+    step)."""
     s, m = prof.s, prof.m
     g = prof.g
     span = _edge_span(g, prof.at)
@@ -3942,6 +3946,8 @@ def edge_offset(prof: EdgeProfile, e: Ellipse, fraction: float) -> float:
     lo, pk, hi = span
     if not m[hi] > m[lo]:
         return 0.0
+    # the half level's span: across a long ramp's noisy dips
+    ramp = _ramp_top(g, m, _ramp_foot(g, span))
     pk = _spread_middle(g, lo, pk, hi)
     # The window: 2 px of the pupil's level before the span's dark end, and beyond the peak
     # (or the spread's centroid where its top is flat, :func:`_spread_middle`) twice the
@@ -3954,17 +3960,77 @@ def edge_offset(prof: EdgeProfile, e: Ellipse, fraction: float) -> float:
     if b > hi + 1 and g[hi:b].max() > g[pk]:
         # a stronger edge within the window beyond the span (a dark iris ring's step to the
         # sclera 5 px out), which the model's quadratic does not follow: the half level
-        return _half_level_offset(prof, e, fraction, span)
+        return _half_level_offset(prof, e, fraction, ramp)
     e_lo, e_hi, sig_hi = float(s[lo]) - 0.5, float(s[pk]) + 1.0, max(1.0, flank)
     edge, sig, _ = _step_fit(s[a:b], m[a:b], e_lo, e_hi, sig_hi)
     rho = math.sqrt(e.a * e.b)
     if not (e_lo < edge < e_hi and sig < 2.0 * sig_hi and rho + edge > 0):
-        return _half_level_offset(prof, e, fraction, span)
+        return _half_level_offset(prof, e, fraction, ramp)
     if edge - float(s[lo]) < _EDGE_FOOT * sig:
         # the step at the foot of the rise, its blur reaching ≥ 2 σ before it where the
         # profile is still flat: the rise was taken for the iris's slope, not the step's blur
-        return _half_level_offset(prof, e, fraction, span)
+        return _half_level_offset(prof, e, fraction, ramp)
     return edge + sig * sig / (2.0 * (rho + edge))
+
+
+def _ramp_top(g: np.ndarray, m: np.ndarray, span) -> tuple[int, int, int]:
+    """The span (:func:`_edge_span`: dark end, peak, bright end indices) that :func:`edge_offset`'s
+    half level reads, its bright end moved on past shallow dips of the line spread ``g``
+    where the profile ``m`` goes on rising: while the spread stops at a local minimum over
+    :data:`_RAMP_DIP` of its peak, the next rise's peak is ≥ ½ of it and the profile has
+    climbed more than :data:`_RAMP_SHARE` of the way from the dark end to that rise's top,
+    the span runs on to that top. A defocused camera's 15–20 px edge (a pillbox blur: a
+    near-flat spread, noisy in a median of few-sample profiles) dips so mid-ramp, and the
+    half level read over part of the rise put the edge 6–11 px in (`paper2005` at 640 ×
+    480). A dark iris ring before the sclera's step (:func:`_ring_inside`'s case) dips
+    deeper or sooner: on the tests' pictures where a stronger edge follows, ≤ 0.11 of the
+    peak, or 0.30–0.50 with ≤ 0.33 of the rise climbed; those ramps 0.37–0.57 with
+    0.59–0.75."""
+    lo, pk, hi = span
+    n = len(g)
+    while hi + 1 < n and g[hi] > _RAMP_DIP * g[pk] and g[hi + 1] > g[hi]:
+        i = hi + 1
+        while i + 1 < n and g[i + 1] >= g[i]:
+            i += 1
+        if g[i] < 0.5 * g[pk]:
+            break
+        nxt = _edge_span(g, i)
+        if nxt is None or nxt[2] <= hi or not m[hi] - m[lo] > _RAMP_SHARE * (m[nxt[2]] - m[lo]):
+            break
+        hi = nxt[2]
+    return lo, pk, hi
+
+
+def _ramp_foot(g: np.ndarray, span) -> tuple[int, int, int]:
+    """:func:`_ramp_top` on the dark side: the span's dark end moved back past shallow dips
+    (over :data:`_RAMP_DIP` of the peak) of the line spread ``g`` to the foot of a rise whose
+    peak is ≥ ½ of the span's — the start of a ramp whose noisy spread dipped near its middle
+    (`paper2005` at 640 × 480, (−20°, −10°): the span began 5 px up the ramp, the ¼ line
+    looked off it and the offset was refused, the axes 8–11 px short). A darker core inside
+    the pupil, a shelf with the pupil's edge inside it, is :func:`_ring_inside`'s, read
+    before."""
+    lo, pk, hi = span
+    while lo > 0 and g[lo] > _RAMP_DIP * g[pk] and g[lo - 1] > g[lo]:
+        i = lo - 1
+        while i > 0 and g[i - 1] >= g[i]:
+            i -= 1
+        if g[i] < 0.5 * g[pk]:
+            break
+        prev = _edge_span(g, i)
+        if prev is None or prev[0] >= lo:
+            break
+        lo = prev[0]
+    return lo, pk, hi
+
+
+#: :func:`_ramp_top`, :func:`_ramp_foot`: the least dip of the line spread, as a share of its
+#: peak, that is noise on one ramp rather than the gap between two edges (the tests' dark
+#: iris rings before the sclera ≤ 0.11, or ≤ 0.50 with under a third of the rise climbed;
+#: paper2005's 640 × 480 ramps 0.33–0.57; session 34's measurement, a guess between them)
+_RAMP_DIP = 0.25
+#: :func:`_ramp_top`: the least share of the rise to the next rise's top climbed at the dip
+#: for the two to be one ramp (those rings ≤ 0.33, the ramps ≥ 0.59; as above)
+_RAMP_SHARE = 0.5
 
 
 #: :func:`edge_offset`: the least distance, in σ of the fitted blur, from the line spread's
