@@ -584,7 +584,7 @@ def fit_spot(img: np.ndarray, noise: float, blob: dict, params, min_half: int = 
     # the residual and its Jacobian by rows of parameters (MINPACK's col_deriv: no transposed
     # copy; its last three rows, the plane's, constant) by compiled loops over the window's
     # pixels (:func:`_spot_residual`, :func:`_spot_jacobian`): ~1 µs a call where the same
-    # NumPy expressions took ~10 (a fit takes 20–100 of each; the analytic Jacobian saves the
+    # NumPy expressions took ~7 (a fit takes 20–100 of each; the analytic Jacobian saves the
     # 7 calls a numerical one costs). MINPACK copies what each returns.
     res = np.empty(win.size)
     jac = np.empty((7, win.size))
