@@ -102,7 +102,7 @@ BAD = {
     ),
     "missing glass": (
         lambda t: t.replace('glass = "BSM24"', 'glass = "UNOBTAINIUM"', 1),
-        ["lens.surfaces.0.glass", "UNOBTAINIUM"],
+        ["scene.toml", "lens.surfaces.0.glass", "UNOBTAINIUM"],  # (the file named: session 34)
     ),
     "NaN": (
         lambda t: t.replace("height_mm = 30.0", "height_mm = nan", 1),
@@ -133,7 +133,7 @@ def test_bad_scene_file_one_line_exit_2(tmp_path, case):
         (["--set", "leds.height_mm=-3"], ["leds.height_mm", "-3"]),
         (["--set", "leds.distance_mm=0"], ["leds.distance_mm", "0"]),
         (["--set", "eye.pupil_diameter_mm=nan"], ["eye.pupil_diameter_mm", "nan"]),
-        (["--set", "leds.nope=1"], ["leds.nope"]),
+        (["--set", "leds.nope=1"], ["override 'leds.nope'"]),  # (the override, not the preset)
         (["--set", "leds.height_mm"], ["leds.height_mm", "key=value"]),
         (["--scene", "no_such_scene"], ["no_such_scene"]),
         (["--set", "leds.distance_mm=2"], ["LED", "eye plane"]),

@@ -223,7 +223,33 @@ def validate_scene(data: dict[str, Any], origin: str = "scene") -> Scene:
         check_eye_geometry(scene.eye)
     except GeometryError as exc:
         raise GeometryError(exc.message, file=origin, field=exc.field, value=exc.value) from None
+    _check_glasses(scene, origin)
     return scene
+
+
+def _check_glasses(scene: Scene, origin: str) -> None:
+    """SceneError naming ``origin`` (the file), the field and the glass when a lens surface's
+    glass is in none of the lens's catalogs (or a catalog cannot be read) — said when the
+    scene is read, not later when it is compiled (:func:`eyelume.compile.lens_indices`, which
+    checks again for scenes built in code)."""
+    from eyelume.errors import GlassError
+    from eyelume.scene.glass import load_catalog
+
+    lens = scene.lens
+    if lens is None or not any(s.glass and s.glass.lower() != "air" for s in lens.surfaces):
+        return
+    try:
+        catalog = load_catalog(*lens.glass_catalogs) if lens.glass_catalogs else load_catalog()
+    except GlassError as exc:
+        raise SceneError(str(exc), file=origin, field="lens.glass_catalogs") from None
+    for j, s in enumerate(lens.surfaces):
+        if s.glass and s.glass.lower() != "air":
+            try:
+                catalog[s.glass]
+            except GlassError as exc:
+                raise SceneError(
+                    str(exc), file=origin, field=f"lens.surfaces.{j}.glass", value=s.glass
+                ) from None
 
 
 def load_scene(source: str | Path = "paper2005", overrides: dict[str, Any] | None = None) -> Scene:
@@ -261,7 +287,21 @@ def load_scene(source: str | Path = "paper2005", overrides: dict[str, Any] | Non
         origin = str(path)
     if overrides:
         data = _override_data(data, overrides)
-    return validate_scene(data, origin)
+    return _validate_overridden(data, origin, overrides)
+
+
+def _validate_overridden(data: dict[str, Any], origin: str, overrides: dict[str, Any] | None):
+    """:func:`validate_scene`, an unknown field that an override made named as that override's
+    (``--set leds.hieght=3``: "override 'leds.hieght': …", not the preset's or file's)."""
+    try:
+        return validate_scene(data, origin)
+    except SceneError as exc:
+        for key in overrides or ():
+            if exc.message == "unknown field" and not_a_path(exc, key):
+                raise SceneError(
+                    f"override '{key}': the scene ({origin}) has no field '{exc.field}'"
+                ) from None
+        raise
 
 
 def _parse_value(text: Any) -> Any:
@@ -382,7 +422,7 @@ def not_a_path(exc: Exception, path: str) -> bool:
 def apply_overrides(scene: Scene, overrides: dict[str, Any]) -> Scene:
     """A new scene with the dotted-path ``overrides`` applied (the scene itself is unchanged)."""
     data = scene.model_dump(mode="python")
-    return validate_scene(_override_data(data, overrides), f"scene {scene.name}")
+    return _validate_overridden(_override_data(data, overrides), f"scene {scene.name}", overrides)
 
 
 def _toml_ready(value: Any) -> Any:
