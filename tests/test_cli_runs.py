@@ -291,3 +291,19 @@ def test_a_bad_study_file_is_refused_before_the_store_is_touched(tmp_path, vary,
     for w in words:
         assert w in line, (w, line)
     assert not out.exists()
+
+
+def test_a_finished_study_rerun_without_resume_is_one_line(tmp_path):
+    """A study folder that holds finished runs, run again without --resume: the one error
+    line (use --resume or a new --out), exit 2 — no banner line before it (session 34's new
+    user: "study s: 2 runs into …" then the error)."""
+    study = tmp_path / "st.toml"
+    study.write_text(
+        'name = "s"\nmetrics = ["safety"]\n[[vary]]\npath = "leds.height_mm"\n'
+        "values = [20.0, 25.0]\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "o"
+    assert runner.invoke(app, ["study", str(study), "--out", str(out)]).exit_code == 0
+    line = _one_line_exit_2(runner.invoke(app, ["study", str(study), "--out", str(out)]))
+    assert "2 finished runs" in line and "--resume" in line, line

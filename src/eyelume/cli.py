@@ -1612,7 +1612,10 @@ def study(
     if (Path(out) / "results.sqlite").exists():
         from eyelume.optimize.store import check_store
 
-        check_store(out)  # a damaged store is one line before the banner, not after it
+        # a damaged store, or finished runs without --resume: one line before the banner
+        finished = check_store(out)
+        if finished and not resume:
+            _fail(f"{out}: holds {finished} finished runs; use --resume or a new --out")
     total = run_count(st)
     err.print(f"study {st.name}: {total} runs into {out} (Ctrl-C, then --resume, loses nothing)")
     with _progress_bar("[bold]runs", "{task.completed}/{task.total}") as bar:
