@@ -214,7 +214,8 @@ def _lookup(data: Any, loc: tuple[Any, ...]) -> Any:
 def validate_scene(data: dict[str, Any], origin: str = "scene") -> Scene:
     """Build a :class:`Scene` from plain data, turning the first validation error into one line;
     then refuse an eye that cannot exist (:func:`~eyelume.scene.eye.check_eye_geometry`,
-    GeometryError naming ``origin``, the field and the value)."""
+    GeometryError naming ``origin``, the field and the value) and a lens glass missing from
+    its catalogs (:func:`_check_glasses`, SceneError naming the same)."""
     try:
         scene = Scene.model_validate(data)
     except ValidationError as exc:
