@@ -3946,8 +3946,6 @@ def edge_offset(prof: EdgeProfile, e: Ellipse, fraction: float) -> float:
     lo, pk, hi = span
     if not m[hi] > m[lo]:
         return 0.0
-    # the half level's span: across a long ramp's noisy dips
-    ramp = _ramp_top(g, m, _ramp_foot(g, span))
     pk = _spread_middle(g, lo, pk, hi)
     # The window: 2 px of the pupil's level before the span's dark end, and beyond the peak
     # (or the spread's centroid where its top is flat, :func:`_spread_middle`) twice the
@@ -3960,16 +3958,16 @@ def edge_offset(prof: EdgeProfile, e: Ellipse, fraction: float) -> float:
     if b > hi + 1 and g[hi:b].max() > g[pk]:
         # a stronger edge within the window beyond the span (a dark iris ring's step to the
         # sclera 5 px out), which the model's quadratic does not follow: the half level
-        return _half_level_offset(prof, e, fraction, ramp)
+        return _half_level_offset(prof, e, fraction, span)
     e_lo, e_hi, sig_hi = float(s[lo]) - 0.5, float(s[pk]) + 1.0, max(1.0, flank)
     edge, sig, _ = _step_fit(s[a:b], m[a:b], e_lo, e_hi, sig_hi)
     rho = math.sqrt(e.a * e.b)
     if not (e_lo < edge < e_hi and sig < 2.0 * sig_hi and rho + edge > 0):
-        return _half_level_offset(prof, e, fraction, ramp)
+        return _half_level_offset(prof, e, fraction, span)
     if edge - float(s[lo]) < _EDGE_FOOT * sig:
         # the step at the foot of the rise, its blur reaching ≥ 2 σ before it where the
         # profile is still flat: the rise was taken for the iris's slope, not the step's blur
-        return _half_level_offset(prof, e, fraction, ramp)
+        return _half_level_offset(prof, e, fraction, span)
     return edge + sig * sig / (2.0 * (rho + edge))
 
 
@@ -4070,9 +4068,11 @@ def _half_level_offset(prof: EdgeProfile, e: Ellipse, fraction: float, span) -> 
     as the profile does over that ring (radius √(a b) + s), for a symmetric blur its half
     level; 0.0 when the fit's line does not sit about its own ``fraction`` up the span
     (within a factor 2): the walk climbed on to a brighter edge beyond. (Sessions 22–24's
-    offset everywhere; on a gradual iris it reads the half level of the whole rise, far out.)"""
+    offset everywhere; on a gradual iris it reads the half level of the whole rise, far out.)
+    The span is run on across a long ramp's noisy dips first (:func:`_ramp_foot`,
+    :func:`_ramp_top`)."""
     s, m = prof.s, prof.m
-    lo, _, hi = span
+    lo, _, hi = _ramp_top(prof.g, m, _ramp_foot(prof.g, span))
     m_lo, m_hi = m[lo], m[hi]
     up = (m[prof.at] - m_lo) / (m_hi - m_lo)
     if not 0.5 * fraction <= up <= 2.0 * fraction:
