@@ -83,6 +83,27 @@ def test_a_pillbox_blurred_pupil_keeps_its_axes():
     assert all(abs(a - 100.0) < 2.0 for a in d.pupil.axes_px), d.pupil.axes_px
 
 
+def _assert_axes_within_2px(sc, samples: int, digital: bool) -> None:
+    """``sc`` rendered (fast estimator, ``samples`` per pixel, seed 1) and detected — the
+    irradiance, or with ``digital`` the camera's reading — answered `ok` with both full axes
+    within 2 px of the truth's outline (an ellipse fitted to its 72 edge points)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # (the pupil plane's defocus, the point here)
+        cs = compile_scene(sc)
+    truth = eye_truth(cs)
+    _, axes, _ = cv2.fitEllipse(np.array(truth["pupil"]["edge_px"], np.float32))
+    r = render(cs, RenderOptions(estimator="fast", samples_per_pixel=samples, seed=1))
+    pic = (
+        digitize(r.eye_image, sc.sensor, sc.wavelength_nm, seed=1).counts
+        if digital
+        else r.eye_image
+    )
+    d = detect(pic, led_azimuths_deg=list(sc.leds.azimuths()))
+    assert d.ok, d.failures
+    got, want = sorted(d.pupil.axes_px), sorted(axes)
+    assert all(abs(g - w) < 2.0 for g, w in zip(got, want, strict=True)), (got, want)
+
+
 @pytest.mark.slow
 def test_paper2005_focused_at_640x480_keeps_the_pupils_axes():
     """`paper2005` at 640 × 480 with the sensor moved to the eye plane's real-ray best focus
@@ -99,16 +120,7 @@ def test_paper2005_focused_at_640x480_keeps_the_pupils_axes():
             "lens.surfaces.10.thickness_mm": 198.52,
         },
     )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # (the pupil plane's defocus, the point here)
-        cs = compile_scene(sc)
-    truth = eye_truth(cs)
-    _, axes, _ = cv2.fitEllipse(np.array(truth["pupil"]["edge_px"], np.float32))
-    r = render(cs, RenderOptions(estimator="fast", samples_per_pixel=2, seed=1))
-    d = detect(r.eye_image, led_azimuths_deg=list(sc.leds.azimuths()))
-    assert d.ok, d.failures
-    got, want = sorted(d.pupil.axes_px), sorted(axes)
-    assert all(abs(g - w) < 2.0 for g, w in zip(got, want, strict=True)), (got, want)
+    _assert_axes_within_2px(sc, samples=2, digital=False)
 
 
 @pytest.mark.slow
@@ -122,14 +134,4 @@ def test_paper2005_at_640x480_reads_the_whole_ramp():
     sc = eyelume.load_scene(
         "paper2005", {"eye.gaze_horizontal_deg": -20.0, "sensor.cols": 640, "sensor.rows": 480}
     )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # (the pupil plane's defocus, the point here)
-        cs = compile_scene(sc)
-    truth = eye_truth(cs)
-    _, axes, _ = cv2.fitEllipse(np.array(truth["pupil"]["edge_px"], np.float32))
-    r = render(cs, RenderOptions(estimator="fast", samples_per_pixel=4, seed=1))
-    counts = digitize(r.eye_image, sc.sensor, sc.wavelength_nm, seed=1).counts
-    d = detect(counts, led_azimuths_deg=list(sc.leds.azimuths()))
-    assert d.ok, d.failures
-    got, want = sorted(d.pupil.axes_px), sorted(axes)
-    assert all(abs(g - w) < 2.0 for g, w in zip(got, want, strict=True)), (got, want)
+    _assert_axes_within_2px(sc, samples=4, digital=True)
